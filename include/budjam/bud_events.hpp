@@ -1,0 +1,74 @@
+#pragma once
+// Survival of the buds that are unconstrained at jamming (MODEL.md, "Bud events").
+// At jamming every unconstrained bud is tagged (by cell id); from then on, for each accepted state,
+// a tagged bud can: touch something for the first time (first_contact), stop being unconstrained
+// (completed: the event of the Kaplan–Meier estimate), divide before completion (censored), or
+// still be unconstrained when the run or the jamming episode ends (censored).
+// a = b² − b_J² is the added bud size in diameter squared (true area π a / 4).
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/growth.hpp"
+#include "budjam/packing.hpp"
+#include <cstddef>
+#include <cstdint>
+#include <iosfwd>
+#include <vector>
+
+namespace budjam {
+
+enum class BudEventKind {
+  tagged,          // unconstrained at jamming (a = 0)
+  first_contact,   // its bud lobe carries a contact for the first time (any contact, also with rattlers)
+  completed,       // no longer unconstrained (event)
+  divided,         // the cell divided before completion (censored)
+  censored_end,    // still unconstrained when the run ended (censored)
+  censored_unjam,  // still unconstrained when the packing unjammed (censored; re-tagged at the next jamming)
+};
+const char* to_string(BudEventKind kind);
+
+struct BudEvent {
+  BudEventKind kind = BudEventKind::tagged;
+  int episode = 0;         // jamming episode
+  std::int64_t cell_id = -1;
+  long step = 0;           // accepted-step index
+  double phi = 0;
+  double a = 0;            // b² − b_J²
+};
+
+class BudTracker {
+ public:
+  // Tags every unconstrained bud of `net` (non-rattler, bud lobe with no load-bearing contact).
+  // Replaces any previous tags. Returns the `tagged` events (in cell-index order).
+  std::vector<BudEvent> tag(int episode, long step, double phi, const Packing& p, const ContactNetwork& net);
+
+  // Updates the active tags after an accepted state. `divisions` happened in the step that produced
+  // this state: a tagged cell among them ends as `divided` with a taken at division. Returns the
+  // events in cell-id order (first_contact before completed for the same bud).
+  std::vector<BudEvent> update(long step, double phi, const Packing& p, const std::vector<Contact>& contacts,
+                               const ContactNetwork& net, const std::vector<Division>& divisions);
+
+  // Ends every active tag with `kind` (censored_end or censored_unjam).
+  std::vector<BudEvent> close(BudEventKind kind, long step, double phi, const Packing& p);
+
+  std::size_t tagged() const { return tags_.size(); }
+  std::size_t active() const;      // tagged, neither completed nor divided nor closed
+  std::size_t completed() const;
+  std::size_t divided() const;
+  std::size_t touched() const;     // had their first contact
+  int episode() const { return episode_; }
+
+  void save(std::ostream& os) const;
+  void load(std::istream& is);
+
+ private:
+  struct Tag {
+    std::int64_t id;
+    double b2_J;
+    bool touched = false;
+    int state = 0;  // 0 active, 1 completed, 2 divided, 3 closed
+  };
+  std::vector<Tag> tags_;  // sorted by id
+  int episode_ = 0;
+};
+
+}  // namespace budjam

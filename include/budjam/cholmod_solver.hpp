@@ -1,0 +1,86 @@
+#pragma once
+// A small RAII wrapper around CHOLMOD (SuiteSparse) for symmetric sparse systems: the moduli solve
+// H u = Ξ with it, the spectrum solves (H − σM) x = b in shift-invert Lanczos.
+//
+//   CholmodSolver s;                       // LLᵀ (supernodal when it pays)
+//   if (!s.factor(H)) ...                  // false: not positive definite (s.failed_column())
+//   Eigen::MatrixXd X = s.solve(B);        // many right-hand sides at once
+//   s.factor(H, sigma, mass);              // H − σ diag(mass): the fill-reducing ordering of the
+//                                          // previous call is reused when the pattern is the same
+//
+// With Factorisation::ldlt the factor is a simplicial LDLᵀ without pivoting: it accepts symmetric
+// indefinite matrices (fails only on an exactly zero or NaN pivot), and negative_pivots() is the
+// inertia — by Sylvester's law the number of eigenvalues of H − σM below 0, i.e. of (H, M)
+// below σ. Not backward stable for strongly indefinite matrices: check residuals.
+//
+// Matrices are Eigen column-major with int indices; only the upper triangle (row ≤ col) is
+// read, so a matrix with both triangles stored (as budjam::hessian returns) is fine. One solver
+// must not be used by two threads at once; two solvers may.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace budjam {
+
+// CHOLMOD reported an error other than "not positive definite" (out of memory, invalid input,
+// solve before a successful factorisation).
+struct CholmodError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class Factorisation { llt, ldlt };
+
+class CholmodSolver {
+ public:
+  explicit CholmodSolver(Factorisation kind = Factorisation::llt);
+  ~CholmodSolver();
+  CholmodSolver(CholmodSolver&&) noexcept;
+  CholmodSolver& operator=(CholmodSolver&&) noexcept;
+  CholmodSolver(const CholmodSolver&) = delete;
+  CholmodSolver& operator=(const CholmodSolver&) = delete;
+
+  // Factors A (square, symmetric; upper triangle read). Returns true on success; false if A is
+  // not positive definite (llt) or has a zero pivot (ldlt) — then failed_column() is the column
+  // (in CHOLMOD's permuted order) where the factorisation stopped and solve() throws.
+  bool factor(const Eigen::SparseMatrix<double>& A);
+  // Factors A − σ diag(mass); mass.size() == A.rows(). mass may be empty: identity.
+  bool factor(const Eigen::SparseMatrix<double>& A, double sigma, const Eigen::VectorXd& mass);
+  // Factors A − σ M for a sparse symmetric M.
+  bool factor(const Eigen::SparseMatrix<double>& A, double sigma, const Eigen::SparseMatrix<double>& M);
+
+  // x = (A − σM)⁻¹ b. Throws CholmodError unless the last factor() succeeded.
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
+  // Same on raw arrays of length rows() (for ARPACK's reverse communication); x may alias b.
+  void solve(const double* b, double* x) const;
+
+  bool ok() const { return ok_; }
+  Factorisation kind() const { return kind_; }
+  Eigen::Index rows() const { return n_; }
+  long failed_column() const { return failed_column_; }  // −1 after success
+  // ldlt: number of negative D entries (inertia); llt: 0 after success.
+  long negative_pivots() const { return negative_pivots_; }
+  // CHOLMOD's cheap reciprocal condition estimate (min/max diagonal of L, squared for LDLᵀ's D).
+  double rcond() const { return rcond_; }
+  long factor_nonzeros() const { return factor_nonzeros_; }
+  bool supernodal() const { return supernodal_; }
+  long analyses() const { return analyses_; }  // symbolic analyses done (ordering reuse is visible)
+
+ private:
+  struct Impl;
+  bool factor_matrix(const Eigen::SparseMatrix<double>& C);
+  std::unique_ptr<Impl> impl_;
+  Factorisation kind_;
+  bool ok_ = false;
+  Eigen::Index n_ = 0;
+  long failed_column_ = -1;
+  long negative_pivots_ = 0;
+  double rcond_ = 0;
+  long factor_nonzeros_ = 0;
+  bool supernodal_ = false;
+  long analyses_ = 0;
+};
+
+}  // namespace budjam

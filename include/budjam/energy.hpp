@@ -1,0 +1,50 @@
+#pragma once
+// Harmonic lobe–lobe repulsion U = Σ (k/2)(σ − r)² and generalised forces F = −∂U/∂q on the
+// (x, y, θ) of every cell (F_θ is the torque about the centroid).
+//
+// Conventions at the edges of the contact law (docs/minimiser.md):
+// - r = σ exactly is not a contact (U and F are continuous there: both vanish).
+// - r = 0 (coincident centres of lobes of different cells): U = kσ²/2 and the force has magnitude
+//   kσ along coincident_normal() (contacts.hpp): the centroid-to-centroid direction, or +x when
+//   the centroids coincide too. Every direction is a one-sided derivative of U there; this
+//   choice is finite, deterministic and separates the cells.
+#include "budjam/cell_list.hpp"
+#include "budjam/packing.hpp"
+#include <Eigen/Core>
+#include <vector>
+
+namespace budjam {
+
+// Keeps the lobe positions and the Verlet neighbour list current for a packing whose
+// coordinates move (FIRE) or whose cells change (growth, division). Invariant: after
+// evaluate(), `lobes()` and `neighbours()` describe the packing that was passed in.
+class ForceField {
+ public:
+  explicit ForceField(double skin = 0.3);
+
+  // U, and F = −∂U/∂q (size 3N) for the packing as it is now. O(N); allocates nothing once
+  // `force` and the internal buffers have their size.
+  double evaluate(const Packing& p, Eigen::VectorXd& force);
+  // U only.
+  double energy(const Packing& p);
+
+  // Call after the number of cells or any bud size changed: forces a neighbour rebuild.
+  // (A changed radius or count is also detected by the neighbour list itself.)
+  void invalidate();
+
+  const Lobes& lobes() const { return lobes_; }
+  const NeighbourList& neighbours() const { return list_; }
+  long evaluations() const { return evaluations_; }
+
+ private:
+  void refresh(const Packing& p);
+  Lobes lobes_;
+  NeighbourList list_;
+  long evaluations_ = 0;
+  // Per-cell dumbbell geometry, recomputed only when a bud size changes.
+  std::vector<double> b_cached_, mother_offset_, bud_offset_;
+  // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques.
+  std::vector<double> ox_, oy_;
+};
+
+}  // namespace budjam

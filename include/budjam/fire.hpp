@@ -1,0 +1,45 @@
+#pragma once
+// FIRE 2.0 energy minimisation (Guénolé et al., Comput. Mater. Sci. 175, 109584 (2020)) over
+// (x, y, θ̃) with θ̃ = r_g θ, so every coordinate is a length. docs/minimiser.md explains the
+// stopping rule and the choice of parameters.
+#include "budjam/energy.hpp"
+#include "budjam/packing.hpp"
+
+namespace budjam {
+
+struct FireParams {
+  double dt_start = 0.1;
+  double dt_max = 1.0;
+  double dt_min = 1e-3;
+  int n_delay = 5;
+  double f_inc = 1.1;
+  double f_dec = 0.5;
+  double alpha_start = 0.1;
+  double f_alpha = 0.99;
+  // Stopping rule (docs/minimiser.md): the packing is relaxed when the largest generalised
+  // force component (x, y, and τ/r_g) is below max(force_tol, force_resolution(p)), or when E/N is
+  // below energy_floor (then it is certainly unjammed: the minimum lies below the jamming
+  // threshold ε_U > energy_floor).
+  double force_tol = 1e-13;
+  double energy_floor = 1e-20;
+  long max_iterations = 1000000;
+};
+
+struct FireResult {
+  bool converged = false;
+  long iterations = 0;
+  long evaluations = 0;    // force evaluations made by this call
+  double energy = 0.0;     // U at the end
+  double max_force = 0.0;  // largest |F| component at the end (θ component as F_θ / r_g)
+};
+
+// Relaxes p in place. A centroid lying more than L/2 outside the box is first moved back by whole
+// periods (a deterministic relabelling of images that leaves U unchanged); no other wrapping.
+FireResult minimise(Packing& p, ForceField& field, const FireParams& params = {});
+
+// The smallest force FIRE can resolve in double precision: 16 ε k × (the larger of L and the
+// largest |coordinate|), since lobe positions, hence overlaps, carry rounding errors of a few
+// ulps of the coordinates. The effective force tolerance never goes below it.
+double force_resolution(const Packing& p);
+
+}  // namespace budjam

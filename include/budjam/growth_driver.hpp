@@ -1,0 +1,215 @@
+#pragma once
+// The quasistatic growth loop of MODEL.md ("Growth", "Jamming and compression targets"):
+//   growth step Δt → FIRE → classify E/N → accept / reject (halve Δt) → emit events.
+// Everything optional (logs, packings, moduli, spectra, rigidity) is an Observer that receives a
+// read-only view of each accepted state. The driver computes contacts, the contact network and the
+// bud pressures only when the protocol (feedback, depletion) or an observer needs them.
+//
+// Order of events for one accepted step (all see the same StateView, with the records of this
+// state already in place):
+//   Divided (one per division in the step) → BudEvent* (updates; `tagged` at a jamming state,
+//   `censored_unjam` at an unjamming) → StepAccepted → Unjammed | Jammed → TargetReached* →
+//   Depleted → then, at the end of the run, BudEvent* (censored_end) → Finished | Failed.
+// The initial relaxed state is announced as StepAccepted with step 0.
+// A rejected step emits nothing (it is undone exactly, RNG included).
+#include "budjam/bud_events.hpp"
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/growth.hpp"
+#include "budjam/packing.hpp"
+#include "budjam/scene.hpp"
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace budjam {
+
+// unjammed: jamming not (yet, or no longer) found, every cell grows at γ0.
+// jammed: at or above the jamming point φ_J; feedback (if P0 is set) is on.
+enum class Phase { unjammed, jammed };
+const char* to_string(Phase phase);
+
+enum class RunStatus {
+  running,
+  finished,          // every target landed (and φ_2 found or φ_J + max_dphi reached if asked)
+  step_limit,        // more than scene.max_steps growth steps (accepted + rejected)
+  dt_underflow,      // Δt halved below scene.dt_min
+  minimiser_failed,  // FIRE hit its iteration limit
+};
+const char* to_string(RunStatus status);
+
+// What an observer wants computed at every accepted step. Contacts and the network are always
+// available at accepted states above jamming (the driver needs them for φ_2 and the bud events)
+// and at every event state (Jammed, TargetReached, Depleted, Finished/Failed if above jamming).
+struct Needs {
+  bool contacts = false;        // contact list
+  bool network = false;         // ContactNetwork (implies contacts)
+  bool bud_pressures = false;   // p_i per cell (implies contacts); feedback runs always have them
+  bool before_jamming = false;  // also at accepted states in the unjammed phase
+  Needs& operator|=(const Needs& o) {
+    contacts |= o.contacts;
+    network |= o.network;
+    bud_pressures |= o.bud_pressures;
+    before_jamming |= o.before_jamming;
+    return *this;
+  }
+};
+
+// Data of the (latest) jamming point.
+struct JammingRecord {
+  int episode = 0;              // 0 for the first jamming, k after the k-th unjamming
+  long step = 0;                // accepted-step index of the jammed state
+  double phi = 0, P = 0, E_per_cell = 0;
+  std::size_t N = 0, N_nr = 0, N_f = 0, N_u = 0, N_u_buds = 0, N_c = 0;
+  double Z = 0, Z_iso = 0, dZ = 0;
+  double u = 0;                 // N_u / N_nr (contact-free lobes)
+  double u_buds = 0;            // the paper's u_J: unconstrained buds / N_nr
+  double n_J = 0;               // N_nr / L²
+  std::size_t tagged = 0;       // unconstrained buds tagged for the bud events and φ_2
+};
+
+struct TargetRecord {
+  std::size_t index = 0;        // k: position in scene.targets
+  double dphi = 0;              // requested Δφ
+  double phi_target = 0;        // φ_J + Δφ
+  long step = 0;
+  double phi = 0, P = 0, E_per_cell = 0;
+  std::size_t N = 0, N_nr = 0, N_f = 0, N_f_single = 0, N_c = 0, N_u = 0, N_u_buds = 0;
+  double Z = 0, u = 0, u_buds = 0, Z_iso = 0, dZ = 0;
+  double chi_c = 1;             // ⟨exp(−p/P0)⟩ over compressed buds (1 with P0 = none or none compressed)
+  long divisions_since_jamming = 0;
+};
+
+struct DepletionRecord {        // φ_2
+  long step = 0;
+  double phi = 0, P = 0;
+  std::size_t N = 0, N_nr = 0;
+  double Z = 0, u = 0, u_buds = 0, Z_iso = 0, dZ = 0;
+  std::size_t still_unconstrained = 0;  // tagged buds still unconstrained (≤ 1)
+  long divisions_since_jamming = 0;
+};
+
+struct UnjamRecord {
+  int episode = 0;              // the jamming episode that ended
+  long step = 0;
+  double phi = 0;
+  double phi_J = 0;             // the φ_J that was lost
+  std::size_t targets_lost = 0; // targets landed in that episode (discarded: targets are re-visited)
+};
+
+struct RunResult {
+  RunStatus status = RunStatus::running;
+  std::string message;          // one line for failures
+  std::optional<JammingRecord> jamming;
+  std::vector<TargetRecord> targets;          // of the current jamming episode, in increasing Δφ
+  std::optional<DepletionRecord> depletion;   // φ_2 of the current jamming episode
+  std::vector<UnjamRecord> unjammings;
+  long accepted = 0, rejected = 0;            // growth steps
+  long force_evaluations = 0, fire_iterations = 0;
+  long divisions = 0;                          // all divisions in accepted steps
+};
+
+// Read-only view of an accepted state. Pointers are null when not computed for this state.
+struct StateView {
+  long step = 0;                // accepted steps so far; 0 = the initial state
+  long attempts = 0;            // growth steps tried so far (accepted + rejected)
+  double dt = 0;                // Δt of the step that produced this state
+  double phi = 0, P = 0, E_per_cell = 0;
+  Phase phase = Phase::unjammed;
+  const Scene* scene = nullptr;
+  const Packing* packing = nullptr;
+  const std::vector<Contact>* contacts = nullptr;
+  const ContactNetwork* network = nullptr;
+  const std::vector<double>* bud_pressures = nullptr;
+  const JammingRecord* jamming = nullptr;     // null in the unjammed phase
+  const BudTracker* buds = nullptr;           // tags of the current jamming episode
+  long divisions_since_jamming = 0;           // 0 in the unjammed phase
+  std::size_t compressed_buds = 0;            // buds with ≥ 1 contact (valid when contacts != null)
+  double chi_c = 1;                           // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known)
+};
+
+struct StepAccepted { const StateView& state; };
+struct Jammed { const StateView& state; const JammingRecord& jamming; };
+struct Unjammed { const StateView& state; const UnjamRecord& record; };
+struct TargetReached { const StateView& state; const TargetRecord& target; };
+struct Depleted { const StateView& state; const DepletionRecord& depletion; };
+struct Divided { const StateView& state; const Division& division; };  // state: after minimisation
+struct BudEventHappened { const StateView& state; const BudEvent& event; };
+struct Failed { const StateView& state; const RunResult& result; };    // state: last accepted
+struct Finished { const StateView& state; const RunResult& result; };
+
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  // Unique name; keys the observer's section in a checkpoint.
+  virtual std::string name() const = 0;
+  virtual Needs needs() const { return {}; }
+
+  virtual void on_step_accepted(const StepAccepted&) {}
+  virtual void on_jammed(const Jammed&) {}
+  virtual void on_unjammed(const Unjammed&) {}
+  virtual void on_target_reached(const TargetReached&) {}
+  virtual void on_depleted(const Depleted&) {}
+  virtual void on_divided(const Divided&) {}
+  virtual void on_bud_event(const BudEventHappened&) {}
+  virtual void on_failed(const Failed&) {}
+  virtual void on_finished(const Finished&) {}
+
+  // Checkpoints: whatever the observer needs to continue after --resume (e.g. the byte length of
+  // the files it appends to, so that rows written after the checkpoint can be cut off; make them
+  // durable first, CsvLog::sync). Called after all events of a checkpointed step. Text; must not
+  // contain a line equal to "end-observer". On restore, load_state gets what save_state wrote; an
+  // observer with no section in the checkpoint is not called (fine for stateless ones such as a
+  // progress display); a section with content but no observer of that name is an error.
+  virtual void save_state(std::ostream&) {}
+  virtual void load_state(std::istream&) {}
+};
+
+// Extra knobs that are not part of a scene (tests use them).
+struct DriverOptions {
+  std::optional<std::uint64_t> seed;  // overrides scene.seed
+};
+
+class GrowthDriver {
+ public:
+  explicit GrowthDriver(const Scene& scene, const DriverOptions& options = {});
+  ~GrowthDriver();
+  GrowthDriver(const GrowthDriver&) = delete;
+  GrowthDriver& operator=(const GrowthDriver&) = delete;
+
+  // Non-owning; add all observers before the first advance() (and in the same order, by name,
+  // before restore()).
+  void add_observer(Observer& observer);
+
+  // One growth attempt (accepted or rejected). Returns the status after it.
+  RunStatus advance();
+  // Runs until the status is no longer `running`; emits Finished or Failed once.
+  RunStatus run();
+
+  // Called with the full driver state after all events of every `every`-th accepted step.
+  void set_checkpoint_writer(long every, std::function<void(const std::string& checkpoint)> writer);
+  std::string checkpoint();
+  // Restores a state written by checkpoint() of a driver built from the same scene.
+  // Throws InputError if it does not fit.
+  void restore(const std::string& checkpoint);
+
+  const Scene& scene() const;
+  std::uint64_t seed() const;
+  const Packing& packing() const;
+  const RunResult& result() const;
+  Phase phase() const;
+  double dt() const;
+  // View of the current (last accepted) state.
+  StateView view() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace budjam

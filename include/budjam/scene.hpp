@@ -1,0 +1,77 @@
+#pragma once
+// A run's description, validated: what to grow, how precisely, and what to observe.
+// Plain data; the TOML reader lives in tools/io (the library knows nothing of files).
+#include "budjam/fire.hpp"
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace budjam {
+
+// Thrown for invalid input; what() is one line that names the key and the problem,
+// e.g. "growth.P0: must be positive (got -0.001)".
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class DivisionRule { random, aligned, opposite };
+enum class InitialState { two_cells, random_seeds };
+
+// Where an on-demand computation (moduli, DOS) is made along a run.
+struct Schedule {
+  bool at_jamming = false;
+  bool at_phi2 = false;
+  bool at_targets = false;
+  long every = 0;  // every k accepted steps above jamming; 0 = never
+  bool any() const { return at_jamming || at_phi2 || at_targets || every > 0; }
+};
+
+struct Scene {
+  std::string name = "unnamed";
+  std::uint64_t seed = 1;
+
+  // [box]
+  double L = 8.0;
+
+  // [cells]
+  double r0 = 0.002;     // mean innate rate
+  double delta = 0.4;    // spread of γ0 = r0 (1 + δ (U − 1/2))
+  double alpha0 = 1.01;  // newborn aspect ratio
+  DivisionRule division = DivisionRule::random;
+
+  // [init]
+  InitialState init = InitialState::two_cells;
+  std::size_t n_seeds = 0;  // cells placed at random for InitialState::random_seeds
+
+  // [growth]
+  std::optional<double> P0;      // feedback pressure scale; nullopt = no feedback
+  double dt = 1.0;               // nominal growth step
+  double dt_min = 1e-12;         // bisection below this is a failure
+  long max_steps = 2000000;      // growth steps (accepted + rejected) before failing
+
+  // [jamming]
+  double epsilon_U = 1e-16;          // E/N below this: unjammed
+  double target_tolerance = 5e-9;    // |φ − (φ_J + Δφ)| on landing
+  std::vector<double> targets;       // Δφ, strictly increasing, > 0
+  bool continue_to_phi2 = false;     // keep growing past the last target until φ_2 is found
+  double max_dphi = 0.2;             // ... but never beyond φ_J + max_dphi
+
+  // [minimiser]
+  FireParams fire;
+  double skin = 0.3;
+
+  // [observe]
+  bool bud_events = true;
+  bool rigidity_events = false;
+  Schedule moduli;
+  Schedule dos;
+  long checkpoint_every = 0;   // accepted steps between checkpoints; 0 = none
+  bool progress = true;
+};
+
+// Throws InputError naming the first offending key.
+void validate(const Scene& scene);
+
+}  // namespace budjam

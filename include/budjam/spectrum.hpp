@@ -1,0 +1,151 @@
+#pragma once
+// Vibrational spectrum of an arrested packing (paper, appendix "Vibrational density of states";
+// MODEL.md "One cell" for the masses).
+//
+// The generalised problem H v = ω² M v is solved on the non-rattler cells, with M the diagonal
+// dumbbell mass matrix (m, m, I per cell). It is symmetrised with M^{-1/2}: the dynamical matrix
+// K = M^{-1/2} H M^{-1/2} (paper Eq. S-dynmat) has the same eigenvalues λ = ω², and its orthonormal
+// eigenvectors e are the mass-weighted modes, v = M^{-1/2} e.
+//
+// The two uniform translations t_x = (1,0,0,1,0,0,…), t_y = (0,1,0,0,1,0,…) are exact zero modes
+// of H in a periodic box (H t = 0 for any pair potential). They are removed by M-orthogonal
+// deflation: in mass-weighted coordinates T_α = M^{1/2} t_α / ‖M^{1/2} t_α‖ is an exact
+// eigenvector of K, so K maps the complement T^⊥ into itself and the spectrum on T^⊥ is the
+// rest of the spectrum. Dense: K is rotated by the two Householder reflectors that map T onto
+// the first two axes and the (3n−2)² complement block is diagonalised. ARPACK: the Lanczos
+// operator is P (K − σI)⁻¹ P with P = 1 − T Tᵀ and the start vector lies in T^⊥. No other mode is
+// removed: the unconstrained-bud modes stay in the spectrum and are counted.
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace budjam {
+
+// Diagonal of M in the layout of Packing::q: (m_i, m_i, I_i) for every cell, m = 1 + (b/D)²,
+// I = Σ_lobes m_lobe (ℓ² + R²/2). Diagonal because (x, y) is the centre of mass: the kinetic
+// energy of a rigid dumbbell has no translation–rotation cross term.
+Eigen::VectorXd mass_diagonal(const Packing& p);
+
+// H v = λ M v on a subset of the cells. H is the stiffness (Hessian of U) in the (x, y, θ) layout
+// of the kept cells, both triangles stored.
+struct VibrationalProblem {
+  Eigen::SparseMatrix<double> H;   // 3n × 3n
+  Eigen::VectorXd mass;            // 3n, diagonal of M
+  std::vector<std::size_t> cells;  // packing index of each kept cell (n of them)
+};
+
+// The problem of the non-rattler cells with the load-bearing contacts (rattlers and their
+// contacts removed), using the analytic Hessian (stiffness + prestress terms).
+VibrationalProblem vibrational_problem(const Packing& p, const std::vector<Contact>& contacts,
+                                       const ContactNetwork& net);
+
+enum class SpectrumMethod { automatic, dense, arpack };
+const char* to_string(SpectrumMethod method);
+// "auto" | "dense" | "arpack"; throws InputError naming `key` otherwise.
+SpectrumMethod parse_spectrum_method(const std::string& text, const std::string& key = "method");
+
+struct SpectrumOptions {
+  SpectrumMethod method = SpectrumMethod::automatic;
+  std::size_t dense_max_dof = 2000;  // automatic: dense when 3n − 2 ≤ this (≈ 670 cells, ~1 s)
+  int modes = 100;                   // ARPACK: the lowest K modes (clamped to 3n − 3)
+  int ncv = 0;                       // ARPACK Lanczos vectors; 0 = min(3n−2, max(2K+1, K+20))
+  double tol = 0.0;                  // ARPACK relative residual tolerance; 0 = machine precision
+  double sigma = -1e-3;              // ARPACK shift (units k/m); negative so K − σI is positive
+                                     // definite despite the zero modes. Retried ×10 more negative
+                                     // (up to 4 times) if the factorisation finds K − σI indefinite.
+  bool vectors = true;               // eigenvectors (needed for participation ratios)
+  std::uint64_t seed = 1;            // ARPACK start vector
+};
+
+struct Spectrum {
+  SpectrumMethod method = SpectrumMethod::dense;  // the one used (never automatic)
+  std::size_t n_cells = 0;       // n
+  std::size_t n_dof = 0;         // 3n − 2: modes of the full problem
+  Eigen::VectorXd lambda;        // ω², ascending: all n_dof (dense) or the lowest K (ARPACK)
+  Eigen::MatrixXd modes;         // mass-weighted eigenvectors as columns (3n rows), orthonormal,
+                                 // orthogonal to both translations; empty without vectors
+  double translation_residual = 0;  // ‖K T‖/‖K‖_max: 0 up to rounding for a correct Hessian
+  // ARPACK only:
+  double sigma = 0;              // shift actually used
+  int ncv = 0, restarts = 0, operator_applications = 0;
+  double seconds_factorise = 0, seconds_lanczos = 0;
+
+  bool complete() const { return static_cast<std::size_t>(lambda.size()) == n_dof; }
+};
+
+// Solves a problem given by H and diag(M) (any matrix, not only a packing's).
+Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
+                        const SpectrumOptions& options = {});
+
+// ---- spectral observables ------------------------------------------------------------------
+
+// Number of modes with λ < tol (quasi-zero modes; negative rounding noise included).
+std::size_t count_below(const Eigen::VectorXd& lambda, double tol);
+
+// The band edge ω*: the root-mean-square frequency of the lowest n_band modes above the
+// quasi-zero modes, ω* = sqrt(mean λ over those modes), with
+//   n_band = max(band_min, ceil(band_fraction · (n_dof − N_zero))),  N_zero = #{λ < lambda_tol}.
+// A fixed fraction of the extended band keeps ω* intensive (the paper's "lowest few modes" at
+// L = 15 are ≈ 1 % of ≈ 600 modes). `available` is false (ω* = NaN) when a partial spectrum
+// does not reach that far; `modes_needed` then says how many lowest modes would.
+struct BandEdgeRule {
+  double lambda_tol = 1e-6;
+  std::size_t band_min = 5;
+  double band_fraction = 0.01;
+};
+struct BandEdge {
+  bool available = false;
+  double omega_star = 0;
+  std::size_t n_zero = 0;        // modes below lambda_tol
+  std::size_t n_band = 0;        // modes averaged
+  std::size_t modes_needed = 0;  // n_zero + n_band
+};
+BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule = {});
+
+// Participation ratio of each computed mode, PR = (Σ_i w_i)² / (n Σ_i w_i²) with w_i the
+// kinetic-energy share of cell i (sum of its three squared mass-weighted components): 1/n for a
+// mode on one cell, O(1) for an extended mode. Requires eigenvectors.
+Eigen::VectorXd participation_ratios(const Spectrum& s);
+
+// D(ω) = (1/n_dof) Σ_n δ(ω − ω_n), binned on [0, omega_max) with `bins` equal bins; modes with
+// λ < exclude_below are left out (the paper's panel A omits the quasi-zero band) and counted.
+// For a partial spectrum only ω below the highest computed mode is meaningful: `omega_valid`.
+struct DosHistogram {
+  std::vector<double> edges;    // bins + 1
+  std::vector<double> density;  // bins, normalised by n_dof and bin width
+  std::size_t excluded = 0;     // modes below exclude_below
+  std::size_t outside = 0;      // modes with ω ≥ omega_max
+  double omega_valid = 0;       // histogram is complete below this ω
+};
+DosHistogram dos_histogram(const Spectrum& s, std::size_t bins, double omega_max, double exclude_below);
+
+// Signed frequency ω = sign(λ) sqrt(|λ|): a negative λ (instability or rounding) stays visible.
+double signed_omega(double lambda);
+
+// Everything `budjam dos` and the DOS observer report about one spectrum.
+struct SpectralSummary {
+  SpectrumMethod method = SpectrumMethod::dense;
+  std::size_t n_cells = 0, n_dof = 0, computed = 0;
+  double lambda_min = 0, lambda_max_computed = 0;
+  double lambda_tol = 1e-6;
+  std::size_t N_zero = 0;                                  // #{λ < lambda_tol}
+  bool zero_count_complete = true;  // false if a partial spectrum does not reach max(lambda_tol,
+                                    // 1e-5): the counts are then only lower bounds (compute more modes)
+  std::vector<std::pair<double, std::size_t>> zero_counts; // (tol, #{λ < tol}) for 1e-5 … 1e-8
+  BandEdge band;
+  double translation_residual = 0;
+};
+SpectralSummary summarise(const Spectrum& s, const BandEdgeRule& rule = {});
+
+// The number of lowest modes that `summarise` needs for ω* on a problem with n_dof modes and
+// about `expected_zero` quasi-zero modes (e.g. N_u), plus a margin of `spare`.
+int modes_for_band_edge(std::size_t n_dof, std::size_t expected_zero, const BandEdgeRule& rule = {},
+                        std::size_t spare = 16);
+
+}  // namespace budjam

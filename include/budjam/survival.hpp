@@ -1,0 +1,59 @@
+#pragma once
+// Kaplan–Meier survival S(a) of the buds that are unconstrained at jamming (paper Eq. 8; MODEL.md
+// "Bud events"). The "time" is the added bud size a = b² − b_J² (diameter squared; true area π a/4)
+// at which a tagged bud is completed (the event) or leaves observation without completing
+// (censored: its cell divided, the run ended, or the packing unjammed).
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+namespace budjam {
+
+struct SurvivalRecord {
+  double a = 0;        // ≥ 0: added size at the event or at censoring
+  bool event = false;  // true: completed; false: censored
+};
+
+// One distinct a at which something happened. `at_risk` counts records with a_i ≥ a (censored
+// records at the same a are still at risk: events come first at ties, the usual convention).
+struct KaplanMeierStep {
+  double a = 0;
+  std::size_t at_risk = 0, events = 0, censored = 0;
+  double S = 1;              // Ŝ(a) = Π_{a_k ≤ a} (1 − d_k / n_k)
+  double greenwood_var = 0;  // Ŝ(a)² Σ_{a_k ≤ a} d_k / (n_k (n_k − d_k)); 0 once Ŝ = 0
+};
+
+class KaplanMeierCurve {
+ public:
+  KaplanMeierCurve() = default;
+  explicit KaplanMeierCurve(std::vector<KaplanMeierStep> steps, std::size_t n, std::size_t events)
+      : steps_(std::move(steps)), n_(n), events_(events) {}
+
+  const std::vector<KaplanMeierStep>& steps() const { return steps_; }
+  std::size_t records() const { return n_; }
+  std::size_t events() const { return events_; }
+
+  // Right-continuous step function: Ŝ(a) = 1 before the first event.
+  double S(double a) const;
+  // Greenwood variance of Ŝ(a).
+  double variance(double a) const;
+  // ∫_0^a Ŝ(a') da' (exact for the step function).
+  double integral(double a) const;
+  // The smallest a at which Ŝ(a) ≤ level (for u_J S(a_ε) = ε: level = ε/u_J). 0 if level ≥ 1;
+  // nullopt if Ŝ never falls that low (too much censoring).
+  std::optional<double> quantile_point(double level) const;
+  // The largest a observed (event or censoring); Ŝ is undefined beyond it if it did not reach 0.
+  double last_observation() const { return steps_.empty() ? 0.0 : steps_.back().a; }
+
+ private:
+  std::vector<KaplanMeierStep> steps_;  // ascending a
+  std::size_t n_ = 0, events_ = 0;
+};
+
+// Throws std::invalid_argument for a negative or non-finite a.
+KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records);
+
+// a_ε with u_J Ŝ(a_ε) = ε (paper Eq. 14).
+std::optional<double> a_epsilon(const KaplanMeierCurve& S, double u_J, double epsilon);
+
+}  // namespace budjam

@@ -1,0 +1,168 @@
+// Linked-cell neighbour search with a Verlet skin, periodic with Lees–Edwards images.
+#include "budjam/cell_list.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace budjam {
+
+namespace {
+
+// Distance² between lobes a and b by the box's minimum-image convention.
+inline double distance2(const Lobes& lobes, const Box& box, std::size_t a, std::size_t b) {
+  double dx = lobes.x[a] - lobes.x[b];
+  double dy = lobes.y[a] - lobes.y[b];
+  box.minimum_image(dx, dy);
+  return dx * dx + dy * dy;
+}
+
+inline int wrap_index(long c, int n) {
+  const long m = c % n;
+  return static_cast<int>(m < 0 ? m + n : m);
+}
+
+}  // namespace
+
+bool NeighbourList::update(const Lobes& lobes, const Box& box) {
+  const std::size_t n = lobes.size();
+  bool rebuild = !valid_ || n != x0_.size() || box.L != box_.L || box.shear != box_.shear;
+  if (!rebuild) {
+    // Two largest squared displacements; a pair's distance can shrink by at most d1 + d2.
+    double m1 = 0.0, m2 = 0.0;
+    bool radii_changed = false, finite = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      radii_changed |= lobes.R[i] != R0_[i];
+      const double dx = lobes.x[i] - x0_[i], dy = lobes.y[i] - y0_[i];
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > m2) {
+        if (d2 > m1) {
+          m2 = m1;
+          m1 = d2;
+        } else {
+          m2 = d2;
+        }
+      }
+      finite &= std::isfinite(d2);  // a NaN fails every comparison above
+    }
+    // A non-finite displacement forces a rebuild, which then throws.
+    rebuild = radii_changed || !finite || !(std::sqrt(m1) + std::sqrt(m2) < skin_);
+  }
+  if (rebuild) build(lobes, box);
+  return rebuild;
+}
+
+void NeighbourList::build(const Lobes& lobes, const Box& box) {
+  const std::size_t n = lobes.size();
+  if (!(box.L > 0.0) || !std::isfinite(box.L) || !std::isfinite(box.shear))
+    throw std::domain_error("neighbour list: box side must be positive and finite (L = " + std::to_string(box.L) +
+                            ", shear = " + std::to_string(box.shear) + ")");
+  double R_max = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(lobes.x[i]) || !std::isfinite(lobes.y[i]) || !std::isfinite(lobes.R[i]))
+      throw std::domain_error("neighbour list: lobe " + std::to_string(i) + " of cell " +
+                              std::to_string(cell_of(i)) + " has a non-finite position or radius");
+    R_max = std::max(R_max, lobes.R[i]);
+  }
+  const double L = box.L;
+  const double cutoff = 2.0 * R_max + skin_;
+
+  // Cells per side: each at least `cutoff` wide, so that a 3×3 stencil holds every partner; at
+  // most about one cell per lobe, so that a huge box with few lobes does not allocate a huge grid.
+  const double fit = std::floor(L / cutoff);
+  const double cap = std::floor(std::sqrt(2.0 * static_cast<double>(n) + 9.0));
+  const int g = static_cast<int>(std::max(1.0, std::min(fit, cap)));
+  grid_ = g;
+  const double w = L / g;
+
+  // Lobes into cells (counting sort). A lobe is binned by its image in the primary box: a shift
+  // of k boxes in y moves x by k·γL (Lees–Edwards), as in Box::minimum_image.
+  const std::size_t n_cells = static_cast<std::size_t>(g) * static_cast<std::size_t>(g);
+  cell_of_lobe_.resize(n);
+  cell_start_.assign(n_cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ky = std::floor(lobes.y[i] / L);
+    double yw = lobes.y[i] - ky * L;
+    double xw = lobes.x[i] - ky * box.shear * L;
+    xw -= std::floor(xw / L) * L;
+    const int cx = std::clamp(static_cast<int>(xw / w), 0, g - 1);
+    const int cy = std::clamp(static_cast<int>(yw / w), 0, g - 1);
+    const auto c = static_cast<std::uint32_t>(cy * g + cx);
+    cell_of_lobe_[i] = c;
+    ++cell_start_[c + 1];
+  }
+  for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  sorted_.resize(n);
+  fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) sorted_[fill_[cell_of_lobe_[i]]++] = static_cast<std::uint32_t>(i);
+
+  // Lees–Edwards offset of the image row above, in cell widths: s = γL mod L.
+  double s = std::fmod(box.shear * L, L);
+  if (s < 0) s += L;
+  const double o = s / w;
+
+  pairs_.clear();
+  std::array<int, 12> stencil{};
+  std::vector<std::uint32_t>& partners = partners_;
+  for (std::size_t a = 0; a < n; ++a) {
+    const int c = static_cast<int>(cell_of_lobe_[a]);
+    const int cx = c % g, cy = c / g;
+    int m = 0;
+    for (int dy = -1; dy <= 1; ++dy) {
+      const int row = cy + dy;
+      if (row >= 0 && row < g) {
+        for (int dx = -1; dx <= 1; ++dx) stencil[m++] = row * g + wrap_index(cx + dx, g);
+      } else {
+        // Row across the y boundary: its lobes' images are shifted by +s (row above) or −s (row
+        // below); partners within `cutoff` lie in four columns (three when s = 0).
+        const int wrapped = row < 0 ? g - 1 : 0;
+        const double shift = row < 0 ? o : -o;
+        const long lo = static_cast<long>(std::floor(cx - 1 + shift));
+        const int cols = s == 0.0 ? 3 : 4;
+        for (int k = 0; k < cols; ++k) stencil[m++] = wrapped * g + wrap_index(lo + k, g);
+      }
+    }
+    // Small grids (g < 4) repeat cells in the stencil: visit each once.
+    std::sort(stencil.begin(), stencil.begin() + m);
+    m = static_cast<int>(std::unique(stencil.begin(), stencil.begin() + m) - stencil.begin());
+
+      partners.clear();
+    const std::size_t ca = cell_of(a);
+    for (int k = 0; k < m; ++k) {
+      const auto cell = static_cast<std::size_t>(stencil[k]);
+      for (std::uint32_t t = cell_start_[cell]; t < cell_start_[cell + 1]; ++t) {
+        const std::uint32_t b = sorted_[t];
+        if (b <= a || cell_of(b) == ca) continue;
+        const double reach = lobes.R[a] + lobes.R[b] + skin_;
+        if (distance2(lobes, box, a, b) < reach * reach) partners.push_back(b);
+      }
+    }
+    std::sort(partners.begin(), partners.end());
+    for (std::uint32_t b : partners) pairs_.emplace_back(static_cast<std::uint32_t>(a), b);
+  }
+
+  x0_.assign(lobes.x.begin(), lobes.x.end());
+  y0_.assign(lobes.y.begin(), lobes.y.end());
+  R0_.assign(lobes.R.begin(), lobes.R.end());
+  box_ = box;
+  valid_ = true;
+  ++rebuilds_;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Lobes& lobes, const Box& box,
+                                                                        double cutoff_extra) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  const std::size_t n = lobes.size();
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if (cell_of(a) == cell_of(b)) continue;
+      const double reach = lobes.R[a] + lobes.R[b] + cutoff_extra;
+      if (distance2(lobes, box, a, b) < reach * reach)
+        out.emplace_back(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
+    }
+  return out;
+}
+
+}  // namespace budjam

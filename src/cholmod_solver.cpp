@@ -1,0 +1,191 @@
+#include "budjam/cholmod_solver.hpp"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+namespace budjam {
+
+struct CholmodSolver::Impl {
+  cholmod_common common{};
+  cholmod_factor* L = nullptr;
+  // Upper-triangle pattern of the last analysed matrix, to reuse the ordering.
+  std::vector<int> outer, inner;
+  // Solve workspace, reused between calls (cholmod_solve2).
+  cholmod_dense* X = nullptr;
+  cholmod_dense* Y = nullptr;
+  cholmod_dense* E = nullptr;
+
+  explicit Impl(Factorisation kind) {
+    cholmod_start(&common);
+    common.print = 0;  // the library never prints; errors come back as exceptions
+    if (kind == Factorisation::ldlt) {
+      common.supernodal = CHOLMOD_SIMPLICIAL;  // supernodal CHOLMOD is LLᵀ only
+      common.final_ll = 0;
+    } else {
+      common.supernodal = CHOLMOD_AUTO;
+      // A simplicial factor is otherwise computed as LDLᵀ, which silently accepts indefinite
+      // matrices; LLᵀ stops at the first non-positive pivot (CHOLMOD_NOT_POSDEF).
+      common.final_ll = 1;
+    }
+  }
+  ~Impl() {
+    free_workspace();
+    if (L) cholmod_free_factor(&L, &common);
+    cholmod_finish(&common);
+  }
+  void free_workspace() {
+    if (X) cholmod_free_dense(&X, &common);
+    if (Y) cholmod_free_dense(&Y, &common);
+    if (E) cholmod_free_dense(&E, &common);
+  }
+  void drop_factor() {
+    if (L) cholmod_free_factor(&L, &common);
+    outer.clear();
+    inner.clear();
+  }
+  std::string status_text() const {
+    switch (common.status) {
+      case CHOLMOD_OUT_OF_MEMORY: return "out of memory";
+      case CHOLMOD_TOO_LARGE: return "problem too large";
+      case CHOLMOD_INVALID: return "invalid input";
+      case CHOLMOD_NOT_INSTALLED: return "method not installed";
+      case CHOLMOD_GPU_PROBLEM: return "GPU problem";
+      default: return "status " + std::to_string(common.status);
+    }
+  }
+};
+
+CholmodSolver::CholmodSolver(Factorisation kind) : impl_(std::make_unique<Impl>(kind)), kind_(kind) {}
+CholmodSolver::~CholmodSolver() = default;
+CholmodSolver::CholmodSolver(CholmodSolver&&) noexcept = default;
+CholmodSolver& CholmodSolver::operator=(CholmodSolver&&) noexcept = default;
+
+bool CholmodSolver::factor(const Eigen::SparseMatrix<double>& A) {
+  if (A.rows() != A.cols()) throw CholmodError("CholmodSolver::factor: matrix is not square");
+  Eigen::SparseMatrix<double> C = A.triangularView<Eigen::Upper>();
+  return factor_matrix(C);
+}
+
+bool CholmodSolver::factor(const Eigen::SparseMatrix<double>& A, double sigma, const Eigen::VectorXd& mass) {
+  if (A.rows() != A.cols()) throw CholmodError("CholmodSolver::factor: matrix is not square");
+  if (mass.size() != 0 && mass.size() != A.rows())
+    throw CholmodError("CholmodSolver::factor: mass vector does not match the matrix");
+  Eigen::SparseMatrix<double> D(A.rows(), A.cols());
+  D.reserve(Eigen::VectorXi::Constant(A.cols(), 1));
+  for (Eigen::Index k = 0; k < A.rows(); ++k) D.insert(k, k) = mass.size() ? mass[k] : 1.0;
+  Eigen::SparseMatrix<double> C = Eigen::SparseMatrix<double>(A - sigma * D).triangularView<Eigen::Upper>();
+  return factor_matrix(C);
+}
+
+bool CholmodSolver::factor(const Eigen::SparseMatrix<double>& A, double sigma, const Eigen::SparseMatrix<double>& M) {
+  if (A.rows() != A.cols() || M.rows() != A.rows() || M.cols() != A.cols())
+    throw CholmodError("CholmodSolver::factor: matrix sizes do not match");
+  Eigen::SparseMatrix<double> C = Eigen::SparseMatrix<double>(A - sigma * M).triangularView<Eigen::Upper>();
+  return factor_matrix(C);
+}
+
+bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
+  Eigen::SparseMatrix<double> C = Cin;
+  C.makeCompressed();
+  Impl& m = *impl_;
+  ok_ = false;
+  failed_column_ = -1;
+  negative_pivots_ = 0;
+  rcond_ = 0;
+  n_ = C.rows();
+
+  cholmod_sparse S{};
+  S.nrow = static_cast<size_t>(C.rows());
+  S.ncol = static_cast<size_t>(C.cols());
+  S.nzmax = static_cast<size_t>(C.nonZeros());
+  S.p = C.outerIndexPtr();
+  S.i = C.innerIndexPtr();
+  S.x = C.valuePtr();
+  S.stype = 1;  // symmetric, upper triangle
+  S.itype = CHOLMOD_INT;
+  S.xtype = CHOLMOD_REAL;
+  S.dtype = CHOLMOD_DOUBLE;
+  S.sorted = 1;
+  S.packed = 1;
+
+  const bool same_pattern =
+      m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
+      std::equal(m.outer.begin(), m.outer.end(), C.outerIndexPtr()) &&
+      static_cast<Eigen::Index>(m.inner.size()) == C.nonZeros() &&
+      std::equal(m.inner.begin(), m.inner.end(), C.innerIndexPtr());
+  if (!same_pattern) {
+    m.drop_factor();
+    m.L = cholmod_analyze(&S, &m.common);
+    if (!m.L) throw CholmodError("CHOLMOD analyse failed: " + m.status_text());
+    m.outer.assign(C.outerIndexPtr(), C.outerIndexPtr() + C.outerSize() + 1);
+    m.inner.assign(C.innerIndexPtr(), C.innerIndexPtr() + C.nonZeros());
+    ++analyses_;
+  }
+  const int good = cholmod_factorize(&S, m.L, &m.common);
+  if (m.common.status == CHOLMOD_NOT_POSDEF || (good && m.L->minor < m.L->n)) {
+    failed_column_ = static_cast<long>(m.L->minor);
+    m.drop_factor();  // a partial factor is not reused
+    return false;
+  }
+  if (!good || m.common.status < CHOLMOD_OK) throw CholmodError("CHOLMOD factorisation failed: " + m.status_text());
+  supernodal_ = m.L->is_super != 0;
+  factor_nonzeros_ = static_cast<long>(m.common.lnz);
+  rcond_ = cholmod_rcond(m.L, &m.common);
+  if (kind_ == Factorisation::ldlt) {
+    if (m.L->is_super || m.L->is_ll) throw CholmodError("CHOLMOD returned an LLᵀ factor where LDLᵀ was asked");
+    const int* Lp = static_cast<const int*>(m.L->p);
+    const double* Lx = static_cast<const double*>(m.L->x);
+    for (size_t j = 0; j < m.L->n; ++j)
+      if (Lx[Lp[j]] < 0) ++negative_pivots_;  // the diagonal D_jj is stored first in column j
+  }
+  ok_ = true;
+  return true;
+}
+
+void CholmodSolver::solve(const double* b, double* x) const {
+  if (!ok_) throw CholmodError("CholmodSolver::solve: no successful factorisation");
+  Impl& m = *impl_;
+  cholmod_dense B{};
+  B.nrow = static_cast<size_t>(n_);
+  B.ncol = 1;
+  B.nzmax = static_cast<size_t>(n_);
+  B.d = static_cast<size_t>(n_);
+  B.x = const_cast<double*>(b);
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, m.L, &B, nullptr, &m.X, nullptr, &m.Y, &m.E, &m.common))
+    throw CholmodError("CHOLMOD solve failed: " + m.status_text());
+  std::memmove(x, m.X->x, sizeof(double) * static_cast<size_t>(n_));
+}
+
+Eigen::VectorXd CholmodSolver::solve(const Eigen::VectorXd& b) const {
+  if (b.size() != n_) throw CholmodError("CholmodSolver::solve: right-hand side has the wrong size");
+  Eigen::VectorXd x(n_);
+  solve(b.data(), x.data());
+  return x;
+}
+
+Eigen::MatrixXd CholmodSolver::solve(const Eigen::MatrixXd& Bm) const {
+  if (!ok_) throw CholmodError("CholmodSolver::solve: no successful factorisation");
+  if (Bm.rows() != n_) throw CholmodError("CholmodSolver::solve: right-hand sides have the wrong size");
+  Impl& m = *impl_;
+  cholmod_dense B{};
+  B.nrow = static_cast<size_t>(n_);
+  B.ncol = static_cast<size_t>(Bm.cols());
+  B.nzmax = static_cast<size_t>(Bm.size());
+  B.d = static_cast<size_t>(n_);
+  B.x = const_cast<double*>(Bm.data());
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, m.L, &B, nullptr, &m.X, nullptr, &m.Y, &m.E, &m.common))
+    throw CholmodError("CHOLMOD solve failed: " + m.status_text());
+  Eigen::MatrixXd out(n_, Bm.cols());
+  std::memcpy(out.data(), m.X->x, sizeof(double) * static_cast<size_t>(Bm.size()));
+  return out;
+}
+
+}  // namespace budjam

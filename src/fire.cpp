@@ -1,0 +1,137 @@
+// FIRE 2.0 (Guénolé et al., Comput. Mater. Sci. 175, 109584 (2020), Algorithm 2 with the
+// semi-implicit Euler integrator) over the scaled coordinates (x, y, θ̃ = r_g θ).
+#include "budjam/fire.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace budjam {
+
+namespace {
+
+// Brings a centroid that has wandered more than half a box outside the primary box back by whole
+// periods (Lees–Edwards: a shift of k boxes in y moves x by k γL). Only far-out centroids move, so
+// ordinary runs keep continuous coordinates, while coordinates stay O(L) and the force resolution
+// (∝ ulp of the coordinates) does not degrade in very long runs. The energy is unchanged.
+void wrap_far_centroids(Packing& p) {
+  const double L = p.box.L;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    double& x = p.q[3 * i];
+    double& y = p.q[3 * i + 1];
+    if (y < -0.5 * L || y >= 1.5 * L) {
+      const double k = std::floor(y / L);
+      y -= k * L;
+      x -= k * p.box.shear * L;
+    }
+    if (x < -0.5 * L || x >= 1.5 * L) x -= std::floor(x / L) * L;
+  }
+}
+
+}  // namespace
+
+double force_resolution(const Packing& p) {
+  double extent = p.box.L;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    extent = std::max({extent, std::abs(p.x(i)), std::abs(p.y(i))});
+  return 16.0 * std::numeric_limits<double>::epsilon() * kSpring * extent;
+}
+
+FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
+  FireResult res;
+  const std::size_t n = p.size();
+  if (n == 0) {
+    res.converged = true;
+    return res;
+  }
+  wrap_far_centroids(p);
+
+  const Eigen::Index m = static_cast<Eigen::Index>(3 * n);
+  std::vector<double> rg(n), inv_rg(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    rg[i] = p.dumbbell(i).gyration;
+    inv_rg[i] = 1.0 / rg[i];
+  }
+  const double tol = std::max(prm.force_tol, force_resolution(p));
+  const double floor_total = prm.energy_floor * static_cast<double>(n);
+
+  Eigen::VectorXd F(m), v = Eigen::VectorXd::Zero(m);
+  double* q = p.q.data();
+  double* f = F.data();
+  double* vel = v.data();
+
+  // Forces on the scaled coordinates: F_θ̃ = τ / r_g. Returns the largest |component|.
+  auto scale_forces = [&]() {
+    double fmax = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      f[3 * i + 2] *= inv_rg[i];
+      fmax = std::max({fmax, std::abs(f[3 * i]), std::abs(f[3 * i + 1]), std::abs(f[3 * i + 2])});
+    }
+    return fmax;
+  };
+  // x̃ += h v in scaled coordinates: θ moves by h v_θ̃ / r_g.
+  auto move = [&](double h) {
+    for (std::size_t i = 0; i < n; ++i) {
+      q[3 * i] += h * vel[3 * i];
+      q[3 * i + 1] += h * vel[3 * i + 1];
+      q[3 * i + 2] += h * vel[3 * i + 2] * inv_rg[i];
+    }
+  };
+  auto done = [&](double U, double fmax) {
+    // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
+    return fmax < tol || U < floor_total;
+  };
+
+  double U = field.evaluate(p, F);
+  ++res.evaluations;
+  double fmax = scale_forces();
+  if (done(U, fmax)) {
+    res.converged = true;
+    res.energy = U;
+    res.max_force = fmax;
+    return res;
+  }
+
+  double dt = prm.dt_start;
+  double alpha = prm.alpha_start;
+  long n_positive = 0;
+  for (long it = 1; it <= prm.max_iterations; ++it) {
+    res.iterations = it;
+    const double power = F.dot(v);
+    if (power > 0.0) {
+      ++n_positive;
+      if (n_positive > prm.n_delay) {
+        dt = std::min(dt * prm.f_inc, prm.dt_max);
+        alpha *= prm.f_alpha;
+      }
+    } else {
+      n_positive = 0;
+      // Half step back: undo half of the last move, which went uphill (FIRE 2.0 inertia correction),
+      // with the step that made it.
+      move(-0.5 * dt);
+      v.setZero();
+      if (it > prm.n_delay) {  // no slow-down during the initial delay
+        if (dt * prm.f_dec >= prm.dt_min) dt *= prm.f_dec;
+        alpha = prm.alpha_start;
+      }
+    }
+    // Semi-implicit Euler with FIRE mixing: v ← v + dt F; v ← (1−α) v + α |v| F̂; x ← x + dt v.
+    v += dt * F;
+    const double vn = v.norm(), fn = F.norm();
+    if (fn > 0.0) v = (1.0 - alpha) * v + (alpha * vn / fn) * F;
+    move(dt);
+
+    U = field.evaluate(p, F);
+    ++res.evaluations;
+    fmax = scale_forces();
+    if (done(U, fmax)) {
+      res.converged = true;
+      break;
+    }
+  }
+  res.energy = U;
+  res.max_force = fmax;
+  return res;
+}
+
+}  // namespace budjam

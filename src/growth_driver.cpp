@@ -1,0 +1,626 @@
+#include "budjam/growth_driver.hpp"
+
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace budjam {
+
+const char* to_string(Phase phase) {
+  switch (phase) {
+    case Phase::unjammed: return "unjammed";
+    case Phase::jammed: return "jammed";
+  }
+  return "?";
+}
+
+const char* to_string(RunStatus status) {
+  switch (status) {
+    case RunStatus::running: return "running";
+    case RunStatus::finished: return "finished";
+    case RunStatus::step_limit: return "step_limit";
+    case RunStatus::dt_underflow: return "dt_underflow";
+    case RunStatus::minimiser_failed: return "minimiser_failed";
+  }
+  return "?";
+}
+
+namespace {
+
+// Exact text round trip of a double.
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+struct Reader {
+  std::istream& is;
+  std::string word() {
+    std::string w;
+    if (!(is >> w)) throw InputError("checkpoint: truncated");
+    return w;
+  }
+  void expect(const std::string& key) {
+    const std::string w = word();
+    if (w != key) throw InputError("checkpoint: expected '" + key + "', found '" + w + "'");
+  }
+  double real() {
+    const std::string w = word();
+    char* end = nullptr;
+    const double v = std::strtod(w.c_str(), &end);
+    if (end == w.c_str() || *end) throw InputError("checkpoint: bad number '" + w + "'");
+    return v;
+  }
+  long integer() {
+    const std::string w = word();
+    char* end = nullptr;
+    const long v = std::strtol(w.c_str(), &end, 10);
+    if (end == w.c_str() || *end) throw InputError("checkpoint: bad integer '" + w + "'");
+    return v;
+  }
+  std::size_t size() { return static_cast<std::size_t>(integer()); }
+};
+
+}  // namespace
+
+struct GrowthDriver::Impl {
+  Scene scene;
+  std::uint64_t seed = 0;
+  std::vector<Observer*> observers;
+  Needs needs;
+
+  // The last accepted state and everything that a rejected step must not touch.
+  Packing packing;
+  Rng rng;
+  Phase phase = Phase::unjammed;
+  double dt = 1.0;       // Δt of the next attempt
+  double last_dt = 0.0;  // Δt of the step that produced the accepted state
+  long step = 0, attempts = 0;
+  bool started = false;
+  RunResult result;
+  std::size_t next_target = 0;
+  long divisions_since_jamming = 0;
+  int episodes = 0;  // jamming episodes begun
+  BudTracker buds;
+
+  // Derived from the accepted state (recomputed identically after a restore).
+  double E = 0, P = 0, phi = 0;
+  std::vector<Contact> contacts;
+  bool have_contacts = false;
+  ContactNetwork net;
+  bool have_net = false;
+  std::vector<double> pressures;
+  bool have_pressures = false;
+  std::size_t compressed = 0;
+  double chi_c = 1.0;
+  std::vector<double> rates;  // γ_i of the next step, frozen from the accepted state
+
+  ForceField field;
+  Eigen::VectorXd force;
+  bool final_emitted = false;
+  long checkpoint_every = 0;
+  std::function<void(const std::string&)> checkpoint_writer;
+
+  Impl(const Scene& s, const DriverOptions& o) : scene(s), field(s.skin) {
+    validate(scene);
+    seed = o.seed ? *o.seed : scene.seed;
+    rng.seed(seed);
+    dt = scene.dt;
+  }
+
+  // U/N of `p` with a freshly built neighbour list, so that the list (and the order of the
+  // contacts taken from it) depends only on the configuration, not on the history of rebuilds:
+  // a resumed run then repeats an uninterrupted one bit for bit.
+  double fresh_energy_per_cell(const Packing& p) {
+    field.invalidate();
+    const double U = field.evaluate(p, force);
+    return p.size() ? U / static_cast<double>(p.size()) : 0.0;
+  }
+
+  // Contacts, P, network, bud pressures, rates for the accepted state. Requires the field to be
+  // current for `packing` (fresh_energy_per_cell just called on it).
+  void derive() {
+    phi = packing.packing_fraction();
+    contacts = find_contacts(packing, field.lobes(), field.neighbours());
+    have_contacts = true;
+    P = pressure(contacts, packing.box);
+    const bool jammed = phase == Phase::jammed;
+    const bool observe_here = jammed || needs.before_jamming;
+    have_net = jammed || (observe_here && needs.network);
+    if (have_net) net = analyse_network(packing.size(), contacts);
+    const bool feedback = jammed && scene.P0.has_value();
+    have_pressures = feedback || (observe_here && needs.bud_pressures);
+    if (have_pressures) pressures = bud_pressures(packing, contacts);
+    compressed = 0;
+    std::vector<char> touched(packing.size(), 0);
+    for (const Contact& c : contacts) {
+      if (is_bud(c.i)) touched[cell_of(c.i)] = 1;
+      if (is_bud(c.j)) touched[cell_of(c.j)] = 1;
+    }
+    for (char t : touched) compressed += t ? 1 : 0;
+    chi_c = 1.0;
+    if (have_pressures && scene.P0) {
+      double sum = 0;
+      std::size_t n = 0;
+      for (double p : pressures)
+        if (p > 0) sum += growth_factor(p, scene.P0), ++n;
+      if (n) chi_c = sum / static_cast<double>(n);
+    }
+    rates = growth_rates(packing, feedback ? &pressures : nullptr, scene.P0);
+  }
+
+  StateView view() const {
+    StateView v;
+    v.step = step;
+    v.attempts = attempts;
+    v.dt = last_dt;
+    v.phi = phi;
+    v.P = P;
+    v.E_per_cell = E;
+    v.phase = phase;
+    v.scene = &scene;
+    v.packing = &packing;
+    v.contacts = have_contacts ? &contacts : nullptr;
+    v.network = have_net ? &net : nullptr;
+    v.bud_pressures = have_pressures ? &pressures : nullptr;
+    v.jamming = (phase == Phase::jammed && result.jamming) ? &*result.jamming : nullptr;
+    v.buds = &buds;
+    v.divisions_since_jamming = phase == Phase::jammed ? divisions_since_jamming : 0;
+    v.compressed_buds = compressed;
+    v.chi_c = chi_c;
+    return v;
+  }
+
+  void emit_bud_events(const StateView& v, const std::vector<BudEvent>& events) {
+    for (const BudEvent& e : events)
+      for (Observer* o : observers) o->on_bud_event(BudEventHappened{v, e});
+  }
+
+  void start() {
+    packing = initial_state(scene, rng);
+    field.invalidate();
+    const FireResult fr = minimise(packing, field, scene.fire);
+    result.force_evaluations += fr.evaluations + 1;
+    result.fire_iterations += fr.iterations;
+    started = true;
+    if (!fr.converged) {
+      E = fresh_energy_per_cell(packing);
+      derive();
+      return fail(RunStatus::minimiser_failed, "FIRE did not converge on the initial state");
+    }
+    E = fresh_energy_per_cell(packing);
+    if (E >= scene.epsilon_U)
+      throw InputError("init: the relaxed initial state is already jammed (E/N = " + num(E) + ")");
+    derive();
+    const StateView v = view();
+    for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
+  }
+
+  void fail(RunStatus status, std::string message) {
+    result.status = status;
+    result.message = std::move(message);
+    finish_events();
+  }
+
+  void finish_events() {
+    if (final_emitted) return;
+    final_emitted = true;
+    const StateView v = view();
+    if (phase == Phase::jammed) emit_bud_events(v, buds.close(BudEventKind::censored_end, step, phi, packing));
+    for (Observer* o : observers) {
+      if (result.status == RunStatus::finished) o->on_finished(Finished{v, result});
+      else o->on_failed(Failed{v, result});
+    }
+  }
+
+  TargetRecord target_record(std::size_t k) const {
+    TargetRecord t;
+    t.index = k;
+    t.dphi = scene.targets[k];
+    t.phi_target = result.jamming->phi + scene.targets[k];
+    t.step = step;
+    t.phi = phi;
+    t.P = P;
+    t.E_per_cell = E;
+    t.N = packing.size();
+    t.N_nr = net.N_nr;
+    t.N_f = net.N_f;
+    t.N_f_single = net.N_f_single_pass;
+    t.N_c = net.N_c;
+    t.N_u = net.N_u;
+    t.N_u_buds = net.N_u_buds;
+    t.Z = net.Z;
+    t.u = net.u;
+    t.u_buds = net.u_buds;
+    t.Z_iso = net.Z_iso;
+    t.dZ = net.dZ;
+    t.chi_c = chi_c;
+    t.divisions_since_jamming = divisions_since_jamming;
+    return t;
+  }
+
+  RunStatus advance() {
+    if (result.status != RunStatus::running) return result.status;
+    if (!started) {
+      start();
+      return result.status;
+    }
+    if (attempts >= scene.max_steps) {
+      fail(RunStatus::step_limit, "more than growth.max_steps = " + std::to_string(scene.max_steps) +
+                                      " growth steps without reaching the end of the run");
+      return result.status;
+    }
+
+    // Trial step on copies: a rejection leaves the accepted packing and RNG untouched.
+    Packing trial = packing;
+    Rng trial_rng = rng;
+    const std::vector<Division> divisions = grow_step(trial, rates, dt, scene, trial_rng);
+    field.invalidate();
+    const FireResult fr = minimise(trial, field, scene.fire);
+    ++attempts;
+    result.force_evaluations += fr.evaluations + 1;
+    result.fire_iterations += fr.iterations;
+    if (!fr.converged) {
+      fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
+                                            std::to_string(scene.fire.max_iterations) + " (growth step " +
+                                            std::to_string(attempts) + ", dt = " + num(dt) + ")");
+      return result.status;
+    }
+    const double E_trial = fresh_energy_per_cell(trial);
+    const double phi_trial = trial.packing_fraction();
+    const double eps = scene.epsilon_U;
+
+    bool reject = false;
+    if (phase == Phase::unjammed) {
+      reject = E_trial > 2.0 * eps;  // overshot jamming: bisect
+    } else if (E_trial >= eps) {
+      if (next_target < scene.targets.size()) {
+        reject = phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance;
+      } else if (scene.continue_to_phi2 && !result.depletion &&
+                 phi_trial > result.jamming->phi + scene.max_dphi) {
+        // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
+        field.invalidate();
+        result.status = RunStatus::finished;
+        finish_events();
+        return result.status;
+      }
+    }
+    if (reject) {
+      ++result.rejected;
+      dt *= 0.5;
+      if (dt < scene.dt_min)
+        fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) +
+                                          " (phase " + to_string(phase) + ", phi = " + num(phi) + ")");
+      return result.status;
+    }
+
+    // Accept.
+    packing = std::move(trial);
+    rng = trial_rng;
+    E = E_trial;
+    ++step;
+    ++result.accepted;
+    last_dt = dt;
+    dt = scene.dt;
+    result.divisions += static_cast<long>(divisions.size());
+
+    bool jammed_now = false, unjammed_now = false;
+    if (phase == Phase::unjammed && E >= eps) {
+      phase = Phase::jammed;
+      jammed_now = true;
+    } else if (phase == Phase::jammed && E < eps) {
+      phase = Phase::unjammed;
+      unjammed_now = true;
+    } else if (phase == Phase::jammed) {
+      divisions_since_jamming += static_cast<long>(divisions.size());
+    }
+    derive();
+
+    // Records first, so that every event of this state sees the same, final view.
+    std::vector<BudEvent> bud_events;
+    if (phase == Phase::jammed && !jammed_now)
+      bud_events = buds.update(step, phi, packing, contacts, net, divisions);
+    if (unjammed_now) {
+      UnjamRecord r;
+      r.episode = result.jamming->episode;
+      r.step = step;
+      r.phi = phi;
+      r.phi_J = result.jamming->phi;
+      r.targets_lost = result.targets.size();
+      result.unjammings.push_back(r);
+      bud_events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
+      // The search for jamming restarts: φ_J, the targets and φ_2 belong to the next episode.
+      result.jamming.reset();
+      result.targets.clear();
+      result.depletion.reset();
+      next_target = 0;
+      divisions_since_jamming = 0;
+    }
+    if (jammed_now) {
+      JammingRecord j;
+      j.episode = episodes++;
+      j.step = step;
+      j.phi = phi;
+      j.P = P;
+      j.E_per_cell = E;
+      j.N = packing.size();
+      j.N_nr = net.N_nr;
+      j.N_f = net.N_f;
+      j.N_u = net.N_u;
+      j.N_u_buds = net.N_u_buds;
+      j.N_c = net.N_c;
+      j.Z = net.Z;
+      j.Z_iso = net.Z_iso;
+      j.dZ = net.dZ;
+      j.u = net.u;
+      j.u_buds = net.u_buds;
+      j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
+      bud_events = buds.tag(j.episode, step, phi, packing, net);
+      j.tagged = bud_events.size();
+      result.jamming = j;
+      result.targets.clear();
+      result.depletion.reset();
+      next_target = 0;
+      divisions_since_jamming = 0;
+    }
+
+    const StateView v = view();
+    for (const Division& d : divisions)
+      for (Observer* o : observers) o->on_divided(Divided{v, d});
+    emit_bud_events(v, bud_events);
+    for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
+    if (unjammed_now)
+      for (Observer* o : observers) o->on_unjammed(Unjammed{v, result.unjammings.back()});
+    if (jammed_now)
+      for (Observer* o : observers) o->on_jammed(Jammed{v, *result.jamming});
+
+    if (phase == Phase::jammed && !jammed_now) {
+      while (next_target < scene.targets.size() &&
+             std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
+        result.targets.push_back(target_record(next_target));
+        ++next_target;
+        for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
+      }
+      if (!result.depletion && buds.active() <= 1) {
+        DepletionRecord d;
+        d.step = step;
+        d.phi = phi;
+        d.P = P;
+        d.N = packing.size();
+        d.N_nr = net.N_nr;
+        d.Z = net.Z;
+        d.u = net.u;
+        d.u_buds = net.u_buds;
+        d.Z_iso = net.Z_iso;
+        d.dZ = net.dZ;
+        d.still_unconstrained = buds.active();
+        d.divisions_since_jamming = divisions_since_jamming;
+        result.depletion = d;
+        for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
+      }
+    }
+
+    if (phase == Phase::jammed && next_target == scene.targets.size() &&
+        (!scene.continue_to_phi2 || result.depletion)) {
+      result.status = RunStatus::finished;
+      finish_events();
+      return result.status;
+    }
+    if (checkpoint_every > 0 && checkpoint_writer && step % checkpoint_every == 0) checkpoint_writer(save());
+    return result.status;
+  }
+
+  // ---- checkpoints ---------------------------------------------------------------------------
+  std::string save() {
+    std::ostringstream os;
+    os << "budjam-checkpoint 1\n";
+    os << "seed " << seed << '\n';
+    os << "rng " << rng << '\n';
+    os << "state " << to_string(phase) << ' ' << num(dt) << ' ' << num(last_dt) << ' ' << step << ' ' << attempts
+       << ' ' << next_target << ' ' << divisions_since_jamming << ' ' << episodes << '\n';
+    os << "counters " << result.accepted << ' ' << result.rejected << ' ' << result.force_evaluations << ' '
+       << result.fire_iterations << ' ' << result.divisions << '\n';
+    os << "jamming " << (result.jamming ? 1 : 0);
+    if (const auto& j = result.jamming)
+      os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
+         << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c
+         << ' ' << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds)
+         << ' ' << num(j->n_J) << ' ' << j->tagged;
+    os << '\n';
+    os << "targets " << result.targets.size() << '\n';
+    for (const TargetRecord& t : result.targets)
+      os << t.index << ' ' << num(t.dphi) << ' ' << num(t.phi_target) << ' ' << t.step << ' ' << num(t.phi) << ' '
+         << num(t.P) << ' ' << num(t.E_per_cell) << ' ' << t.N << ' ' << t.N_nr << ' ' << t.N_f << ' ' << t.N_f_single
+         << ' ' << t.N_c << ' ' << t.N_u << ' ' << t.N_u_buds << ' ' << num(t.Z) << ' ' << num(t.u) << ' '
+         << num(t.u_buds) << ' ' << num(t.Z_iso) << ' ' << num(t.dZ) << ' ' << num(t.chi_c) << ' '
+         << t.divisions_since_jamming << '\n';
+    os << "depletion " << (result.depletion ? 1 : 0);
+    if (const auto& d = result.depletion)
+      os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' '
+         << num(d->Z) << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
+         << d->still_unconstrained << ' ' << d->divisions_since_jamming;
+    os << '\n';
+    os << "unjammings " << result.unjammings.size() << '\n';
+    for (const UnjamRecord& u : result.unjammings)
+      os << u.episode << ' ' << u.step << ' ' << num(u.phi) << ' ' << num(u.phi_J) << ' ' << u.targets_lost << '\n';
+    buds.save(os);
+    os << "packing " << packing.size() << ' ' << num(packing.box.L) << ' ' << num(packing.box.shear) << ' '
+       << packing.next_id << '\n';
+    for (std::size_t i = 0; i < packing.size(); ++i)
+      os << num(packing.x(i)) << ' ' << num(packing.y(i)) << ' ' << num(packing.theta(i)) << ' ' << num(packing.b[i])
+         << ' ' << num(packing.gamma0[i]) << ' ' << packing.id[i] << ' ' << packing.parent[i] << '\n';
+    for (Observer* o : observers) {
+      os << "observer " << o->name() << '\n';
+      o->save_state(os);
+      os << "\nend-observer\n";
+    }
+    os << "end\n";
+    return os.str();
+  }
+
+  void load(const std::string& text) {
+    std::istringstream is(text);
+    Reader r{is};
+    r.expect("budjam-checkpoint");
+    if (r.integer() != 1) throw InputError("checkpoint: unknown version");
+    r.expect("seed");
+    const std::string s = r.word();
+    if (std::to_string(seed) != s)
+      throw InputError("checkpoint: seed " + s + " does not match the run's seed " + std::to_string(seed));
+    r.expect("rng");
+    if (!(is >> rng)) throw InputError("checkpoint: bad random-stream state");
+    r.expect("state");
+    const std::string ph = r.word();
+    if (ph == "jammed") phase = Phase::jammed;
+    else if (ph == "unjammed") phase = Phase::unjammed;
+    else throw InputError("checkpoint: unknown phase '" + ph + "'");
+    dt = r.real();
+    last_dt = r.real();
+    step = r.integer();
+    attempts = r.integer();
+    next_target = r.size();
+    divisions_since_jamming = r.integer();
+    episodes = static_cast<int>(r.integer());
+    r.expect("counters");
+    result = RunResult{};
+    result.accepted = r.integer();
+    result.rejected = r.integer();
+    result.force_evaluations = r.integer();
+    result.fire_iterations = r.integer();
+    result.divisions = r.integer();
+    r.expect("jamming");
+    if (r.integer()) {
+      JammingRecord j;
+      j.episode = static_cast<int>(r.integer());
+      j.step = r.integer();
+      j.phi = r.real(), j.P = r.real(), j.E_per_cell = r.real();
+      j.N = r.size(), j.N_nr = r.size(), j.N_f = r.size(), j.N_u = r.size(), j.N_u_buds = r.size(), j.N_c = r.size();
+      j.Z = r.real(), j.Z_iso = r.real(), j.dZ = r.real(), j.u = r.real(), j.u_buds = r.real(), j.n_J = r.real();
+      j.tagged = r.size();
+      result.jamming = j;
+    }
+    r.expect("targets");
+    for (std::size_t k = 0, n = r.size(); k < n; ++k) {
+      TargetRecord t;
+      t.index = r.size();
+      t.dphi = r.real(), t.phi_target = r.real();
+      t.step = r.integer();
+      t.phi = r.real(), t.P = r.real(), t.E_per_cell = r.real();
+      t.N = r.size(), t.N_nr = r.size(), t.N_f = r.size(), t.N_f_single = r.size(), t.N_c = r.size();
+      t.N_u = r.size(), t.N_u_buds = r.size();
+      t.Z = r.real(), t.u = r.real(), t.u_buds = r.real(), t.Z_iso = r.real(), t.dZ = r.real(), t.chi_c = r.real();
+      t.divisions_since_jamming = r.integer();
+      result.targets.push_back(t);
+    }
+    r.expect("depletion");
+    if (r.integer()) {
+      DepletionRecord d;
+      d.step = r.integer();
+      d.phi = r.real(), d.P = r.real();
+      d.N = r.size(), d.N_nr = r.size();
+      d.Z = r.real(), d.u = r.real(), d.u_buds = r.real(), d.Z_iso = r.real(), d.dZ = r.real();
+      d.still_unconstrained = r.size();
+      d.divisions_since_jamming = r.integer();
+      result.depletion = d;
+    }
+    r.expect("unjammings");
+    for (std::size_t k = 0, n = r.size(); k < n; ++k) {
+      UnjamRecord u;
+      u.episode = static_cast<int>(r.integer());
+      u.step = r.integer();
+      u.phi = r.real(), u.phi_J = r.real();
+      u.targets_lost = r.size();
+      result.unjammings.push_back(u);
+    }
+    buds.load(is);
+    r.expect("packing");
+    const std::size_t n = r.size();
+    Packing p;
+    p.box.L = r.real();
+    p.box.shear = r.real();
+    const long next_id = r.integer();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = r.real(), y = r.real(), th = r.real(), b = r.real(), g0 = r.real();
+      const long id = r.integer(), parent = r.integer();
+      p.add_cell(x, y, th, b, g0, parent);
+      p.id.back() = id;
+    }
+    p.next_id = next_id;
+    if (p.box.L != scene.L) throw InputError("checkpoint: box side does not match the scene");
+    packing = std::move(p);
+
+    // Observer sections, matched by name.
+    std::map<std::string, Observer*> by_name;
+    for (Observer* o : observers) by_name[o->name()] = o;
+    std::string line;
+    std::getline(is, line);  // end of the last packing line
+    while (std::getline(is, line)) {
+      if (line == "end") break;
+      if (line.rfind("observer ", 0) != 0) throw InputError("checkpoint: unexpected line '" + line + "'");
+      const std::string name = line.substr(9);
+      std::string body, l;
+      while (std::getline(is, l) && l != "end-observer") body += l + '\n';
+      auto it = by_name.find(name);
+      if (it == by_name.end()) {
+        if (body.find_first_not_of(" \n\t") != std::string::npos)
+          throw InputError("checkpoint: state saved for observer '" + name + "', which this run does not have");
+        continue;
+      }
+      std::istringstream os(body);
+      it->second->load_state(os);
+      by_name.erase(it);
+    }
+    if (line != "end") throw InputError("checkpoint: truncated (no 'end' line)");
+
+    started = true;
+    final_emitted = false;
+    result.status = RunStatus::running;
+    E = fresh_energy_per_cell(packing);
+    derive();
+  }
+};
+
+GrowthDriver::GrowthDriver(const Scene& scene, const DriverOptions& options)
+    : impl_(std::make_unique<Impl>(scene, options)) {}
+GrowthDriver::~GrowthDriver() = default;
+
+void GrowthDriver::add_observer(Observer& observer) {
+  impl_->observers.push_back(&observer);
+  Needs n = observer.needs();
+  if (n.network || n.bud_pressures) n.contacts = true;
+  impl_->needs |= n;
+}
+
+RunStatus GrowthDriver::advance() { return impl_->advance(); }
+
+RunStatus GrowthDriver::run() {
+  while (impl_->advance() == RunStatus::running) {
+  }
+  return impl_->result.status;
+}
+
+void GrowthDriver::set_checkpoint_writer(long every, std::function<void(const std::string&)> writer) {
+  impl_->checkpoint_every = every;
+  impl_->checkpoint_writer = std::move(writer);
+}
+
+std::string GrowthDriver::checkpoint() { return impl_->save(); }
+void GrowthDriver::restore(const std::string& checkpoint) { impl_->load(checkpoint); }
+
+const Scene& GrowthDriver::scene() const { return impl_->scene; }
+std::uint64_t GrowthDriver::seed() const { return impl_->seed; }
+const Packing& GrowthDriver::packing() const { return impl_->packing; }
+const RunResult& GrowthDriver::result() const { return impl_->result; }
+Phase GrowthDriver::phase() const { return impl_->phase; }
+double GrowthDriver::dt() const { return impl_->dt; }
+StateView GrowthDriver::view() const { return impl_->view(); }
+
+}  // namespace budjam

@@ -1,0 +1,311 @@
+#include "budjam/spectrum.hpp"
+
+#include "budjam/arpack.hpp"
+#include "budjam/cholmod_solver.hpp"
+#include "budjam/hessian.hpp"
+#include "budjam/scene.hpp"  // InputError
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Householder>
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace budjam {
+
+Eigen::VectorXd mass_diagonal(const Packing& p) {
+  Eigen::VectorXd m(3 * p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Dumbbell d = p.dumbbell(i);
+    m[3 * i] = d.mass;
+    m[3 * i + 1] = d.mass;
+    m[3 * i + 2] = d.inertia;
+  }
+  return m;
+}
+
+VibrationalProblem vibrational_problem(const Packing& p, const std::vector<Contact>& contacts,
+                                       const ContactNetwork& net) {
+  const DofMap map = non_rattler_dofs(net);
+  VibrationalProblem prob;
+  prob.H = restrict_matrix(hessian(p, load_bearing(contacts, net)), map);
+  prob.mass = restrict_vector(mass_diagonal(p), map);
+  prob.cells = map.cells;
+  return prob;
+}
+
+const char* to_string(SpectrumMethod method) {
+  switch (method) {
+    case SpectrumMethod::automatic: return "auto";
+    case SpectrumMethod::dense: return "dense";
+    case SpectrumMethod::arpack: return "arpack";
+  }
+  return "?";
+}
+
+SpectrumMethod parse_spectrum_method(const std::string& text, const std::string& key) {
+  if (text == "auto") return SpectrumMethod::automatic;
+  if (text == "dense") return SpectrumMethod::dense;
+  if (text == "arpack") return SpectrumMethod::arpack;
+  throw InputError(key + ": must be auto, dense or arpack (got '" + text + "')");
+}
+
+double signed_omega(double lambda) { return lambda < 0 ? -std::sqrt(-lambda) : std::sqrt(lambda); }
+
+namespace {
+
+using Sparse = Eigen::SparseMatrix<double>;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Unit mass-weighted translations T_x, T_y (columns) for a 3n layout: T_α ∝ M^{1/2} t_α.
+Eigen::MatrixXd translations(const Eigen::VectorXd& mass) {
+  const Eigen::Index n3 = mass.size();
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n3, 2);
+  for (Eigen::Index a = 0; a < n3; a += 3) {
+    T(a, 0) = std::sqrt(mass[a]);
+    T(a + 1, 1) = std::sqrt(mass[a + 1]);
+  }
+  T.col(0).normalize();
+  T.col(1).normalize();
+  return T;
+}
+
+// K = M^{-1/2} H M^{-1/2}
+Sparse dynamical_matrix(const Sparse& H, const Eigen::VectorXd& mass) {
+  const Eigen::VectorXd w = mass.cwiseSqrt().cwiseInverse();
+  Sparse K = w.asDiagonal() * H * w.asDiagonal();
+  K.makeCompressed();
+  return K;
+}
+
+double max_abs(const Sparse& A) {
+  double m = 0;
+  for (int k = 0; k < A.outerSize(); ++k)
+    for (Sparse::InnerIterator it(A, k); it; ++it) m = std::max(m, std::abs(it.value()));
+  return m;
+}
+
+double translation_residual(const Sparse& K, const Eigen::MatrixXd& T) {
+  const double scale = max_abs(K);
+  if (scale == 0) return 0;
+  return (K * T).cwiseAbs().maxCoeff() / scale;
+}
+
+void check_problem(const Sparse& H, const Eigen::VectorXd& mass) {
+  if (H.rows() != H.cols() || H.rows() != mass.size())
+    throw std::invalid_argument("spectrum: H is " + std::to_string(H.rows()) + "x" + std::to_string(H.cols()) +
+                                " but M has " + std::to_string(mass.size()) + " entries");
+  if (mass.size() % 3 != 0 || mass.size() == 0)
+    throw std::invalid_argument("spectrum: the problem needs 3 coordinates per cell and at least one cell");
+  if ((mass.array() <= 0).any() || !mass.allFinite())
+    throw std::invalid_argument("spectrum: masses must be positive and finite");
+}
+
+Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
+  const Eigen::Index n3 = mass.size(), nd = n3 - 2;
+  Spectrum s;
+  s.method = SpectrumMethod::dense;
+  s.n_cells = static_cast<std::size_t>(n3 / 3);
+  s.n_dof = static_cast<std::size_t>(nd);
+  const Sparse Ks = dynamical_matrix(H, mass);
+  const Eigen::MatrixXd T = translations(mass);
+  s.translation_residual = translation_residual(Ks, T);
+
+  // Rotate with the Householder reflectors Q that map span(T) onto the first two axes:
+  // QᵀKQ = [[≈0, ≈0], [≈0, K_⊥]]; K_⊥ is K on the complement of the translations.
+  Eigen::MatrixXd K = Eigen::MatrixXd(Ks);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(T);
+  const auto Q = qr.householderQ();
+  K.applyOnTheLeft(Q.adjoint());
+  K.applyOnTheRight(Q);
+  const Eigen::MatrixXd Kc = K.bottomRightCorner(nd, nd).selfadjointView<Eigen::Lower>();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kc, opt.vectors ? Eigen::ComputeEigenvectors
+                                                                    : Eigen::EigenvaluesOnly);
+  if (es.info() != Eigen::Success) throw std::runtime_error("spectrum: dense eigensolver did not converge");
+  s.lambda = es.eigenvalues();
+  if (opt.vectors) {
+    s.modes = Eigen::MatrixXd::Zero(n3, nd);
+    s.modes.bottomRows(nd) = es.eigenvectors();
+    s.modes.applyOnTheLeft(Q);
+  }
+  return s;
+}
+
+Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
+  const Eigen::Index n3 = mass.size(), nd = n3 - 2;
+  if (opt.modes <= 0) throw std::invalid_argument("spectrum: ARPACK needs modes > 0");
+  if (opt.modes >= nd)
+    throw std::invalid_argument("spectrum: ARPACK computes fewer modes than the problem has (asked for " +
+                                std::to_string(opt.modes) + " of " + std::to_string(nd) +
+                                "); use the dense method for the whole spectrum");
+  Spectrum s;
+  s.method = SpectrumMethod::arpack;
+  s.n_cells = static_cast<std::size_t>(n3 / 3);
+  s.n_dof = static_cast<std::size_t>(nd);
+  const Sparse K = dynamical_matrix(H, mass);
+  const Eigen::MatrixXd T = translations(mass);
+  s.translation_residual = translation_residual(K, T);
+
+  const auto t0 = Clock::now();
+  double sigma = opt.sigma;
+  CholmodSolver chol(Factorisation::llt);
+  const Eigen::VectorXd unit;  // empty: identity mass (K is already mass-weighted)
+  for (int attempt = 0;; ++attempt) {
+    if (chol.factor(K, sigma, unit)) break;
+    if (attempt == 4)
+      throw std::runtime_error("spectrum: K − σ is not positive definite down to σ = " + std::to_string(sigma) +
+                               " (k/m): the packing has a negative eigenvalue (not an energy minimum?); "
+                               "use the dense method to see it");
+    sigma *= 10;
+  }
+  s.sigma = sigma;
+  s.seconds_factorise = seconds_since(t0);
+
+  // Lanczos on T^⊥: OP = P (K − σI)⁻¹ P, P = 1 − T Tᵀ.
+  auto project = [&](Eigen::Ref<Eigen::VectorXd> x) { x -= T * (T.transpose() * x); };
+  Eigen::VectorXd buf(n3);
+  LanczosOptions lo;
+  lo.nev = opt.modes;
+  lo.ncv = opt.ncv > 0 ? std::min<int>(opt.ncv, static_cast<int>(nd)) : std::min<int>(static_cast<int>(nd), std::max(2 * lo.nev + 1, lo.nev + 20));
+  lo.tol = opt.tol;
+  lo.vectors = opt.vectors;
+  lo.start.resize(n3);
+  std::mt19937_64 rng(opt.seed);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (Eigen::Index a = 0; a < n3; ++a) lo.start[a] = U(rng);
+  project(lo.start);
+  const auto t1 = Clock::now();
+  const auto res = lanczos_shift_invert(
+      static_cast<int>(n3), sigma,
+      [&](const double* x, double* y) {
+        buf = Eigen::Map<const Eigen::VectorXd>(x, n3);
+        project(buf);
+        Eigen::Map<Eigen::VectorXd> out(y, n3);
+        chol.solve(buf.data(), y);
+        project(out);
+      },
+      lo);
+  s.seconds_lanczos = seconds_since(t1);
+  s.lambda = res.values;
+  s.modes = res.vectors;
+  s.ncv = res.ncv;
+  s.restarts = res.restarts;
+  s.operator_applications = res.operator_applications;
+  return s;
+}
+
+}  // namespace
+
+Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
+                        const SpectrumOptions& options) {
+  check_problem(H, mass);
+  const std::size_t nd = static_cast<std::size_t>(mass.size()) - 2;
+  SpectrumMethod method = options.method;
+  if (method == SpectrumMethod::automatic)
+    method = (nd <= options.dense_max_dof || static_cast<std::size_t>(options.modes) >= nd)
+                 ? SpectrumMethod::dense
+                 : SpectrumMethod::arpack;
+  return method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
+}
+
+// ---- observables ---------------------------------------------------------------------------
+
+std::size_t count_below(const Eigen::VectorXd& lambda, double tol) {
+  return static_cast<std::size_t>((lambda.array() < tol).count());
+}
+
+BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule) {
+  BandEdge b;
+  b.n_zero = count_below(s.lambda, rule.lambda_tol);
+  const std::size_t extended = s.n_dof - std::min(s.n_dof, b.n_zero);
+  b.n_band = std::min(extended, std::max(rule.band_min,
+                                         static_cast<std::size_t>(std::ceil(rule.band_fraction * extended))));
+  b.modes_needed = b.n_zero + b.n_band;
+  // A partial spectrum counts its quasi-zero modes correctly only if it reaches above lambda_tol;
+  // then the band modes must be among the computed ones as well.
+  if (b.n_band == 0 || b.modes_needed > static_cast<std::size_t>(s.lambda.size())) {
+    b.available = false;
+    b.omega_star = std::numeric_limits<double>::quiet_NaN();
+    return b;
+  }
+  double sum = 0;
+  for (std::size_t k = b.n_zero; k < b.modes_needed; ++k) sum += s.lambda[static_cast<Eigen::Index>(k)];
+  b.omega_star = std::sqrt(sum / static_cast<double>(b.n_band));
+  b.available = true;
+  return b;
+}
+
+Eigen::VectorXd participation_ratios(const Spectrum& s) {
+  if (s.modes.cols() != s.lambda.size())
+    throw std::invalid_argument("participation_ratios: the spectrum was computed without eigenvectors");
+  const Eigen::Index n = s.modes.rows() / 3;
+  Eigen::VectorXd pr(s.modes.cols());
+  for (Eigen::Index k = 0; k < s.modes.cols(); ++k) {
+    double sum = 0, sum2 = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double w = s.modes.col(k).segment<3>(3 * i).squaredNorm();
+      sum += w;
+      sum2 += w * w;
+    }
+    pr[k] = sum * sum / (static_cast<double>(n) * sum2);
+  }
+  return pr;
+}
+
+DosHistogram dos_histogram(const Spectrum& s, std::size_t bins, double omega_max, double exclude_below) {
+  if (bins == 0 || !(omega_max > 0)) throw std::invalid_argument("dos_histogram: need bins > 0 and omega_max > 0");
+  DosHistogram h;
+  h.edges.resize(bins + 1);
+  h.density.assign(bins, 0.0);
+  const double width = omega_max / static_cast<double>(bins);
+  for (std::size_t k = 0; k <= bins; ++k) h.edges[k] = width * static_cast<double>(k);
+  for (Eigen::Index n = 0; n < s.lambda.size(); ++n) {
+    const double lam = s.lambda[n];
+    if (lam < exclude_below) {
+      ++h.excluded;
+      continue;
+    }
+    const double w = std::sqrt(std::max(lam, 0.0));
+    if (w >= omega_max) {
+      ++h.outside;
+      continue;
+    }
+    h.density[std::min(bins - 1, static_cast<std::size_t>(w / width))] += 1.0;
+  }
+  for (auto& d : h.density) d /= static_cast<double>(s.n_dof) * width;
+  h.omega_valid = s.complete() ? std::numeric_limits<double>::infinity()
+                               : (s.lambda.size() ? signed_omega(s.lambda[s.lambda.size() - 1]) : 0.0);
+  return h;
+}
+
+SpectralSummary summarise(const Spectrum& s, const BandEdgeRule& rule) {
+  SpectralSummary m;
+  m.method = s.method;
+  m.n_cells = s.n_cells;
+  m.n_dof = s.n_dof;
+  m.computed = static_cast<std::size_t>(s.lambda.size());
+  m.lambda_min = s.lambda.size() ? s.lambda.minCoeff() : std::numeric_limits<double>::quiet_NaN();
+  m.lambda_max_computed = s.lambda.size() ? s.lambda.maxCoeff() : std::numeric_limits<double>::quiet_NaN();
+  m.lambda_tol = rule.lambda_tol;
+  m.N_zero = count_below(s.lambda, rule.lambda_tol);
+  m.zero_count_complete = s.complete() || m.lambda_max_computed >= std::max(rule.lambda_tol, 1e-5);
+  for (double tol : {1e-5, 1e-6, 1e-7, 1e-8}) m.zero_counts.emplace_back(tol, count_below(s.lambda, tol));
+  m.band = band_edge(s, rule);
+  m.translation_residual = s.translation_residual;
+  return m;
+}
+
+int modes_for_band_edge(std::size_t n_dof, std::size_t expected_zero, const BandEdgeRule& rule, std::size_t spare) {
+  const std::size_t extended = n_dof - std::min(n_dof, expected_zero);
+  const std::size_t n_band =
+      std::max(rule.band_min, static_cast<std::size_t>(std::ceil(rule.band_fraction * extended)));
+  return static_cast<int>(std::min(n_dof, expected_zero + n_band + spare));
+}
+
+}  // namespace budjam

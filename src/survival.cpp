@@ -1,0 +1,88 @@
+#include "budjam/survival.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace budjam {
+
+KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records) {
+  std::vector<SurvivalRecord> r = records;
+  for (const auto& x : r)
+    if (!std::isfinite(x.a) || x.a < 0) throw std::invalid_argument("kaplan_meier: added size a must be finite and >= 0");
+  // Ascending a; at equal a, events before censorings (a censored record is at risk at its own a).
+  std::sort(r.begin(), r.end(), [](const SurvivalRecord& x, const SurvivalRecord& y) {
+    return x.a < y.a || (x.a == y.a && x.event && !y.event);
+  });
+  std::vector<KaplanMeierStep> steps;
+  std::size_t at_risk = r.size(), events_total = 0;
+  double S = 1.0, greenwood_sum = 0.0;
+  bool exhausted = false;
+  for (std::size_t k = 0; k < r.size();) {
+    KaplanMeierStep st;
+    st.a = r[k].a;
+    st.at_risk = at_risk;
+    std::size_t j = k;
+    for (; j < r.size() && r[j].a == st.a; ++j) (r[j].event ? st.events : st.censored)++;
+    if (st.events > 0) {
+      S *= 1.0 - static_cast<double>(st.events) / static_cast<double>(st.at_risk);
+      if (st.events == st.at_risk)
+        exhausted = true;  // Ŝ = 0: Greenwood's term d/(n(n − d)) is 0·∞; the variance is 0 there
+      else
+        greenwood_sum += static_cast<double>(st.events) /
+                         (static_cast<double>(st.at_risk) * static_cast<double>(st.at_risk - st.events));
+    }
+    st.S = S;
+    st.greenwood_var = exhausted ? 0.0 : S * S * greenwood_sum;
+    events_total += st.events;
+    at_risk -= st.events + st.censored;
+    steps.push_back(st);
+    k = j;
+  }
+  return KaplanMeierCurve(std::move(steps), r.size(), events_total);
+}
+
+double KaplanMeierCurve::S(double a) const {
+  double s = 1.0;
+  for (const auto& st : steps_) {
+    if (st.a > a) break;
+    s = st.S;
+  }
+  return s;
+}
+
+double KaplanMeierCurve::variance(double a) const {
+  double v = 0.0;
+  for (const auto& st : steps_) {
+    if (st.a > a) break;
+    v = st.greenwood_var;
+  }
+  return v;
+}
+
+double KaplanMeierCurve::integral(double a) const {
+  if (a <= 0) return 0.0;
+  double area = 0.0, prev_a = 0.0, s = 1.0;
+  for (const auto& st : steps_) {
+    if (st.a >= a) break;
+    area += s * (st.a - prev_a);
+    prev_a = st.a;
+    s = st.S;
+  }
+  return area + s * (a - prev_a);
+}
+
+std::optional<double> KaplanMeierCurve::quantile_point(double level) const {
+  if (level >= 1.0) return 0.0;
+  for (const auto& st : steps_)
+    if (st.events > 0 && st.S <= level) return st.a;
+  return std::nullopt;
+}
+
+std::optional<double> a_epsilon(const KaplanMeierCurve& S, double u_J, double epsilon) {
+  if (!(u_J > 0)) throw std::invalid_argument("a_epsilon: u_J must be positive");
+  if (!(epsilon >= 0)) throw std::invalid_argument("a_epsilon: epsilon must be >= 0");
+  return S.quantile_point(epsilon / u_J);
+}
+
+}  // namespace budjam

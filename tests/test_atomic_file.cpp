@@ -1,0 +1,257 @@
+// Crash-safe outputs: atomic whole-file writes, CSV logs that are `.partial` until finished,
+// resumable logs, and the JSON helpers.
+#include "io/atomic_file.hpp"
+#include "io/json.hpp"
+#include "io/text.hpp"
+
+#include "budjam/scene.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <bit>
+#include <csignal>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace budjam;
+using namespace budjam::io;
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+
+namespace {
+
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& tag)
+      : path(fs::temp_directory_path() / ("budjam-" + tag + "-" + std::to_string(::getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> names_in(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("write_atomically replaces the whole file and leaves no temporary file", "[atomic]") {
+  TempDir dir("atomic");
+  const fs::path file = dir.path / "summary.json";
+  write_atomically(file, "first version, rather long\n");
+  write_atomically(file, "second\n");
+  CHECK(slurp(file) == "second\n");
+  CHECK(names_in(dir.path) == std::vector<std::string>{"summary.json"});
+  write_atomically(file, [](std::ostream& out) { out << "from a writer " << 42 << "\n"; });
+  CHECK(slurp(file) == "from a writer 42\n");
+  // Missing directories are created.
+  write_atomically(dir.path / "packings" / "jammed.pack", "x");
+  CHECK(slurp(dir.path / "packings" / "jammed.pack") == "x");
+  // Permissions follow the umask like any ordinary file (mkstemp alone would give 0600).
+  const auto perms = fs::status(file).permissions();
+  CHECK((perms & fs::perms::owner_read) != fs::perms::none);
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  if (!(mask & 0044)) CHECK((perms & fs::perms::others_read) != fs::perms::none);
+}
+
+TEST_CASE("a writer that throws leaves the previous file intact and no temporary file", "[atomic]") {
+  TempDir dir("atomic-throw");
+  const fs::path file = dir.path / "result.pack";
+  write_atomically(file, "complete old content\n");
+  CHECK_THROWS_WITH(write_atomically(file,
+                                     [](std::ostream& out) {
+                                       out << "half of the new con";
+                                       throw std::runtime_error("writer failed");
+                                     }),
+                    "writer failed");
+  CHECK(slurp(file) == "complete old content\n");
+  CHECK(names_in(dir.path) == std::vector<std::string>{"result.pack"});
+  // Without a previous file, nothing appears at all.
+  CHECK_THROWS(write_atomically(dir.path / "new.pack", [](std::ostream&) { throw std::runtime_error("no"); }));
+  CHECK_FALSE(fs::exists(dir.path / "new.pack"));
+}
+
+TEST_CASE("an output that cannot be written raises IoError and keeps the old file", "[atomic]") {
+  TempDir dir("atomic-fail");
+  const fs::path file = dir.path / "out.json";
+  write_atomically(file, "old\n");
+  // A directory in the way of the final name: rename fails after the temporary file was written.
+  fs::create_directories(dir.path / "blocked" / "inner");
+  CHECK_THROWS_AS(write_atomically(dir.path / "blocked", "new\n"), IoError);
+  CHECK(names_in(dir.path) == std::vector<std::string>{"blocked", "out.json"});
+  // A parent that is a regular file.
+  CHECK_THROWS_AS(write_atomically(file / "child.txt", "x"), IoError);
+  CHECK(slurp(file) == "old\n");
+}
+
+TEST_CASE("read_text_file names the file in its error", "[atomic]") {
+  TempDir dir("read");
+  CHECK_THROWS_WITH(read_text_file(dir.path / "nope.toml"), Contains("nope.toml: cannot read: No such file"));
+  CHECK_THROWS_AS(read_text_file(dir.path), InputError);
+}
+
+TEST_CASE("a CSV log is .partial until finished, then complete under its own name", "[atomic][csv]") {
+  TempDir dir("csv");
+  const fs::path file = dir.path / "steps.csv";
+  {
+    CsvLog log(file, {"step", "phi", "phase", "N_c"});
+    log.row({1, 0.5, "growing", CsvField::missing()});
+    log.row({2, 0.1 + 0.2, "jammed", std::optional<double>(12.0)});
+    CHECK(fs::exists(log.partial_path()));
+    CHECK_FALSE(fs::exists(file));
+    CHECK(log.bytes() == fs::file_size(log.partial_path()));
+    log.finish();
+    CHECK(log.finished());
+  }
+  CHECK_FALSE(fs::exists(dir.path / "steps.csv.partial"));
+  CHECK(slurp(file) == "step,phi,phase,N_c\n1,0.5,growing,\n2,0.30000000000000004,jammed,12\n");
+}
+
+TEST_CASE("a log that is never finished stays .partial", "[atomic][csv]") {
+  TempDir dir("csv-unfinished");
+  {
+    CsvLog log(dir.path / "divisions.csv", {"step", "id"});
+    log.row({5, 7});
+  }  // destroyed without finish(): as if the run had stopped here
+  CHECK(names_in(dir.path) == std::vector<std::string>{"divisions.csv.partial"});
+}
+
+TEST_CASE("starting a log removes a finished log of an earlier run in the same place", "[atomic][csv]") {
+  TempDir dir("csv-stale");
+  {
+    CsvLog log(dir.path / "steps.csv", {"a"});
+    log.row({1});
+    log.finish();
+  }
+  CsvLog again(dir.path / "steps.csv", {"a"});
+  CHECK_FALSE(fs::exists(dir.path / "steps.csv"));
+}
+
+TEST_CASE("CSV fields read back exactly: round-trip doubles, RFC 4180 quoting", "[csv]") {
+  CHECK(CsvField(1e-16).text == "1e-16");
+  CHECK(CsvField(-0.0).text == "-0");
+  CHECK(CsvField(std::numeric_limits<double>::quiet_NaN()).text == "nan");
+  CHECK(CsvField(std::size_t{18446744073709551615u}).text == "18446744073709551615");
+  CHECK(CsvField(-3).text == "-3");
+  CHECK(CsvField(true).text == "true");
+  CHECK(CsvField("plain").text == "plain");
+  CHECK(CsvField("a,b").text == "\"a,b\"");
+  CHECK(CsvField("say \"hi\"").text == "\"say \"\"hi\"\"\"");
+  const double x = 0.8412345678901234;
+  CHECK(std::bit_cast<std::uint64_t>(*parse_double(CsvField(x).text)) == std::bit_cast<std::uint64_t>(x));
+}
+
+TEST_CASE("a row with the wrong number of fields is refused", "[csv]") {
+  TempDir dir("csv-count");
+  CsvLog log(dir.path / "x.csv", {"a", "b"});
+  CHECK_THROWS_AS(log.row({1}), std::logic_error);
+  CHECK_THROWS_AS(log.row({1, 2, 3}), std::logic_error);
+}
+
+TEST_CASE("resuming a log at a checkpointed size gives the same file as an uninterrupted run", "[csv][checkpoint]") {
+  TempDir dir("csv-resume");
+  const std::vector<std::string> cols = {"step", "phi"};
+  auto value = [](int i) { return 0.5 + 1e-3 * i / 7.0; };
+
+  {  // the uninterrupted run
+    CsvLog log(dir.path / "ref.csv", cols);
+    for (int i = 0; i < 20; ++i) log.row({i, value(i)});
+    log.finish();
+  }
+  std::uint64_t checkpoint = 0;
+  {  // the interrupted run: checkpoint after 12 rows, then 5 more rows are lost with the process
+    CsvLog log(dir.path / "run.csv", cols);
+    for (int i = 0; i < 12; ++i) log.row({i, value(i)});
+    log.sync();
+    checkpoint = log.bytes();
+    for (int i = 12; i < 17; ++i) log.row({i, value(i)});
+  }
+  {
+    CsvLog log = CsvLog::resume(dir.path / "run.csv", cols, checkpoint);
+    CHECK(log.bytes() == checkpoint);
+    for (int i = 12; i < 20; ++i) log.row({i, value(i)});
+    log.finish();
+  }
+  CHECK(slurp(dir.path / "run.csv") == slurp(dir.path / "ref.csv"));
+
+  // Refusals: no partial file, another header, fewer bytes than the checkpoint says.
+  CHECK_THROWS_AS(CsvLog::resume(dir.path / "none.csv", cols, 10), InputError);
+  {
+    CsvLog log(dir.path / "short.csv", cols);
+    log.row({1, 2.0});
+  }
+  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", {"step", "P"}, 10), Contains("header"));
+  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 1000), Contains("checkpoint expects 1000"));
+}
+
+TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {
+  TempDir dir("csv-kill");
+  const fs::path file = dir.path / "steps.csv";
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    ::close(ready[0]);
+    CsvLog log(file, {"step", "phi", "phase"});
+    for (long i = 0;; ++i) {
+      log.row({i, 0.5 + 1e-9 * static_cast<double>(i), "growing"});
+      if (i == 1000) (void)!::write(ready[1], "x", 1);
+    }
+  }
+  ::close(ready[1]);
+  char c;
+  REQUIRE(::read(ready[0], &c, 1) == 1);
+  ::usleep(20000);
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ::close(ready[0]);
+  REQUIRE(WIFSIGNALED(status));
+
+  CHECK_FALSE(fs::exists(file));
+  const std::string text = slurp(dir.path / "steps.csv.partial");
+  REQUIRE(text.size() > 1000);
+  CHECK(text.back() == '\n');
+  std::istringstream lines(text);
+  std::string line;
+  long n = 0;
+  while (std::getline(lines, line)) {
+    if (n++ == 0) continue;
+    REQUIRE(std::count(line.begin(), line.end(), ',') == 2);
+  }
+  CHECK(n > 1000);
+}
+
+TEST_CASE("json_text is deterministic and writes null for missing values", "[json]") {
+  TempDir dir("json");
+  Json j;
+  j["status"] = "ok";
+  j["phi_2"] = number_or_null(std::nullopt);
+  j["P"] = number_or_null(std::numeric_limits<double>::infinity());
+  j["phi_J"] = 0.1 + 0.2;
+  j["N"] = 412;
+  CHECK(json_text(j) ==
+        "{\n  \"status\": \"ok\",\n  \"phi_2\": null,\n  \"P\": null,\n  \"phi_J\": 0.30000000000000004,\n  \"N\": 412\n}\n");
+  write_json(dir.path / "summary.json", j);
+  const Json back = read_json(dir.path / "summary.json");
+  CHECK(back == j);
+  CHECK(std::bit_cast<std::uint64_t>(back["phi_J"].get<double>()) == std::bit_cast<std::uint64_t>(0.1 + 0.2));
+  write_atomically(dir.path / "bad.json", "{\"a\": 1,\n");
+  CHECK_THROWS_WITH(read_json(dir.path / "bad.json"), Contains("bad.json: invalid JSON: parse error at line"));
+}

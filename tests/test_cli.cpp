@@ -1,0 +1,156 @@
+// The `budjam` executable's frame: exit codes, one-line errors on stderr, `validate`.
+#include "io/packing_file.hpp"
+#include "io/scene_file.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+fs::path work_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("budjam-cli-" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path p = work_dir() / name;
+  std::ofstream(p, std::ios::binary) << text;
+  return p;
+}
+
+// Runs `budjam <args>` through the shell; arguments are passed as written (quote them yourself).
+Result budjam(const std::string& args) {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
+  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  REQUIRE(WIFEXITED(status));
+  r.code = WEXITSTATUS(status);
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::size_t lines_in(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+// Exactly one line "budjam: error: ...\n".
+void require_one_error_line(const Result& r) {
+  INFO(r.err);
+  CHECK(lines_in(r.err) == 1);
+  CHECK_THAT(r.err, StartsWith("budjam: error: "));
+  CHECK(!r.err.empty());
+  CHECK(r.err.back() == '\n');
+}
+
+}  // namespace
+
+TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming the key", "[cli]") {
+  struct Case {
+    std::string toml, key;
+  };
+  for (const Case& c : std::vector<Case>{{"[growth]\nP0 = -1e-3\n", "growth.P0: must be positive"},
+                                         {"[growth]\nP00 = 1\n", "growth.P00: unknown key"},
+                                         {"[box]\nL = 1\n", "box.L: must exceed"},
+                                         {"[jamming]\ntargets = [0.01, 0.001]\n", "jamming.targets: must be strictly increasing"},
+                                         {"[cells]\nr0 = nan\n", "cells.r0: must be a finite number (got nan)"},
+                                         {"[growth\n", "bad.toml:1:"}}) {
+    INFO(c.toml);
+    const fs::path scene = write("bad.toml", c.toml);
+    const Result r = budjam("validate '" + scene.string() + "'");
+    CHECK(r.code == 2);
+    require_one_error_line(r);
+    CHECK_THAT(r.err, Contains(c.key));
+    CHECK(r.out.empty());
+  }
+}
+
+TEST_CASE("budjam validate prints the effective scene, which reads back to the same scene", "[cli]") {
+  const fs::path scene = write("good.toml", "[run]\nname = \"cli\"\n[growth]\nP0 = 1e-3\n[jamming]\ntargets = [1e-3, 1e-2]\n");
+  const Result r = budjam("validate '" + scene.string() + "' --set growth.P0=none --set run.seed=5");
+  REQUIRE(r.code == 0);
+  CHECK(r.err.empty());
+  const budjam::Scene s = budjam::io::parse_scene(r.out, "stdout");
+  CHECK_FALSE(s.P0.has_value());
+  CHECK(s.seed == 5);
+  CHECK(s.name == "cli");
+  CHECK(budjam::io::scene_to_toml(s) == r.out);
+
+  const Result j = budjam("validate --json '" + scene.string() + "'");
+  REQUIRE(j.code == 0);
+  const auto json = nlohmann::json::parse(j.out);
+  CHECK(json["growth"]["P0"] == 1e-3);
+  CHECK(json["jamming"]["targets"].size() == 2);
+}
+
+TEST_CASE("budjam validate checks packing files and names the corrupt line", "[cli]") {
+  budjam::Packing p;
+  p.box.L = 8;
+  p.add_cell(4, 3.5, 0.1, 0.5, 0.002, -1);
+  p.add_cell(4, 4.5, 0.2, 0.7, 0.002, -1);
+  budjam::io::PackingMeta meta;
+  meta.set("phase", "jammed");
+  const std::string text = budjam::io::format_packing(p, meta);
+  const fs::path good = write("good.pack", text);
+  const Result ok = budjam("validate '" + good.string() + "'");
+  REQUIRE(ok.code == 0);
+  CHECK_THAT(ok.out, Contains("N = 2"));
+  CHECK_THAT(ok.out, Contains("meta.phase = jammed"));
+
+  const fs::path bad = write("bad.pack", text.substr(0, text.size() - 4));  // "end\n" cut off
+  const Result r = budjam("validate '" + bad.string() + "'");
+  CHECK(r.code == 2);
+  require_one_error_line(r);
+  CHECK_THAT(r.err, Contains("bad.pack:10: truncated"));
+}
+
+TEST_CASE("command-line mistakes exit 2 with one stderr line", "[cli]") {
+  for (const std::string args : {"", "no-such-command", "validate", "validate a.toml b.toml", "validate --bogus x.toml",
+                                 "validate missing-file.toml"}) {
+    INFO(args);
+    const Result r = budjam(args);
+    CHECK(r.code == 2);
+    require_one_error_line(r);
+  }
+}
+
+TEST_CASE("--version and --help succeed on stdout", "[cli]") {
+  const Result v = budjam("--version");
+  CHECK(v.code == 0);
+  CHECK_THAT(v.out, StartsWith("budjam "));
+  CHECK(v.err.empty());
+  const Result h = budjam("--help");
+  CHECK(h.code == 0);
+  CHECK_THAT(h.out, Contains("validate"));
+  const Result hv = budjam("validate --help");
+  CHECK(hv.code == 0);
+  CHECK_THAT(hv.out, Contains("--set"));
+}

@@ -1,0 +1,280 @@
+// Growth, growth law, division and initial states follow MODEL.md ("Growth") exactly.
+#include "budjam/growth.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+using namespace budjam;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double cell_area(double b) { return 0.25 * kPi * (1.0 + b * b); }
+
+// Smallest angular distance between two angles.
+double angle_gap(double a, double b) { return std::abs(std::remainder(a - b, 2 * kPi)); }
+
+Scene base_scene() {
+  Scene s;
+  s.L = 10;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("uniform01 takes the top 53 bits of the stream and lies in [0, 1)", "[growth]") {
+  Rng a(42), b(42);
+  for (int k = 0; k < 1000; ++k) {
+    const std::uint64_t raw = b();
+    const double u = uniform01(a);
+    CHECK(u == static_cast<double>(raw >> 11) / 9007199254740992.0);
+    CHECK(u >= 0.0);
+    CHECK(u < 1.0);
+  }
+}
+
+TEST_CASE("innate rates are r0 (1 + delta (U - 1/2)) with mean r0", "[growth]") {
+  Scene s = base_scene();
+  Rng rng(7), copy(7);
+  double sum = 0;
+  const int n = 20000;
+  for (int k = 0; k < n; ++k) {
+    const double g = draw_innate_rate(s, rng);
+    CHECK(g == s.r0 * (1.0 + s.delta * (uniform01(copy) - 0.5)));
+    CHECK(g >= s.r0 * (1 - s.delta / 2));
+    CHECK(g < s.r0 * (1 + s.delta / 2));
+    sum += g;
+  }
+  // standard error of the mean: r0 δ / sqrt(12 n) ≈ 1.6e-6
+  CHECK(sum / n == Approx(s.r0).margin(1e-5));
+}
+
+TEST_CASE("a growth step multiplies the cell area by (1 + gamma dt), all into the bud", "[growth]") {
+  for (double b : {0.01, 0.3, 0.7245, 1.0199}) {
+    for (double gdt : {1e-9, 0.002, 0.5}) {
+      const double nb = grown_bud(b, gdt, 1.0);
+      CHECK(cell_area(nb) == Approx((1 + gdt) * cell_area(b)).epsilon(1e-14));
+      CHECK(nb * nb == Approx((1 + gdt) * (1 + b * b) - 1).epsilon(1e-13));
+      CHECK(grown_bud(b, gdt / 4, 4.0) == Approx(nb).epsilon(1e-15));  // only γΔt matters
+    }
+    CHECK(grown_bud(b, 0.0, 1.0) == b);  // an underflowed growth factor leaves the bud exactly alone
+  }
+}
+
+TEST_CASE("growth factor exp(-p/P0) is 1 without feedback, exact 0 on underflow, never NaN", "[growth]") {
+  CHECK(growth_factor(123.0, std::nullopt) == 1.0);
+  CHECK(growth_factor(0.0, 1e-3) == 1.0);
+  CHECK(growth_factor(-1e-9, 1e-3) == 1.0);
+  CHECK(growth_factor(1e-3, 1e-3) == Approx(std::exp(-1.0)).epsilon(1e-15));
+  CHECK(growth_factor(2e-4, 1e-3) == Approx(std::exp(-0.2)).epsilon(1e-15));
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double p : {0.1, 1.0, 1e3, 1e300, inf}) {
+    const double g = growth_factor(p, 1e-5);
+    CHECK_FALSE(std::isnan(g));
+    CHECK(g == 0.0);
+  }
+  // no denormals: anything that would be below DBL_MIN is exactly 0
+  const double g = growth_factor(709.0 * 1e-5, 1e-5);
+  CHECK((g == 0.0 || g >= std::numeric_limits<double>::min()));
+  CHECK_THROWS_AS(growth_factor(1.0, 0.0), InputError);
+  CHECK_THROWS_AS(growth_factor(1.0, -1e-3), InputError);
+}
+
+TEST_CASE("growth rates with P0 = 1e-5 and huge bud pressures are finite and non-negative", "[growth]") {
+  Scene s = base_scene();
+  Rng rng(3);
+  Packing p = two_cell_start(s, rng);
+  const std::vector<double> pressures{1e12, std::numeric_limits<double>::infinity()};
+  const auto rates = growth_rates(p, &pressures, 1e-5);
+  for (double r : rates) {
+    CHECK(std::isfinite(r));
+    CHECK(r == 0.0);
+  }
+  const std::vector<double> none{0.0, 0.0};
+  CHECK(growth_rates(p, &none, 1e-5) == p.gamma0);
+  CHECK(growth_rates(p, &pressures, std::nullopt) == p.gamma0);  // P0 = none: no feedback at all
+  CHECK(growth_rates(p, nullptr, 1e-5) == p.gamma0);             // below jamming: no pressures passed
+  // Grown with these rates, the compressed buds keep their size exactly.
+  Packing q = p;
+  grow_step(q, rates, 1.0, s, rng);
+  CHECK(q.b == p.b);
+}
+
+TEST_CASE("division places two newborns at (x,y) -/+ (alpha0/2) n and keeps the identity on the mother side",
+          "[growth]") {
+  Scene s = base_scene();
+  Rng rng(11);
+  Packing p;
+  p.box.L = s.L;
+  p.add_cell(1.0, 2.0, 0.0, 0.3, 0.002, -1);
+  const double theta = 0.7;
+  p.add_cell(5.0, 5.0, theta, 1.0201, 0.0021, -1);
+  const auto id_before = p.id[1];
+  const auto next_before = p.next_id;
+  const Division d = divide(p, 1, s, rng);
+  REQUIRE(p.size() == 3);
+  CHECK(d.mother_index == 1);
+  CHECK(d.daughter_index == 2);
+  CHECK(p.id[1] == id_before);           // mother side keeps the identity
+  CHECK(p.parent[1] == -1);
+  CHECK(p.id[2] == next_before);         // daughter: new id, parent = old cell
+  CHECK(p.parent[2] == id_before);
+  CHECK(p.next_id == next_before + 1);
+  CHECK(d.mother_id == id_before);
+  CHECK(d.daughter_id == p.id[2]);
+  CHECK(d.b == 1.0201);
+  const double h = 0.5 * s.alpha0;
+  CHECK(p.x(1) == Approx(5.0 - h * std::cos(theta)).epsilon(1e-15));
+  CHECK(p.y(1) == Approx(5.0 - h * std::sin(theta)).epsilon(1e-15));
+  CHECK(p.x(2) == Approx(5.0 + h * std::cos(theta)).epsilon(1e-15));
+  CHECK(p.y(2) == Approx(5.0 + h * std::sin(theta)).epsilon(1e-15));
+  // both newborn: α = α0
+  CHECK(1 + p.b[1] == Approx(s.alpha0).epsilon(1e-15));
+  CHECK(1 + p.b[2] == Approx(s.alpha0).epsilon(1e-15));
+  CHECK(p.b[1] == newborn_bud(s.alpha0));
+  // Area is not conserved: about 2.04 -> 2.0002 in units of π D²/4.
+  CHECK((cell_area(p.b[1]) + cell_area(p.b[2])) / (kPi / 4) == Approx(2.0002).epsilon(1e-12));
+  // the other cell is untouched
+  CHECK(p.x(0) == 1.0);
+  CHECK(p.b[0] == 0.3);
+  // new innate rates in range, orientations in [−π, π)
+  for (std::size_t i : {1u, 2u}) {
+    CHECK(p.gamma0[i] >= s.r0 * (1 - s.delta / 2));
+    CHECK(p.gamma0[i] < s.r0 * (1 + s.delta / 2));
+    CHECK(p.theta(i) >= -kPi);
+    CHECK(p.theta(i) < kPi);
+  }
+}
+
+TEST_CASE("division draws gamma0, theta, noise for the mother side, then the daughter, from one stream",
+          "[growth]") {
+  Scene s = base_scene();
+  Packing p;
+  p.box.L = s.L;
+  p.add_cell(5.0, 5.0, 0.2, 1.05, 0.002, -1);
+  Rng rng(99), ref(99);
+  divide(p, 0, s, rng);
+  const double g_m = s.r0 * (1 + s.delta * (uniform01(ref) - 0.5));
+  const double th_m = -kPi + 2 * kPi * uniform01(ref);
+  const double n_m = 5e-5 * (2 * uniform01(ref) - 1);
+  const double g_d = s.r0 * (1 + s.delta * (uniform01(ref) - 0.5));
+  const double th_d = -kPi + 2 * kPi * uniform01(ref);
+  const double n_d = 5e-5 * (2 * uniform01(ref) - 1);
+  CHECK(p.gamma0[0] == g_m);
+  CHECK(p.gamma0[1] == g_d);
+  CHECK(angle_gap(p.theta(0), th_m + n_m) < 1e-14);
+  CHECK(angle_gap(p.theta(1), th_d + n_d) < 1e-14);
+  CHECK(rng == ref);  // exactly six draws
+}
+
+TEST_CASE("aligned and opposite division rules orient the newborns along the old axis within 5e-5 rad",
+          "[growth]") {
+  Scene s = base_scene();
+  const double theta = -2.9;
+  for (auto rule : {DivisionRule::aligned, DivisionRule::opposite}) {
+    s.division = rule;
+    for (int seed = 0; seed < 50; ++seed) {
+      Packing p;
+      p.box.L = s.L;
+      p.add_cell(5.0, 5.0, theta, 1.05, 0.002, -1);
+      Rng rng(seed);
+      divide(p, 0, s, rng);
+      const double mother_expected = rule == DivisionRule::aligned ? theta : theta + kPi;
+      CHECK(angle_gap(p.theta(0), mother_expected) <= 5e-5 + 1e-15);
+      CHECK(angle_gap(p.theta(1), theta) <= 5e-5 + 1e-15);
+      CHECK(p.theta(0) >= -kPi);
+      CHECK(p.theta(0) < kPi);
+    }
+  }
+}
+
+TEST_CASE("grow_step divides a cell as soon as alpha exceeds 2 alpha0; newborns do not grow in the step",
+          "[growth]") {
+  Scene s = base_scene();
+  Rng rng(5);
+  Packing p;
+  p.box.L = s.L;
+  p.add_cell(2.0, 2.0, 0.0, 1.0199, 0.002, -1);  // crosses b = 1.02 this step
+  p.add_cell(7.0, 7.0, 1.0, 0.5, 0.002, -1);     // does not
+  const std::vector<double> rates{0.002, 0.002};
+  const Packing before = p;
+  const auto divisions = grow_step(p, rates, 1.0, s, rng);
+  REQUIRE(divisions.size() == 1);
+  REQUIRE(p.size() == 3);
+  CHECK(grown_bud(before.b[0], 0.002, 1.0) > 1.02);
+  CHECK(p.b[0] == newborn_bud(s.alpha0));  // newborn, not grown again in this step
+  CHECK(p.b[2] == newborn_bud(s.alpha0));
+  CHECK(p.b[1] == grown_bud(0.5, 0.002, 1.0));
+  CHECK(divisions[0].b == grown_bud(before.b[0], 0.002, 1.0));
+
+  // a bud just below the threshold does not divide
+  Packing q;
+  q.box.L = s.L;
+  q.add_cell(2.0, 2.0, 0.0, 1.0, 0.002, -1);
+  CHECK(grow_step(q, {0.0}, 1.0, s, rng).empty());
+  CHECK_FALSE(ready_to_divide(1.02, s.alpha0));
+  CHECK(ready_to_divide(std::nextafter(1.02, 2.0) + 1e-15, s.alpha0));
+  CHECK_THROWS(grow_step(q, {}, 1.0, s, rng));
+}
+
+TEST_CASE("the two-cell start places alpha0 and 1 + sqrt(2.5 alpha0 - (alpha0-1)^2 - 2) cells at the centre",
+          "[growth]") {
+  Scene s = base_scene();
+  s.L = 15;
+  Rng rng(1), ref(1);
+  const Packing p = two_cell_start(s, rng);
+  REQUIRE(p.size() == 2);
+  CHECK(p.x(0) == 7.5);
+  CHECK(p.y(0) == 7.0);
+  CHECK(p.x(1) == 7.5);
+  CHECK(p.y(1) == 8.0);
+  CHECK(1 + p.b[0] == Approx(1.01).epsilon(1e-15));
+  CHECK(1 + p.b[1] == Approx(1.7245).margin(1e-4));
+  CHECK(p.b[1] == Approx(std::sqrt(2.5 * 1.01 - 0.01 * 0.01 - 2)).epsilon(1e-15));
+  CHECK(p.parent[0] == -1);
+  CHECK(p.parent[1] == -1);
+  CHECK(p.id[0] != p.id[1]);
+  CHECK(p.box.L == 15);
+  // draw order per cell: γ0, then θ
+  CHECK(p.gamma0[0] == s.r0 * (1 + s.delta * (uniform01(ref) - 0.5)));
+  CHECK(p.theta(0) == -kPi + 2 * kPi * uniform01(ref));
+  CHECK(p.gamma0[1] == s.r0 * (1 + s.delta * (uniform01(ref) - 0.5)));
+  CHECK(p.theta(1) == -kPi + 2 * kPi * uniform01(ref));
+}
+
+TEST_CASE("random seeds are newborn cells that overlap nowhere, also across the periodic boundary", "[growth]") {
+  Scene s = base_scene();
+  s.L = 20;
+  s.init = InitialState::random_seeds;
+  s.n_seeds = 150;  // covered fraction ≈ 0.30
+  Rng rng(17);
+  const Packing p = random_seeds(s, rng);
+  REQUIRE(p.size() == 150);
+  Lobes lobes;
+  place_lobes(p, lobes);
+  for (std::size_t a = 0; a < lobes.size(); ++a)
+    for (std::size_t b = a + 1; b < lobes.size(); ++b) {
+      if (cell_of(a) == cell_of(b)) continue;
+      double dx = lobes.x[a] - lobes.x[b], dy = lobes.y[a] - lobes.y[b];
+      p.box.minimum_image(dx, dy);
+      INFO("lobes " << a << " " << b);
+      CHECK(std::hypot(dx, dy) >= lobes.R[a] + lobes.R[b]);
+    }
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    CHECK(p.b[i] == newborn_bud(s.alpha0));
+    CHECK(p.x(i) >= 0.0);
+    CHECK(p.x(i) < s.L);
+  }
+  Rng again(17);
+  const Packing q = random_seeds(s, again);
+  CHECK(q.q == p.q);
+  CHECK(q.gamma0 == p.gamma0);
+
+  s.n_seeds = 1000;  // cannot fit in 400 D²
+  Rng r2(1);
+  CHECK_THROWS_AS(random_seeds(s, r2), InputError);
+}

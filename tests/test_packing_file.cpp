@@ -1,0 +1,281 @@
+// The packing file format (io/packing_file.hpp) and checkpoints that embed it (io/checkpoint.hpp).
+#include "io/checkpoint.hpp"
+#include "io/packing_file.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <bit>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <random>
+#include <unistd.h>
+
+using namespace budjam;
+using namespace budjam::io;
+using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
+
+namespace {
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+
+// A finite double with uniformly random bits: every exponent, subnormals, ±0 all occur.
+double random_finite(std::mt19937_64& rng) {
+  while (true) {
+    const double d = std::bit_cast<double>(rng());
+    if (std::isfinite(d)) return d;
+  }
+}
+
+Packing random_packing(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Packing p;
+  p.box.L = 15.0 + u(rng);
+  p.box.shear = 1e-7 * u(rng);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t parent = i < 2 ? -1 : static_cast<std::int64_t>(rng() % i);
+    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), 2 * std::numbers::pi * (u(rng) - 0.5), 0.01 + u(rng), 0.002 * (0.8 + 0.4 * u(rng)),
+               parent);
+  }
+  return p;
+}
+
+void require_identical(const Packing& a, const Packing& b) {
+  REQUIRE(a.size() == b.size());
+  CHECK(same_bits(a.box.L, b.box.L));
+  CHECK(same_bits(a.box.shear, b.box.shear));
+  CHECK(a.next_id == b.next_id);
+  CHECK(a.id == b.id);
+  CHECK(a.parent == b.parent);
+  REQUIRE(a.q.size() == b.q.size());
+  for (Eigen::Index k = 0; k < a.q.size(); ++k) REQUIRE(same_bits(a.q[k], b.q[k]));
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    REQUIRE(same_bits(a.b[i], b.b[i]));
+    REQUIRE(same_bits(a.gamma0[i], b.gamma0[i]));
+  }
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_packing(text, "t.pack");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  REQUIRE(at != std::string::npos);
+  return s.replace(at, from.size(), to);
+}
+
+// Line numbers: 1 magic, 2 L, 3 shear, 4 N, 5 next_id, 6 meta phase, 7 cells, 8–10 rows, 11 end.
+const std::string kValid =
+    "budjam-packing 1\n"
+    "L 8\n"
+    "shear 0\n"
+    "N 3\n"
+    "next_id 3\n"
+    "meta phase jammed\n"
+    "cells id parent x y theta b gamma0\n"
+    "0 -1 4 3.5 0.25 0.5 0.002\n"
+    "1 -1 4 4.5 -1 0.7245 0.0021\n"
+    "2 0 5 4 3 0.01 0.0019\n"
+    "end\n";
+
+}  // namespace
+
+TEST_CASE("a packing file round-trips every double bit-exactly, including extreme values", "[packing_file]") {
+  std::mt19937_64 rng(7);
+  Packing p = random_packing(200, 11);
+  // Coordinates and angles with arbitrary bit patterns (the format must not care what they mean).
+  for (Eigen::Index k = 0; k < p.q.size(); ++k) p.q[k] = random_finite(rng);
+  p.q[0] = -0.0;
+  p.q[1] = std::numeric_limits<double>::denorm_min();
+  p.q[2] = std::numeric_limits<double>::max();
+  p.q[3] = -std::numeric_limits<double>::min();
+  p.b[0] = 0.0;
+  p.b[1] = std::nextafter(0.01, 1.0);
+  p.gamma0[2] = 0.1 + 0.2;
+  PackingMeta meta;
+  meta.set("phase", "target");
+  meta.set_number("phi", 0.8412345678901234);
+  meta.set_number("P", 1.234e-5);
+  meta.set_integer("step", 123456789012);
+  meta.set("note", " spaced  value with, commas ");
+  meta.set("empty", "");
+
+  const std::string text = format_packing(p, meta);
+  const PackingFile r = parse_packing(text, "mem.pack");
+  require_identical(p, r.packing);
+  CHECK(r.meta.values == meta.values);
+  CHECK(same_bits(r.meta.number("phi"), 0.8412345678901234));
+  CHECK(r.meta.integer("step") == 123456789012);
+  CHECK(format_packing(r.packing, r.meta) == text);  // a fixed point after one cycle
+}
+
+TEST_CASE("write_packing and read_packing round-trip through a file", "[packing_file]") {
+  const auto dir = std::filesystem::temp_directory_path() / ("budjam-pack-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const Packing p = random_packing(50, 3);
+  PackingMeta meta;
+  meta.set("phase", "jammed");
+  write_packing(dir / "packings" / "jammed.pack", p, meta);
+  const PackingFile r = read_packing(dir / "packings" / "jammed.pack");
+  require_identical(p, r.packing);
+  CHECK(r.meta.get("phase") == "jammed");
+  CHECK_THROWS_WITH(read_packing(dir / "missing.pack"), Contains("missing.pack: cannot read"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("the reference example of the format is read as documented", "[packing_file]") {
+  const PackingFile f = parse_packing(kValid, "t.pack");
+  const Packing& p = f.packing;
+  REQUIRE(p.size() == 3);
+  CHECK(p.box.L == 8);
+  CHECK(p.next_id == 3);
+  CHECK(p.x(1) == 4);
+  CHECK(p.y(1) == 4.5);
+  CHECK(p.theta(1) == -1);
+  CHECK(p.b[1] == 0.7245);
+  CHECK(p.gamma0[2] == 0.0019);
+  CHECK(p.parent[2] == 0);
+  CHECK(f.meta.get("phase") == "jammed");
+  // Comments and blank lines are allowed in the header; CRLF line ends are tolerated.
+  CHECK(parse_packing(replace(kValid, "L 8\n", "# a comment\n\nL 8\n"), "t").packing.size() == 3);
+  std::string crlf;
+  for (char c : kValid) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  require_identical(parse_packing(crlf, "t").packing, p);
+}
+
+TEST_CASE("each kind of corrupt packing file is refused with its line number", "[packing_file]") {
+  struct Case {
+    std::string text, message;
+  };
+  const std::vector<Case> cases = {
+      {"", "t.pack:1: empty file"},
+      {replace(kValid, "budjam-packing 1", "budjam-pack 1"), "t.pack:1: not a budjam packing file"},
+      {replace(kValid, "budjam-packing 1", "x,y,z"), "t.pack:1: not a budjam packing file"},
+      {replace(kValid, "budjam-packing 1", "budjam-packing 2"), "t.pack:1: unsupported packing format version 2"},
+      {replace(kValid, "budjam-packing 1", "budjam-packing one"), "t.pack:1: format version is not an integer"},
+      {replace(kValid, "N 3\n", ""), "t.pack:6: the header lacks \"N\""},
+      {replace(kValid, "L 8\n", ""), "t.pack:6: the header lacks \"L\""},
+      {replace(kValid, "N 3\n", "N 3\nN 3\n"), "t.pack:5: duplicate header key \"N\""},
+      {replace(kValid, "shear 0\n", "shear 0\ncolour blue\n"), "t.pack:4: unknown header key \"colour\""},
+      {replace(kValid, "L 8", "L eight"), "t.pack:2: L: not a number (got \"eight\")"},
+      {replace(kValid, "L 8", "L 0"), "t.pack:2: L: must be positive"},
+      {replace(kValid, "L 8", "L inf"), "t.pack:2: L: not finite"},
+      {replace(kValid, "N 3", "N -3"), "t.pack:4: N: must not be negative"},
+      {replace(kValid, "N 3", "N 3.5"), "t.pack:4: N: not an integer"},
+      {replace(kValid, "meta phase jammed", "meta ph@se jammed"), "t.pack:6: invalid meta key"},
+      {replace(kValid, "cells id parent x y theta b gamma0", "cells id x y"), "t.pack:7: the cells line must be"},
+      {replace(kValid, "4 4.5 -1 0.7245", "4 4.5 0.7245"), "t.pack:9: expected 7 columns (id parent x y theta b gamma0), found 6"},
+      {replace(kValid, "0.0021\n", "0.0021 9\n"), "t.pack:9: expected 7 columns"},
+      {replace(kValid, "4 4.5 -1", "4 abc -1"), "t.pack:9: column y: not a number (got \"abc\")"},
+      {replace(kValid, "4 4.5 -1", "4 4.5x -1"), "t.pack:9: column y: not a number (got \"4.5x\")"},
+      {replace(kValid, "4 4.5 -1", "4 nan -1"), "t.pack:9: column y: not finite (got nan)"},
+      {replace(kValid, "4 4.5 -1", "4 4.5 -inf"), "t.pack:9: column theta: not finite (got -inf)"},
+      {replace(kValid, "2 0 5 4 3", "2 0.5 5 4 3"), "t.pack:10: column parent: not an integer"},
+      {replace(kValid, "1 -1 4 4.5", "0 -1 4 4.5"), "t.pack:9: duplicate id 0 (first on line 8)"},
+      {replace(kValid, "2 0 5 4 3", "7 0 5 4 3"), "t.pack:10: column id: must lie in [0, next_id = 3) (got 7)"},
+      {replace(kValid, "2 0 5 4 3", "2 2 5 4 3"), "t.pack:10: column parent: must be -1 or another id"},
+      {replace(kValid, "0.01 0.0019", "-0.01 0.0019"), "t.pack:10: column b: must not be negative"},
+      {replace(kValid, "0.01 0.0019", "0.01 -0.0019"), "t.pack:10: column gamma0: must not be negative"},
+      {replace(kValid, "N 3", "N 4"), "t.pack:11: expected N = 4 cell rows, found 3"},
+      {replace(kValid, "N 3", "N 2"), "t.pack:10: more cell rows than N = 2"},
+      {replace(kValid, "end\n", ""), "t.pack:11: truncated: missing the \"end\" line"},
+      {replace(kValid, "2 0 5 4 3 0.01 0.0019\nend\n", ""), "t.pack:10: truncated: expected N = 3 cell rows, the file ends after 2"},
+      {replace(kValid, "end\n", "end\n0 -1 1 1 1 1 1\n"), "t.pack:12: unexpected text after \"end\""},
+      {"budjam-packing 1\nL 8\nshear 0\n", "t.pack:4: truncated: the header has no \"cells\" line"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.text);
+    const std::string message = error_of(c.text);
+    CHECK_THAT(message, StartsWith(c.message));
+    CHECK(message.find('\n') == std::string::npos);
+  }
+}
+
+TEST_CASE("every truncation of a packing file is refused", "[packing_file]") {
+  // Files are written atomically, but a copy can still be cut short; no prefix of a file may
+  // read as a valid packing (the only exception: the final newline alone).
+  Packing p = random_packing(6, 5);
+  PackingMeta meta;
+  meta.set_number("phi", 0.5);
+  const std::string text = format_packing(p, meta);
+  for (std::size_t n = 0; n + 1 < text.size(); ++n) {
+    INFO("prefix of " << n << " bytes");
+    CHECK_THAT(error_of(text.substr(0, n)), StartsWith("t.pack:"));
+  }
+  CHECK(error_of(text.substr(0, text.size() - 1)).empty());
+}
+
+TEST_CASE("a corrupt header N cannot make the reader allocate for cells that are not there", "[packing_file]") {
+  CHECK_THAT(error_of(replace(kValid, "N 3", "N 9000000000000000000")), StartsWith("t.pack:11: expected N ="));
+}
+
+TEST_CASE("format_packing refuses packings that could not be read back", "[packing_file]") {
+  Packing p = random_packing(3, 1);
+  p.q[4] = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(format_packing(p), std::invalid_argument);
+  p = random_packing(3, 1);
+  p.id[2] = p.id[1];
+  CHECK_THROWS_AS(format_packing(p), std::invalid_argument);
+  p = random_packing(3, 1);
+  p.b.pop_back();
+  CHECK_THROWS_AS(format_packing(p), std::invalid_argument);
+  PackingMeta meta;
+  CHECK_THROWS_AS(meta.set("two words", "x"), std::invalid_argument);
+  CHECK_THROWS_AS(meta.set("k", "line\nbreak"), std::invalid_argument);
+  meta.set("phi", "not a number");
+  CHECK_THROWS_WITH(meta.number("phi"), "meta.phi: not a number (got \"not a number\")");
+  CHECK_THROWS_WITH(meta.number("P"), "meta.P: missing");
+}
+
+TEST_CASE("a checkpoint restores the packing and the driver state bit-exactly", "[packing_file][checkpoint]") {
+  const auto dir = std::filesystem::temp_directory_path() / ("budjam-ckpt-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::mt19937_64 rng(99);
+  const Packing p = random_packing(40, 8);
+  PackingMeta meta;
+  meta.set_integer("step", 1234);
+  Json state;
+  state["phase"] = "above_jamming";
+  state["phi_J"] = random_finite(rng);
+  std::vector<double> pressures;
+  for (int i = 0; i < 40; ++i) pressures.push_back(random_finite(rng));
+  state["bud_pressure"] = pressures;
+  std::ostringstream stream;
+  stream << rng;  // the random stream's full state, as the driver would store it
+  state["rng"] = stream.str();
+  state["log_bytes"] = {{"steps.csv", 123456}};
+
+  write_checkpoint(dir / "checkpoint.json", p, meta, state);
+  const Checkpoint c = read_checkpoint(dir / "checkpoint.json");
+  require_identical(p, c.packing.packing);
+  CHECK(c.packing.meta.integer("step") == 1234);
+  CHECK(same_bits(c.state["phi_J"].get<double>(), state["phi_J"].get<double>()));
+  const auto back = c.state["bud_pressure"].get<std::vector<double>>();
+  REQUIRE(back.size() == pressures.size());
+  for (std::size_t i = 0; i < back.size(); ++i) CHECK(same_bits(back[i], pressures[i]));
+  std::mt19937_64 restored;
+  std::istringstream(c.state["rng"].get<std::string>()) >> restored;
+  CHECK(restored == rng);
+  CHECK(c.state["log_bytes"]["steps.csv"] == 123456);
+
+  // A checkpoint whose embedded packing is damaged is refused, naming the packing line.
+  Json broken = read_json(dir / "checkpoint.json");
+  std::string text = broken["packing"];
+  text.replace(text.find("\nend\n"), 5, "\n");
+  broken["packing"] = text;
+  write_json(dir / "broken.json", broken);
+  CHECK_THROWS_WITH(read_checkpoint(dir / "broken.json"), Contains("broken.json[packing]:") && Contains("truncated"));
+  write_json(dir / "other.json", Json{{"format", "something"}});
+  CHECK_THROWS_WITH(read_checkpoint(dir / "other.json"), Contains("not a budjam checkpoint"));
+  std::filesystem::remove_all(dir);
+}

@@ -1,0 +1,101 @@
+// Ensemble statistics against closed forms and hand-worked values.
+#include "budjam/statistics.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+#include <vector>
+
+using namespace budjam;
+
+TEST_CASE("mean, variances and standard error match hand-worked values") {
+  const std::vector<double> x{2, 4, 4, 4, 5, 5, 7, 9};  // mean 5, Σ(x − x̄)² = 32
+  CHECK(mean(x) == Approx(5.0));
+  CHECK(population_variance(x) == Approx(4.0));        // 32 / 8
+  CHECK(sample_variance(x) == Approx(32.0 / 7.0));     // 32 / 7
+  CHECK(standard_error(x) == Approx(std::sqrt(32.0 / 7.0 / 8.0)));
+  CHECK(std::isnan(standard_error(std::vector<double>{1.0})));
+  CHECK(std::isnan(mean(std::vector<double>{})));
+}
+
+TEST_CASE("median and type-7 quantiles interpolate between order statistics") {
+  CHECK(median({3, 1, 2}) == 2.0);
+  CHECK(median({4, 1, 3, 2}) == 2.5);
+  // {1,2,3,4}: h = 3q; q = 0.25 → h = 0.75 → 1 + 0.75·(2 − 1) = 1.75
+  CHECK(quantile({4, 3, 2, 1}, 0.25) == Approx(1.75));
+  CHECK(quantile({4, 3, 2, 1}, 0.0) == 1.0);
+  CHECK(quantile({4, 3, 2, 1}, 1.0) == 4.0);
+  CHECK_THROWS(quantile({1.0}, 1.5));
+}
+
+TEST_CASE("uniform_index is unbiased over a small range") {
+  std::mt19937_64 rng(7);
+  std::vector<int> counts(3, 0);
+  const int draws = 300000;
+  for (int k = 0; k < draws; ++k) counts[uniform_index(rng, 3)]++;
+  for (int c : counts) CHECK(std::abs(c - draws / 3) < 5 * std::sqrt(draws * (1.0 / 3) * (2.0 / 3)));
+}
+
+TEST_CASE("bootstrap SE of the mean approaches s/sqrt(n) * sqrt((n-1)/n)") {
+  // The bootstrap distribution of the mean has variance σ̂²/n with the plug-in σ̂² = s²(n − 1)/n.
+  const std::vector<double> x{0.3, 1.7, 2.2, -0.4, 5.1, 3.3, 0.9, 2.8, 1.1, 4.0};
+  const double n = static_cast<double>(x.size());
+  const double closed = standard_error(x) * std::sqrt((n - 1) / n);
+  BootstrapOptions opt;
+  opt.resamples = 200000;  // Monte Carlo error of the SE ≈ 1/√(2·resamples) ≈ 0.16 %
+  opt.seed = 11;
+  const auto b = bootstrap_mean(x, opt);
+  CHECK(b.estimate == Approx(mean(x)));
+  CHECK(b.se == Approx(closed).epsilon(0.01));
+  // the 95 % percentile interval of a nearly normal statistic is about mean ± 1.96 SE
+  CHECK(b.lo == Approx(mean(x) - 1.96 * closed).epsilon(0.03));
+  CHECK(b.hi == Approx(mean(x) + 1.96 * closed).epsilon(0.03));
+}
+
+TEST_CASE("bootstrap of the median of {1,2,3} reproduces its exact resampling distribution") {
+  // Median of 3 draws with replacement from {1,2,3}: P(1) = P(3) = 3(1/3)²(2/3) + (1/3)³ = 7/27,
+  // P(2) = 13/27. Mean 2, variance 14/27.
+  const std::vector<double> x{1, 2, 3};
+  BootstrapOptions opt;
+  opt.resamples = 100000;
+  const auto b = bootstrap_median(x, opt);
+  CHECK(b.estimate == 2.0);
+  CHECK(b.se == Approx(std::sqrt(14.0 / 27.0)).epsilon(0.01));
+  CHECK(b.lo == 1.0);  // 7/27 > 2.5 %: the interval reaches both ends
+  CHECK(b.hi == 3.0);
+}
+
+TEST_CASE("bootstrap is deterministic for a seed and changes with it") {
+  const std::vector<double> x{1, 5, 2, 8, 3, 9, 4};
+  BootstrapOptions a;
+  a.seed = 3;
+  BootstrapOptions c = a;
+  c.seed = 4;
+  CHECK(bootstrap_median(x, a).se == bootstrap_median(x, a).se);
+  CHECK(bootstrap_median(x, a).se != bootstrap_median(x, c).se);
+  CHECK(bootstrap_median(x).resamples == 2000);  // the paper's default
+  CHECK(bootstrap_median(std::vector<double>{4.0}).se == 0.0);
+  CHECK_THROWS(bootstrap_median(std::vector<double>{}));
+}
+
+TEST_CASE("linear fit is exact on a line") {
+  const std::vector<double> x{0.5, 1.0, 2.0, 3.5, 7.0};
+  std::vector<double> y;
+  for (double v : x) y.push_back(3.0 - 2.0 * v);
+  const auto f = linear_fit(x, y);
+  CHECK(f.slope == Approx(-2.0).epsilon(1e-14));
+  CHECK(f.intercept == Approx(3.0).epsilon(1e-14));
+  CHECK(f.slope_se == Approx(0.0).margin(1e-14));
+  CHECK(f.r2 == Approx(1.0));
+}
+
+TEST_CASE("linear fit slope error matches the hand-worked residual variance") {
+  // x = {0,1,2}, y = {0,2,1}: x̄ = ȳ = 1, Sxx = 2, Sxy = 1 → slope 1/2, intercept 1/2;
+  // residuals −1/2, 1, −1/2 → RSS = 3/2, σ² = RSS/(n−2) = 3/2, SE(slope) = √(σ²/Sxx) = √(3/4).
+  const auto f = linear_fit(std::vector<double>{0, 1, 2}, std::vector<double>{0, 2, 1});
+  CHECK(f.slope == Approx(0.5));
+  CHECK(f.intercept == Approx(0.5));
+  CHECK(f.slope_se == Approx(std::sqrt(0.75)));
+  CHECK(f.intercept_se == Approx(std::sqrt(1.5 * (1.0 / 3 + 1.0 / 2))));
+  CHECK_THROWS(linear_fit(std::vector<double>{1, 1}, std::vector<double>{0, 1}));
+}

@@ -1,0 +1,85 @@
+// Kaplan–Meier survival with censoring and Greenwood's variance, against a hand-worked example.
+#include "budjam/survival.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+
+using namespace budjam;
+
+namespace {
+// Eight tagged buds: completions (E) at a = 1, 3, 3, 5, 7; censorings (C) at a = 2, 3, 6.
+std::vector<SurvivalRecord> example() {
+  return {{3, true}, {1, true}, {2, false}, {3, false}, {5, true}, {3, true}, {7, true}, {6, false}};
+}
+}  // namespace
+
+TEST_CASE("Kaplan-Meier matches the hand-worked censored example") {
+  // a = 1: n = 8, d = 1            → S = 7/8
+  // a = 2: n = 7, censored 1        → S = 7/8
+  // a = 3: n = 6, d = 2, censored 1 → S = 7/8 · 4/6 = 7/12 (censored at a tie are still at risk)
+  // a = 5: n = 3, d = 1             → S = 7/12 · 2/3 = 7/18
+  // a = 6: n = 2, censored 1
+  // a = 7: n = 1, d = 1             → S = 0
+  const auto km = kaplan_meier(example());
+  REQUIRE(km.steps().size() == 6);
+  CHECK(km.records() == 8);
+  CHECK(km.events() == 5);
+  CHECK(km.steps()[2].at_risk == 6);
+  CHECK(km.steps()[2].events == 2);
+  CHECK(km.steps()[2].censored == 1);
+  CHECK(km.steps()[3].at_risk == 3);
+  CHECK(km.S(0.5) == 1.0);
+  CHECK(km.S(1.0) == Approx(7.0 / 8));  // right-continuous
+  CHECK(km.S(2.5) == Approx(7.0 / 8));
+  CHECK(km.S(3.0) == Approx(7.0 / 12));
+  CHECK(km.S(5.5) == Approx(7.0 / 18));
+  CHECK(km.S(6.9) == Approx(7.0 / 18));
+  CHECK(km.S(7.0) == 0.0);
+}
+
+TEST_CASE("Greenwood variance matches the hand-worked sums") {
+  // Σ d/(n(n−d)): a=1: 1/(8·7) = 1/56; a=3: + 2/(6·4) = 1/12 → 17/168; a=5: + 1/(3·2) → 45/168.
+  const auto km = kaplan_meier(example());
+  CHECK(km.variance(0.5) == 0.0);
+  CHECK(km.variance(1.0) == Approx((49.0 / 64) * (1.0 / 56)));
+  CHECK(km.variance(3.0) == Approx((49.0 / 144) * (17.0 / 168)));
+  CHECK(km.variance(5.0) == Approx((49.0 / 324) * (45.0 / 168)));
+  CHECK(km.variance(7.0) == 0.0);  // Ŝ = 0: no spread left
+}
+
+TEST_CASE("integral of S is the exact area under the step function") {
+  // ∫_0^8 S = 1·1 + (7/8)·2 + (7/12)·2 + (7/18)·2 + 0 = 169/36
+  const auto km = kaplan_meier(example());
+  CHECK(km.integral(8.0) == Approx(169.0 / 36));
+  CHECK(km.integral(0.5) == Approx(0.5));
+  CHECK(km.integral(4.0) == Approx(1.0 + 7.0 / 4 + 7.0 / 12));
+  CHECK(km.integral(0.0) == 0.0);
+}
+
+TEST_CASE("a_eps is the first completion where u_J S(a) falls to eps") {
+  const auto km = kaplan_meier(example());
+  // level ε/u_J = 0.6 → first S ≤ 0.6 is 7/12 at a = 3; level 0.5 → 7/18 at a = 5
+  CHECK(*a_epsilon(km, 0.25, 0.15) == 3.0);
+  CHECK(*a_epsilon(km, 0.25, 0.125) == 5.0);
+  CHECK(*a_epsilon(km, 0.25, 0.0) == 7.0);  // exact exhaustion
+  CHECK(*a_epsilon(km, 0.25, 0.3) == 0.0);  // ε ≥ u_J: already there
+  // all censored: S never falls, a_ε does not exist
+  const auto cens = kaplan_meier({{1, false}, {2, false}});
+  CHECK_FALSE(a_epsilon(cens, 0.2, 0.01).has_value());
+  CHECK(cens.S(10.0) == 1.0);
+}
+
+TEST_CASE("without censoring Kaplan-Meier is the empirical survival function") {
+  std::vector<SurvivalRecord> r;
+  for (int k = 1; k <= 10; ++k) r.push_back({0.1 * k, true});
+  const auto km = kaplan_meier(r);
+  for (int k = 1; k <= 10; ++k) CHECK(km.S(0.1 * k + 1e-12) == Approx(1.0 - 0.1 * k).margin(1e-12));
+  // Greenwood without censoring is the binomial variance S(1 − S)/n
+  CHECK(km.variance(0.35) == Approx(0.7 * 0.3 / 10));
+}
+
+TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
+  CHECK_THROWS(kaplan_meier({{-1.0, true}}));
+  CHECK_THROWS(kaplan_meier({{NAN, true}}));
+  CHECK(kaplan_meier({}).S(1.0) == 1.0);
+}

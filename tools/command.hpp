@@ -1,0 +1,58 @@
+#pragma once
+// Subcommands register themselves: each tools/cmd_<name>.cpp holds
+//
+//   namespace {
+//   const bool registered = budjam::cli::register_command({"grow", "Grow a packing from a scene",
+//       [](CLI::App& sub) {
+//         auto opts = std::make_shared<Options>();
+//         sub.add_option("SCENE", opts->scene, "scene file")->required();
+//         sub.callback([opts] { run(*opts); });
+//       }});
+//   }
+//
+// main.cpp creates one CLI11 subcommand per registered command, in name order, calls `setup` on
+// it and runs the one the user chose. A callback reports failure by throwing (exit codes below);
+// main prints exactly one line "budjam: error: <what()>" on stderr.
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace budjam::cli {
+
+// Exit codes of `budjam` (docs/files.md).
+enum ExitCode : int {
+  kExitOk = 0,          // success
+  kExitRunFailed = 1,   // the run ran and failed (step limit, step underflow, ...): RunFailure
+  kExitBadInput = 2,    // invalid command line, scene or input file: CLI11 errors, budjam::InputError
+  kExitInternal = 3,    // an output could not be written, or any other error: io::IoError, std::exception
+};
+
+// Thrown by a subcommand after it has written its outputs (summary.json with the failure
+// status) to make `budjam` exit with kExitRunFailed. what() is the one-line reason.
+struct RunFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Command {
+  std::string name;                          // the subcommand word: `budjam <name> ...`
+  std::string help;                          // one line for `budjam --help`
+  std::function<void(CLI::App& sub)> setup;  // adds options and sub.callback(...) to the subcommand
+};
+
+// Function-local static: safe to use from other translation units' static initialisers.
+inline std::vector<Command>& registry() {
+  static std::vector<Command> commands;
+  return commands;
+}
+
+// Returns true so that it can initialise a namespace-scope `const bool`.
+inline bool register_command(Command command) {
+  registry().push_back(std::move(command));
+  return true;
+}
+
+}  // namespace budjam::cli

@@ -1,0 +1,70 @@
+#pragma once
+// The packing file (".pack"): one versioned text format that every subcommand reads and writes.
+// Format version 1 (docs/files.md has the full description):
+//
+//   budjam-packing 1
+//   L 15
+//   shear 0
+//   N 2
+//   next_id 2
+//   meta phase jammed            <- zero or more "meta <key> <value>" lines, free-form text values
+//   cells id parent x y theta b gamma0
+//   0 -1 7.5 7 0.3 0.01 0.00213
+//   1 -1 7.5 8 -2.1 0.7245 0.00187
+//   end
+//
+// Numbers are written as the shortest text that reads back bit-identically, so a packing
+// survives any number of write/read cycles unchanged. Lines starting with '#' are allowed
+// before the "cells" line. The "end" line makes any truncation detectable.
+#include "budjam/packing.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace budjam::io {
+
+inline constexpr int kPackingFormatVersion = 1;
+
+// Free-form key/value metadata stored with a packing: phase, phi, P, step, seed, dphi, P0, ...
+// Keys are [A-Za-z0-9_.-]+; values are one line of text (may be empty or contain spaces).
+struct PackingMeta {
+  std::map<std::string, std::string> values;  // sorted: files are deterministic
+
+  void set(const std::string& key, std::string value);
+  void set_number(const std::string& key, double value);  // round-trip text
+  void set_integer(const std::string& key, std::int64_t value);
+
+  bool has(const std::string& key) const { return values.count(key) != 0; }
+  std::optional<std::string> get(const std::string& key) const;
+  // InputError "meta.<key>: missing" / "meta.<key>: not a number (got ...)".
+  double number(const std::string& key) const;
+  std::int64_t integer(const std::string& key) const;
+};
+
+struct PackingFile {
+  Packing packing;
+  PackingMeta meta;
+};
+
+// The file text. std::invalid_argument if the packing is inconsistent (array sizes, a meta key
+// or value that cannot be written) — a programming error, never a user's.
+std::string format_packing(const Packing& packing, const PackingMeta& meta = {});
+
+// Parses file text; `source` names it in errors. Refuses anything not exactly in the format with
+// InputError "<source>:<line>: <problem>": wrong magic, unsupported version, unknown/duplicate/
+// missing header key, wrong column count, non-numeric or non-finite number, invalid L/b/γ0/ids,
+// duplicate ids, fewer or more rows than N, missing "end" (truncation), text after "end".
+PackingFile parse_packing(std::string_view text, const std::string& source = "<packing>");
+
+// Atomic write (io/atomic_file.hpp) / read of a file.
+void write_packing(const std::filesystem::path& path, const Packing& packing, const PackingMeta& meta = {});
+PackingFile read_packing(const std::filesystem::path& path);
+
+// True if `text` starts like a packing file (its first line is "budjam-packing ...").
+bool looks_like_packing(std::string_view text);
+
+}  // namespace budjam::io

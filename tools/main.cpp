@@ -1,0 +1,60 @@
+// `budjam`: builds the command line from the self-registered subcommands (command.hpp), runs the
+// chosen one, and turns every failure into one line on stderr and an exit code.
+#include "command.hpp"
+
+#include "budjam/scene.hpp"
+#include "io/atomic_file.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <iostream>
+#include <set>
+#include <string>
+
+#ifndef BUDJAM_VERSION
+#define BUDJAM_VERSION "0.1.0"  // keep equal to project(VERSION) in CMakeLists.txt
+#endif
+
+namespace {
+
+int error(const std::string& message, int code) {
+  std::string line = message;
+  std::replace(line.begin(), line.end(), '\n', ' ');  // one line, always
+  std::cerr << "budjam: error: " << line << std::endl;
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace budjam::cli;
+  CLI::App app{"budjam: growing packings of budding cells (yeast) in 2D, to jamming and beyond", "budjam"};
+  app.set_version_flag("--version", std::string("budjam ") + BUDJAM_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough(false);
+
+  std::vector<Command> commands = registry();
+  std::sort(commands.begin(), commands.end(), [](const Command& a, const Command& b) { return a.name < b.name; });
+  std::set<std::string> seen;
+  for (const Command& c : commands) {
+    if (!seen.insert(c.name).second) return error("internal: subcommand \"" + c.name + "\" registered twice", kExitInternal);
+    CLI::App* sub = app.add_subcommand(c.name, c.help);
+    c.setup(*sub);
+  }
+
+  try {
+    app.parse(argc, argv);  // runs the chosen subcommand's callback
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
+    return error(std::string(e.what()) + " (see budjam --help)", kExitBadInput);
+  } catch (const RunFailure& e) {
+    return error(e.what(), kExitRunFailed);
+  } catch (const budjam::InputError& e) {
+    return error(e.what(), kExitBadInput);
+  } catch (const budjam::io::IoError& e) {
+    return error(e.what(), kExitInternal);
+  } catch (const std::exception& e) {
+    return error(std::string("internal: ") + e.what(), kExitInternal);
+  }
+}

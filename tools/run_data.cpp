@@ -1,0 +1,201 @@
+#include "run_data.hpp"
+
+#include "budjam/cell_list.hpp"
+#include "budjam/scene.hpp"
+#include "io/atomic_file.hpp"
+#include "io/text.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace budjam::tools {
+
+namespace fs = std::filesystem;
+
+std::size_t CsvTable::column(const std::string& name) const {
+  for (std::size_t k = 0; k < columns.size(); ++k)
+    if (columns[k] == name) return k;
+  throw InputError(source + ": no column '" + name + "'");
+}
+
+bool CsvTable::has_column(const std::string& name) const {
+  for (const auto& c : columns)
+    if (c == name) return true;
+  return false;
+}
+
+double CsvTable::number(std::size_t row, std::size_t col) const {
+  const std::string& t = rows.at(row).at(col);
+  if (t.empty()) return std::numeric_limits<double>::quiet_NaN();
+  if (auto v = io::parse_double(t)) return *v;
+  // line numbers: header is line 1
+  throw InputError(source + ":" + std::to_string(row + 2) + ": " + columns[col] + ": not a number (got \"" + t + "\")");
+}
+
+std::vector<double> CsvTable::numbers(const std::string& name) const {
+  const std::size_t c = column(name);
+  std::vector<double> out(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) out[r] = number(r, c);
+  return out;
+}
+
+namespace {
+
+// Splits one CSV record starting at `pos`; advances pos past its line end.
+std::vector<std::string> parse_record(const std::string& text, std::size_t& pos, const std::string& where) {
+  std::vector<std::string> fields;
+  std::string cur;
+  bool quoted = false, was_quoted = false;
+  while (pos < text.size()) {
+    const char c = text[pos];
+    if (quoted) {
+      if (c == '"') {
+        if (pos + 1 < text.size() && text[pos + 1] == '"') {
+          cur += '"';
+          pos += 2;
+          continue;
+        }
+        quoted = false;
+        ++pos;
+        continue;
+      }
+      cur += c;
+      ++pos;
+      continue;
+    }
+    if (c == '"' && cur.empty() && !was_quoted) {
+      quoted = was_quoted = true;
+      ++pos;
+      continue;
+    }
+    if (c == ',') {
+      fields.push_back(std::move(cur));
+      cur.clear();
+      was_quoted = false;
+      ++pos;
+      continue;
+    }
+    if (c == '\r') {
+      ++pos;
+      continue;
+    }
+    if (c == '\n') {
+      ++pos;
+      break;
+    }
+    cur += c;
+    ++pos;
+  }
+  if (quoted) throw InputError(where + ": unterminated quoted field");
+  fields.push_back(std::move(cur));
+  return fields;
+}
+
+}  // namespace
+
+CsvTable read_csv(const fs::path& path) {
+  CsvTable t;
+  t.source = path.string();
+  const std::string text = io::read_text_file(path);
+  std::size_t pos = 0, line = 1;
+  if (text.empty()) throw InputError(t.source + ": empty file (no header)");
+  t.columns = parse_record(text, pos, t.source + ":1");
+  while (pos < text.size()) {
+    ++line;
+    auto rec = parse_record(text, pos, t.source + ":" + std::to_string(line));
+    if (rec.size() == 1 && rec[0].empty()) continue;  // blank line
+    if (rec.size() != t.columns.size())
+      throw InputError(t.source + ":" + std::to_string(line) + ": " + std::to_string(rec.size()) + " fields, header has " +
+                       std::to_string(t.columns.size()));
+    t.rows.push_back(std::move(rec));
+  }
+  return t;
+}
+
+std::optional<double> RunData::P0() const {
+  if (!summary.contains("P0") || summary["P0"].is_null()) return std::nullopt;
+  return summary["P0"].get<double>();
+}
+
+std::string RunData::P0_label() const {
+  const auto p = P0();
+  return p ? io::format_double(*p) : std::string("none");
+}
+
+double RunData::get(const std::string& key) const {
+  if (!summary.contains(key) || !summary[key].is_number()) return std::numeric_limits<double>::quiet_NaN();
+  return summary[key].get<double>();
+}
+
+RunData load_run(const fs::path& dir) {
+  RunData r;
+  r.dir = dir;
+  const fs::path s = dir / "summary.json";
+  if (!fs::exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
+  r.summary = io::read_json(s);
+  if (r.summary.value("format", std::string()) != "budjam-summary")
+    throw InputError(s.string() + ": not a budjam run summary (format)");
+  r.steps = read_csv(dir / "steps.csv");
+  r.divisions = read_csv(dir / "divisions.csv");
+  if (fs::exists(dir / "bud_events.csv")) r.bud_events = read_csv(dir / "bud_events.csv");
+  return r;
+}
+
+std::vector<SurvivalRecord> survival_records(const CsvTable& ev, int episode) {
+  const std::size_t c_ep = ev.column("episode"), c_id = ev.column("cell_id"), c_kind = ev.column("event"),
+                    c_a = ev.column("a");
+  if (episode < 0) {
+    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, static_cast<int>(ev.number(r, c_ep)));
+    if (episode < 0) return {};
+  }
+  // Last row per tagged bud (rows are in time order), in order of first appearance.
+  std::map<std::string, std::pair<std::string, double>> last;
+  std::vector<std::string> order;
+  for (std::size_t r = 0; r < ev.size(); ++r) {
+    if (static_cast<int>(ev.number(r, c_ep)) != episode) continue;
+    const std::string& id = ev.text(r, c_id);
+    const std::string& kind = ev.text(r, c_kind);
+    auto it = last.find(id);
+    if (it == last.end()) {
+      order.push_back(id);
+      last[id] = {kind, ev.number(r, c_a)};
+    } else if (it->second.first == "tagged" || it->second.first == "first_contact") {
+      it->second = {kind, ev.number(r, c_a)};  // terminal rows end a tag: later rows cannot follow
+    }
+  }
+  std::vector<SurvivalRecord> out;
+  for (const auto& id : order) {
+    const auto& [kind, a] = last[id];
+    out.push_back({std::max(0.0, a), kind == "completed"});
+  }
+  return out;
+}
+
+PackingContacts analyse_contacts(const Packing& p) {
+  PackingContacts pc;
+  Lobes lobes;
+  place_lobes(p, lobes);
+  NeighbourList nl;
+  nl.update(lobes, p.box);
+  pc.contacts = find_contacts(p, lobes, nl);
+  pc.network = analyse_network(p.size(), pc.contacts);
+  pc.bud_pressures = bud_pressures(p, pc.contacts);
+  pc.P = pressure(pc.contacts, p.box);
+  double s = 0;
+  std::size_t n = 0;
+  for (const auto& c : load_bearing(pc.contacts, pc.network)) {
+    s += c.r * c.r;
+    ++n;
+  }
+  pc.lc2 = n ? s / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
+  return pc;
+}
+
+std::optional<io::Json> sidecar(const fs::path& pack, const std::string& kind) {
+  fs::path f = pack;
+  f.replace_extension("." + kind + ".json");
+  if (!fs::exists(f)) return std::nullopt;
+  return io::read_json(f);
+}
+
+}  // namespace budjam::tools

@@ -1,0 +1,78 @@
+#pragma once
+// Reading finished growth-run directories for the analysis subcommands (survival, analyse):
+// summary.json, steps.csv, divisions.csv, bud_events.csv and the per-packing results of
+// `budjam moduli` / `budjam dos` stored beside the packings (docs/analysis.md, "Pipeline").
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
+#include "budjam/survival.hpp"
+#include "io/json.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+// A CSV file as text cells; numbers parsed on demand. Quoted fields (RFC 4180) are understood.
+struct CsvTable {
+  std::string source;
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+
+  // Index of a column; InputError "<source>: no column '<name>'".
+  std::size_t column(const std::string& name) const;
+  bool has_column(const std::string& name) const;
+  // NaN for an empty field; InputError "<source>:<line>: <column>: not a number".
+  double number(std::size_t row, std::size_t col) const;
+  const std::string& text(std::size_t row, std::size_t col) const { return rows[row][col]; }
+  std::vector<double> numbers(const std::string& name) const;
+  std::size_t size() const { return rows.size(); }
+};
+
+// InputError "<path>:<line>: ..." for a malformed file (wrong field count, unterminated quote).
+CsvTable read_csv(const std::filesystem::path& path);
+
+// One finished run directory.
+struct RunData {
+  std::filesystem::path dir;
+  io::Json summary;
+  CsvTable steps, divisions;
+  std::optional<CsvTable> bud_events;  // absent when the scene turned bud events off
+
+  std::string status() const { return summary.value("status", std::string("?")); }
+  double L() const { return summary.at("L").get<double>(); }
+  std::optional<double> P0() const;  // nullopt = no feedback
+  std::string P0_label() const;      // "none" or the number as text
+  std::uint64_t seed() const { return summary.at("seed").get<std::uint64_t>(); }
+  // A number from summary.json, NaN for null or absent.
+  double get(const std::string& key) const;
+  bool jammed() const { return summary.contains("phi_J") && !summary["phi_J"].is_null(); }
+};
+
+// Reads a finished run (summary.json present). InputError naming the file otherwise.
+RunData load_run(const std::filesystem::path& dir);
+
+// Completion records of the tagged buds of one jamming episode (the last one, -1): completed = event;
+// divided / censored_end / censored_unjam = censored; a bud with no terminal row is censored at its
+// last logged a.
+std::vector<SurvivalRecord> survival_records(const CsvTable& bud_events, int episode = -1);
+
+// Contacts and contact network of a relaxed packing, as every analysis computes them.
+struct PackingContacts {
+  std::vector<Contact> contacts;
+  ContactNetwork network;
+  std::vector<double> bud_pressures;
+  double P = 0;
+  double lc2 = 0;  // ℓ_c²: mean squared centre distance over load-bearing contacts
+};
+PackingContacts analyse_contacts(const Packing& p);
+
+// Results of `budjam moduli` / `budjam dos` kept beside a packing: packings/<name>.moduli.json,
+// packings/<name>.dos.json (the Makefile writes them). nullopt when absent.
+std::optional<io::Json> sidecar(const std::filesystem::path& pack, const std::string& kind);
+
+}  // namespace budjam::tools

@@ -1,0 +1,296 @@
+#include "run_outputs.hpp"
+
+#include "io/packing_file.hpp"
+#include "io/text.hpp"
+#include "observers.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <istream>
+#include <ostream>
+
+namespace budjam::tools {
+
+namespace fs = std::filesystem;
+using io::CsvField;
+using io::Json;
+
+// ---- RunLog -------------------------------------------------------------------------------------
+
+const std::vector<std::string>& RunLog::step_columns() {
+  static const std::vector<std::string> c{
+      "step",   "attempts", "dt",       "N",          "phi",   "P",       "E_per_cell", "phase",
+      "N_c",    "N_f",      "N_f_single", "N_u",      "N_u_buds", "Z",     "Z_iso",      "dZ",
+      "chi_c",  "compressed_buds", "tagged_active", "tagged_completed", "tagged_divided",
+      "divisions_since_jamming"};
+  return c;
+}
+
+const std::vector<std::string>& RunLog::division_columns() {
+  static const std::vector<std::string> c{"step", "phi", "phase", "N", "mother_id", "daughter_id",
+                                          "mother_index", "daughter_index", "x", "y", "theta", "b"};
+  return c;
+}
+
+RunLog::RunLog(fs::path run_dir, std::uint64_t seed, bool resuming) : dir_(std::move(run_dir)), seed_(seed) {
+  fs::create_directories(dir_ / "packings");
+  if (!resuming) {
+    steps_.emplace(dir_ / "steps.csv", step_columns());
+    divisions_.emplace(dir_ / "divisions.csv", division_columns());
+  }
+}
+
+void RunLog::on_step_accepted(const StepAccepted& e) {
+  const StateView& s = e.state;
+  const bool above = s.phase == Phase::jammed && s.network;
+  const ContactNetwork* n = s.network;
+  auto opt = [&](auto v) { return above ? CsvField(v) : CsvField::missing(); };
+  steps_->row({s.step, s.attempts, s.dt, s.packing->size(), s.phi, s.P, s.E_per_cell, to_string(s.phase),
+               above ? CsvField(n->N_c) : CsvField::missing(), above ? CsvField(n->N_f) : CsvField::missing(),
+               above ? CsvField(n->N_f_single_pass) : CsvField::missing(),
+               above ? CsvField(n->N_u) : CsvField::missing(), above ? CsvField(n->N_u_buds) : CsvField::missing(),
+               above ? CsvField(n->Z) : CsvField::missing(), above ? CsvField(n->Z_iso) : CsvField::missing(),
+               above ? CsvField(n->dZ) : CsvField::missing(), opt(s.chi_c), opt(s.compressed_buds),
+               opt(s.buds->active()), opt(s.buds->completed()), opt(s.buds->divided()),
+               opt(s.divisions_since_jamming)});
+}
+
+void RunLog::on_divided(const Divided& e) {
+  const Division& d = e.division;
+  divisions_->row({e.state.step, e.state.phi, to_string(e.state.phase), e.state.packing->size(), d.mother_id,
+                   d.daughter_id, d.mother_index, d.daughter_index, d.x, d.y, d.theta, d.b});
+}
+
+void RunLog::write_pack(const std::string& file, const StateView& s, const std::string& kind,
+                        std::optional<double> dphi) {
+  io::PackingMeta meta;
+  meta.set("kind", kind);
+  meta.set("phase", to_string(s.phase));
+  meta.set_integer("step", s.step);
+  meta.set_integer("seed", static_cast<std::int64_t>(seed_));
+  meta.set_number("phi", s.phi);
+  meta.set_number("P", s.P);
+  meta.set_number("E_per_cell", s.E_per_cell);
+  if (s.scene->P0) meta.set_number("P0", *s.scene->P0);
+  else meta.set("P0", "none");
+  if (s.jamming) meta.set_number("phi_J", s.jamming->phi);
+  if (dphi) meta.set_number("dphi", *dphi);
+  if (s.network) {
+    meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
+    meta.set_number("Z", s.network->Z);
+  }
+  io::write_packing(dir_ / "packings" / file, *s.packing, meta);
+}
+
+void RunLog::on_jammed(const Jammed& e) { write_pack("jammed.pack", e.state, "jammed", std::nullopt); }
+void RunLog::on_depleted(const Depleted& e) { write_pack("phi2.pack", e.state, "phi2", std::nullopt); }
+void RunLog::on_target_reached(const TargetReached& e) {
+  write_pack("target_" + std::to_string(e.target.index) + ".pack", e.state, "target", e.target.dphi);
+}
+
+void RunLog::on_finished(const Finished&) {
+  steps_->finish();
+  divisions_->finish();
+}
+void RunLog::on_failed(const Failed&) {
+  // A failed run's logs are complete up to the failure: they are finished too (summary.json says
+  // the run failed).
+  steps_->finish();
+  divisions_->finish();
+}
+
+void RunLog::save_state(std::ostream& os) {
+  steps_->sync();
+  divisions_->sync();
+  os << steps_->bytes() << ' ' << divisions_->bytes() << '\n';
+}
+
+void RunLog::load_state(std::istream& is) {
+  std::uint64_t a = 0, b = 0;
+  if (!(is >> a >> b)) throw InputError("checkpoint: bad run_log state");
+  steps_.emplace(io::CsvLog::resume(dir_ / "steps.csv", step_columns(), a));
+  divisions_.emplace(io::CsvLog::resume(dir_ / "divisions.csv", division_columns(), b));
+}
+
+// ---- bud_events.csv -------------------------------------------------------------------------------
+
+namespace {
+
+const std::vector<std::string> kBudColumns{"episode", "cell_id", "event", "step", "phi", "a"};
+
+class BudEventLog : public Observer {
+ public:
+  BudEventLog(fs::path dir, bool resuming) : path_(std::move(dir) / "bud_events.csv") {
+    if (!resuming) log_.emplace(path_, kBudColumns);
+  }
+  std::string name() const override { return "bud_events"; }
+  void on_bud_event(const BudEventHappened& e) override {
+    const BudEvent& b = e.event;
+    log_->row({b.episode, b.cell_id, to_string(b.kind), b.step, b.phi, b.a});
+  }
+  void on_finished(const Finished&) override { log_->finish(); }
+  void on_failed(const Failed&) override { log_->finish(); }
+  void save_state(std::ostream& os) override {
+    log_->sync();
+    os << log_->bytes() << '\n';
+  }
+  void load_state(std::istream& is) override {
+    std::uint64_t bytes = 0;
+    if (!(is >> bytes)) throw InputError("checkpoint: bad bud_events state");
+    log_.emplace(io::CsvLog::resume(path_, kBudColumns, bytes));
+  }
+
+ private:
+  fs::path path_;
+  std::optional<io::CsvLog> log_;
+};
+
+const ObserverRegistration bud_events_registration{
+    "bud_events", [](const ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (!c.scene.bud_events) return nullptr;
+      return std::make_unique<BudEventLog>(c.run_dir, c.resuming);
+    }};
+
+// ---- progress on stderr ---------------------------------------------------------------------------
+
+class Progress : public Observer {
+ public:
+  std::string name() const override { return "progress"; }
+  void on_step_accepted(const StepAccepted& e) override {
+    const auto now = Clock::now();
+    if (now - last_ < std::chrono::seconds(2)) return;
+    line("", e.state, now);
+  }
+  void on_jammed(const Jammed& e) override { line("jammed: ", e.state, Clock::now()); }
+  void on_unjammed(const Unjammed& e) override { line("unjammed (jamming search restarts): ", e.state, Clock::now()); }
+  void on_target_reached(const TargetReached& e) override {
+    line("target dphi=" + io::format_double(e.target.dphi) + ": ", e.state, Clock::now());
+  }
+  void on_depleted(const Depleted& e) override { line("phi_2: ", e.state, Clock::now()); }
+  void on_finished(const Finished& e) override { line("finished: ", e.state, Clock::now()); }
+  void on_failed(const Failed& e) override { line(std::string("FAILED (") + to_string(e.result.status) + "): ", e.state, Clock::now()); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void line(const std::string& what, const StateView& s, Clock::time_point now) {
+    const double dt = std::chrono::duration<double>(now - last_).count();
+    const double rate = dt > 0 ? static_cast<double>(s.attempts - last_attempts_) / dt : 0.0;
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "grow: %sstep %ld  phi %.8f  N %zu  P %.3e  %s  %.1f steps/s", what.c_str(),
+                  s.step, s.phi, s.packing->size(), s.P, to_string(s.phase), rate);
+    std::cerr << buf << '\n';
+    last_ = now;
+    last_attempts_ = s.attempts;
+  }
+  Clock::time_point last_ = Clock::now();
+  long last_attempts_ = 0;
+};
+
+const ObserverRegistration progress_registration{
+    "progress", [](const ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (c.quiet || !c.scene.progress) return nullptr;
+      return std::make_unique<Progress>();
+    }};
+
+}  // namespace
+
+// ---- summary.json --------------------------------------------------------------------------------
+
+Json summary_json(const GrowthDriver& driver) {
+  const RunResult& r = driver.result();
+  const Scene& sc = driver.scene();
+  const StateView now = driver.view();
+  Json j;
+  j["format"] = "budjam-summary";
+  j["version"] = 1;
+  j["status"] = to_string(r.status);
+  j["message"] = r.message;
+  j["scene"] = sc.name;
+  j["seed"] = driver.seed();
+  j["L"] = sc.L;
+  j["P0"] = sc.P0 ? Json(*sc.P0) : Json(nullptr);
+  const auto& J = r.jamming;
+  auto jv = [&](auto get) { return J ? Json(get(*J)) : Json(nullptr); };
+  j["N_J"] = jv([](const JammingRecord& x) { return x.N; });
+  j["phi_J"] = jv([](const JammingRecord& x) { return x.phi; });
+  j["P_J"] = jv([](const JammingRecord& x) { return x.P; });
+  j["E_J"] = jv([](const JammingRecord& x) { return x.E_per_cell; });
+  j["Z_J"] = jv([](const JammingRecord& x) { return x.Z; });
+  j["Z_iso_J"] = jv([](const JammingRecord& x) { return x.Z_iso; });
+  j["dZ_J"] = jv([](const JammingRecord& x) { return x.dZ; });
+  j["u_J"] = jv([](const JammingRecord& x) { return x.u_buds; });
+  j["u_J_lobes"] = jv([](const JammingRecord& x) { return x.u; });
+  j["n_J"] = jv([](const JammingRecord& x) { return x.n_J; });
+  j["N_nr_J"] = jv([](const JammingRecord& x) { return x.N_nr; });
+  j["N_f_J"] = jv([](const JammingRecord& x) { return x.N_f; });
+  j["tagged_J"] = jv([](const JammingRecord& x) { return x.tagged; });
+  j["step_J"] = jv([](const JammingRecord& x) { return x.step; });
+  j["jamming_episode"] = jv([](const JammingRecord& x) { return x.episode; });
+  const auto& D = r.depletion;
+  j["phi_2"] = D ? Json(D->phi) : Json(nullptr);
+  j["P_2"] = D ? Json(D->P) : Json(nullptr);
+  j["N_2"] = D ? Json(D->N) : Json(nullptr);
+  j["Z_2"] = D ? Json(D->Z) : Json(nullptr);
+  j["dZ_2"] = D ? Json(D->dZ) : Json(nullptr);
+  j["N_div_2"] = D ? Json(D->divisions_since_jamming) : Json(nullptr);
+  j["step_2"] = D ? Json(D->step) : Json(nullptr);
+  Json targets = Json::array();
+  for (const TargetRecord& t : r.targets) {
+    Json x;
+    x["index"] = t.index;
+    x["dphi"] = t.dphi;
+    x["phi"] = t.phi;
+    x["phi_target"] = t.phi_target;
+    x["P"] = t.P;
+    x["E_per_cell"] = t.E_per_cell;
+    x["N"] = t.N;
+    x["N_nr"] = t.N_nr;
+    x["Z"] = t.Z;
+    x["u"] = t.u;
+    x["u_buds"] = t.u_buds;
+    x["Z_iso"] = t.Z_iso;
+    x["dZ"] = t.dZ;
+    x["N_c"] = t.N_c;
+    x["N_u"] = t.N_u;
+    x["N_u_buds"] = t.N_u_buds;
+    x["N_f"] = t.N_f;
+    x["N_f_single"] = t.N_f_single;
+    x["chi_c"] = t.chi_c;
+    x["N_div"] = t.divisions_since_jamming;
+    x["step"] = t.step;
+    targets.push_back(x);
+  }
+  j["targets"] = targets;
+  Json unj = Json::array();
+  for (const UnjamRecord& u : r.unjammings)
+    unj.push_back(Json{{"episode", u.episode}, {"step", u.step}, {"phi", u.phi}, {"phi_J", u.phi_J},
+                       {"targets_lost", u.targets_lost}});
+  j["unjammings"] = unj;
+  j["final"] = Json{{"step", now.step}, {"phase", to_string(now.phase)}, {"phi", now.phi}, {"P", now.P},
+                    {"N", now.packing->size()}};
+  j["accepted_steps"] = r.accepted;
+  j["rejected_steps"] = r.rejected;
+  j["divisions"] = r.divisions;
+  j["force_evaluations"] = r.force_evaluations;
+  j["fire_iterations"] = r.fire_iterations;
+  return j;
+}
+
+void write_summary(const fs::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing) {
+  const RunResult& r = driver.result();
+  const long evals = r.force_evaluations - timing.force_evaluations_at_start;
+  const long attempts = driver.view().attempts - timing.attempts_at_start;
+  Json t;
+  t["note"] = "not deterministic; this session only (a resumed run counts from the resume)";
+  t["wall_seconds"] = timing.wall_seconds;
+  t["growth_steps"] = attempts;
+  t["growth_steps_per_second"] = timing.wall_seconds > 0 ? attempts / timing.wall_seconds : 0.0;
+  t["force_evaluations"] = evals;
+  t["force_evaluations_per_second"] = timing.wall_seconds > 0 ? evals / timing.wall_seconds : 0.0;
+  t["final_N"] = driver.packing().size();
+  io::write_json(run_dir / kTimingFile, t);
+  io::write_json(run_dir / kSummaryFile, summary_json(driver));  // last: marks the run complete
+}
+
+}  // namespace budjam::tools

@@ -1,0 +1,59 @@
+#pragma once
+// The files of a growth run directory (docs/growth.md, "Run directory"):
+//   steps.csv, divisions.csv, packings/{jammed,phi2,target_<k>}.pack   (RunLog, always)
+//   bud_events.csv                                                    (observer "bud_events")
+//   summary.json, timing.json                                         (write_summary, at the end)
+// and the progress line on stderr (observer "progress").
+#include "budjam/growth_driver.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json.hpp"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace budjam::tools {
+
+// steps.csv, divisions.csv and the packings at jamming, φ_2 and each target.
+class RunLog : public Observer {
+ public:
+  // resuming: the logs are reopened by load_state (cut back to the checkpoint) instead of created.
+  RunLog(std::filesystem::path run_dir, std::uint64_t seed, bool resuming);
+  std::string name() const override { return "run_log"; }
+  void on_step_accepted(const StepAccepted& e) override;
+  void on_divided(const Divided& e) override;
+  void on_jammed(const Jammed& e) override;
+  void on_target_reached(const TargetReached& e) override;
+  void on_depleted(const Depleted& e) override;
+  void on_finished(const Finished& e) override;
+  void on_failed(const Failed& e) override;
+  void save_state(std::ostream& os) override;
+  void load_state(std::istream& is) override;
+
+  static const std::vector<std::string>& step_columns();
+  static const std::vector<std::string>& division_columns();
+
+ private:
+  void write_pack(const std::string& file, const StateView& s, const std::string& kind, std::optional<double> dphi);
+  std::filesystem::path dir_;
+  std::uint64_t seed_;
+  std::optional<io::CsvLog> steps_, divisions_;
+};
+
+// The run's summary (deterministic: same scene and seed => same bytes) and timing.json (wall
+// time and rates, not deterministic).
+io::Json summary_json(const GrowthDriver& driver);
+struct SessionTiming {
+  double wall_seconds = 0;
+  long attempts_at_start = 0;           // growth steps already done when this session started
+  long force_evaluations_at_start = 0;
+};
+void write_summary(const std::filesystem::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
+
+// Run-directory file names.
+inline constexpr const char* kSummaryFile = "summary.json";
+inline constexpr const char* kTimingFile = "timing.json";
+inline constexpr const char* kCheckpointFile = "checkpoint.txt";
+inline constexpr const char* kSceneFile = "scene.toml";
+
+}  // namespace budjam::tools
