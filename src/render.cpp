@@ -77,7 +77,13 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
   const double L = p.box.L, s = opt.pixels_per_unit, m = opt.margin * s;
   const double side = L * s;
   const double legend_h = opt.legend ? 44.0 : 0.0;
-  const double caption_h = opt.caption.empty() ? 0.0 : 22.0;
+  std::vector<std::string> caption_lines;
+  for (std::size_t a = 0; !opt.caption.empty() && a <= opt.caption.size();) {
+    const std::size_t b = std::min(opt.caption.find('\n', a), opt.caption.size());
+    caption_lines.push_back(opt.caption.substr(a, b - a));
+    a = b + 1;
+  }
+  const double caption_h = 16.0 * static_cast<double>(caption_lines.size()) + (caption_lines.empty() ? 0.0 : 6.0);
   const double W = side + 2 * m, H = side + 2 * m + legend_h + caption_h;
   // Box coordinates → pixels (y up in the model, down in SVG).
   auto X = [&](double x) { return m + x * s; };
@@ -119,8 +125,8 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
       const bool free_bud = bud && net.unconstrained_bud(i);
       std::string cls = rattler ? (bud ? "bud rattler" : "mother rattler") : (bud ? "bud" : "mother");
       if (free_bud) cls += " unconstrained";
-      const char* fill = rattler ? "#d9d9d9" : (bud ? "#9ecae1" : "#c6dbef");
-      const char* stroke = free_bud ? "#1a9641" : (rattler ? "#969696" : "#3182bd");
+      const char* fill = rattler ? "#d9d9d9" : (bud ? "#bcbddc" : "#c6dbef");
+      const char* stroke = free_bud ? "#1a9641" : (rattler ? "#969696" : (bud ? "#756bb1" : "#3182bd"));
       const std::string extra = free_bud ? " stroke-dasharray=\"3,2\" stroke-width=\"2\"" : "";
       for (const auto& d : images(lx[l] - R, lx[l] + R, ly[l] - R, ly[l] + R, p.box, opt.periodic_images))
         o += "<circle class=\"" + cls + "\" data-cell=\"" + std::to_string(i) + "\" cx=\"" + num(X(lx[l] + d[0])) +
@@ -164,15 +170,17 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
     o += "<text x=\"" + num(m) + "\" y=\"" + num(y + 24) + "\">" + escape(buf) + "</text>\n";
     const double lx0 = m + bar_w + 16;
     o += "<circle cx=\"" + num(lx0 + 6) + "\" cy=\"" + num(y + 5) +
-         "\" r=\"5\" fill=\"#9ecae1\" stroke=\"#1a9641\" stroke-dasharray=\"3,2\" stroke-width=\"2\"/>\n";
+         "\" r=\"5\" fill=\"#bcbddc\" stroke=\"#1a9641\" stroke-dasharray=\"3,2\" stroke-width=\"2\"/>\n";
     o += "<text x=\"" + num(lx0 + 16) + "\" y=\"" + num(y + 9) + "\">unconstrained bud</text>\n";
     o += "<circle cx=\"" + num(lx0 + 6) + "\" cy=\"" + num(y + 25) + "\" r=\"5\" fill=\"#d9d9d9\" stroke=\"#969696\"/>\n";
     o += "<text x=\"" + num(lx0 + 16) + "\" y=\"" + num(y + 29) + "\">rattler</text>\n";
     o += "</g>\n";
     y += legend_h;
   }
-  if (!opt.caption.empty())
-    o += "<text class=\"caption\" x=\"" + num(m) + "\" y=\"" + num(y + 12) + "\">" + escape(opt.caption) + "</text>\n";
+  for (const auto& line : caption_lines) {
+    o += "<text class=\"caption\" x=\"" + num(m) + "\" y=\"" + num(y + 12) + "\">" + escape(line) + "</text>\n";
+    y += 16.0;
+  }
   o += "</svg>\n";
   return o;
 }

@@ -301,11 +301,37 @@ SpectralSummary summarise(const Spectrum& s, const BandEdgeRule& rule) {
   return m;
 }
 
+long count_below_by_inertia(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass, double tol) {
+  check_problem(H, mass);
+  if (!(tol > 0)) throw std::invalid_argument("count_below_by_inertia: tol must be positive");
+  // Sylvester: the inertia of K − tol·I = L D Lᵀ is that of D. The two translations are exact
+  // zero eigenvalues of K, below any positive tol.
+  CholmodSolver ldlt(Factorisation::ldlt);
+  if (!ldlt.factor(dynamical_matrix(H, mass), tol, Eigen::VectorXd()))
+    throw std::runtime_error("count_below_by_inertia: zero pivot in the LDLᵀ factorisation of K − tol; "
+                             "tol is an eigenvalue to working precision");
+  return ldlt.negative_pivots() - 2;
+}
+
 int modes_for_band_edge(std::size_t n_dof, std::size_t expected_zero, const BandEdgeRule& rule, std::size_t spare) {
   const std::size_t extended = n_dof - std::min(n_dof, expected_zero);
   const std::size_t n_band =
       std::max(rule.band_min, static_cast<std::size_t>(std::ceil(rule.band_fraction * extended)));
   return static_cast<int>(std::min(n_dof, expected_zero + n_band + spare));
+}
+
+PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 SpectrumOptions options, const BandEdgeRule& rule) {
+  if (net.N_nr == 0) throw InputError("packing: no non-rattler cells (unjammed): no vibrational spectrum");
+  const VibrationalProblem prob = vibrational_problem(p, contacts, net);
+  const std::size_t nd = static_cast<std::size_t>(prob.mass.size()) - 2;
+  if (options.modes <= 0) options.modes = modes_for_band_edge(nd, net.N_u, rule);
+  PackingSpectrum out;
+  out.cells = prob.cells;
+  out.spectrum = solve_spectrum(prob.H, prob.mass, options);
+  out.summary = summarise(out.spectrum, rule);
+  if (options.vectors) out.participation = participation_ratios(out.spectrum);
+  return out;
 }
 
 }  // namespace budjam

@@ -22,14 +22,22 @@ struct Result {
   std::string out, err;
 };
 
-fs::path work_dir() {
-  static const fs::path dir = [] {
-    const fs::path d = fs::temp_directory_path() / ("budjam-cli-" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+// A scratch directory for this process, removed at exit.
+struct WorkDir {
+  fs::path path = fs::temp_directory_path() / ("budjam-cli-" + std::to_string(::getpid()));
+  WorkDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+const fs::path& work_dir() {
+  static const WorkDir dir;
+  return dir.path;
 }
 
 std::string slurp(const fs::path& p) {
@@ -46,7 +54,7 @@ fs::path write(const std::string& name, const std::string& text) {
 }
 
 // Runs `budjam <args>` through the shell; arguments are passed as written (quote them yourself).
-Result budjam(const std::string& args) {
+Result run_budjam(const std::string& args) {
   const char* exe = std::getenv("BUDJAM_EXE");
   REQUIRE(exe != nullptr);
   const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
@@ -85,7 +93,7 @@ TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming th
                                          {"[growth\n", "bad.toml:1:"}}) {
     INFO(c.toml);
     const fs::path scene = write("bad.toml", c.toml);
-    const Result r = budjam("validate '" + scene.string() + "'");
+    const Result r = run_budjam("validate '" + scene.string() + "'");
     CHECK(r.code == 2);
     require_one_error_line(r);
     CHECK_THAT(r.err, Contains(c.key));
@@ -95,7 +103,7 @@ TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming th
 
 TEST_CASE("budjam validate prints the effective scene, which reads back to the same scene", "[cli]") {
   const fs::path scene = write("good.toml", "[run]\nname = \"cli\"\n[growth]\nP0 = 1e-3\n[jamming]\ntargets = [1e-3, 1e-2]\n");
-  const Result r = budjam("validate '" + scene.string() + "' --set growth.P0=none --set run.seed=5");
+  const Result r = run_budjam("validate '" + scene.string() + "' --set growth.P0=none --set run.seed=5");
   REQUIRE(r.code == 0);
   CHECK(r.err.empty());
   const budjam::Scene s = budjam::io::parse_scene(r.out, "stdout");
@@ -104,7 +112,7 @@ TEST_CASE("budjam validate prints the effective scene, which reads back to the s
   CHECK(s.name == "cli");
   CHECK(budjam::io::scene_to_toml(s) == r.out);
 
-  const Result j = budjam("validate --json '" + scene.string() + "'");
+  const Result j = run_budjam("validate --json '" + scene.string() + "'");
   REQUIRE(j.code == 0);
   const auto json = nlohmann::json::parse(j.out);
   CHECK(json["growth"]["P0"] == 1e-3);
@@ -120,13 +128,13 @@ TEST_CASE("budjam validate checks packing files and names the corrupt line", "[c
   meta.set("phase", "jammed");
   const std::string text = budjam::io::format_packing(p, meta);
   const fs::path good = write("good.pack", text);
-  const Result ok = budjam("validate '" + good.string() + "'");
+  const Result ok = run_budjam("validate '" + good.string() + "'");
   REQUIRE(ok.code == 0);
   CHECK_THAT(ok.out, Contains("N = 2"));
   CHECK_THAT(ok.out, Contains("meta.phase = jammed"));
 
   const fs::path bad = write("bad.pack", text.substr(0, text.size() - 4));  // "end\n" cut off
-  const Result r = budjam("validate '" + bad.string() + "'");
+  const Result r = run_budjam("validate '" + bad.string() + "'");
   CHECK(r.code == 2);
   require_one_error_line(r);
   CHECK_THAT(r.err, Contains("bad.pack:10: truncated"));
@@ -136,21 +144,21 @@ TEST_CASE("command-line mistakes exit 2 with one stderr line", "[cli]") {
   for (const std::string args : {"", "no-such-command", "validate", "validate a.toml b.toml", "validate --bogus x.toml",
                                  "validate missing-file.toml"}) {
     INFO(args);
-    const Result r = budjam(args);
+    const Result r = run_budjam(args);
     CHECK(r.code == 2);
     require_one_error_line(r);
   }
 }
 
 TEST_CASE("--version and --help succeed on stdout", "[cli]") {
-  const Result v = budjam("--version");
+  const Result v = run_budjam("--version");
   CHECK(v.code == 0);
   CHECK_THAT(v.out, StartsWith("budjam "));
   CHECK(v.err.empty());
-  const Result h = budjam("--help");
+  const Result h = run_budjam("--help");
   CHECK(h.code == 0);
   CHECK_THAT(h.out, Contains("validate"));
-  const Result hv = budjam("validate --help");
+  const Result hv = run_budjam("validate --help");
   CHECK(hv.code == 0);
   CHECK_THAT(hv.out, Contains("--set"));
 }

@@ -1,5 +1,4 @@
-// The packing file format (io/packing_file.hpp) and checkpoints that embed it (io/checkpoint.hpp).
-#include "io/checkpoint.hpp"
+// The packing file format (io/packing_file.hpp).
 #include "io/packing_file.hpp"
 
 #include <catch2/catch.hpp>
@@ -235,47 +234,4 @@ TEST_CASE("format_packing refuses packings that could not be read back", "[packi
   meta.set("phi", "not a number");
   CHECK_THROWS_WITH(meta.number("phi"), "meta.phi: not a number (got \"not a number\")");
   CHECK_THROWS_WITH(meta.number("P"), "meta.P: missing");
-}
-
-TEST_CASE("a checkpoint restores the packing and the driver state bit-exactly", "[packing_file][checkpoint]") {
-  const auto dir = std::filesystem::temp_directory_path() / ("budjam-ckpt-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::mt19937_64 rng(99);
-  const Packing p = random_packing(40, 8);
-  PackingMeta meta;
-  meta.set_integer("step", 1234);
-  Json state;
-  state["phase"] = "above_jamming";
-  state["phi_J"] = random_finite(rng);
-  std::vector<double> pressures;
-  for (int i = 0; i < 40; ++i) pressures.push_back(random_finite(rng));
-  state["bud_pressure"] = pressures;
-  std::ostringstream stream;
-  stream << rng;  // the random stream's full state, as the driver would store it
-  state["rng"] = stream.str();
-  state["log_bytes"] = {{"steps.csv", 123456}};
-
-  write_checkpoint(dir / "checkpoint.json", p, meta, state);
-  const Checkpoint c = read_checkpoint(dir / "checkpoint.json");
-  require_identical(p, c.packing.packing);
-  CHECK(c.packing.meta.integer("step") == 1234);
-  CHECK(same_bits(c.state["phi_J"].get<double>(), state["phi_J"].get<double>()));
-  const auto back = c.state["bud_pressure"].get<std::vector<double>>();
-  REQUIRE(back.size() == pressures.size());
-  for (std::size_t i = 0; i < back.size(); ++i) CHECK(same_bits(back[i], pressures[i]));
-  std::mt19937_64 restored;
-  std::istringstream(c.state["rng"].get<std::string>()) >> restored;
-  CHECK(restored == rng);
-  CHECK(c.state["log_bytes"]["steps.csv"] == 123456);
-
-  // A checkpoint whose embedded packing is damaged is refused, naming the packing line.
-  Json broken = read_json(dir / "checkpoint.json");
-  std::string text = broken["packing"];
-  text.replace(text.find("\nend\n"), 5, "\n");
-  broken["packing"] = text;
-  write_json(dir / "broken.json", broken);
-  CHECK_THROWS_WITH(read_checkpoint(dir / "broken.json"), Contains("broken.json[packing]:") && Contains("truncated"));
-  write_json(dir / "other.json", Json{{"format", "something"}});
-  CHECK_THROWS_WITH(read_checkpoint(dir / "other.json"), Contains("not a budjam checkpoint"));
-  std::filesystem::remove_all(dir);
 }

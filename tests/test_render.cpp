@@ -123,10 +123,11 @@ TEST_CASE("force colours darken monotonically from weakest to strongest") {
 TEST_CASE("render is deterministic and refuses a network of another packing") {
   auto s = make();
   RenderOptions o;
-  o.caption = "phi = 0.8 & <test>";
+  o.caption = "phi = 0.8 & <test>\nsecond line";
   const std::string a = render_svg(s.p, s.contacts, s.net, o);
   CHECK(a == render_svg(s.p, s.contacts, s.net, o));
-  CHECK(a.find("phi = 0.8 &amp; &lt;test&gt;") != std::string::npos);
+  CHECK(a.find(">phi = 0.8 &amp; &lt;test&gt;</text>") != std::string::npos);
+  CHECK(count(a, "class=\"caption\"") == 2);
   s.net.rattler.pop_back();
   CHECK_THROWS_AS(render_svg(s.p, s.contacts, s.net), std::invalid_argument);
 }

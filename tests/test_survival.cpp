@@ -69,6 +69,17 @@ TEST_CASE("a_eps is the first completion where u_J S(a) falls to eps") {
   CHECK(cens.S(10.0) == 1.0);
 }
 
+TEST_CASE("a_eps reaches an exact level despite rounding of the product-limit") {
+  // Five tagged buds, four completions, one censored at the end: Ŝ = 4/5·3/4·2/3·1/2 = 1/5, which
+  // floating point gives as 0.20000000000000004. With ε = 1/N_nr and u_J = 5/N_nr the level is 1/5:
+  // φ_2's "at most one bud left" must be found at the fourth completion.
+  const auto km = kaplan_meier({{0.1, true}, {0.2, true}, {0.3, true}, {0.4, true}, {0.5, false}});
+  REQUIRE(km.S(0.45) == Approx(0.2));
+  const double N_nr = 48.0;
+  REQUIRE(a_epsilon(km, 5.0 / N_nr, 1.0 / N_nr).has_value());
+  CHECK(*a_epsilon(km, 5.0 / N_nr, 1.0 / N_nr) == 0.4);
+}
+
 TEST_CASE("without censoring Kaplan-Meier is the empirical survival function") {
   std::vector<SurvivalRecord> r;
   for (int k = 1; k <= 10; ++k) r.push_back({0.1 * k, true});

@@ -67,7 +67,7 @@ void run(const Options& o) {
   ro.draw_contacts = !o.no_contacts;
   char buf[256];
   const auto& m = f.meta;
-  std::snprintf(buf, sizeof buf, "%s  N = %zu  L = %g  phi = %.6f  P = %.3g  Z = %.3f  rattlers = %zu  free buds = %zu",
+  std::snprintf(buf, sizeof buf, "%s: N = %zu, L = %g, phi = %.6f, P = %.3g\nZ = %.3f, rattlers = %zu, unconstrained buds = %zu",
                 m.get("kind").value_or(fs::path(o.packing).stem().string()).c_str(), f.packing.size(), f.packing.box.L,
                 f.packing.packing_fraction(), pc.P, pc.network.Z, pc.network.N_f, pc.network.N_u_buds);
   ro.caption = buf;

@@ -17,7 +17,7 @@ struct RenderOptions {
   bool periodic_images = true;    // draw the copies of lobes/contacts that cross the boundary
   bool draw_contacts = true;
   bool legend = true;             // force scale and the meaning of the marks, below the box
-  std::string caption;            // one line under the picture (e.g. "φ = 0.845, P = 1e-4")
+  std::string caption;            // text under the picture; "\n" separates lines
 };
 
 // Colour of a contact with force f on the scale [0, f_max]: a perceptually ordered ramp from pale

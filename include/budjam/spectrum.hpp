@@ -53,7 +53,8 @@ SpectrumMethod parse_spectrum_method(const std::string& text, const std::string&
 struct SpectrumOptions {
   SpectrumMethod method = SpectrumMethod::automatic;
   std::size_t dense_max_dof = 2000;  // automatic: dense when 3n − 2 ≤ this (≈ 670 cells, ~1 s)
-  int modes = 100;                   // ARPACK: the lowest K modes (clamped to 3n − 3)
+  int modes = 100;                   // ARPACK: the lowest K modes (< 3n − 2); packing_spectrum():
+                                     // ≤ 0 means as many as ω* needs (modes_for_band_edge)
   int ncv = 0;                       // ARPACK Lanczos vectors; 0 = min(3n−2, max(2K+1, K+20))
   double tol = 0.0;                  // ARPACK relative residual tolerance; 0 = machine precision
   double sigma = -1e-3;              // ARPACK shift (units k/m); negative so K − σI is positive
@@ -87,6 +88,11 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
 
 // Number of modes with λ < tol (quasi-zero modes; negative rounding noise included).
 std::size_t count_below(const Eigen::VectorXd& lambda, double tol);
+
+// #{λ < tol} among the 3n − 2 modes without computing any: Sylvester's law of inertia on an
+// LDLᵀ factorisation of K − tol·I (negative pivots, minus the two translations). An independent
+// check of N_zero for systems too large for the dense solver. tol > 0.
+long count_below_by_inertia(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass, double tol);
 
 // The band edge ω*: the root-mean-square frequency of the lowest n_band modes above the
 // quasi-zero modes, ω* = sqrt(mean λ over those modes), with
@@ -147,5 +153,20 @@ SpectralSummary summarise(const Spectrum& s, const BandEdgeRule& rule = {});
 // about `expected_zero` quasi-zero modes (e.g. N_u), plus a margin of `spare`.
 int modes_for_band_edge(std::size_t n_dof, std::size_t expected_zero, const BandEdgeRule& rule = {},
                         std::size_t spare = 16);
+
+// ---- one packing, end to end ----------------------------------------------------------------
+
+struct PackingSpectrum {
+  std::vector<std::size_t> cells;  // the non-rattler cells, in the order of the modes' blocks
+  Spectrum spectrum;
+  SpectralSummary summary;
+  Eigen::VectorXd participation;   // per computed mode (empty without vectors)
+};
+
+// Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +
+// summarise). With options.modes ≤ 0 the ARPACK path computes modes_for_band_edge(n_dof, N_u)
+// modes. Throws InputError if the packing has no non-rattler cell (unjammed: no spectrum).
+PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 SpectrumOptions options = {}, const BandEdgeRule& rule = {});
 
 }  // namespace budjam

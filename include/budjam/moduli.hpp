@@ -1,0 +1,127 @@
+#pragma once
+// Non-affine linear elastic response of a relaxed packing (issue 3.4; derivation in docs/moduli.md).
+//
+// Strain: an affine displacement gradient e_αβ = ∂u_α/∂x_β applied to the box and the centroids
+// (X → (1 + e) X, images included); orientations θ are not strained (cells are rigid). Lees–Edwards
+// simple shear γ is e_xy = γ; isotropic rescaling of box and centroids is e = ε·1. The cells then
+// relax: q = q_aff(e) + u, H du/de = Ξ with Ξ = −∂²U/∂q∂e (the force response), solved on the
+// non-rattler cells with CHOLMOD.
+//
+// Two stresses are differentiated along that relaxed path:
+//  - the contact-virial stress of MODEL.md, S_αβ = −(1/L²) Σ f r̂_α r_β with r the lobe-centre
+//    separation. B and G of MODEL.md ("B = φ dP/dφ", "G = dΣ_xy/dγ") are slopes of this stress;
+//    they are the headline `B`, `G` (they match the paper's finite-strain measurements);
+//  - the energy (thermodynamic) stress τ_αβ = (1/A) ∂U/∂e_αβ = −(1/A) Σ f n_α C_β with C the
+//    centroid separation, whose slopes follow from the energy expansion
+//    U(e)/A = U0/A + τ:e + ½ e:E:e (E = Born − Ξᵀ H⁺ Ξ, per area). The stiffness tensor C_αβγδ is
+//    the coefficient of the Lagrangian strain η = (eᵀ + e + eᵀe)/2: C = E − δ_αγ τ_βδ.
+// The two stresses differ by the axial force each rigid dumbbell carries between its lobes
+// (S omits it), so their slopes differ too; both are reported.
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace budjam {
+
+// Strain components in the order of the 4 × 4 response matrices: e_xx, e_xy, e_yx, e_yy.
+inline constexpr int kXX = 0, kXY = 1, kYX = 2, kYY = 3;
+using Response4 = Eigen::Matrix4d;  // R(αβ, γδ) = d(stress_αβ)/d(e_γδ), or E(αβ, γδ)
+
+// Energy stress τ = −(1/L²) Σ f n ⊗ C (C: centroid separation of the two cells, minimum image).
+// Symmetric when every cell is torque-balanced. P_energy = −tr τ / 2.
+Eigen::Matrix2d energy_stress(const Packing& p, const std::vector<Contact>& contacts);
+
+// B, G from a stress-response matrix R (d stress / d e):
+//   B        = −A dP/dA under e = ε·1              = (1/4) Σ_α Σ_γ R(αα, γγ)
+//   G_simple = dΣ_xy/dγ under Lees–Edwards e_xy = γ = (R(xy, xy) + R(yx, xy))/2
+//   G_pure   = d[(Σ_xx − Σ_yy)/2]/dγ under e = diag(γ/2, −γ/2)
+//   G_mean   = (G_simple + G_pure)/2
+struct Moduli {
+  double B = 0, G_simple = 0, G_pure = 0, G_mean = 0;
+};
+Moduli moduli_from(const Response4& R);
+
+// How the singular Hessian was handled (issue 3.4, 3.6).
+struct KernelTreatment {
+  std::size_t dofs = 0;                 // 3 N_nr (reduced system before pinning)
+  std::size_t pinned_translation = 0;   // 2: x, y of one reference cell (the two global translations)
+  std::size_t pinned_lobe_rotation = 0; // θ of cells with exactly one contact-free lobe: the free lobe
+                                        // swings about the loaded one (an exact zero mode, also of the
+                                        // prestress term); pinning θ leaves that mode out
+  std::size_t pinned_zero_rows = 0;     // other dofs whose Hessian row is exactly zero
+  std::size_t reference_cell = 0;       // packing index of the cell whose x, y are pinned
+  std::string method;                   // "cholesky" or "regularised-refinement" (fallback when the
+                                        // pinned system is still singular: a mechanism beyond the above)
+  long cholesky_failed_column = -1;     // where plain Cholesky stopped (fallback only)
+  double regularisation = 0;            // δ of the fallback (H + δ1) factor, 0 otherwise
+  int refinement_steps = 0;             // iterative-refinement steps taken
+  double residual = 0;                  // max over strain columns of ‖H u − Ξ‖ / ‖Ξ‖ on ALL non-rattler
+                                        // rows (pinned rows included: they check Ξ ⊥ kernel)
+  double kernel_component = 0;          // max over columns and pinned kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖)
+  double rcond = 0;                     // CHOLMOD's reciprocal condition estimate of the factor
+  bool well_posed = false;              // residual ≤ tolerance: Ξ had no kernel component and the
+                                        // response is unique where it is measured
+};
+
+struct ModuliOptions {
+  double residual_tolerance = 1e-8;     // relative; above it well_posed = false
+  double regularisation = 1e-10;        // fallback δ relative to the largest Hessian diagonal entry
+  int max_refinement_steps = 200;
+};
+
+struct ElasticResponse {
+  // The packing and its network.
+  std::size_t N = 0, N_nr = 0, N_f = 0, N_u = 0, N_u_buds = 0;
+  std::size_t contacts = 0;  // load-bearing physical contacts (both cells non-rattlers)
+  double L = 0, area = 0, phi = 0;
+  double Z = 0, Z_iso = 0, dZ = 0, u = 0, u_buds = 0;
+  double n = 0;              // N_nr / L²
+
+  // Stresses at the state (from all contacts, as MODEL.md).
+  double P = 0;              // contact virial, (1/(2L²)) Σ f r
+  double P_energy = 0;       // −tr τ / 2
+  Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // S (MODEL.md)
+  Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
+  double max_torque_imbalance = 0;  // |τ_xy − τ_yx|: 0 in a relaxed packing
+
+  // Response matrices (rows: stress component αβ, columns: strain component γδ; order xx, xy, yx, yy).
+  Response4 R = Response4::Zero();            // dS/de, relaxed (non-affine)
+  Response4 R_affine = Response4::Zero();     // dS/de, affine (u = 0)
+  Response4 R_energy = Response4::Zero();     // dτ/de, relaxed
+  Response4 R_energy_affine = Response4::Zero();
+  Response4 E = Response4::Zero();            // (1/A) d²U/de de, relaxed
+  Response4 E_affine = Response4::Zero();     // Born term (1/A) ∂²U/∂e∂e (with the prestress part)
+  // Stiffness tensor of the Lagrangian strain, Voigt order (xx, yy, xy): C11 = C_xxxx, C22 = C_yyyy,
+  // C12 = C_xxyy, C33 = C_xyxy, C13 = C_xxxy, C23 = C_yyxy.
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d C_affine = Eigen::Matrix3d::Zero();
+
+  Moduli moduli;                // from R: MODEL.md's B and G (the headline values)
+  Moduli moduli_affine;         // from R_affine
+  Moduli moduli_energy;         // from R_energy
+  Moduli moduli_energy_affine;  // from R_energy_affine
+
+  // Mean-field estimates of the paper (Eqs. S-Bext, S-G), with this packing's n, Z, ΔZ.
+  double ell_c = 0;             // ℓ_c: mean lobe-centre distance r of the load-bearing contacts
+  double ell_c2_mean = 0;       // ⟨r²⟩ (for comparison; the formulas use ℓ_c²)
+  double M4 = 0;                // ⟨n_x² n_y²⟩ measured over the load-bearing contacts (isotropic: 1/8)
+  double B_ext = 0;             // n k ℓ_c² Z / 8
+  double G_mf = 0;              // n k ℓ_c² M4 ΔZ / 2 with the measured M4
+  double G_mf_iso = 0;          // same with M4 = 1/8
+
+  KernelTreatment kernel;
+  double seconds = 0;           // wall time of the computation (not part of any result file's physics)
+};
+
+// The response of a relaxed packing. `contacts` are all contacts of the current state (find_contacts),
+// `net` their network (analyse_network). Rattlers and their contacts are removed. Throws
+// std::invalid_argument for inconsistent input and std::runtime_error when the Hessian is
+// indefinite (the packing is not at an energy minimum: relax it first).
+ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 const ModuliOptions& options = {});
+
+}  // namespace budjam

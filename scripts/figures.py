@@ -1,0 +1,553 @@
+#!/usr/bin/python3
+"""Draws the paper's figures from the tables written by `budjam analyse` (docs/analysis.md).
+
+Drawing only: every number plotted here was computed by budjam (analysis.json and the CSV tables).
+Run with Debian's python3 and python3-matplotlib:
+
+    /usr/bin/python3 scripts/figures.py --tables analysis/quick/tables --out analysis/quick/figures fig2 fig3 ...
+
+Each figure is written as <name>.png and <name>.pdf. A figure whose inputs are missing (no moduli,
+no spectra) stops with an error naming the missing stage instead of drawing an empty plot.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import cm, colors  # noqa: E402
+
+PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D22), also in analysis.json
+
+
+class Missing(Exception):
+    pass
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def num(s):
+    if s is None or s == "":
+        return math.nan
+    return float(s)
+
+
+def p0_value(label):
+    """P0 label → x position on a log axis: 'none' sits one decade above the weakest feedback (at 1)."""
+    return 1.0 if label == "none" else float(label)
+
+
+def p0_text(label):
+    return "no feedback" if label == "none" else r"$P_0=10^{%d}$" % round(math.log10(float(label)))
+
+
+def p0_axis(ax, labels):
+    xs = sorted({p0_value(l) for l in labels})
+    ax.set_xscale("log")
+    ax.set_xticks(xs)
+    ax.set_xticklabels(["none" if x == 1.0 else r"$10^{%d}$" % round(math.log10(x)) for x in xs])
+    ax.set_xlabel(r"$P_0$")
+    ax.minorticks_off()
+
+
+def p0_colour(label, labels):
+    """Strong feedback dark, weak light; no feedback black."""
+    if label == "none":
+        return "black"
+    vals = sorted({float(l) for l in labels if l != "none"})
+    if len(vals) <= 1:
+        return cm.viridis(0.3)
+    k = vals.index(float(label))
+    return cm.viridis(0.05 + 0.85 * k / (len(vals) - 1))
+
+
+def save(fig, out, name):
+    os.makedirs(out, exist_ok=True)
+    for ext in ("png", "pdf"):
+        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+    plt.close(fig)
+    print(f"figure: {os.path.join(out, name)}.png/.pdf")
+
+
+class Tables:
+    def __init__(self, d):
+        self.dir = d
+        with open(os.path.join(d, "analysis.json")) as f:
+            self.analysis = json.load(f)
+        self.main_L = self.analysis["main_L"]
+
+    def csv(self, name):
+        return read_csv(os.path.join(self.dir, name))
+
+    def groups(self, L=None):
+        g = self.analysis["groups"]
+        return [x for x in g if L is None or x["L"] == L]
+
+    def need_moduli(self, what):
+        if self.analysis["inputs"]["moduli_files"] == 0:
+            raise Missing(f"{what} needs the elastic moduli: no .moduli.json files were found "
+                          "(run `make -f Makefile.analysis moduli`, which needs `budjam moduli`)")
+
+    def need_dos(self, what):
+        if self.analysis["inputs"]["dos_files"] == 0:
+            raise Missing(f"{what} needs the vibrational spectra: no .dos.json files were found "
+                          "(run `make -f Makefile.analysis dos`, which needs `budjam dos`)")
+
+
+def same_L(rows, L):
+    return [r for r in rows if float(r["L"]) == float(L)]
+
+
+def identity_line(ax, xs, ys, log=False):
+    v = [x for x in list(xs) + list(ys) if math.isfinite(x) and (x > 0 or not log)]
+    if not v:
+        return
+    lo, hi = min(v), max(v)
+    ax.plot([lo, hi], [lo, hi], "k--", lw=1, zorder=0)
+
+
+def panel(ax, letter):
+    ax.text(-0.16, 1.04, letter, transform=ax.transAxes, fontweight="bold", fontsize=13)
+
+
+# ---- Fig. 2: structure -------------------------------------------------------------------------------
+
+def dz_identity(ax, targets, colour_of, label_of):
+    seen = set()
+    xs, ys = [], []
+    for r in targets:
+        x, y = num(r["dZ_pred"]), num(r["dZ"])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            continue
+        key = label_of(r)
+        ax.plot(x, y, "o", ms=4, color=colour_of(r), alpha=0.8, label=None if key in seen else key)
+        seen.add(key)
+        xs.append(x)
+        ys.append(y)
+    if not xs:
+        raise Missing("ΔZ identity: no target has a ΔZ_0(P) prediction (no no-feedback runs?)")
+    identity_line(ax, xs, ys)
+    ax.set_xlabel(r"$\Delta Z_0(P)+2(u_J-u)$")
+    ax.set_ylabel(r"$\Delta Z$")
+    ax.legend(fontsize=7, frameon=False)
+
+
+def fig2(T):
+    L = T.main_L
+    targets = same_L(T.csv("targets.csv"), L)
+    labels = sorted({r["P0"] for r in targets}, key=p0_value, reverse=True)
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    dz_identity(axes[0], targets, lambda r: p0_colour(r["P0"], labels), lambda r: p0_text(r["P0"]))
+    panel(axes[0], "A")
+
+    ax = axes[1]
+    rem = same_L(T.csv("remaining.csv"), L)
+    for lab in labels:
+        rows = [r for r in rem if r["P0"] == lab]
+        x = [num(r["dphi"]) for r in rows]
+        y = [num(r["mean"]) for r in rows]
+        e = [num(r["se"]) if r["se"] else 0.0 for r in rows]
+        c = p0_colour(lab, labels)
+        ax.plot(x, y, "-", color=c, label=p0_text(lab))
+        ax.fill_between(x, [a - b for a, b in zip(y, e)], [a + b for a, b in zip(y, e)], color=c, alpha=0.2, lw=0)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$\phi-\phi_J$")
+    ax.set_ylabel(r"$u/u_J$ (buds free at $\phi_J$ still free)")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "B")
+
+    ax = axes[2]
+    gs = T.groups(L)
+    for key, style, lab in (("dphi_2", "ko", "simulation"),
+                            ("dphi_2_pred_area", "s", r"Eq. (14), $a$ as area"),
+                            ("dphi_2_pred_diameter_sq", "^", r"Eq. (14), $a$ as diameter$^2$")):
+        x = [p0_value(g["P0_label"]) for g in gs if g[key]["mean"] is not None]
+        y = [g[key]["mean"] for g in gs if g[key]["mean"] is not None]
+        e = [g[key]["se"] or 0.0 for g in gs if g[key]["mean"] is not None]
+        ax.errorbar(x, y, yerr=e, fmt=style if style != "ko" else "o", color="black" if style == "ko" else None,
+                    mfc="none" if style != "ko" else "black", capsize=3, label=lab, ls="none")
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_yscale("log")
+    ax.set_ylabel(r"$\phi_2-\phi_J$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "C")
+    fig.suptitle(f"Structure, L = {L:g}", fontsize=10)
+    save(fig, T.out, "fig2")
+
+
+def figS(T):
+    """Kaplan–Meier S(a) with Greenwood 95 % bands (the input of Eq. 14)."""
+    L = T.main_L
+    rows = same_L(T.csv("survival.csv"), L)
+    labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    for lab in labels:
+        rr = [r for r in rows if r["P0"] == lab]
+        a = [num(r["a"]) * math.pi / 4 for r in rr]
+        S = [num(r["S"]) for r in rr]
+        c = p0_colour(lab, labels)
+        ax.step(a, S, where="post", color=c, label=p0_text(lab))
+        ax.fill_between(a, [num(r["lo"]) for r in rr], [num(r["hi"]) for r in rr], step="post", color=c, alpha=0.15, lw=0)
+    ax.set_xscale("symlog", linthresh=1e-4)
+    ax.set_xlabel(r"added bud area $a$ (true area $\pi a_{D^2}/4$)")
+    ax.set_ylabel(r"$S(a)$")
+    ax.legend(fontsize=7, frameon=False)
+    save(fig, T.out, "figS")
+
+
+# ---- Fig. 3: mechanics -------------------------------------------------------------------------------
+
+def bgrow_identity(ax, targets, colour_of, label_of):
+    seen = set()
+    xs, ys = [], []
+    for r in targets:
+        x = num(r["lambda_c"]) * num(r["B"])
+        y = num(r["B_grow"])
+        if not (math.isfinite(x) and math.isfinite(y) and x > 0 and y > 0):
+            continue
+        key = label_of(r)
+        ax.plot(x, y, "o", ms=4, color=colour_of(r), alpha=0.8, label=None if key in seen else key)
+        seen.add(key)
+        xs.append(x)
+        ys.append(y)
+    if not xs:
+        raise Missing("B_grow identity: no target with both B_grow and B")
+    identity_line(ax, xs, ys, log=True)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(r"$\lambda_c B_{\rm ext}$")
+    ax.set_ylabel(r"$B_{\rm grow}=\phi\,(\partial P/\partial\phi)_{\rm grow}$")
+    ax.legend(fontsize=7, frameon=False)
+
+
+def fig3(T):
+    T.need_moduli("Fig. 3")
+    L = T.main_L
+    targets = same_L(T.csv("targets.csv"), L)
+    runs = same_L(T.csv("runs.csv"), L)
+    labels = sorted({r["P0"] for r in targets}, key=p0_value, reverse=True)
+    gs = T.groups(L)
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    bgrow_identity(axes[0], targets, lambda r: p0_colour(r["P0"], labels), lambda r: p0_text(r["P0"]))
+    panel(axes[0], "A")
+
+    ax = axes[1]
+    g2 = [g for g in gs if g["P_2_over_Pmax"]["mean"] is not None]
+    ax.errorbar([p0_value(g["P0_label"]) for g in g2], [g["P_2_over_Pmax"]["mean"] for g in g2],
+                yerr=[g["P_2_over_Pmax"]["se"] or 0 for g in g2], fmt="ko", capsize=3)
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_yscale("log")
+    ax.set_ylabel(r"$P_2/P_{\max}$")
+    ins = ax.inset_axes([0.58, 0.12, 0.38, 0.35])
+    lb = [g for g in gs if g["lambda_bar"]["mean"] is not None]
+    ins.errorbar([p0_value(g["P0_label"]) for g in lb], [g["lambda_bar"]["mean"] for g in lb],
+                 yerr=[g["lambda_bar"]["se"] or 0 for g in lb], fmt="s", ms=3, color="tab:blue", capsize=2)
+    ins.set_xscale("log")
+    ins.set_yscale("log")
+    ins.set_xlabel(r"$P_0$", fontsize=7)
+    ins.set_ylabel(r"$\bar\lambda_c$", fontsize=7)
+    ins.tick_params(labelsize=6)
+    panel(ax, "B")
+
+    ax = axes[2]
+    for r in runs:
+        if math.isfinite(num(r["G_2"])):
+            ax.plot(p0_value(r["P0"]), num(r["G_2"]), "o", color="0.7", ms=3, zorder=1)
+    gm = [g for g in gs if g["G_2"]["median"] is not None]
+    ax.errorbar([p0_value(g["P0_label"]) for g in gm], [g["G_2"]["median"] for g in gm],
+                yerr=[g["G_2"]["se"] for g in gm], fmt="ko", capsize=3, zorder=2, label="median ± bootstrap SE")
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_ylabel(r"$G_2=G(\phi_2)$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "C")
+    fig.suptitle(f"Mechanics, L = {L:g}", fontsize=10)
+    save(fig, T.out, "fig3")
+
+
+# ---- Fig. 4: state diagram ---------------------------------------------------------------------------
+
+def fig4(T):
+    T.need_moduli("Fig. 4")
+    L = T.main_L
+    rows = same_L(T.csv("trajectory.csv"), L)
+    labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
+    fig, ax = plt.subplots(figsize=(5.8, 4.5))
+    for lab in labels:
+        rr = sorted([r for r in rows if r["P0"] == lab and r["endpoint"] == "false"], key=lambda r: num(r["dphi"]))
+        end = [r for r in rows if r["P0"] == lab and r["endpoint"] == "true"]
+        pts = [(num(r["P"]) / PMAX, num(r["G"]) / PMAX) for r in rr if math.isfinite(num(r["G"])) and num(r["P"]) > 0]
+        if end and math.isfinite(num(end[0]["G"])) and num(end[0]["P"]) > 0:
+            pts.append((num(end[0]["P"]) / PMAX, num(end[0]["G"]) / PMAX))
+        c = p0_colour(lab, labels)
+        if pts:
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color=c, label=p0_text(lab))
+        if end and math.isfinite(num(end[0]["G"])):
+            ax.plot(num(end[0]["P"]) / PMAX, num(end[0]["G"]) / PMAX, "o", color=c, ms=7)
+    plateau = T.analysis["main"].get("G2_plateau_over_Pmax")
+    if plateau:
+        ax.axhline(plateau, ls="--", color="0.4", lw=1, label=r"$G_2(0^+)=n_Jk\ell_c^2M_4u_J$")
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$P/P_{\max}$")
+    ax.set_ylabel(r"$G/P_{\max}$")
+    ax.legend(fontsize=7, frameon=False)
+    ax.set_title(f"Post-jamming state diagram, L = {L:g}", fontsize=10)
+    save(fig, T.out, "fig4")
+
+
+# ---- Appendix B: finite size -------------------------------------------------------------------------
+
+def figB1(T):
+    T.need_moduli("Fig. B1 (panels C, D)")
+    targets = T.csv("targets.csv")
+    Ls = sorted({float(r["L"]) for r in targets})
+    col = {L: cm.tab10(k) for k, L in enumerate(Ls)}
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
+    dz_identity(axes[0], targets, lambda r: col[float(r["L"])], lambda r: f"L = {float(r['L']):g}")
+    panel(axes[0], "A")
+    ax = axes[1]
+    for L in Ls:
+        gs = [g for g in T.groups(L) if g["dphi_2"]["mean"] is not None]
+        ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g["dphi_2"]["mean"] for g in gs],
+                    yerr=[g["dphi_2"]["se"] or 0 for g in gs], fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
+    p0_axis(ax, [g["P0_label"] for g in T.groups()])
+    ax.set_yscale("log")
+    ax.set_ylabel(r"$\phi_2-\phi_J$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "B")
+    bgrow_identity(axes[2], targets, lambda r: col[float(r["L"])], lambda r: f"L = {float(r['L']):g}")
+    panel(axes[2], "C")
+    ax = axes[3]
+    for L in Ls:
+        gs = [g for g in T.groups(L) if g["G_2"]["median"] is not None]
+        ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g["G_2"]["median"] for g in gs],
+                    yerr=[g["G_2"]["se"] for g in gs], fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
+    p0_axis(ax, [g["P0_label"] for g in T.groups()])
+    ax.set_ylabel(r"median $G_2$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "D")
+    save(fig, T.out, "figB1")
+
+
+# ---- Appendix D: divisions and paired mechanics --------------------------------------------------------
+
+def figD1(T):
+    L = T.main_L
+    rows = same_L(T.csv("division_curve.csv"), L)
+    gs = T.groups(L)
+    labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    ax = axes[0]
+    for lab in labels:
+        rr = [r for r in rows if r["P0"] == lab]
+        x = [num(r["dphi"]) for r in rr]
+        c = p0_colour(lab, labels)
+        ax.plot(x, [num(r["median"]) for r in rr], "-", color=c, label=p0_text(lab))
+        ax.fill_between(x, [num(r["q25"]) for r in rr], [num(r["q75"]) for r in rr], color=c, alpha=0.2, lw=0)
+        g = [g for g in gs if g["P0_label"] == lab]
+        if g and g[0]["dphi_2_median"]["median"] is not None:
+            ax.axvline(g[0]["dphi_2_median"]["median"], ls="--", color=c, lw=1)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$\Delta\phi=\phi-\phi_J$")
+    ax.set_ylabel(r"$N_{\rm div}^{\rm all}(\Delta\phi)/\langle N_J\rangle$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "A")
+    ax = axes[1]
+    gm = [g for g in gs if g["N_div_2_over_N_J"]["median"] is not None]
+    med = [g["N_div_2_over_N_J"]["median"] for g in gm]
+    lo = [m - g["N_div_2_over_N_J"]["ci95"][0] for m, g in zip(med, gm)]
+    hi = [g["N_div_2_over_N_J"]["ci95"][1] - m for m, g in zip(med, gm)]
+    ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="ko", capsize=3)
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_yscale("symlog", linthresh=1e-3)
+    ax.set_ylabel(r"median $N_{\rm div}^{\rm all}(\phi_2)/\langle N_J\rangle$")
+    panel(ax, "B")
+    save(fig, T.out, "figD1")
+
+
+def figD2(T):
+    T.need_moduli("Fig. D2")
+    L = T.main_L
+    runs = same_L(T.csv("runs.csv"), L)
+    gs = T.groups(L)
+    labels = sorted({r["P0"] for r in runs}, key=p0_value, reverse=True)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    ax = axes[0]
+    for lab in labels:
+        rr = [r for r in runs if r["P0"] == lab and math.isfinite(num(r["G_2"])) and num(r["P_2"]) > 0]
+        c = p0_colour(lab, labels)
+        ax.plot([num(r["P_2"]) for r in rr], [num(r["G_2"]) for r in rr], "o", ms=3, color=c, alpha=0.5)
+        g = [g for g in gs if g["P0_label"] == lab]
+        if g and g[0]["G_2"]["median"] is not None and g[0]["P_2_median"]["median"] is not None:
+            ax.errorbar(g[0]["P_2_median"]["median"], g[0]["G_2"]["median"], xerr=g[0]["P_2_median"]["se"],
+                        yerr=g[0]["G_2"]["se"], fmt="o", ms=8, color=c, mec="k", capsize=3, label=p0_text(lab))
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$P_2$")
+    ax.set_ylabel(r"$G_2$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "A")
+    ax = axes[1]
+    gm = [g for g in gs if g["G_2_over_P_2"]["median"] is not None]
+    ax.errorbar([p0_value(g["P0_label"]) for g in gm], [g["G_2_over_P_2"]["median"] for g in gm],
+                yerr=[g["G_2_over_P_2"]["se"] for g in gm], fmt="ko", capsize=3)
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_yscale("log")
+    ax.set_ylabel(r"median $G_2/P_2$")
+    panel(ax, "B")
+    save(fig, T.out, "figD2")
+
+
+# ---- Appendix E: growth-rate crossover -------------------------------------------------------------------
+
+def figE1(T):
+    L = T.main_L
+    gs = [g for g in T.groups(L) if g["h_gamma"]["median"] is not None]
+    if not gs:
+        raise Missing("Fig. E1: no run has a target at Δφ = 3·10⁻³ (add it to TARGETS)")
+    hist = same_L(T.csv("growth_rates.csv"), L)
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    x = [p0_value(g["P0_label"]) for g in gs]
+    y = [g["h_gamma"]["median"] for g in gs]
+    ax.errorbar(x, y, yerr=[g["h_gamma"]["se"] for g in gs], fmt="ko-", capsize=3)
+    p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.set_yscale("symlog", linthresh=1e-4)
+    ax.set_ylabel(r"$h_\gamma=\mathrm{Var}(g)/\langle g\rangle^2$")
+    ax.set_title(r"Growth-rate crossover, $\Delta\phi=3\times10^{-3}$, L = %g" % L, fontsize=10)
+    shown = [l for l in ("0.1", "0.01", "0.001", "0.0001") if any(g["P0_label"] == l for g in gs)]
+    for k, lab in enumerate(shown):
+        ins = ax.inset_axes([0.02 + 0.245 * k, 0.6, 0.2, 0.32])
+        rr = [r for r in hist if r["P0"] == lab]
+        bars = [r for r in rr if r["delta_at_1"] == "false"]
+        ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars], width=0.05, align="edge", color="tab:blue")
+        delta = [num(r["density"]) for r in rr if r["delta_at_1"] == "true"]
+        if delta:
+            ins.annotate("", xy=(1.0, 1.0), xytext=(1.0, 0.0), xycoords=("data", "axes fraction"),
+                         arrowprops=dict(arrowstyle="->", color="tab:red"))
+            ins.text(0.98, 0.9, "%.2f" % delta[0], color="tab:red", fontsize=6, ha="right",
+                     transform=ins.transAxes)
+        ins.set_xlim(0, 1.05)
+        ins.set_title(p0_text(lab), fontsize=7)
+        ins.set_xlabel(r"$g$", fontsize=7, labelpad=1)
+        ins.set_ylabel(r"$\Pi(g)$", fontsize=7, labelpad=1)
+        ins.tick_params(labelsize=5)
+    save(fig, T.out, "figE1")
+
+
+# ---- Appendix F: vibrational spectrum -------------------------------------------------------------------
+
+def read_eigenvalues(path):
+    rows = read_csv(path)
+    if not rows:
+        return []
+    key = "lambda" if "lambda" in rows[0] else ("omega2" if "omega2" in rows[0] else None)
+    if key is not None:
+        return [math.sqrt(max(num(r[key]), 0.0)) for r in rows]
+    if "omega" in rows[0]:
+        return [num(r["omega"]) for r in rows]
+    raise Missing(f"{path}: no 'lambda', 'omega2' or 'omega' column")
+
+
+def figF1(T):
+    T.need_dos("Fig. F1")
+    L = T.main_L
+    rows = same_L(T.csv("dos.csv"), L)
+    labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    ax = axes[0]
+    strong = min((l for l in labels if l != "none"), key=float, default=None)
+    if strong is not None:
+        rr = [r for r in rows if r["P0"] == strong]
+        first_run = sorted({r["run"] for r in rr})[0]
+        rr = sorted([r for r in rr if r["run"] == first_run], key=lambda r: num(r["dphi"]) if r["dphi"] else 0.0)
+        for k, r in enumerate(rr):
+            path = os.path.join(r["run"], "packings", r["packing"] + ".eigenvalues.csv")
+            if not os.path.exists(path):
+                raise Missing(f"{path}: eigenvalues missing (`budjam dos` must write them)")
+            w = [x for x in read_eigenvalues(path) if x > 1e-3]  # the band only; N_u quasi-zero modes in panel C
+            if not w:
+                continue
+            c = cm.plasma(k / max(1, len(rr) - 1))
+            ax.hist(w, bins=40, density=True, histtype="step", color=c, label=r["packing"])
+            ax.plot(num(r["omega_star"]), 0, "v", color=c, ms=8, clip_on=False)
+        ax.set_title(p0_text(strong), fontsize=8)
+    ax.set_xlabel(r"$\omega$")
+    ax.set_ylabel(r"$D(\omega)$")
+    ax.legend(fontsize=6, frameon=False)
+    panel(ax, "A")
+    ax = axes[1]
+    ax.plot([num(r["dZ"]) for r in rows], [num(r["omega_star"]) for r in rows], "o", ms=4, label=r"$\Delta Z=Z-Z_{\rm iso}(u)$")
+    ax.plot([num(r["Z_minus_6"]) for r in rows], [num(r["omega_star"]) for r in rows], "x", ms=4, color="0.5",
+            label=r"naive $Z-6$")
+    ax.axvline(0, color="0.8", lw=1)
+    ax.set_xlabel(r"$\Delta Z$")
+    ax.set_ylabel(r"$\omega^\ast$")
+    ax.legend(fontsize=7, frameon=False)
+    panel(ax, "B")
+    ax = axes[2]
+    x = [num(r["N_u"]) for r in rows]
+    y = [num(r["N_zero"]) for r in rows]
+    ax.plot(x, y, "o", ms=4)
+    identity_line(ax, x, y)
+    ax.set_xlabel(r"$N_u$")
+    ax.set_ylabel(r"$N_{\rm zero}$")
+    panel(ax, "C")
+    save(fig, T.out, "figF1")
+
+
+# ---- accuracy against cost (issue 6) -----------------------------------------------------------------------
+
+def accuracy(T):
+    rows = read_csv(os.path.join(T.dir, "accuracy.csv"))
+    quantities = [c[len("err_"):] for c in rows[0].keys() if c.startswith("err_")]
+    n = len(quantities)
+    cols = min(4, n)
+    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(4 * cols, 3.4 * ((n + cols - 1) // cols)), squeeze=False)
+    for ax, q in zip(axes.flat, quantities):
+        for r in rows:
+            e, t = num(r["err_" + q]), num(r["seconds"])
+            if math.isfinite(e) and math.isfinite(t):
+                ax.plot(t, max(e, 1e-17), "o", color="tab:red" if r["variant"] == "default" else "tab:blue")
+                ax.annotate(r["variant"], (t, max(e, 1e-17)), fontsize=6)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time per run [s]")
+        ax.set_ylabel(f"|error| of {q}")
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    save(fig, T.out, "accuracy")
+
+
+FIGURES = {"fig2": fig2, "fig3": fig3, "fig4": fig4, "figB1": figB1, "figD1": figD1, "figD2": figD2,
+           "figE1": figE1, "figF1": figF1, "figS": figS, "accuracy": accuracy}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--tables", required=True, help="directory with analysis.json and the CSV tables")
+    ap.add_argument("--out", required=True, help="directory for the figures")
+    ap.add_argument("figures", nargs="+", choices=sorted(FIGURES))
+    a = ap.parse_args()
+    if a.figures == ["accuracy"]:
+        T = type("Acc", (), {})()
+        T.dir, T.out = a.tables, a.out
+    else:
+        T = Tables(a.tables)
+        T.out = a.out
+    plt.rcParams.update({"font.size": 9, "axes.labelsize": 10})
+    for name in a.figures:
+        try:
+            FIGURES[name](T)
+        except Missing as e:
+            print(f"figures.py: {name}: {e}", file=sys.stderr)
+            sys.exit(2)
+
+
+if __name__ == "__main__":
+    main()

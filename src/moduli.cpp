@@ -1,0 +1,369 @@
+#include "budjam/moduli.hpp"
+
+#include "budjam/cholmod_solver.hpp"
+#include "budjam/hessian.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace budjam {
+
+namespace {
+
+// Everything the response needs about one load-bearing contact.
+struct ContactTerms {
+  Eigen::Matrix<double, 2, 6> J;  // ∂d/∂(q_i, q_j)
+  Eigen::Matrix<double, 2, 4> D;  // ∂d/∂e: column (γδ) = ê_γ C_δ
+  Eigen::Matrix2d K;              // pair stiffness in d (stiffness + prestress)
+  Eigen::Vector2d g;              // f n: the force on lobe i (= −∂V/∂d)
+  Eigen::Vector2d d;              // lobe-centre separation r n
+  Eigen::Vector2d C;              // centroid separation
+  long bi, bj;                    // reduced blocks of the two cells
+};
+
+Eigen::Vector2d centroid_separation(const Packing& p, const Contact& c) {
+  // d = C + o_a − o_b with o = s ê(θ): the centroid separation of the same image as the contact.
+  const std::size_t i = cell_of(c.i), j = cell_of(c.j);
+  const double sa = lobe_offset(p, c.i), sb = lobe_offset(p, c.j);
+  const Eigen::Vector2d ei(std::cos(p.theta(i)), std::sin(p.theta(i)));
+  const Eigen::Vector2d ej(std::cos(p.theta(j)), std::sin(p.theta(j)));
+  return c.r * Eigen::Vector2d(c.nx, c.ny) - sa * ei + sb * ej;
+}
+
+ContactTerms terms_of(const Packing& p, const Contact& c, const DofMap& map) {
+  ContactTerms t;
+  const Eigen::Vector2d n(c.nx, c.ny);
+  const double f = c.force();
+  t.J = contact_jacobian(p, c);
+  t.K = kSpring * n * n.transpose() - (f / c.r) * (Eigen::Matrix2d::Identity() - n * n.transpose());
+  t.g = f * n;
+  t.d = c.r * n;
+  t.C = centroid_separation(p, c);
+  t.D.setZero();
+  for (int gam = 0; gam < 2; ++gam)
+    for (int del = 0; del < 2; ++del) t.D(gam, 2 * gam + del) = t.C[del];
+  t.bi = map.block[cell_of(c.i)];
+  t.bj = map.block[cell_of(c.j)];
+  return t;
+}
+
+// Rows/columns `keep` of a symmetric sparse matrix (dof granularity).
+SparseMatrix select(const SparseMatrix& A, const std::vector<long>& index_of, Eigen::Index n) {
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<std::size_t>(A.nonZeros()));
+  for (Eigen::Index col = 0; col < A.outerSize(); ++col) {
+    const long c = index_of[static_cast<std::size_t>(col)];
+    if (c < 0) continue;
+    for (SparseMatrix::InnerIterator it(A, col); it; ++it) {
+      const long r = index_of[static_cast<std::size_t>(it.row())];
+      if (r >= 0) t.emplace_back(r, c, it.value());
+    }
+  }
+  SparseMatrix S(n, n);
+  S.setFromTriplets(t.begin(), t.end());
+  S.makeCompressed();
+  return S;
+}
+
+double column_residual(const Eigen::MatrixXd& rhs, const Eigen::MatrixXd& res) {
+  double worst = 0;
+  for (Eigen::Index k = 0; k < rhs.cols(); ++k) {
+    const double b = rhs.col(k).norm();
+    if (b > 0) worst = std::max(worst, res.col(k).norm() / b);
+    else if (res.col(k).norm() > 0) worst = std::max(worst, res.col(k).norm());
+  }
+  return worst;
+}
+
+}  // namespace
+
+Eigen::Matrix2d energy_stress(const Packing& p, const std::vector<Contact>& contacts) {
+  Eigen::Matrix2d W = Eigen::Matrix2d::Zero();
+  for (const Contact& c : contacts) W += c.force() * Eigen::Vector2d(c.nx, c.ny) * centroid_separation(p, c).transpose();
+  return -W / (p.box.L * p.box.L);
+}
+
+Moduli moduli_from(const Response4& R) {
+  Moduli m;
+  m.B = 0.25 * (R(kXX, kXX) + R(kXX, kYY) + R(kYY, kXX) + R(kYY, kYY));
+  m.G_simple = 0.5 * (R(kXY, kXY) + R(kYX, kXY));
+  m.G_pure = 0.25 * (R(kXX, kXX) - R(kXX, kYY) - R(kYY, kXX) + R(kYY, kYY));
+  m.G_mean = 0.5 * (m.G_simple + m.G_pure);
+  return m;
+}
+
+ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 const ModuliOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (net.rattler.size() != p.size())
+    throw std::invalid_argument("elastic_response: the contact network is not that of this packing (" +
+                                std::to_string(net.rattler.size()) + " cells vs " + std::to_string(p.size()) + ")");
+  ElasticResponse out;
+  const double L = p.box.L, A = L * L;
+  out.N = p.size();
+  out.N_nr = net.N_nr;
+  out.N_f = net.N_f;
+  out.N_u = net.N_u;
+  out.N_u_buds = net.N_u_buds;
+  out.L = L;
+  out.area = A;
+  out.phi = p.packing_fraction();
+  out.Z = net.Z;
+  out.Z_iso = net.Z_iso;
+  out.dZ = net.dZ;
+  out.u = net.u;
+  out.u_buds = net.u_buds;
+  out.n = static_cast<double>(net.N_nr) / A;
+  out.P = pressure(contacts, p.box);
+  out.stress = stress_tensor(contacts, p.box);
+  out.stress_energy = energy_stress(p, contacts);
+  out.P_energy = -0.5 * out.stress_energy.trace();
+  out.max_torque_imbalance = std::abs(out.stress_energy(0, 1) - out.stress_energy(1, 0));
+
+  const std::vector<Contact> lb = load_bearing(contacts, net);
+  const DofMap map = non_rattler_dofs(net);
+  const Eigen::Index nr = map.size();
+  out.contacts = lb.size();
+  out.kernel.dofs = static_cast<std::size_t>(nr);
+
+  // Mean-field estimates (paper Eqs. S-Bext, S-G).
+  if (!lb.empty()) {
+    double sr = 0, sr2 = 0, m4 = 0;
+    for (const Contact& c : lb) {
+      sr += c.r;
+      sr2 += c.r * c.r;
+      m4 += c.nx * c.nx * c.ny * c.ny;
+    }
+    const double m = static_cast<double>(lb.size());
+    out.ell_c = sr / m;
+    out.ell_c2_mean = sr2 / m;
+    out.M4 = m4 / m;
+    out.B_ext = out.n * kSpring * out.ell_c * out.ell_c * out.Z / 8.0;
+    out.G_mf = out.n * kSpring * out.ell_c * out.ell_c * out.M4 * out.dZ / 2.0;
+    out.G_mf_iso = out.n * kSpring * out.ell_c * out.ell_c * 0.125 * out.dZ / 2.0;
+  }
+  if (nr == 0 || lb.empty()) {
+    out.kernel.method = "none (no load-bearing contacts)";
+    out.kernel.well_posed = false;
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+  }
+
+  // Hessian of the non-rattlers from their contacts, force response Ξ, Born term.
+  const SparseMatrix H = restrict_matrix(hessian(p, lb), map);
+  std::vector<ContactTerms> ct;
+  ct.reserve(lb.size());
+  Eigen::MatrixXd Xi = Eigen::MatrixXd::Zero(nr, 4);
+  Response4 born = Response4::Zero();
+  std::vector<int> lobe_count(2 * p.size(), 0);
+  for (const Contact& c : lb) {
+    ct.push_back(terms_of(p, c, map));
+    const ContactTerms& t = ct.back();
+    const Eigen::Matrix<double, 6, 4> x = -t.J.transpose() * t.K * t.D;
+    Xi.middleRows(3 * t.bi, 3) += x.topRows<3>();
+    Xi.middleRows(3 * t.bj, 3) += x.bottomRows<3>();
+    born += t.D.transpose() * t.K * t.D;
+    ++lobe_count[c.i];
+    ++lobe_count[c.j];
+  }
+
+  // Kernel: pin the two translations on the best-connected cell, the θ of every cell with
+  // exactly one contact-free lobe, and any dof with an exactly zero Hessian row.
+  std::vector<bool> pinned(static_cast<std::size_t>(nr), false);
+  std::vector<Eigen::VectorXd> kernel_vectors;
+  {
+    std::size_t ref = 0;
+    int best = -1;
+    for (std::size_t k = 0; k < map.cells.size(); ++k) {
+      const std::size_t i = map.cells[k];
+      const int cnt = lobe_count[mother_lobe(i)] + lobe_count[bud_lobe(i)];
+      if (cnt > best) {
+        best = cnt;
+        ref = k;
+      }
+    }
+    out.kernel.reference_cell = map.cells[ref];
+    pinned[3 * ref] = pinned[3 * ref + 1] = true;
+    out.kernel.pinned_translation = 2;
+    Eigen::VectorXd tx = Eigen::VectorXd::Zero(nr), ty = tx;
+    for (Eigen::Index k = 0; k < nr; k += 3) {
+      tx[k] = 1;
+      ty[k + 1] = 1;
+    }
+    kernel_vectors.push_back(tx);
+    kernel_vectors.push_back(ty);
+  }
+  for (std::size_t k = 0; k < map.cells.size(); ++k) {
+    const std::size_t i = map.cells[k];
+    const int m = lobe_count[mother_lobe(i)], b = lobe_count[bud_lobe(i)];
+    if ((m == 0) == (b == 0)) continue;
+    // Rotation about the centre of the loaded lobe ℓ: δX = −s_ℓ ê⊥ δθ leaves every contact unchanged.
+    const double s = lobe_offset(p, m > 0 ? mother_lobe(i) : bud_lobe(i));
+    const double th = p.theta(i);
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(nr);
+    v[3 * k] = s * std::sin(th);
+    v[3 * k + 1] = -s * std::cos(th);
+    v[3 * k + 2] = 1.0;
+    kernel_vectors.push_back(v);
+    if (!pinned[3 * k + 2]) {
+      pinned[3 * k + 2] = true;
+      ++out.kernel.pinned_lobe_rotation;
+    }
+  }
+  {
+    std::vector<bool> nonzero(static_cast<std::size_t>(nr), false);
+    for (Eigen::Index col = 0; col < H.outerSize(); ++col)
+      for (SparseMatrix::InnerIterator it(H, col); it; ++it)
+        if (it.value() != 0.0) nonzero[static_cast<std::size_t>(col)] = true;
+    for (Eigen::Index k = 0; k < nr; ++k)
+      if (!nonzero[k] && !pinned[k]) {
+        pinned[k] = true;
+        ++out.kernel.pinned_zero_rows;
+        Eigen::VectorXd v = Eigen::VectorXd::Zero(nr);
+        v[k] = 1;
+        kernel_vectors.push_back(v);
+      }
+  }
+  for (const auto& v : kernel_vectors)
+    for (int col = 0; col < 4; ++col) {
+      const double xn = Xi.col(col).norm();
+      if (xn > 0) out.kernel.kernel_component = std::max(out.kernel.kernel_component, std::abs(v.dot(Xi.col(col))) / (v.norm() * xn));
+    }
+
+  std::vector<long> free_index(static_cast<std::size_t>(nr), -1);
+  long nf = 0;
+  for (Eigen::Index k = 0; k < nr; ++k)
+    if (!pinned[k]) free_index[k] = nf++;
+  const SparseMatrix Hf = select(H, free_index, nf);
+  Eigen::MatrixXd Xf(nf, 4);
+  for (Eigen::Index k = 0; k < nr; ++k)
+    if (free_index[k] >= 0) Xf.row(free_index[k]) = Xi.row(k);
+
+  // Solve H_ff U_f = Ξ_f: Cholesky, else regularised LDLᵀ with iterative refinement.
+  Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
+  const double xi_scale = Xf.norm();
+  if (nf > 0 && xi_scale > 0) {
+    CholmodSolver llt(Factorisation::llt);
+    if (llt.factor(Hf)) {
+      out.kernel.method = "cholesky";
+      out.kernel.rcond = llt.rcond();
+      Uf = llt.solve(Xf);
+      double res = column_residual(Xf, Xf - Hf * Uf);
+      for (int step = 0; step < 3 && res > 1e-15; ++step) {  // refinement: a couple of cheap solves
+        const Eigen::MatrixXd Unew = Uf + llt.solve(Eigen::MatrixXd(Xf - Hf * Uf));
+        const double rnew = column_residual(Xf, Xf - Hf * Unew);
+        if (!(rnew < res)) break;
+        Uf = Unew;
+        res = rnew;
+        ++out.kernel.refinement_steps;
+      }
+    } else {
+      out.kernel.method = "regularised-refinement";
+      out.kernel.cholesky_failed_column = llt.failed_column();
+      const double diag = Hf.diagonal().cwiseAbs().maxCoeff();
+      CholmodSolver ldl(Factorisation::ldlt);
+      double delta = options.regularisation * diag;
+      bool ok = false;
+      for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
+      delta /= 100;
+      if (!ok || ldl.negative_pivots() > 0)
+        throw std::runtime_error("elastic_response: the Hessian of the non-rattlers has negative eigenvalues (" +
+                                 std::to_string(ldl.negative_pivots()) +
+                                 " below −δ): the packing is not at an energy minimum; relax it first");
+      out.kernel.regularisation = delta;
+      out.kernel.rcond = ldl.rcond();
+      // (H + δ)⁻¹ iteration: converges to the solution without kernel component when Ξ ⊥ kernel.
+      double res = 1.0, best = 1.0;
+      int stall = 0;
+      for (int step = 0; step < options.max_refinement_steps; ++step) {
+        const Eigen::MatrixXd R = Xf - Hf * Uf;
+        res = column_residual(Xf, R);
+        if (res <= 0.01 * options.residual_tolerance) break;
+        if (res < 0.9 * best) {
+          best = res;
+          stall = 0;
+        } else if (++stall > 10) {
+          break;
+        }
+        Uf += ldl.solve(R);
+        ++out.kernel.refinement_steps;
+      }
+    }
+  } else {
+    out.kernel.method = "none (Ξ = 0)";
+  }
+
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nr, 4);
+  for (Eigen::Index k = 0; k < nr; ++k)
+    if (free_index[k] >= 0) U.row(k) = Uf.row(free_index[k]);
+  out.kernel.residual = column_residual(Xi, Xi - H * U);
+  out.kernel.well_posed = std::isfinite(out.kernel.residual) && out.kernel.residual <= options.residual_tolerance;
+
+  // Energy expansion and the stress slopes along the relaxed (U) and affine (0) paths.
+  out.E_affine = born / A;
+  out.E = (born - Xi.transpose() * U) / A;
+  out.E = 0.5 * (out.E + out.E.transpose()).eval();
+  Response4 dW = Response4::Zero(), dW_aff = Response4::Zero(), dWm = Response4::Zero(), dWm_aff = Response4::Zero();
+  Eigen::Matrix2d W = Eigen::Matrix2d::Zero(), Wm = Eigen::Matrix2d::Zero();
+  for (const ContactTerms& t : ct) {
+    Eigen::Matrix<double, 6, 4> Uc;
+    Uc.topRows<3>() = U.middleRows(3 * t.bi, 3);
+    Uc.bottomRows<3>() = U.middleRows(3 * t.bj, 3);
+    const Eigen::Matrix<double, 2, 4> dd = t.D + t.J * Uc;
+    const Eigen::Matrix<double, 2, 4> dC = t.D + Uc.topRows<2>() - Uc.middleRows<2>(3);
+    const Eigen::Matrix<double, 2, 4> Kdd = t.K * dd, KD = t.K * t.D;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        const int row = 2 * a + b;
+        // w = g ⊗ v, dg = −K dd: dw_ab = −(K dd)_a v_b + g_a dv_b
+        dW.row(row) += -Kdd.row(a) * t.d[b] + t.g[a] * dd.row(b);
+        dW_aff.row(row) += -KD.row(a) * t.d[b] + t.g[a] * t.D.row(b);
+        dWm.row(row) += -Kdd.row(a) * t.C[b] + t.g[a] * dC.row(b);
+        dWm_aff.row(row) += -KD.row(a) * t.C[b] + t.g[a] * t.D.row(b);
+      }
+    W += t.g * t.d.transpose();
+    Wm += t.g * t.C.transpose();
+  }
+  // stress = −W/A(e), A(e) = A det(1 + e): d stress_ab/de_gd = −(1/A) dW_ab/de_gd − stress_ab δ_gd
+  const Eigen::Matrix2d S = -W / A, T = -Wm / A;
+  auto to_response = [&](const Response4& dw, const Eigen::Matrix2d& s) {
+    Response4 R = -dw / A;
+    for (int row = 0; row < 4; ++row) {
+      R(row, kXX) -= s(row / 2, row % 2);
+      R(row, kYY) -= s(row / 2, row % 2);
+    }
+    return R;
+  };
+  out.R = to_response(dW, S);
+  out.R_affine = to_response(dW_aff, S);
+  out.R_energy = to_response(dWm, T);
+  out.R_energy_affine = to_response(dWm_aff, T);
+
+  // Lagrangian-strain stiffness C_abgd = E_abgd − δ_ag τ_bd, Voigt (xx, yy, xy).
+  auto lagrangian = [&](const Response4& E) {
+    Response4 C = E;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b)
+        for (int d = 0; d < 2; ++d) C(2 * a + b, 2 * a + d) -= T(b, d);
+    const int v[3] = {kXX, kYY, kXY};
+    Eigen::Matrix3d c;
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 3; ++s) c(r, s) = C(v[r], v[s]);
+    return Eigen::Matrix3d(0.5 * (c + c.transpose()));
+  };
+  out.C = lagrangian(out.E);
+  out.C_affine = lagrangian(out.E_affine);
+
+  out.moduli = moduli_from(out.R);
+  out.moduli_affine = moduli_from(out.R_affine);
+  out.moduli_energy = moduli_from(out.R_energy);
+  out.moduli_energy_affine = moduli_from(out.R_energy_affine);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace budjam

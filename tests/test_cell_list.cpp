@@ -1,0 +1,202 @@
+// Linked cells + Verlet skin against the O(N²) oracle, in ordinary, sheared, tiny and huge boxes.
+#include "budjam/cell_list.hpp"
+
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+using namespace budjam;
+
+namespace {
+
+using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+
+// N cells with bud diameters uniform in [b_min, b_max] at packing fraction φ, uniformly placed and
+// oriented; centroids are then shifted by random whole periods, since q is never wrapped.
+Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min = 0.01, double b_max = 1.02) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> b(n);
+  double area = 0;
+  for (auto& bi : b) {
+    bi = b_min + (b_max - b_min) * u(rng);
+    area += 0.25 * std::numbers::pi * (1 + bi * bi);
+  }
+  Packing p;
+  p.box.L = std::sqrt(area / phi);
+  std::uniform_int_distribution<int> period(-3, 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = p.box.L * (u(rng) + period(rng));
+    const double y = p.box.L * (u(rng) + period(rng));
+    p.add_cell(x, y, std::numbers::pi * (2 * u(rng) - 1), b[i], 0.002, -1);
+  }
+  return p;
+}
+
+PairList sorted(PairList v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+PairList built_pairs(const Lobes& lobes, const Box& box, double skin) {
+  NeighbourList list(skin);
+  list.update(lobes, box);
+  return list.pairs();
+}
+
+}  // namespace
+
+TEST_CASE("linked-cell pairs equal brute-force pairs within sigma + skin", "[fast]") {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    for (double phi : {0.1, 0.5, 0.9, 1.3}) {
+      const Packing p = random_packing(150, phi, seed);
+      Lobes lobes;
+      place_lobes(p, lobes);
+      for (double skin : {0.05, 0.3, 0.7}) {
+        const PairList cells = built_pairs(lobes, p.box, skin);
+        INFO("seed " << seed << " phi " << phi << " skin " << skin);
+        CHECK(cells == sorted(cells));  // documented order: by (a, b)
+        CHECK(cells == brute_force_pairs(lobes, p.box, skin));
+      }
+    }
+  }
+}
+
+TEST_CASE("linked-cell pairs equal brute-force pairs under Lees-Edwards shear", "[fast]") {
+  for (double shear : {0.1, 0.37, -0.8, 1.3, 1e-9, 0.5}) {
+    for (std::uint64_t seed = 11; seed <= 14; ++seed) {
+      Packing p = random_packing(200, 1.0, seed);
+      p.box.shear = shear;
+      Lobes lobes;
+      place_lobes(p, lobes);
+      INFO("shear " << shear << " seed " << seed);
+      CHECK(built_pairs(lobes, p.box, 0.3) == brute_force_pairs(lobes, p.box, 0.3));
+    }
+  }
+}
+
+TEST_CASE("linked-cell pairs equal brute-force pairs in boxes of one to four grid cells", "[fast]") {
+  // L from below 2 cut-offs (grid 1) to about 4 cut-offs; dense and sheared variants.
+  for (double L : {2.0, 2.7, 3.5, 4.2, 5.5}) {
+    for (double shear : {0.0, 0.3, -0.55}) {
+      for (std::uint64_t seed = 21; seed <= 25; ++seed) {
+        std::mt19937_64 rng(seed);
+        std::uniform_real_distribution<double> u(0.0, 1.0);
+        Packing p;
+        p.box = {L, shear};
+        const int n = 2 + static_cast<int>(L * L / 2);
+        for (int i = 0; i < n; ++i)
+          p.add_cell(L * (u(rng) + 2), L * (u(rng) - 1), 7 * u(rng), 0.01 + u(rng), 0.002, -1);
+        Lobes lobes;
+        place_lobes(p, lobes);
+        NeighbourList list(0.3);
+        list.update(lobes, p.box);
+        INFO("L " << L << " shear " << shear << " seed " << seed << " grid " << list.grid());
+        CHECK(list.grid() <= 4);
+        CHECK(list.pairs() == brute_force_pairs(lobes, p.box, 0.3));
+      }
+    }
+  }
+}
+
+TEST_CASE("Verlet list keeps every contact until the skin criterion triggers a rebuild", "[fast]") {
+  Packing p = random_packing(200, 0.9, 31);
+  const double skin = 0.3;
+  NeighbourList list(skin);
+  Lobes lobes;
+  place_lobes(p, lobes);
+  REQUIRE(list.update(lobes, p.box));
+  std::mt19937_64 rng(32);
+  std::normal_distribution<double> g(0.0, 1.0);
+  long rebuilds = 0, steps = 0;
+  for (int step = 0; step < 300; ++step) {
+    // Small random moves of every cell (translations and rotations).
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      p.q[3 * i] += 0.01 * g(rng);
+      p.q[3 * i + 1] += 0.01 * g(rng);
+      p.q[3 * i + 2] += 0.02 * g(rng);
+    }
+    place_lobes(p, lobes);
+    rebuilds += list.update(lobes, p.box) ? 1 : 0;
+    ++steps;
+    // Every pair within σ (indeed within σ + skin − d1 − d2) must be listed.
+    const PairList contacts = brute_force_pairs(lobes, p.box, 0.0);
+    const PairList& have = list.pairs();
+    for (const auto& c : contacts) REQUIRE(std::binary_search(have.begin(), have.end(), c));
+  }
+  CHECK(rebuilds > 0);
+  CHECK(rebuilds < steps / 3);  // the skin actually saves rebuilds
+}
+
+TEST_CASE("neighbour list rebuilds on changed radii, count or box, and not otherwise", "[fast]") {
+  Packing p = random_packing(50, 0.8, 41);
+  NeighbourList list(0.3);
+  Lobes lobes;
+  place_lobes(p, lobes);
+  CHECK(list.update(lobes, p.box));
+  CHECK_FALSE(list.update(lobes, p.box));
+  lobes.R[7] += 1e-12;  // a bud grew a little
+  CHECK(list.update(lobes, p.box));
+  CHECK_FALSE(list.update(lobes, p.box));
+  p.box.shear = 1e-6;
+  CHECK(list.update(lobes, p.box));
+  p.box.L *= 1.0000001;
+  CHECK(list.update(lobes, p.box));
+  p.add_cell(1, 1, 0, 0.01, 0.002, -1);
+  place_lobes(p, lobes);
+  CHECK(list.update(lobes, p.box));
+  CHECK(list.pairs() == brute_force_pairs(lobes, p.box, 0.3));
+  // Moves just below the criterion: no rebuild; a single lobe moving by a full skin: rebuild.
+  lobes.x[0] += 0.14;
+  lobes.x[5] += 0.14;
+  CHECK_FALSE(list.update(lobes, p.box));
+  lobes.x[9] += 0.31;
+  CHECK(list.update(lobes, p.box));
+  list.invalidate();
+  CHECK(list.update(lobes, p.box));
+}
+
+TEST_CASE("neighbour list refuses non-finite lobe positions", "[fast]") {
+  Packing p = random_packing(10, 0.5, 51);
+  NeighbourList list(0.3);
+  Lobes lobes;
+  place_lobes(p, lobes);
+  list.update(lobes, p.box);
+  lobes.x[3] = std::nan("");
+  CHECK_THROWS_AS(list.update(lobes, p.box), std::domain_error);
+}
+
+TEST_CASE("huge box with two cells: capped grid finds the pair across the corner", "[.hard]") {
+  for (double shear : {0.0, 0.25}) {
+    Packing p;
+    p.box = {1000.0, shear};
+    // Two cells overlapping across the corner of the box (images in x and y).
+    p.add_cell(999.8, 999.9, 0.3, 1.0, 0.002, -1);
+    p.add_cell(0.2 - shear * 1000.0, 0.1, 2.0, 0.5, 0.002, -1);  // its image above is at x + γL
+    Lobes lobes;
+    place_lobes(p, lobes);
+    NeighbourList list(0.3);
+    list.update(lobes, p.box);
+    INFO("shear " << shear);
+    CHECK(list.grid() <= 4);  // not 757² cells for four lobes
+    CHECK_FALSE(brute_force_pairs(lobes, p.box, 0.0).empty());
+    CHECK(list.pairs() == brute_force_pairs(lobes, p.box, 0.3));
+  }
+}
+
+TEST_CASE("neighbour pairs of a tiny box (L = 2, two cells) equal brute force", "[.hard]") {
+  for (double shear : {0.0, 0.4}) {
+    for (int k = 0; k < 50; ++k) {
+      Packing p;
+      p.box = {2.0, shear};
+      p.add_cell(0.1 * k, 1.9 - 0.03 * k, 0.4 * k, 0.01 + 0.02 * k, 0.002, -1);
+      p.add_cell(1.7 + 0.01 * k, 0.05 * k, -0.3 * k, 1.02 - 0.02 * k, 0.002, -1);
+      Lobes lobes;
+      place_lobes(p, lobes);
+      INFO("k " << k << " shear " << shear);
+      CHECK(built_pairs(lobes, p.box, 0.3) == brute_force_pairs(lobes, p.box, 0.3));
+    }
+  }
+}

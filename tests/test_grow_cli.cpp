@@ -1,0 +1,221 @@
+// `budjam grow` end to end: the run directory, determinism, failure statuses, resume after SIGKILL.
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct WorkDir {
+  fs::path path = fs::temp_directory_path() / ("budjam-grow-cli-" + std::to_string(::getpid()));
+  WorkDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+const fs::path& work_dir() {
+  static const WorkDir dir;
+  return dir.path;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string exe() {
+  const char* e = std::getenv("BUDJAM_EXE");
+  REQUIRE(e != nullptr);
+  return e;
+}
+
+struct Result {
+  int code = -1;
+  std::string err;
+};
+
+Result grow(const std::string& args) {
+  const fs::path err = work_dir() / "stderr";
+  const std::string cmd = "'" + exe() + "' grow " + args + " 2>'" + err.string() + "' >/dev/null";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = slurp(err);
+  return r;
+}
+
+// A small scene: L = 6, two targets, bud events, quick.
+fs::path small_scene(const std::string& name, const std::string& extra = "") {
+  const fs::path p = work_dir() / (name + ".toml");
+  std::ofstream(p) << "[run]\nname = \"" << name << "\"\nseed = 3\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
+                   << "[jamming]\ntargets = [1e-3, 1e-2]\n[minimiser]\ndt_max = 0.4\n" << extra;
+  return p;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+}  // namespace
+
+TEST_CASE("grow writes the documented run directory and lands the targets", "[grow_cli]") {
+  const fs::path dir = work_dir() / "run1";
+  const Result r = grow(q(small_scene("s1")) + " --quiet --out " + q(dir));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.empty());  // --quiet
+  for (const char* f : {"summary.json", "timing.json", "scene.toml", "steps.csv", "divisions.csv", "bud_events.csv",
+                        "packings/jammed.pack", "packings/target_0.pack", "packings/target_1.pack"})
+    CHECK(fs::exists(dir / f));
+  CHECK_FALSE(fs::exists(dir / "checkpoint.txt"));
+  for (const auto& e : fs::recursive_directory_iterator(dir)) CHECK(e.path().extension() != ".partial");
+
+  const auto s = budjam::io::read_json(dir / "summary.json");
+  CHECK(s["status"] == "finished");
+  CHECK(s["seed"] == 3);
+  CHECK(s["L"] == 6.0);
+  CHECK(s["P0"] == 1e-3);
+  const double phi_J = s["phi_J"].get<double>();
+  CHECK(phi_J > 0.75);
+  CHECK(phi_J < 0.92);
+  REQUIRE(s["targets"].size() == 2);
+  for (const auto& t : s["targets"]) CHECK(std::abs(t["phi"].get<double>() - phi_J - t["dphi"].get<double>()) <= 5e-9);
+  CHECK(s["n_J"].get<double>() == Approx(s["N_nr_J"].get<double>() / 36.0));
+
+  // The packings are the states the summary describes.
+  const auto jam = budjam::io::read_packing(dir / "packings/jammed.pack");
+  CHECK(jam.packing.packing_fraction() == phi_J);
+  CHECK(jam.meta.number("phi") == phi_J);
+  const auto t1 = budjam::io::read_packing(dir / "packings/target_1.pack");
+  CHECK(t1.packing.packing_fraction() == s["targets"][1]["phi"].get<double>());
+  CHECK(t1.meta.number("dphi") == 1e-2);
+
+  // steps.csv: a header and one row per accepted state (the initial one included)
+  std::istringstream steps(slurp(dir / "steps.csv"));
+  std::string line;
+  std::getline(steps, line);
+  CHECK(line.rfind("step,attempts,dt,N,phi,P,E_per_cell,phase,N_c,N_f,", 0) == 0);
+  long rows = 0;
+  while (std::getline(steps, line)) ++rows;
+  CHECK(rows == s["accepted_steps"].get<long>() + 1);
+}
+
+TEST_CASE("the same scene and seed give a byte-identical summary.json; another seed does not", "[grow_cli]") {
+  const fs::path scene = small_scene("det");
+  const fs::path a = work_dir() / "det_a", b = work_dir() / "det_b", c = work_dir() / "det_c";
+  REQUIRE(grow(q(scene) + " --quiet --out " + q(a)).code == 0);
+  REQUIRE(grow(q(scene) + " --quiet --out " + q(b)).code == 0);
+  REQUIRE(grow(q(scene) + " --quiet --seed 4 --out " + q(c)).code == 0);
+  CHECK(slurp(a / "summary.json") == slurp(b / "summary.json"));
+  CHECK(slurp(a / "steps.csv") == slurp(b / "steps.csv"));
+  CHECK(slurp(a / "bud_events.csv") == slurp(b / "bud_events.csv"));
+  CHECK(slurp(a / "packings/target_1.pack") == slurp(b / "packings/target_1.pack"));
+  CHECK(slurp(a / "summary.json") != slurp(c / "summary.json"));
+  CHECK(budjam::io::read_json(c / "summary.json")["seed"] == 4);
+  // Re-running into a finished run directory replaces it.
+  REQUIRE(grow(q(scene) + " --quiet --out " + q(a)).code == 0);
+  CHECK(slurp(a / "summary.json") == slurp(b / "summary.json"));
+}
+
+TEST_CASE("a step-limit failure exits 1 with status step_limit in summary.json", "[grow_cli]") {
+  const fs::path dir = work_dir() / "limit";
+  const Result r = grow(q(small_scene("limit")) + " --quiet --set growth.max_steps=30 --out " + q(dir));
+  CHECK(r.code == 1);
+  CHECK(r.err.find("step_limit") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  const auto s = budjam::io::read_json(dir / "summary.json");
+  CHECK(s["status"] == "step_limit");
+  CHECK(s["phi_J"].is_null());
+  CHECK(s["targets"].empty());
+  CHECK(s["accepted_steps"].get<long>() + s["rejected_steps"].get<long>() == 30);
+}
+
+TEST_CASE("a step-size underflow exits 1 with status dt_underflow and no jammed packing", "[grow_cli]") {
+  const fs::path dir = work_dir() / "underflow";
+  const Result r = grow(q(small_scene("uf")) + " --quiet --set growth.dt_min=0.3 --out " + q(dir));
+  CHECK(r.code == 1);
+  CHECK(r.err.find("dt_underflow") != std::string::npos);
+  const auto s = budjam::io::read_json(dir / "summary.json");
+  CHECK(s["status"] == "dt_underflow");
+  CHECK(s["phi_J"].is_null());
+  CHECK_FALSE(fs::exists(dir / "packings/jammed.pack"));
+}
+
+TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", "[grow_cli]") {
+  const fs::path dir = work_dir() / "bad";
+  Result r = grow(q(small_scene("bad", "")) + " --quiet --set growth.P0=-1 --out " + q(dir));
+  CHECK(r.code == 2);
+  CHECK(r.err.find("growth.P0") != std::string::npos);
+  r = grow("--resume " + q(work_dir() / "no-such-run") + " --quiet");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("checkpoint") != std::string::npos);
+  // an existing directory that is not a run directory is never overwritten
+  const fs::path foreign = work_dir() / "foreign";
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "precious.txt") << "keep";
+  r = grow(q(small_scene("bad2")) + " --quiet --out " + q(foreign));
+  CHECK(r.code == 2);
+  CHECK(slurp(foreign / "precious.txt") == "keep");
+}
+
+TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrupted run", "[grow_cli][.slow]") {
+  const std::string extra = "[observe]\ncheckpoint_every = 25\n";
+  const fs::path scene = small_scene("kill", extra);
+  const fs::path ref = work_dir() / "kill_ref", dir = work_dir() / "kill_run";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+
+  // Kill the same run some time after its first checkpoint.
+  for (double delay : {0.0, 0.3}) {
+    fs::remove_all(dir);
+    const pid_t pid = ::fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      const std::string e = exe(), sc = scene.string(), out = dir.string();
+      ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
+              static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    while (!fs::exists(dir / "checkpoint.txt") && !fs::exists(dir / "summary.json") &&
+           std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    REQUIRE(WIFSIGNALED(status));  // really killed, not finished
+    REQUIRE(fs::exists(dir / "checkpoint.txt"));
+    // A killed run never leaves files that look complete.
+    CHECK_FALSE(fs::exists(dir / "summary.json"));
+    CHECK_FALSE(fs::exists(dir / "steps.csv"));
+    CHECK(fs::exists(dir / "steps.csv.partial"));
+
+    const Result r = grow("--resume " + q(dir) + " --quiet");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(slurp(dir / "summary.json") == slurp(ref / "summary.json"));
+    for (const char* f : {"steps.csv", "divisions.csv", "bud_events.csv", "packings/jammed.pack",
+                          "packings/target_0.pack", "packings/target_1.pack", "scene.toml"})
+      CHECK(slurp(dir / f) == slurp(ref / f));
+    CHECK_FALSE(fs::exists(dir / "checkpoint.txt"));
+    // A finished run is not resumed again.
+    CHECK(grow("--resume " + q(dir) + " --quiet").code == 2);
+  }
+}

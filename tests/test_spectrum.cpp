@@ -1,0 +1,501 @@
+// The vibrational spectrum: mass matrix, dense and ARPACK solvers, and the spectral counts
+// (paper appendix "Vibrational density of states"; docs/spectrum.md).
+#include "budjam/spectrum.hpp"
+
+#include "budjam/hessian.hpp"
+#include "budjam/rigidity.hpp"
+#include "budjam/scene.hpp"
+#include "compressed_packing.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <random>
+
+using namespace budjam;
+
+namespace {
+
+using Sparse = Eigen::SparseMatrix<double>;
+
+// Kinetic energy of the lobes of cell i moving with generalised velocity qdot: translation of
+// each lobe's centre (from finite differences of the lobe placement) plus each disk's spin
+// ½ (m R²/2) θ̇². Independent of the mass matrix.
+double lobe_kinetic_energy(const Packing& p, std::size_t i, const Eigen::Vector3d& qdot) {
+  const double h = 1e-6;
+  Packing plus = p, minus = p;
+  plus.q.segment<3>(3 * i) += h * qdot;
+  minus.q.segment<3>(3 * i) -= h * qdot;
+  Lobes lp, lm;
+  place_lobes(plus, lp);
+  place_lobes(minus, lm);
+  double T = 0;
+  for (std::size_t lobe : {mother_lobe(i), bud_lobe(i)}) {
+    const double R = lp.R[lobe];
+    const double m = R * R / 0.25;  // areal density: mother (R = 1/2) has mass 1
+    const double vx = (lp.x[lobe] - lm.x[lobe]) / (2 * h), vy = (lp.y[lobe] - lm.y[lobe]) / (2 * h);
+    T += 0.5 * m * (vx * vx + vy * vy) + 0.5 * (0.5 * m * R * R) * qdot[2] * qdot[2];
+  }
+  return T;
+}
+
+// Adds a spring k (q_a − q_b)²/2 to a triplet list.
+void spring(std::vector<Eigen::Triplet<double>>& t, int a, int b, double k) {
+  t.emplace_back(a, a, k);
+  t.emplace_back(b, b, k);
+  t.emplace_back(a, b, -k);
+  t.emplace_back(b, a, -k);
+}
+
+}  // namespace
+
+TEST_CASE("the mass matrix reproduces the kinetic energy of the two moving disks", "[spectrum][mass]") {
+  Packing p;
+  p.box.L = 10;
+  p.add_cell(1.0, 2.0, 0.3, 0.01, 0.002, -1);
+  p.add_cell(4.0, 5.0, -2.0, 0.6, 0.002, -1);
+  p.add_cell(7.0, 1.0, 2.9, 1.02, 0.002, -1);
+  const Eigen::VectorXd M = mass_diagonal(p);
+  REQUIRE(M.size() == 9);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int trial = 0; trial < 5; ++trial) {
+      const Eigen::Vector3d v(g(rng), g(rng), g(rng));
+      // ½ q̇ᵀ M q̇ with diagonal M: no translation–rotation cross term because (x, y) is the
+      // centre of mass at uniform areal density.
+      const double T_matrix = 0.5 * (M.segment<3>(3 * i).array() * v.array().square()).sum();
+      CHECK(T_matrix == Approx(lobe_kinetic_energy(p, i, v)).epsilon(1e-8));
+    }
+}
+
+TEST_CASE("a single dumbbell's moment of inertia equals the area integral of r² at unit areal density",
+          "[spectrum][mass]") {
+  // Free rotation about the centroid: I = ∫ ρ r² dA over both disks, ρ = 1/(π/4) (mother mass 1).
+  for (double b : {0.01, 0.5, 1.02}) {
+    Packing p;
+    p.box.L = 10;
+    p.add_cell(0.0, 0.0, 0.0, b, 0.002, -1);
+    const Dumbbell d = p.dumbbell(0);
+    const double rho = 4.0 / std::numbers::pi;
+    // Midpoint rule on each disk in polar coordinates about its own centre (exact in angle for
+    // r² integrands up to rounding), r² = (c + ρ cos φ)² + (ρ sin φ)² with c the lobe offset.
+    auto disk = [&](double c, double R) {
+      const int nr = 2000;
+      double I = 0;
+      for (int k = 0; k < nr; ++k) {
+        const double r = (k + 0.5) * R / nr;
+        // ∫₀^{2π} (c² + 2 c r cos φ + r²) dφ = 2π (c² + r²)
+        I += 2 * std::numbers::pi * (c * c + r * r) * r * (R / nr);
+      }
+      return rho * I;
+    };
+    const double I_integral = disk(d.mother_offset, 0.5) + disk(d.bud_offset, 0.5 * b);
+    const Eigen::VectorXd M = mass_diagonal(p);
+    CHECK(M[0] == Approx(1 + b * b).epsilon(1e-14));
+    CHECK(M[1] == M[0]);
+    CHECK(M[2] == Approx(I_integral).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("two springs between two cells give ω² = k (1/m1 + 1/m2) and κ (1/I1 + 1/I2)",
+          "[spectrum][mass]") {
+  // A hand-made harmonic system: spring k between x1 and x2, torsion spring κ between θ1 and θ2,
+  // y free. Removing the two translations leaves the relative y motion and the common rotation
+  // θ1 = θ2 at zero, and the two relative coordinates at k(1/m1 + 1/m2) and κ(1/I1 + 1/I2):
+  // the translational mass and the moment of inertia both enter as in M.
+  Packing p;
+  p.box.L = 10;
+  p.add_cell(1, 1, 0.4, 0.3, 0.002, -1);
+  p.add_cell(3, 3, 1.9, 0.95, 0.002, -1);
+  const Eigen::VectorXd M = mass_diagonal(p);
+  const double k = 1.3, kappa = 0.7;
+  std::vector<Eigen::Triplet<double>> t;
+  spring(t, 0, 3, k);
+  spring(t, 2, 5, kappa);
+  Sparse H(6, 6);
+  H.setFromTriplets(t.begin(), t.end());
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::dense;
+  const Spectrum s = solve_spectrum(H, M, opt);
+  REQUIRE(s.n_dof == 4);
+  REQUIRE(s.lambda.size() == 4);
+  std::vector<double> expected = {0.0, 0.0, k * (1 / M[0] + 1 / M[3]), kappa * (1 / M[2] + 1 / M[5])};
+  std::sort(expected.begin(), expected.end());
+  for (int n = 0; n < 4; ++n) CHECK(s.lambda[n] == Approx(expected[n]).margin(1e-14).epsilon(1e-13));
+  CHECK(s.translation_residual < 1e-15);
+  // Modes are orthonormal and orthogonal to the mass-weighted translations.
+  CHECK((s.modes.transpose() * s.modes - Eigen::MatrixXd::Identity(4, 4)).cwiseAbs().maxCoeff() < 1e-13);
+  Eigen::VectorXd tx = Eigen::VectorXd::Zero(6);
+  tx[0] = std::sqrt(M[0]);
+  tx[3] = std::sqrt(M[3]);
+  CHECK((s.modes.transpose() * tx).cwiseAbs().maxCoeff() < 1e-13);
+  // Each mode solves H v = λ M v with v = M^{-1/2} e.
+  for (int n = 0; n < 4; ++n) {
+    const Eigen::VectorXd v = s.modes.col(n).cwiseQuotient(M.cwiseSqrt());
+    CHECK((H * v - s.lambda[n] * M.cwiseProduct(v)).norm() < 1e-13);
+  }
+}
+
+TEST_CASE("dense and ARPACK reproduce the phonons of a ring of cells", "[spectrum][arpack]") {
+  // n identical cells on a ring, nearest-neighbour springs kx on x, ky on y and κ on θ:
+  // ω² = 2 k_α/m_α (1 − cos(2πj/n)), j = 0 … n−1 for each of x, y, θ. The two j = 0 modes of x
+  // and y are the translations (removed); the j = 0 θ mode (common rotation) is a true zero mode.
+  const int n = 150;
+  const double kx = 1.0, ky = 0.37, kappa = 0.11;
+  Packing p;
+  p.box.L = 200;
+  for (int i = 0; i < n; ++i) p.add_cell(i, 0, 0.0, 0.7, 0.002, -1);
+  const Eigen::VectorXd M = mass_diagonal(p);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    spring(t, 3 * i, 3 * j, kx);
+    spring(t, 3 * i + 1, 3 * j + 1, ky);
+    spring(t, 3 * i + 2, 3 * j + 2, kappa);
+  }
+  Sparse H(3 * n, 3 * n);
+  H.setFromTriplets(t.begin(), t.end());
+  std::vector<double> exact;
+  for (int j = 0; j < n; ++j) {
+    const double c = 1 - std::cos(2 * std::numbers::pi * j / n);
+    if (j > 0) exact.push_back(2 * kx / M[0] * c);
+    if (j > 0) exact.push_back(2 * ky / M[1] * c);
+    exact.push_back(2 * kappa / M[2] * c);
+  }
+  std::sort(exact.begin(), exact.end());
+  REQUIRE(exact.size() == static_cast<std::size_t>(3 * n - 2));
+
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::dense;
+  const Spectrum dense = solve_spectrum(H, M, opt);
+  REQUIRE(dense.complete());
+  for (int k = 0; k < 3 * n - 2; ++k) CHECK(dense.lambda[k] == Approx(exact[k]).margin(1e-13).epsilon(1e-11));
+
+  opt.method = SpectrumMethod::arpack;
+  opt.modes = 40;
+  const Spectrum lanczos = solve_spectrum(H, M, opt);
+  REQUIRE(lanczos.method == SpectrumMethod::arpack);
+  REQUIRE(lanczos.lambda.size() == 40);
+  // The ring's modes come in degenerate pairs (j, n − j): a single-vector Lanczos finds both
+  // copies only through rounding, which ARPACK's restarts and locking exploit.
+  for (int k = 0; k < 40; ++k) CHECK(lanczos.lambda[k] == Approx(exact[k]).margin(1e-13).epsilon(1e-11));
+}
+
+// ---- arrested packings ---------------------------------------------------------------------
+
+namespace {
+
+// FIRE-compressed random dumbbells just above jamming (tests/support/compressed_packing.hpp),
+// built once per (n, seed) and shared by the test cases.
+const testing::CompressedPacking& compressed(std::size_t n, std::uint64_t seed) {
+  static std::map<std::pair<std::size_t, std::uint64_t>, testing::CompressedPacking> cache;
+  auto it = cache.find({n, seed});
+  if (it == cache.end()) it = cache.emplace(std::make_pair(n, seed), testing::compress_random_dumbbells(n, seed)).first;
+  return it->second;
+}
+
+// Rigid rotation of cell i about the centre of the lobe that is not `free_lobe`: the zero mode
+// an unconstrained lobe leaves (all contacts act on the other lobe, through its centre). In the
+// reduced layout of `cells`, mass-weighted, unit norm.
+Eigen::VectorXd pivot_mode(const Packing& p, const std::vector<std::size_t>& cells, std::size_t k,
+                           std::size_t free_lobe, const Eigen::VectorXd& mass) {
+  const std::size_t i = cells[k];
+  const Dumbbell d = p.dumbbell(i);
+  // centroid − pivot, along n̂: +mother_offset if the pivot is the mother, −bud_offset if the bud.
+  const double arm = is_bud(free_lobe) ? d.mother_offset : -d.bud_offset;
+  const double rx = arm * std::cos(p.theta(i)), ry = arm * std::sin(p.theta(i));
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(mass.size());
+  v[3 * k] = -ry;  // δ(centroid) = δθ ẑ × (centroid − pivot)
+  v[3 * k + 1] = rx;
+  v[3 * k + 2] = 1;
+  v = v.cwiseProduct(mass.cwiseSqrt());
+  return v.normalized();
+}
+
+}  // namespace
+
+TEST_CASE("dense and ARPACK eigenvalues of a 300-cell packing agree to 1e-8 relative", "[spectrum][arpack]") {
+  const auto& cp = compressed(300, 11);
+  REQUIRE(cp.network.N_nr > 250);
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::dense;
+  const Spectrum dense = solve_spectrum(prob.H, prob.mass, opt);
+  const std::size_t n_zero = count_below(dense.lambda, 1e-6);
+  opt.method = SpectrumMethod::arpack;
+  opt.modes = static_cast<int>(n_zero) + 60;  // all quasi-zero modes and 60 of the band
+  const Spectrum lanczos = solve_spectrum(prob.H, prob.mass, opt);
+  REQUIRE(lanczos.lambda.size() == opt.modes);
+  // Both solvers are backward stable: eigenvalues agree to ~ε‖K‖ in absolute terms, which for the
+  // band (λ ≳ 1e-4) is far inside 1e-8 relative; the quasi-zero modes (|λ| ~ 1e-14) can only be
+  // compared in absolute terms.
+  const double scale = dense.lambda.cwiseAbs().maxCoeff();
+  for (int k = 0; k < opt.modes; ++k) {
+    if (dense.lambda[k] > 1e-6)
+      CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-8 * dense.lambda[k]);
+    else
+      CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-12 * scale);
+  }
+  // Non-degenerate band modes are the same vectors up to sign.
+  for (int k = static_cast<int>(n_zero); k < opt.modes; ++k) {
+    const double gap = std::min(k > 0 ? dense.lambda[k] - dense.lambda[k - 1] : 1.0,
+                                dense.lambda[k + 1] - dense.lambda[k]);
+    if (gap < 1e-3 * dense.lambda[k]) continue;
+    CHECK(std::abs(dense.modes.col(k).dot(lanczos.modes.col(k))) == Approx(1.0).epsilon(1e-8));
+  }
+  CHECK(lanczos.sigma < 0);
+  CHECK(lanczos.translation_residual < 1e-12);
+}
+
+TEST_CASE("modes of a packing solve H v = ω² M v and carry no translation", "[spectrum]") {
+  const auto& cp = compressed(150, 5);
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  REQUIRE(prob.cells.size() == cp.network.N_nr);
+  for (std::size_t k = 0; k < prob.cells.size(); ++k) CHECK(!cp.network.rattler[prob.cells[k]]);
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::dense;
+  const Spectrum s = solve_spectrum(prob.H, prob.mass, opt);
+  REQUIRE(s.n_dof == 3 * prob.cells.size() - 2);
+  REQUIRE(s.complete());
+  const double scale = s.lambda.cwiseAbs().maxCoeff();
+  const Eigen::VectorXd sqm = prob.mass.cwiseSqrt();
+  Eigen::VectorXd tx = Eigen::VectorXd::Zero(prob.mass.size()), ty = tx;
+  for (Eigen::Index a = 0; a < tx.size(); a += 3) {
+    tx[a] = sqm[a];
+    ty[a + 1] = sqm[a + 1];
+  }
+  double worst_residual = 0, worst_translation = 0;
+  for (Eigen::Index n = 0; n < s.lambda.size(); ++n) {
+    const Eigen::VectorXd v = s.modes.col(n).cwiseQuotient(sqm);  // physical displacement
+    worst_residual = std::max(worst_residual, (prob.H * v - s.lambda[n] * prob.mass.cwiseProduct(v)).norm() /
+                                                  std::sqrt(v.dot(prob.mass.cwiseProduct(v))));
+    worst_translation = std::max({worst_translation, std::abs(s.modes.col(n).dot(tx)) / tx.norm(),
+                                  std::abs(s.modes.col(n).dot(ty)) / ty.norm()});
+  }
+  CHECK(worst_residual < 1e-12 * scale);
+  CHECK(worst_translation < 1e-12);
+  // The Hessian of a pair potential is translation invariant to rounding.
+  CHECK(s.translation_residual < 1e-13);
+  // An arrested packing is at an energy minimum: no eigenvalue below −rounding.
+  CHECK(s.lambda[0] > -1e-11 * scale);
+}
+
+TEST_CASE("quasi-zero modes, pebble-game floppy modes and unconstrained lobes agree on arrested packings",
+          "[spectrum][rigidity]") {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const auto& cp = compressed(150, seed);
+    const auto& net = cp.network;
+    const PackingSpectrum ps = packing_spectrum(cp.packing, cp.contacts, net);
+    REQUIRE(ps.spectrum.method == SpectrumMethod::dense);
+    const SpectralSummary& m = ps.summary;
+    Lobes lobes;
+    place_lobes(cp.packing, lobes);
+    const RigidityState rig = analyse_rigidity(cp.packing, lobes, cp.contacts, net);
+    INFO("seed " << seed << ": N_zero " << m.N_zero << ", floppy " << rig.floppy_plane << ", N_u " << net.N_u);
+    // (1) Robust: the same count over three decades of the cutoff (a wide spectral gap).
+    for (const auto& [tol, count] : m.zero_counts) CHECK(count == m.N_zero);
+    // (2) Spectrum and pebble game count the same floppy modes. Above jamming the backbone spans
+    // the box with a self-stress, so the periodic framework loses the plane's rotation too and
+    // floppy_plane = F − 3 is its count of non-trivial motions (docs/rigidity.md).
+    CHECK(static_cast<long>(m.N_zero) == rig.floppy_plane);
+    // (3) Each contact-free lobe of a non-rattler leaves one zero mode; other floppy motions
+    // are rare.
+    CHECK(m.N_zero >= net.N_u);
+    CHECK(m.N_zero <= net.N_u + 2);
+    // (4) Sylvester's inertia gives the same count without an eigensolver.
+    const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, net);
+    CHECK(count_below_by_inertia(prob.H, prob.mass, 1e-6) == static_cast<long>(m.N_zero));
+    // (5) The analytic unconstrained-lobe modes (rotation about the contacted lobe) lie in the
+    // quasi-zero space plus the two translations.
+    Eigen::MatrixXd Z(prob.mass.size(), m.N_zero + 2);
+    Z.leftCols(m.N_zero) = ps.spectrum.modes.leftCols(m.N_zero);
+    Z.col(m.N_zero).setZero();
+    Z.col(m.N_zero + 1).setZero();
+    for (Eigen::Index a = 0; a < prob.mass.size(); a += 3) {
+      Z(a, m.N_zero) = std::sqrt(prob.mass[a]);
+      Z(a + 1, m.N_zero + 1) = std::sqrt(prob.mass[a + 1]);
+    }
+    Z.col(m.N_zero).normalize();
+    Z.col(m.N_zero + 1).normalize();
+    std::size_t checked = 0;
+    for (std::size_t k = 0; k < prob.cells.size(); ++k)
+      for (std::size_t lobe : {mother_lobe(prob.cells[k]), bud_lobe(prob.cells[k])}) {
+        if (net.lobe_contacts[lobe] != 0) continue;
+        const Eigen::VectorXd v = pivot_mode(cp.packing, prob.cells, k, lobe, prob.mass);
+        CHECK((Z.transpose() * v).norm() == Approx(1.0).epsilon(1e-9));
+        ++checked;
+      }
+    CHECK(checked == net.N_u);
+    // (6) The band lies well above the cutoff and gives a finite ω*.
+    REQUIRE(m.band.available);
+    CHECK(ps.spectrum.lambda[m.N_zero] > 1e-5);
+    CHECK(m.band.omega_star > 0);
+  }
+}
+
+TEST_CASE("the quasi-zero modes are localised, the band is extended", "[spectrum]") {
+  const auto& cp = compressed(150, 2);
+  const PackingSpectrum ps = packing_spectrum(cp.packing, cp.contacts, cp.network);
+  const std::size_t nz = ps.summary.N_zero, n = ps.cells.size();
+  REQUIRE(ps.participation.size() == ps.spectrum.lambda.size());
+  CHECK((ps.participation.array() > 1.0 / static_cast<double>(n) - 1e-12).all());
+  CHECK((ps.participation.array() <= 1.0 + 1e-12).all());
+  // The zero-mode subspace is degenerate (any rotation of it is as good), so compare subspace
+  // averages: the lowest band modes are far more extended than anything in the zero band can be
+  // (a zero mode spread evenly over the N_u free cells would have PR = N_u/n).
+  const double band = ps.participation.segment(nz, 20).mean();
+  CHECK(band > 0.2);
+}
+
+TEST_CASE("participation ratio is 1/n for a one-cell mode and 1 for an evenly shared one", "[spectrum]") {
+  Spectrum s;
+  s.n_cells = 4;
+  s.n_dof = 10;
+  s.lambda = Eigen::VectorXd::LinSpaced(2, 1.0, 2.0);
+  s.modes = Eigen::MatrixXd::Zero(12, 2);
+  s.modes(5, 0) = 1.0;                                     // θ of cell 1 only
+  for (int i = 0; i < 4; ++i) s.modes(3 * i + i % 3, 1) = 0.5;  // equal weight, different components
+  const Eigen::VectorXd pr = participation_ratios(s);
+  CHECK(pr[0] == Approx(0.25));
+  CHECK(pr[1] == Approx(1.0));
+  s.modes.resize(0, 0);
+  CHECK_THROWS_AS(participation_ratios(s), std::invalid_argument);
+}
+
+TEST_CASE("the band edge is the RMS frequency of the lowest max(5, 1%) modes above the cutoff", "[spectrum]") {
+  Spectrum s;
+  s.n_cells = 400;
+  s.n_dof = 1198;
+  // 30 quasi-zero modes, then a band λ = 1e-3 (k+1) for the remaining 1168: n_band = ceil(11.68) = 12.
+  s.lambda.resize(1198);
+  for (int k = 0; k < 30; ++k) s.lambda[k] = 1e-13 * (k - 15);
+  for (int k = 30; k < 1198; ++k) s.lambda[k] = 1e-3 * (k - 29);
+  const BandEdge b = band_edge(s);
+  CHECK(b.n_zero == 30);
+  CHECK(b.n_band == 12);
+  CHECK(b.modes_needed == 42);
+  REQUIRE(b.available);
+  double mean = 0;
+  for (int k = 1; k <= 12; ++k) mean += 1e-3 * k / 12;
+  CHECK(b.omega_star == Approx(std::sqrt(mean)).epsilon(1e-14));
+  // Small systems: at least band_min modes.
+  BandEdgeRule rule;
+  rule.band_fraction = 0.001;
+  CHECK(band_edge(s, rule).n_band == 5);
+  // A partial spectrum that stops short of the band modes cannot give ω*.
+  Spectrum part = s;
+  part.lambda = s.lambda.head(41);
+  const BandEdge bp = band_edge(part);
+  CHECK_FALSE(bp.available);
+  CHECK(std::isnan(bp.omega_star));
+  CHECK(bp.modes_needed == 42);
+  part.lambda = s.lambda.head(42);
+  CHECK(band_edge(part).omega_star == b.omega_star);
+  CHECK(modes_for_band_edge(1198, 30, {}, 0) == 42);
+  // The summary reports the counts at four cutoffs and whether a partial spectrum reached them.
+  part.lambda = s.lambda.head(25);
+  CHECK_FALSE(summarise(part).zero_count_complete);
+  const SpectralSummary full = summarise(s);
+  CHECK(full.zero_count_complete);
+  REQUIRE(full.zero_counts.size() == 4);
+  CHECK(full.zero_counts[0].first == 1e-5);
+  CHECK(full.zero_counts[0].second == 30);
+}
+
+TEST_CASE("the D(ω) histogram is normalised by the number of modes", "[spectrum]") {
+  Spectrum s;
+  s.n_cells = 5;
+  s.n_dof = 13;
+  s.lambda.resize(13);
+  for (int k = 0; k < 3; ++k) s.lambda[k] = 1e-14 * k;  // quasi-zero
+  for (int k = 3; k < 13; ++k) s.lambda[k] = std::pow(0.1 * k, 2);  // ω = 0.3 … 1.2
+  const DosHistogram h = dos_histogram(s, 10, 1.0, 1e-6);
+  CHECK(h.excluded == 3);
+  CHECK(h.outside == 3);  // ω = 1.0, 1.1, 1.2
+  double integral = 0;
+  for (std::size_t b = 0; b < 10; ++b) integral += h.density[b] * (h.edges[b + 1] - h.edges[b]);
+  CHECK(integral == Approx(7.0 / 13.0));
+  CHECK(std::isinf(h.omega_valid));
+  CHECK(signed_omega(-4.0) == -2.0);
+  CHECK(signed_omega(9.0) == 3.0);
+}
+
+TEST_CASE("the automatic method is dense for small problems and ARPACK for large ones, and says so",
+          "[spectrum][arpack]") {
+  const auto& cp = compressed(150, 1);
+  SpectrumOptions opt;
+  PackingSpectrum ps = packing_spectrum(cp.packing, cp.contacts, cp.network, opt);
+  CHECK(ps.spectrum.method == SpectrumMethod::dense);
+  CHECK(ps.summary.method == SpectrumMethod::dense);
+  opt.dense_max_dof = 100;
+  opt.modes = 0;  // enough for ω*
+  ps = packing_spectrum(cp.packing, cp.contacts, cp.network, opt);
+  CHECK(ps.spectrum.method == SpectrumMethod::arpack);
+  CHECK(ps.summary.band.available);
+  CHECK(ps.summary.zero_count_complete);
+  CHECK(std::string(to_string(ps.spectrum.method)) == "arpack");
+  CHECK(parse_spectrum_method("dense") == SpectrumMethod::dense);
+  CHECK_THROWS_AS(parse_spectrum_method("lanczos", "--method"), InputError);
+  // ARPACK cannot return the whole spectrum.
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  opt.method = SpectrumMethod::arpack;
+  opt.modes = static_cast<int>(prob.mass.size()) - 2;
+  CHECK_THROWS_AS(solve_spectrum(prob.H, prob.mass, opt), std::invalid_argument);
+}
+
+TEST_CASE("an unjammed packing has no spectrum and says why", "[spectrum]") {
+  Packing p;
+  p.box.L = 10;
+  p.add_cell(2, 2, 0, 0.5, 0.002, -1);
+  p.add_cell(6, 6, 0, 0.5, 0.002, -1);
+  const ContactNetwork net = analyse_network(p.size(), {});
+  try {
+    packing_spectrum(p, {}, net);
+    FAIL("no error");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("non-rattler") != std::string::npos);
+  }
+}
+
+TEST_CASE("shift-invert finds a negative eigenvalue by lowering the shift, and refuses a hopeless one",
+          "[spectrum][arpack]") {
+  // Ring of cells (as above) with one soft x spring of negative stiffness: an unstable mode.
+  const int n = 60;
+  Packing p;
+  p.box.L = 100;
+  for (int i = 0; i < n; ++i) p.add_cell(i, 0, 0.0, 0.3, 0.002, -1);
+  const Eigen::VectorXd M = mass_diagonal(p);
+  auto ring = [&](double kneg) {
+    std::vector<Eigen::Triplet<double>> t;
+    for (int i = 0; i < n; ++i) {
+      const int j = (i + 1) % n;
+      spring(t, 3 * i, 3 * j, i == 0 ? kneg : 1.0);
+      spring(t, 3 * i + 1, 3 * j + 1, 1.0);
+      spring(t, 3 * i + 2, 3 * j + 2, 1.0);
+    }
+    Sparse H(3 * n, 3 * n);
+    H.setFromTriplets(t.begin(), t.end());
+    return H;
+  };
+  SpectrumOptions opt;
+  opt.modes = 6;
+  const Sparse H = ring(-0.05);
+  opt.method = SpectrumMethod::dense;
+  const Spectrum dense = solve_spectrum(H, M, opt);
+  REQUIRE(dense.lambda[0] < -1e-3);
+  opt.method = SpectrumMethod::arpack;
+  const Spectrum lanczos = solve_spectrum(H, M, opt);
+  CHECK(lanczos.sigma < dense.lambda[0]);
+  for (int k = 0; k < 6; ++k) CHECK(lanczos.lambda[k] == Approx(dense.lambda[k]).margin(1e-12));
+  try {
+    solve_spectrum(ring(-1e3), M, opt);
+    FAIL("no error");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("not positive definite") != std::string::npos);
+  }
+}
