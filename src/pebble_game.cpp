@@ -47,6 +47,8 @@ void PebbleGame::reset(std::size_t joints) {
   independent_.clear();
   n_independent_ = 0;
   now_ = 0;
+  region_.clear();
+  region_parent_.clear();
   for (std::size_t k = 0; k < joints; ++k) add_joint();
 }
 
@@ -56,7 +58,40 @@ std::uint32_t PebbleGame::add_joint() {
   stamp_.push_back(0);
   color_.push_back(boost::white_color);
   pred_.push_back(v);
+  region_.push_back(-1);
   return v;
+}
+
+int PebbleGame::region_root(std::uint32_t joint) {
+  int r = region_[joint];
+  if (r < 0) return -1;
+  while (region_parent_[r] != r) {
+    region_parent_[r] = region_parent_[region_parent_[r]];  // path halving
+    r = region_parent_[r];
+  }
+  return r;
+}
+
+void PebbleGame::record_region(const std::vector<std::uint32_t>& joints) {
+  const int id = static_cast<int>(region_parent_.size());
+  region_parent_.push_back(id);
+  // Regions that share at least two joints with the new one are rigid together with it.
+  std::vector<int> roots;
+  for (std::uint32_t x : joints)
+    if (const int r = region_root(x); r >= 0) roots.push_back(r);
+  std::sort(roots.begin(), roots.end());
+  for (std::size_t k = 0; k < roots.size();) {
+    std::size_t e = k;
+    while (e < roots.size() && roots[e] == roots[k]) ++e;
+    if (e - k >= 2) region_parent_[roots[k]] = id;
+    k = e;
+  }
+  for (std::uint32_t x : joints) region_[x] = id;
+}
+
+void PebbleGame::forget_regions() {
+  std::fill(region_.begin(), region_.end(), -1);
+  region_parent_.clear();
 }
 
 void PebbleGame::next_stamp() {
@@ -127,7 +162,14 @@ bool PebbleGame::gather(std::uint32_t a, int want_a, std::uint32_t b, int want_b
 
 bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
   ++work_.bars_tested;
-  if (!gather(a, 2, b, 2)) return false;  // a and b lie in a rigid region: the bar is redundant
+  if (const int r = region_root(a); r >= 0 && r == region_root(b)) {
+    ++work_.quick_rejections;
+    return false;
+  }
+  if (!gather(a, 2, b, 2)) {  // a and b lie in a rigid region: the bar is redundant
+    record_region(visited_);
+    return false;
+  }
   boost::add_edge(a, b, g_);                // one of a's pebbles covers the bar
   --free_[a];
   return true;
@@ -138,6 +180,7 @@ bool PebbleGame::independent_if_added(std::uint32_t a, std::uint32_t b) {
     throw std::invalid_argument("pebble game: bar (" + std::to_string(a) + ", " + std::to_string(b) +
                                 ") needs two distinct existing joints");
   ++work_.bars_tested;
+  if (const int r = region_root(a); r >= 0 && r == region_root(b)) return false;
   return gather(a, 2, b, 2);
 }
 
@@ -179,7 +222,8 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   }
   bars_.resize(kept);
   independent_.resize(kept);
-  if (!lost_independent) return 0;
+  if (!lost_independent) return 0;  // the rank and the rigid regions are unchanged
+  forget_regions();
   // The remaining independent bars are still independent; extend them greedily by the bars that
   // were redundant, which yields a basis of the new bar set.
   std::size_t retested = 0;
@@ -211,43 +255,95 @@ RigidClusters PebbleGame::rigid_clusters() {
       inc[fill[bars_[k].b]++] = {bars_[k].a, static_cast<std::uint32_t>(k)};
     }
   }
+  const auto degree = [&](std::uint32_t x) { return start[x + 1] - start[x]; };
+
+  // Bars inside the largest known rigid region first: the big cluster is then found early and
+  // its joints are excluded cheaply from every later cluster (two clusters share ≤ 1 joint).
+  std::vector<std::size_t> region_size(region_parent_.size(), 0);
+  for (std::uint32_t x = 0; x < n; ++x)
+    if (const int r = region_root(x); r >= 0) ++region_size[r];
+  std::vector<std::size_t> weight(m, 0);
+  for (std::size_t k = 0; k < m; ++k)
+    if (const int r = region_root(bars_[k].a); r >= 0 && r == region_root(bars_[k].b)) weight[k] = region_size[r];
+  std::vector<std::size_t> order(m);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return weight[p] > weight[q]; });
 
   RigidClusters out;
   out.of_bar.assign(m, -1);
   std::vector<int> rigid_in(n, -1), floppy_in(n, -1);
+  std::vector<std::vector<int>> clusters_of(n);  // clusters found so far, per joint
+  std::vector<char> blocked;                     // per cluster: shares a joint with the current one
+  std::vector<int> blocked_list;
   std::deque<std::uint32_t> queue;
 
-  for (std::size_t k = 0; k < m; ++k) {
+  for (std::size_t k : order) {
     if (out.of_bar[k] != -1) continue;
     const auto [u, v] = bars_[k];
-    // Three pebbles pinned on the bar stand for its rigid-body motions in the plane.
-    // (Two on u and one on v, or one on u and two on v when u's search is blocked by v: the
-    // closed set reachable from u and v always holds at least three free pebbles.)
-    while (free_[u] < 2 && search(u, v, none, true) != none) {
-    }
-    while (free_[u] + free_[v] < 3)
-      if (search(v, u, none, true) == none) throw std::logic_error("pebble game: three pebbles could not be gathered on a bar");
     const int c = static_cast<int>(out.joints.size());
     std::vector<std::uint32_t> members{u, v};
     rigid_in[u] = rigid_in[v] = c;
-    queue.assign({u, v});
-    while (!queue.empty()) {
-      const std::uint32_t x = queue.front();
-      queue.pop_front();
-      for (std::size_t s = start[x]; s < start[x + 1]; ++s) {
-        const std::uint32_t y = inc[s].first;
-        if (rigid_in[y] == c || floppy_in[y] == c) continue;
-        if (free_[y] > 0 || search(y, u, v, false) != none) {
-          floppy_in[y] = c;  // y can move with the bar held: not in this cluster
-          continue;
+    blocked.push_back(0);
+    const auto join = [&](std::uint32_t x) {
+      // A joint that shares an earlier cluster with a member is not in this one: the two
+      // clusters would share two joints and be one.
+      for (int q : clusters_of[x])
+        if (!blocked[q]) {
+          blocked[q] = 1;
+          blocked_list.push_back(q);
         }
-        // No free pebble is reachable from y, nor from anything y reaches: all of them are
-        // rigid with respect to the bar.
-        for (std::uint32_t z : visited_) {
-          if (rigid_in[z] == c) continue;
-          rigid_in[z] = c;
-          members.push_back(z);
-          queue.push_back(z);
+    };
+    join(u);
+    join(v);
+
+    // A joint on a single bar hinges on it: the bar is a cluster by itself (no pebbles needed).
+    if (degree(u) > 1 && degree(v) > 1) {
+      const int shared = region_root(u) >= 0 && region_root(u) == region_root(v) ? region_root(u) : -1;
+      bool gathered = false;
+      queue.assign({u, v});
+      while (!queue.empty()) {
+        const std::uint32_t x = queue.front();
+        queue.pop_front();
+        for (std::size_t s = start[x]; s < start[x + 1]; ++s) {
+          const std::uint32_t y = inc[s].first;
+          if (rigid_in[y] == c || floppy_in[y] == c) continue;
+          bool in_earlier = false;
+          for (int q : clusters_of[y]) in_earlier = in_earlier || blocked[q];
+          if (in_earlier || degree(y) == 1) {
+            floppy_in[y] = c;
+            continue;
+          }
+          if (shared >= 0 && region_root(y) == shared) {  // u, v, y in one known rigid region
+            rigid_in[y] = c;
+            members.push_back(y);
+            join(y);
+            queue.push_back(y);
+            continue;
+          }
+          if (!gathered) {
+            // Three pebbles pinned on the bar stand for its rigid-body motions in the plane (two
+            // on u and one on v, or the reverse when u's search is blocked by v: the closed set
+            // reachable from u and v always holds at least three free pebbles).
+            while (free_[u] < 2 && search(u, v, none, true) != none) {
+            }
+            while (free_[u] + free_[v] < 3)
+              if (search(v, u, none, true) == none)
+                throw std::logic_error("pebble game: three pebbles could not be gathered on a bar");
+            gathered = true;
+          }
+          if (free_[y] > 0 || search(y, u, v, false) != none) {
+            floppy_in[y] = c;  // y can move with the bar held: not in this cluster
+            continue;
+          }
+          // No free pebble is reachable from y, nor from anything y reaches: all of them are
+          // rigid with respect to the bar.
+          for (std::uint32_t z : visited_) {
+            if (rigid_in[z] == c) continue;
+            rigid_in[z] = c;
+            members.push_back(z);
+            join(z);
+            queue.push_back(z);
+          }
         }
       }
     }
@@ -258,20 +354,33 @@ RigidClusters PebbleGame::rigid_clusters() {
           if (label != -1 && label != c) throw std::logic_error("pebble game: a bar lies in two rigid clusters");
           label = c;
         }
+    for (int q : blocked_list) blocked[q] = 0;
+    blocked_list.clear();
+    for (std::uint32_t x : members) clusters_of[x].push_back(c);
     std::sort(members.begin(), members.end());
     out.joints.push_back(std::move(members));
   }
 
+  // The clusters are the exact rigid regions now: record them (largest last, so that a pivot
+  // joint carries the label of its largest cluster) for later insertions.
+  forget_regions();
+  std::vector<int> by_size(out.joints.size());
+  std::iota(by_size.begin(), by_size.end(), 0);
+  std::stable_sort(by_size.begin(), by_size.end(),
+                   [&](int p, int q) { return out.joints[p].size() < out.joints[q].size(); });
+  for (int c : by_size)
+    if (out.joints[c].size() >= 3) record_region(out.joints[c]);
+
   // Canonical order, independent of the insertion history.
-  std::vector<int> order(out.joints.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int p, int q) { return out.joints[p] < out.joints[q]; });
-  std::vector<int> rank(order.size());
+  std::vector<int> canon(out.joints.size());
+  std::iota(canon.begin(), canon.end(), 0);
+  std::sort(canon.begin(), canon.end(), [&](int p, int q) { return out.joints[p] < out.joints[q]; });
+  std::vector<int> rank(canon.size());
   RigidClusters sorted;
-  sorted.joints.reserve(order.size());
-  for (std::size_t r = 0; r < order.size(); ++r) {
-    rank[order[r]] = static_cast<int>(r);
-    sorted.joints.push_back(std::move(out.joints[order[r]]));
+  sorted.joints.reserve(canon.size());
+  for (std::size_t r = 0; r < canon.size(); ++r) {
+    rank[canon[r]] = static_cast<int>(r);
+    sorted.joints.push_back(std::move(out.joints[canon[r]]));
   }
   sorted.of_bar.resize(m);
   for (std::size_t k = 0; k < m; ++k) sorted.of_bar[k] = rank[out.of_bar[k]];

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <istream>
 #include <ostream>
+#include <stdexcept>
 
 namespace budjam::tools {
 
@@ -42,6 +43,7 @@ RunLog::RunLog(fs::path run_dir, std::uint64_t seed, bool resuming) : dir_(std::
 }
 
 void RunLog::on_step_accepted(const StepAccepted& e) {
+  if (!steps_ || !divisions_) throw std::logic_error("run_log: logs not open (resumed without its checkpoint state)");
   const StateView& s = e.state;
   const bool above = s.phase == Phase::jammed && s.network;
   const ContactNetwork* n = s.network;
@@ -81,6 +83,17 @@ void RunLog::write_pack(const std::string& file, const StateView& s, const std::
     meta.set_number("Z", s.network->Z);
   }
   io::write_packing(dir_ / "packings" / file, *s.packing, meta);
+}
+
+void RunLog::on_unjammed(const Unjammed&) {
+  // The jamming point, the targets and φ_2 of the lost episode are void (summary.json drops
+  // them too); they are written again when reached in the next episode.
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir_ / "packings", ec)) {
+    const std::string f = entry.path().filename().string();
+    if (f == "jammed.pack" || f == "phi2.pack" || (f.rfind("target_", 0) == 0 && entry.path().extension() == ".pack"))
+      fs::remove(entry.path(), ec);
+  }
 }
 
 void RunLog::on_jammed(const Jammed& e) { write_pack("jammed.pack", e.state, "jammed", std::nullopt); }

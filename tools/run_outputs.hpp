@@ -23,6 +23,7 @@ class RunLog : public Observer {
   void on_step_accepted(const StepAccepted& e) override;
   void on_divided(const Divided& e) override;
   void on_jammed(const Jammed& e) override;
+  void on_unjammed(const Unjammed& e) override;
   void on_target_reached(const TargetReached& e) override;
   void on_depleted(const Depleted& e) override;
   void on_finished(const Finished& e) override;

@@ -9,7 +9,7 @@ namespace budjam {
 
 struct FireParams {
   double dt_start = 0.1;
-  double dt_max = 1.0;
+  double dt_max = 0.4;  // ≈ 2/3 of the stability limit 2/√λ_max (λ_max ≈ 11–13 in these packings)
   double dt_min = 1e-3;
   int n_delay = 5;
   double f_inc = 1.1;

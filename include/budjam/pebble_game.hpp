@@ -35,6 +35,7 @@ struct PebbleWork {
   std::size_t searches = 0;      // depth-first pebble searches started
   std::size_t visited = 0;       // joints discovered by those searches
   std::size_t bars_tested = 0;   // independence tests (insertions and re-tests)
+  std::size_t quick_rejections = 0;  // redundant bars recognised from known rigid regions, no search
 };
 
 // Invariant: free(v) + out_degree(v) = 2 at every joint, and the covered (independent) bars,
@@ -95,6 +96,15 @@ class PebbleGame {
   bool play(std::uint32_t a, std::uint32_t b);  // test + cover; true if independent
   void next_stamp();
 
+  // Known rigid regions, so that a bar inside one is rejected without a search. A failed gather
+  // leaves in visited_ a closed set holding 3 free pebbles: it spans 2|R| − 3 independent bars, a
+  // rigid region, and it stays rigid as bars are added. Regions sharing ≥ 2 joints are merged
+  // (union–find); a joint keeps the label of the last region recorded on it, so a lookup may miss
+  // (then the search decides) but never errs. Removing an independent bar forgets them all.
+  int region_root(std::uint32_t joint);
+  void record_region(const std::vector<std::uint32_t>& joints);
+  void forget_regions();
+
   Digraph g_;
   std::vector<std::uint8_t> free_;
   std::vector<Bar> bars_;
@@ -106,6 +116,8 @@ class PebbleGame {
   std::vector<std::uint32_t> pred_;
   std::vector<std::uint32_t> visited_;
   std::uint32_t now_ = 0;
+  std::vector<int> region_;         // per joint: a region id, −1 if none
+  std::vector<int> region_parent_;  // union–find over region ids
   PebbleWork work_;
 };
 

@@ -1,0 +1,300 @@
+// FIRE 2.0 minimiser: reaches its tolerance, relaxes unjammed packings to zero energy, returns
+// balanced forces, and classifies states at the jamming threshold E/N = 1e-16 reliably.
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+using namespace budjam;
+
+namespace {
+
+constexpr double kEpsilonU = 1e-16;  // MODEL.md's jamming threshold on E/N
+
+Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min = 0.01, double b_max = 1.02) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> b(n);
+  double area = 0;
+  for (auto& bi : b) {
+    bi = b_min + (b_max - b_min) * u(rng);
+    area += 0.25 * std::numbers::pi * (1 + bi * bi);
+  }
+  Packing p;
+  p.box.L = std::sqrt(area / phi);
+  for (std::size_t i = 0; i < n; ++i)
+    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), std::numbers::pi * (2 * u(rng) - 1), b[i], 0.002, -1);
+  return p;
+}
+
+// Largest generalised force component (θ as τ/r_g) recomputed from the contact list, i.e. not by
+// ForceField::evaluate: Σ f n and Σ (lever arm × f n) per cell.
+double contact_force_residual(const Packing& p) {
+  ForceField field;
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  const auto contacts = find_contacts(p, field.lobes(), field.neighbours());
+  Eigen::VectorXd G = Eigen::VectorXd::Zero(3 * p.size());
+  for (const Contact& c : contacts) {
+    const double f = c.force();
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t lobe = side == 0 ? c.i : c.j;
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const std::size_t cell = cell_of(lobe);
+      const Dumbbell d = p.dumbbell(cell);
+      const double l = is_bud(lobe) ? d.bud_offset : -d.mother_offset;
+      const double ox = l * std::cos(p.theta(cell)), oy = l * std::sin(p.theta(cell));
+      G[3 * cell] += sign * f * c.nx;
+      G[3 * cell + 1] += sign * f * c.ny;
+      G[3 * cell + 2] += sign * f * (ox * c.ny - oy * c.nx) / d.gyration;
+    }
+  }
+  return G.lpNorm<Eigen::Infinity>();
+}
+
+// Box and centroids rescaled affinely to packing fraction φ.
+Packing at_phi(const Packing& p, double phi) {
+  Packing q = p;
+  const double lambda = std::sqrt(p.packing_fraction() / phi);
+  q.box.L *= lambda;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    q.q[3 * i] *= lambda;
+    q.q[3 * i + 1] *= lambda;
+  }
+  return q;
+}
+
+double energy_per_cell(const Packing& p) {
+  ForceField field;
+  return field.energy(p) / static_cast<double>(p.size());
+}
+
+// Bisection in φ by affine decompression of a relaxed jammed packing, until the relaxed E/N lies in
+// [e_lo, e_hi] and the bracket is narrower than `width`. Returns the jammed end of the bracket and,
+// in `below`, the relaxed unjammed end.
+Packing near_jamming(Packing jammed, double e_lo, double e_hi, double width, Packing* below = nullptr) {
+  ForceField field;
+  double hi = jammed.packing_fraction(), lo = hi - 0.15;
+  Packing unjammed = at_phi(jammed, lo);
+  REQUIRE(minimise(unjammed, field).converged);
+  REQUIRE(energy_per_cell(unjammed) < kEpsilonU);
+  for (int k = 0; k < 80; ++k) {
+    const double e = energy_per_cell(jammed);
+    if (e >= e_lo && e <= e_hi && hi - lo < width) break;
+    const double mid = 0.5 * (lo + hi);
+    Packing trial = at_phi(jammed, mid);
+    const FireResult r = minimise(trial, field);
+    REQUIRE(r.converged);
+    if (r.energy / static_cast<double>(trial.size()) >= e_lo) {
+      hi = mid;
+      jammed = trial;
+    } else {
+      lo = mid;
+      unjammed = trial;
+    }
+  }
+  if (below) *below = unjammed;
+  return jammed;
+}
+
+}  // namespace
+
+TEST_CASE("FIRE reaches its force tolerance on a random overlapping packing", "[fast]") {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    Packing p = random_packing(100, 1.0, seed);
+    ForceField field;
+    const FireParams params;
+    const FireResult r = minimise(p, field, params);
+    INFO("seed " << seed << " iterations " << r.iterations);
+    CHECK(r.converged);
+    CHECK(r.max_force < params.force_tol);
+    CHECK(r.energy / 100 > 1e-4);  // φ = 1 is far above jamming: stopped by the force rule
+    CHECK(r.energy == Approx(ForceField().energy(p)).epsilon(1e-12));
+    // Independent recomputation of the residual from the contacts.
+    CHECK(contact_force_residual(p) < 1.5 * params.force_tol);
+    CHECK(r.iterations < 20000);
+  }
+}
+
+TEST_CASE("FIRE relaxes a dilute overlapping packing to E/N below 1e-20 quickly", "[fast]") {
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    Packing p = random_packing(60, 0.45, seed);
+    ForceField field;
+    const double U0 = field.energy(p);
+    REQUIRE(U0 > 1e-3);  // it starts with real overlaps
+    const FireResult r = minimise(p, field);
+    INFO("seed " << seed << " evaluations " << r.evaluations);
+    CHECK(r.converged);
+    CHECK(r.energy / 60 < 1e-20);
+    CHECK(energy_per_cell(p) < 1e-20);
+    CHECK(r.evaluations < 3000);
+  }
+}
+
+TEST_CASE("a relaxed jammed packing has balanced forces and torques on every cell", "[fast]") {
+  Packing p = random_packing(80, 0.95, 21);
+  ForceField field;
+  const FireResult r = minimise(p, field);
+  REQUIRE(r.converged);
+  CHECK(r.energy / 80 > 1e-8);
+  // Σ f n and Σ τ/r_g per cell, from the contacts, vanish to the tolerance, while single contact
+  // forces are many orders of magnitude larger.
+  const auto contacts = find_contacts(p, field.lobes(), field.neighbours());
+  double f_typical = 0;
+  for (const Contact& c : contacts) f_typical += c.force() / static_cast<double>(contacts.size());
+  CHECK(f_typical > 1e-4);
+  CHECK(contact_force_residual(p) < 1.5e-13);
+}
+
+TEST_CASE("FIRE counts its force evaluations and is deterministic", "[fast]") {
+  Packing a = random_packing(70, 0.9, 31), b = a;
+  ForceField fa, fb;
+  const FireResult ra = minimise(a, fa);
+  const FireResult rb = minimise(b, fb);
+  CHECK(ra.evaluations == fa.evaluations());
+  CHECK(ra.evaluations == ra.iterations + 1);
+  CHECK(ra.iterations == rb.iterations);
+  CHECK(a.q == b.q);  // bit for bit
+  // An already relaxed packing costs one evaluation.
+  const FireResult again = minimise(a, fa);
+  CHECK(again.converged);
+  CHECK(again.evaluations == 1);
+  CHECK(again.iterations == 0);
+}
+
+TEST_CASE("FIRE gives up after max_iterations and reports it", "[fast]") {
+  Packing p = random_packing(50, 1.0, 41);
+  ForceField field;
+  FireParams params;
+  params.max_iterations = 10;
+  const FireResult r = minimise(p, field, params);
+  CHECK_FALSE(r.converged);
+  CHECK(r.iterations == 10);
+  CHECK(r.max_force > params.force_tol);
+}
+
+TEST_CASE("centroids far outside the box are brought back by whole periods without changing U", "[fast]") {
+  Packing p = random_packing(40, 0.5, 51);
+  p.box.shear = 0.3;
+  Packing far = p;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double ky = static_cast<double>(static_cast<int>(i % 7) - 3) * 3;  // up to ±9 boxes in y
+    far.q[3 * i] += (static_cast<double>(i % 5) - 2) * 4 * p.box.L + ky * p.box.shear * p.box.L;
+    far.q[3 * i + 1] += ky * p.box.L;
+  }
+  CHECK(energy_per_cell(far) == Approx(energy_per_cell(p)).epsilon(1e-10));
+  ForceField field;
+  FireParams params;
+  params.max_iterations = 1;
+  minimise(far, field, params);
+  const double L = p.box.L;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    CHECK(far.x(i) >= -0.5 * L - 1);
+    CHECK(far.x(i) < 1.5 * L + 1);
+    CHECK(far.y(i) >= -0.5 * L - 1);
+    CHECK(far.y(i) < 1.5 * L + 1);
+  }
+}
+
+TEST_CASE("force resolution grows with the box: the tolerance stays reachable", "[fast]") {
+  Packing p = random_packing(10, 0.5, 61);
+  CHECK(force_resolution(p) < 1e-13);  // does not override the default tolerance in small boxes
+  p.box.L = 1e4;
+  CHECK(force_resolution(p) > 1e-12);
+}
+
+TEST_CASE("a packing just above jamming stays above the threshold; just below it relaxes fully", "[fast]") {
+  // Jammed state with ε_U < E/N < 10 ε_U, by bisection of an affine decompression.
+  Packing start = random_packing(40, 0.92, 71);
+  ForceField field;
+  REQUIRE(minimise(start, field).converged);
+  Packing below;
+  const Packing jam = near_jamming(start, 1.5 * kEpsilonU, 10 * kEpsilonU, 1.0, &below);
+  const double e = energy_per_cell(jam);
+  REQUIRE(e >= 1.5 * kEpsilonU);
+  REQUIRE(e <= 10 * kEpsilonU);
+  INFO("E/N at the jammed state " << e << ", phi " << jam.packing_fraction());
+
+  // (1) Relaxing further with a much tighter tolerance changes E by a negligible amount: the
+  //     stopping rule had resolved the energy.
+  Packing tight = jam;
+  FireParams strict;
+  strict.force_tol = 1e-30;  // i.e. down to force_resolution()
+  strict.max_iterations = 200000;
+  minimise(tight, field, strict);
+  CHECK(energy_per_cell(tight) == Approx(e).epsilon(1e-6));
+
+  // (2) Perturbed far below the overlaps (~1e-8) and relaxed again with the defaults: same energy,
+  //     never reported below the threshold.
+  std::mt19937_64 rng(72);
+  std::normal_distribution<double> g(0.0, 1e-11);
+  for (int k = 0; k < 3; ++k) {
+    Packing q = jam;
+    for (Eigen::Index c = 0; c < q.q.size(); ++c) q.q[c] += g(rng);
+    const FireResult r = minimise(q, field);
+    CHECK(r.converged);
+    CHECK(r.energy / 40 >= kEpsilonU);
+    CHECK(r.energy / 40 == Approx(e).epsilon(1e-5));
+  }
+
+  // (3) The unjammed end of the bracket was proven unjammed (E/N below the floor).
+  CHECK(energy_per_cell(below) < 1e-20);
+  CHECK(below.packing_fraction() < jam.packing_fraction());
+}
+
+TEST_CASE("packing 1e-9 above jamming: FIRE converges and agrees with a tighter minimisation", "[.hard]") {
+  Packing start = random_packing(40, 0.92, 81);
+  ForceField field;
+  REQUIRE(minimise(start, field).converged);
+  // Jammed end of a bracket of width 1e-9 in φ (any positive E/N counts as jammed here).
+  const Packing jam = near_jamming(start, 1e-30, 1e-12, 1e-9);
+  const double e = energy_per_cell(jam);
+  INFO("E/N " << e);
+  CHECK(e > 0);
+  Packing tight = jam;
+  FireParams strict;
+  strict.force_tol = 1e-30;
+  strict.max_iterations = 200000;
+  const FireResult r = minimise(tight, field, strict);
+  CHECK(std::isfinite(r.energy));
+  // The classification against ε_U cannot change by relaxing further.
+  CHECK((energy_per_cell(tight) < kEpsilonU) == (e < kEpsilonU));
+  CHECK(energy_per_cell(tight) <= e * (1 + 1e-6));
+}
+
+TEST_CASE("cells crossing the periodic boundary during minimisation relax as a shifted copy does", "[.hard]") {
+  // A cluster of overlapping cells around the corner of the box: relaxing pushes centroids across
+  // both boundaries. The same cluster shifted into the middle of the box must give the same
+  // relative configuration.
+  std::mt19937_64 rng(91);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Packing corner;
+  corner.box = {12.0, 0.0};
+  for (int i = 0; i < 8; ++i)
+    corner.add_cell(0.6 * u(rng), 0.6 * u(rng), 3 * u(rng), 0.5 + 0.5 * u(rng), 0.002, -1);
+  Packing middle = corner;
+  for (std::size_t i = 0; i < middle.size(); ++i) {
+    middle.q[3 * i] += 6.0;
+    middle.q[3 * i + 1] += 6.0;
+  }
+  const Packing before = corner;
+  ForceField fc, fm;
+  const FireResult rc = minimise(corner, fc);
+  const FireResult rm = minimise(middle, fm);
+  CHECK(rc.converged);
+  CHECK(rm.converged);
+  CHECK(rc.energy / 8 < 1e-20);
+  CHECK(rm.energy / 8 < 1e-20);
+  int crossed = 0;
+  for (std::size_t i = 0; i < corner.size(); ++i) {
+    crossed += (before.x(i) < 0) != (corner.x(i) < 0) || (before.y(i) < 0) != (corner.y(i) < 0);
+    CHECK(std::abs(corner.x(i) - (middle.x(i) - 6.0)) < 1e-6);
+    CHECK(std::abs(corner.y(i) - (middle.y(i) - 6.0)) < 1e-6);
+    CHECK(std::abs(corner.theta(i) - middle.theta(i)) < 1e-6);
+  }
+  CHECK(crossed > 0);
+}

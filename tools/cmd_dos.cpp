@@ -1,0 +1,96 @@
+// `budjam dos PACKING [--method auto|dense|arpack] [--modes K] [--tol T] [--ncv M] [--sigma S]
+//                     [--lambda-tol T] [--bins B] [--dense-max-dof D] [--no-pebble] [--out BASE] [--quiet]`
+// Vibrational spectrum of a relaxed packing (docs/spectrum.md): writes BASE.dos.csv (eigenvalues,
+// frequencies, participation ratios) and BASE.dos.json (N_zero at four cutoffs, ω*, N_u from the
+// contact network, floppy modes from the pebble game, D(ω), the method used). BASE defaults to the
+// packing path without ".pack", so a run's packings/<name>.dos.json is found by `budjam analyse`.
+#include "command.hpp"
+#include "dos_report.hpp"
+#include "run_data.hpp"
+
+#include "budjam/scene.hpp"
+#include "io/packing_file.hpp"
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace budjam;
+
+struct Options {
+  std::string packing;
+  std::string method = "auto";
+  int modes = 0;
+  double tol = 0.0;
+  int ncv = 0;
+  double sigma = -1e-3;
+  double lambda_tol = 1e-6;
+  std::size_t bins = 50;
+  std::size_t dense_max_dof = SpectrumOptions{}.dense_max_dof;
+  bool no_pebble = false;
+  std::string out;
+  bool quiet = false;
+};
+
+void run(const Options& o) {
+  tools::DosRequest req;
+  req.spectrum.method = parse_spectrum_method(o.method, "--method");
+  if (o.modes < 0) throw InputError("--modes: must be ≥ 0 (0 = as many as ω* needs), got " + std::to_string(o.modes));
+  if (o.tol < 0) throw InputError("--tol: must be ≥ 0 (0 = machine precision)");
+  if (o.ncv < 0) throw InputError("--ncv: must be ≥ 0 (0 = automatic)");
+  if (!(o.sigma < 0)) throw InputError("--sigma: must be negative (the shift must lie below the zero modes)");
+  if (!(o.lambda_tol > 0)) throw InputError("--lambda-tol: must be positive");
+  if (o.bins == 0) throw InputError("--bins: must be positive");
+  req.spectrum.modes = o.modes;
+  req.spectrum.tol = o.tol;
+  req.spectrum.ncv = o.ncv;
+  req.spectrum.sigma = o.sigma;
+  req.spectrum.dense_max_dof = o.dense_max_dof;
+  req.rule.lambda_tol = o.lambda_tol;
+  req.bins = o.bins;
+  req.pebble_game = !o.no_pebble;
+
+  const io::PackingFile f = io::read_packing(o.packing);
+  const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
+  if (o.ncv > 0 && o.modes > 0 && o.ncv <= o.modes)
+    throw InputError("--ncv: must exceed --modes (got " + std::to_string(o.ncv) + " ≤ " + std::to_string(o.modes) + ")");
+  const std::size_t n_dof = pc.network.N_nr > 0 ? 3 * pc.network.N_nr - 2 : 0;
+  if (req.spectrum.method == SpectrumMethod::arpack && o.modes > 0 && static_cast<std::size_t>(o.modes) >= n_dof)
+    throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) +
+                     " ≥ " + std::to_string(n_dof) + "); use --method dense");
+
+  const tools::DosReport report = tools::dos_report(f.packing, pc.contacts, pc.network, req);
+  fs::path base = o.out.empty() ? fs::path(o.packing) : fs::path(o.out);
+  if (o.out.empty() && base.extension() == ".pack") base.replace_extension();
+  const auto files = tools::write_dos_files(base, report, req);
+  if (!o.quiet) std::cout << tools::dos_line(report) << " -> " << files[0].string() << ", " << files[1].string() << "\n";
+}
+
+const bool registered = budjam::cli::register_command(
+    {"dos", "Vibrational spectrum of a packing: eigenvalues (CSV) and N_zero, ω*, N_u, floppy modes (JSON)",
+     [](CLI::App& sub) {
+       auto o = std::make_shared<Options>();
+       sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
+       sub.add_option("--method", o->method, "auto (dense up to --dense-max-dof modes, else ARPACK), dense, arpack")
+           ->capture_default_str();
+       sub.add_option("--modes", o->modes, "ARPACK: lowest K modes; 0 = as many as ω* needs (N_u + n_band + 16)")
+           ->capture_default_str();
+       sub.add_option("--tol", o->tol, "ARPACK relative residual tolerance; 0 = machine precision")
+           ->capture_default_str();
+       sub.add_option("--ncv", o->ncv, "ARPACK Lanczos vectors; 0 = max(2K+1, K+20)")->capture_default_str();
+       sub.add_option("--sigma", o->sigma, "ARPACK shift (k/m), negative")->capture_default_str();
+       sub.add_option("--lambda-tol", o->lambda_tol, "quasi-zero cutoff on λ = ω²")->capture_default_str();
+       sub.add_option("--bins", o->bins, "D(ω) histogram bins")->capture_default_str();
+       sub.add_option("--dense-max-dof", o->dense_max_dof, "auto: largest problem solved densely")
+           ->capture_default_str();
+       sub.add_flag("--no-pebble", o->no_pebble, "skip the pebble-game count of floppy modes");
+       sub.add_option("--out", o->out, "output base: BASE.dos.json, BASE.dos.csv (default: PACKING without .pack)");
+       sub.add_flag("--quiet", o->quiet, "no summary line on stdout");
+       sub.callback([o] { run(*o); });
+     }});
+
+}  // namespace

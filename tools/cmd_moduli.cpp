@@ -1,0 +1,208 @@
+// `budjam moduli PACKING [--check] [--strain H] [--relax] [--timing]`
+// Non-affine linear elastic response of a relaxed packing as JSON on stdout (docs/moduli.md).
+// --check adds the independent finite-strain measurement (Lees–Edwards shear and isotropic
+// rescaling relaxed by FIRE) and the relative differences.
+#include "command.hpp"
+
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+#include "budjam/moduli.hpp"
+#include "budjam/strain.hpp"
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace {
+
+using namespace budjam;
+using io::Json;
+using io::number_or_null;
+
+struct Options {
+  std::string packing;
+  bool check = false;
+  double strain = 0;  // 0: automatic
+  bool relax = false;
+  bool timing = false;
+};
+
+FireParams check_fire() {
+  FireParams f;
+  f.dt_max = 0.4;       // stable for the stiffest lobe contacts (docs/growth.md, "Speed")
+  f.force_tol = 1e-14;  // floored by FIRE at its force resolution
+  return f;
+}
+
+Json moduli_json(const Moduli& m) {
+  return Json{{"B", number_or_null(m.B)},
+              {"G_simple", number_or_null(m.G_simple)},
+              {"G_pure", number_or_null(m.G_pure)},
+              {"G_mean", number_or_null(m.G_mean)}};
+}
+
+Json tensor_json(const Eigen::Matrix3d& C) {
+  return Json{{"C_xxxx", number_or_null(C(0, 0))}, {"C_yyyy", number_or_null(C(1, 1))},
+              {"C_xxyy", number_or_null(C(0, 1))}, {"C_xyxy", number_or_null(C(2, 2))},
+              {"C_xxxy", number_or_null(C(0, 2))}, {"C_yyxy", number_or_null(C(1, 2))}};
+}
+
+Json stress_json(const Eigen::Matrix2d& S) {
+  return Json{{"xx", number_or_null(S(0, 0))}, {"xy", number_or_null(S(0, 1))},
+              {"yx", number_or_null(S(1, 0))}, {"yy", number_or_null(S(1, 1))}};
+}
+
+Json matrix_json(const Response4& R) {
+  Json rows = Json::array();
+  for (int r = 0; r < 4; ++r) {
+    Json row = Json::array();
+    for (int c = 0; c < 4; ++c) row.push_back(number_or_null(R(r, c)));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+Json response_json(const ElasticResponse& e) {
+  Json j;
+  // Headline: MODEL.md's finite-strain definitions (contact-virial stress), G by Lees–Edwards shear.
+  j["B"] = number_or_null(e.moduli.B);
+  j["G"] = number_or_null(e.moduli.G_simple);
+  j["B_ext_mean_field"] = number_or_null(e.B_ext);
+  j["G_mean_field"] = number_or_null(e.G_mf);
+  j["N"] = e.N;
+  j["N_nr"] = e.N_nr;
+  j["N_f"] = e.N_f;
+  j["N_u"] = e.N_u;
+  j["N_u_buds"] = e.N_u_buds;
+  j["contacts"] = e.contacts;
+  j["L"] = e.L;
+  j["phi"] = e.phi;
+  j["Z"] = e.Z;
+  j["Z_iso"] = e.Z_iso;
+  j["dZ"] = e.dZ;
+  j["u"] = e.u;
+  j["u_buds"] = e.u_buds;
+  j["n"] = e.n;
+  j["P"] = e.P;
+  j["P_energy"] = e.P_energy;
+  j["stress"] = stress_json(e.stress);
+  j["stress_energy"] = stress_json(e.stress_energy);
+  j["moduli"] = moduli_json(e.moduli);
+  j["moduli_affine"] = moduli_json(e.moduli_affine);
+  j["moduli_energy"] = moduli_json(e.moduli_energy);
+  j["moduli_energy_affine"] = moduli_json(e.moduli_energy_affine);
+  j["elastic_tensor"] = tensor_json(e.C);
+  j["elastic_tensor_affine"] = tensor_json(e.C_affine);
+  j["response"] = Json{{"order", Json::array({"xx", "xy", "yx", "yy"})},
+                       {"dS_de", matrix_json(e.R)},
+                       {"dS_de_affine", matrix_json(e.R_affine)},
+                       {"dtau_de", matrix_json(e.R_energy)},
+                       {"E", matrix_json(e.E)},
+                       {"E_affine", matrix_json(e.E_affine)}};
+  j["mean_field"] = Json{{"ell_c", number_or_null(e.ell_c)},
+                         {"ell_c2_mean", number_or_null(e.ell_c2_mean)},
+                         {"M4", number_or_null(e.M4)},
+                         {"B_ext", number_or_null(e.B_ext)},
+                         {"G", number_or_null(e.G_mf)},
+                         {"G_M4_isotropic", number_or_null(e.G_mf_iso)}};
+  const KernelTreatment& k = e.kernel;
+  j["kernel"] = Json{{"method", k.method},
+                     {"dofs", k.dofs},
+                     {"pinned_translation", k.pinned_translation},
+                     {"pinned_lobe_rotation", k.pinned_lobe_rotation},
+                     {"pinned_zero_rows", k.pinned_zero_rows},
+                     {"reference_cell", k.reference_cell},
+                     {"cholesky_failed_column", k.cholesky_failed_column},
+                     {"regularisation", k.regularisation},
+                     {"refinement_steps", k.refinement_steps},
+                     {"residual", number_or_null(k.residual)},
+                     {"kernel_component", number_or_null(k.kernel_component)},
+                     {"rcond", number_or_null(k.rcond)},
+                     {"well_posed", k.well_posed}};
+  j["conventions"] =
+      "strain e_ab = du_a/dx_b of box and centroids (orientations fixed), cells relaxed; S = contact-virial "
+      "stress of MODEL.md, tau = energy stress (centroid virial); B = -A dP/dA, G_simple = dS_xy/dgamma "
+      "(Lees-Edwards), G_pure = d[(S_xx-S_yy)/2]/dgamma for e = diag(gamma/2, -gamma/2); C = stiffness of the "
+      "Lagrangian strain from the energy expansion; docs/moduli.md";
+  return j;
+}
+
+// Strain step for the finite-strain check: well inside the smallest load-bearing overlap so the
+// contact network survives (MODEL.md: the reference fits only steps that keep the network).
+double automatic_strain(const std::vector<Contact>& lb) {
+  double smallest = 1e300;
+  for (const auto& c : lb) smallest = std::min(smallest, c.overlap());
+  return std::clamp(0.01 * smallest, 1e-10, 1e-6);
+}
+
+Json sweep_json(const StrainSweep& s, double linear, double linear_energy, double h) {
+  Json j;
+  j["strain_step"] = h;
+  j["samples"] = s.samples.size();
+  j["used"] = s.used;
+  j["all_converged"] = s.all_converged;
+  j["finite"] = number_or_null(s.modulus);
+  j["linear"] = number_or_null(linear);
+  j["relative_difference"] = number_or_null(std::abs(s.modulus - linear) / std::abs(linear));
+  j["finite_energy"] = number_or_null(s.modulus_energy);
+  j["linear_energy"] = number_or_null(linear_energy);
+  j["relative_difference_energy"] = number_or_null(std::abs(s.modulus_energy - linear_energy) / std::abs(linear_energy));
+  Json rows = Json::array();
+  for (const auto& x : s.samples)
+    rows.push_back(Json{{"strain", x.strain}, {"P", x.P}, {"S_xy", x.stress(0, 1)}, {"U", x.U},
+                        {"same_contacts", x.same_contacts}, {"fire_iterations", x.fire.iterations}});
+  j["points"] = rows;
+  return j;
+}
+
+void run(const Options& o) {
+  io::PackingFile file = io::read_packing(o.packing);
+  Packing& p = file.packing;
+  ForceField field;
+  if (o.relax) minimise(p, field, check_fire());
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  const std::vector<Contact> contacts = find_contacts(p, field.lobes(), field.neighbours());
+  const ContactNetwork net = analyse_network(p.size(), contacts);
+  const ElasticResponse e = elastic_response(p, contacts, net);
+  Json j;
+  j["file"] = o.packing;
+  for (auto& [k, v] : response_json(e).items()) j[k] = v;
+  if (o.check) {
+    const double h = o.strain > 0 ? o.strain : automatic_strain(load_bearing(contacts, net));
+    const auto strains = symmetric_strains(h, 2);
+    const StrainSweep shear = strain_sweep(p, StrainKind::simple_shear, strains, check_fire());
+    const StrainSweep iso = strain_sweep(p, StrainKind::isotropic, strains, check_fire());
+    Json c;
+    c["simple_shear_G"] = sweep_json(shear, e.moduli.G_simple, e.moduli_energy.G_simple, h);
+    c["isotropic_B"] = sweep_json(iso, e.moduli.B, e.moduli_energy.B, h);
+    const auto within = [](const StrainSweep& s, double lin) {
+      return s.used >= 3 && std::abs(s.modulus - lin) <= 0.01 * std::abs(lin);
+    };
+    c["agree_within_1_percent"] = within(shear, e.moduli.G_simple) && within(iso, e.moduli.B);
+    j["check"] = c;
+  }
+  if (o.timing) j["seconds"] = e.seconds;
+  std::cout << io::json_text(j);
+}
+
+const bool registered = budjam::cli::register_command(
+    {"moduli", "Elastic moduli (B, G, C_ijkl) of a relaxed packing by non-affine linear response", [](CLI::App& sub) {
+       auto o = std::make_shared<Options>();
+       sub.add_option("PACKING", o->packing, "packing file (.pack), relaxed")->required();
+       sub.add_flag("--check", o->check,
+                    "also measure G and B by finite Lees-Edwards shear and isotropic rescaling with FIRE");
+       sub.add_option("--strain", o->strain, "strain step of --check (default: 1% of the smallest overlap, in [1e-10, 1e-6])")
+           ->check(CLI::PositiveNumber);
+       sub.add_flag("--relax", o->relax, "FIRE-minimise the packing first");
+       sub.add_flag("--timing", o->timing, "add the computation time (seconds; not deterministic)");
+       sub.callback([o] { run(*o); });
+     }});
+
+}  // namespace

@@ -1,0 +1,97 @@
+// Growth-run observer "dos" (scene [observe.dos]): the vibrational spectrum at jamming, at φ_2,
+// at each target and/or every k accepted steps above jamming (docs/spectrum.md, "In a run").
+//   packings/jammed.dos.{json,csv}, packings/phi2.dos.*, packings/target_<k>.dos.*  beside the
+//       packings RunLog writes (so `budjam analyse` finds them as sidecars)
+//   spectra/step_<n>.dos.{json,csv}  for `every`
+//   dos.csv  one row per spectrum (resumable log)
+// Defaults of `budjam dos`: automatic method, as many modes as ω* needs.
+#include "dos_report.hpp"
+#include "observers.hpp"
+
+#include "io/atomic_file.hpp"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace budjam;
+
+const std::vector<std::string> kColumns{"episode",  "step",      "kind",    "dphi",  "phi",          "N",
+                                        "N_nr",     "method",    "n_dof",   "computed", "N_zero",    "N_u",
+                                        "N_u_buds", "floppy_modes", "omega_star", "Z",  "dZ"};
+
+class DosObserver : public Observer {
+ public:
+  DosObserver(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.dos), dir_(std::move(dir)) {
+    if (!resuming) log_.emplace(dir_ / "dos.csv", kColumns);
+  }
+  std::string name() const override { return "dos"; }
+  Needs needs() const override {
+    Needs n;
+    n.contacts = n.network = schedule_.every > 0;
+    return n;
+  }
+
+  void on_jammed(const Jammed& e) override {
+    if (schedule_.at_jamming) record(e.state, "jammed", "packings/jammed", std::nullopt);
+  }
+  void on_depleted(const Depleted& e) override {
+    if (schedule_.at_phi2) record(e.state, "phi2", "packings/phi2", std::nullopt);
+  }
+  void on_target_reached(const TargetReached& e) override {
+    if (schedule_.at_targets)
+      record(e.state, "target", "packings/target_" + std::to_string(e.target.index), e.target.dphi);
+  }
+  void on_step_accepted(const StepAccepted& e) override {
+    const StateView& s = e.state;
+    if (schedule_.every <= 0 || s.phase != Phase::jammed || s.jamming == nullptr) return;
+    const long since = s.step - s.jamming->step;
+    if (since <= 0 || since % schedule_.every != 0) return;
+    record(s, "step", "spectra/step_" + std::to_string(s.step), std::nullopt);
+  }
+  void on_finished(const Finished&) override { log_->finish(); }
+  void on_failed(const Failed&) override { log_->finish(); }
+  void save_state(std::ostream& os) override {
+    log_->sync();
+    os << log_->bytes() << '\n';
+  }
+  void load_state(std::istream& is) override {
+    std::uint64_t bytes = 0;
+    if (!(is >> bytes)) throw InputError("checkpoint: bad dos state");
+    log_.emplace(io::CsvLog::resume(dir_ / "dos.csv", kColumns, bytes));
+  }
+
+ private:
+  void record(const StateView& s, const std::string& kind, const std::string& base, std::optional<double> dphi) {
+    if (s.contacts == nullptr || s.network == nullptr)
+      throw std::logic_error("dos observer: the driver gave no contact network at a " + kind + " state");
+    if (s.network->N_nr == 0) return;  // no non-rattler: nothing vibrates
+    const tools::DosReport r = tools::dos_report(*s.packing, *s.contacts, *s.network, request_);
+    const fs::path b = dir_ / base;
+    fs::create_directories(b.parent_path());
+    tools::write_dos_files(b, r, request_);
+    const auto& m = r.result.summary;
+    log_->row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
+               dphi ? io::CsvField(*dphi) : io::CsvField::missing(), s.phi, s.packing->size(), r.network.N_nr,
+               to_string(m.method), m.n_dof, m.computed, m.N_zero, r.network.N_u, r.network.N_u_buds,
+               r.has_rigidity ? io::CsvField(r.rigidity.floppy_plane) : io::CsvField::missing(),
+               m.band.available ? io::CsvField(m.band.omega_star) : io::CsvField::missing(), r.network.Z,
+               r.network.dZ});
+  }
+
+  Schedule schedule_;
+  fs::path dir_;
+  tools::DosRequest request_;
+  std::optional<io::CsvLog> log_;
+};
+
+const tools::ObserverRegistration registration{
+    "dos", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (!c.scene.dos.any()) return nullptr;
+      return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
+    }};
+
+}  // namespace
