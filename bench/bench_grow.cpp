@@ -53,7 +53,6 @@ void step_cost(double L) {
   Scene s;
   s.L = L;
   s.P0 = 1e-3;
-  s.fire.dt_max = 0.4;
   s.init = InitialState::random_seeds;
   s.n_seeds = static_cast<std::size_t>(0.35 * L * L / (0.25 * std::numbers::pi * s.alpha0 * s.alpha0));
   Rng rng(1);

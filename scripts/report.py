@@ -170,8 +170,10 @@ def main():
         f"Preset **{a.preset}** (main system size L = {L:g}); written by `make -f Makefile.analysis PRESET={a.preset} report` "
         f"on {datetime.date.today().isoformat()} from `budjam analyse` output ({a.tables}).",
         "",
-        f"Runs: {inp['finished']} finished of {inp['runs']}; failed: {len(inp['failed'])}"
-        + (" (" + "; ".join(inp["failed"]) + ")" if inp["failed"] else "") + ". "
+        f"Runs: {inp['used']} of {inp['runs']} reached jamming and are used; "
+        f"{len(inp['not_finished'])} stopped before their last target"
+        + (" (" + "; ".join(inp["not_finished"]) + ": their recorded states are used)" if inp["not_finished"] else "")
+        + ". "
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
         f"resamples, seed {A['bootstrap']['seed']}.",
         "",

@@ -174,7 +174,8 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
   // Kernel: pin the two translations on the best-connected cell, the θ of every cell with
   // exactly one contact-free lobe, and any dof with an exactly zero Hessian row.
   std::vector<bool> pinned(static_cast<std::size_t>(nr), false);
-  std::vector<Eigen::VectorXd> kernel_vectors;
+  // Exact kernel vectors of H, sparse: (dof, value) lists (translations are dense but only two).
+  std::vector<std::vector<std::pair<Eigen::Index, double>>> kernel_vectors;
   {
     std::size_t ref = 0;
     int best = -1;
@@ -189,13 +190,13 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
     out.kernel.reference_cell = map.cells[ref];
     pinned[3 * ref] = pinned[3 * ref + 1] = true;
     out.kernel.pinned_translation = 2;
-    Eigen::VectorXd tx = Eigen::VectorXd::Zero(nr), ty = tx;
+    std::vector<std::pair<Eigen::Index, double>> tx, ty;
     for (Eigen::Index k = 0; k < nr; k += 3) {
-      tx[k] = 1;
-      ty[k + 1] = 1;
+      tx.emplace_back(k, 1.0);
+      ty.emplace_back(k + 1, 1.0);
     }
-    kernel_vectors.push_back(tx);
-    kernel_vectors.push_back(ty);
+    kernel_vectors.push_back(std::move(tx));
+    kernel_vectors.push_back(std::move(ty));
   }
   for (std::size_t k = 0; k < map.cells.size(); ++k) {
     const std::size_t i = map.cells[k];
@@ -204,11 +205,8 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
     // Rotation about the centre of the loaded lobe ℓ: δX = −s_ℓ ê⊥ δθ leaves every contact unchanged.
     const double s = lobe_offset(p, m > 0 ? mother_lobe(i) : bud_lobe(i));
     const double th = p.theta(i);
-    Eigen::VectorXd v = Eigen::VectorXd::Zero(nr);
-    v[3 * k] = s * std::sin(th);
-    v[3 * k + 1] = -s * std::cos(th);
-    v[3 * k + 2] = 1.0;
-    kernel_vectors.push_back(v);
+    const auto b3 = static_cast<Eigen::Index>(3 * k);
+    kernel_vectors.push_back({{b3, s * std::sin(th)}, {b3 + 1, -s * std::cos(th)}, {b3 + 2, 1.0}});
     if (!pinned[3 * k + 2]) {
       pinned[3 * k + 2] = true;
       ++out.kernel.pinned_lobe_rotation;
@@ -223,16 +221,21 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
       if (!nonzero[k] && !pinned[k]) {
         pinned[k] = true;
         ++out.kernel.pinned_zero_rows;
-        Eigen::VectorXd v = Eigen::VectorXd::Zero(nr);
-        v[k] = 1;
-        kernel_vectors.push_back(v);
+        kernel_vectors.push_back({{k, 1.0}});
       }
   }
-  for (const auto& v : kernel_vectors)
-    for (int col = 0; col < 4; ++col) {
-      const double xn = Xi.col(col).norm();
-      if (xn > 0) out.kernel.kernel_component = std::max(out.kernel.kernel_component, std::abs(v.dot(Xi.col(col))) / (v.norm() * xn));
+  for (int col = 0; col < 4; ++col) {
+    const double xn = Xi.col(col).norm();
+    if (xn == 0) continue;
+    for (const auto& v : kernel_vectors) {
+      double dot = 0, vv = 0;
+      for (const auto& [k, a] : v) {
+        dot += a * Xi(k, col);
+        vv += a * a;
+      }
+      out.kernel.kernel_component = std::max(out.kernel.kernel_component, std::abs(dot) / (std::sqrt(vv) * xn));
     }
+  }
 
   std::vector<long> free_index(static_cast<std::size_t>(nr), -1);
   long nf = 0;

@@ -67,7 +67,7 @@ Result grow(const std::string& args) {
 fs::path small_scene(const std::string& name, const std::string& extra = "") {
   const fs::path p = work_dir() / (name + ".toml");
   std::ofstream(p) << "[run]\nname = \"" << name << "\"\nseed = 3\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
-                   << "[jamming]\ntargets = [1e-3, 1e-2]\n[minimiser]\ndt_max = 0.4\n" << extra;
+                   << "[jamming]\ntargets = [1e-3, 1e-2]\n" << extra;
   return p;
 }
 

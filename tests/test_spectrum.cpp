@@ -7,14 +7,24 @@
 #include "budjam/scene.hpp"
 #include "compressed_packing.hpp"
 
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <random>
+#include <sstream>
 
 using namespace budjam;
 
@@ -498,4 +508,149 @@ TEST_CASE("shift-invert finds a negative eigenvalue by lowering the shift, and r
   } catch (const std::runtime_error& e) {
     CHECK(std::string(e.what()).find("not positive definite") != std::string::npos);
   }
+}
+
+// ---- `budjam dos` and the growth-run observer ------------------------------------------------
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path work_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("budjam-spectrum-" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct Exit {
+  int code = -1;
+  std::string out, err;
+};
+
+Exit budjam(const std::string& args) {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
+  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  return {WEXITSTATUS(status), slurp(out), slurp(err)};
+}
+
+fs::path scene(const std::string& name) {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  return fs::path(src) / "data" / "scenes" / name;
+}
+
+// The demo scene grown with the DOS observer at jamming, the targets and φ_2.
+fs::path grown_demo(std::uint64_t seed) {
+  const fs::path dir = work_dir() / ("demo-" + std::to_string(seed));
+  if (!fs::exists(dir / "summary.json")) {
+    const Exit r = budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
+                          " --out '" + dir.string() +
+                          "' --set observe.dos.at_jamming=true --set observe.dos.at_targets=true"
+                          " --set observe.dos.at_phi2=true --set jamming.continue_to_phi2=true");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+  }
+  return dir;
+}
+
+std::vector<double> csv_column(const fs::path& file, const std::string& column) {
+  std::istringstream in(slurp(file));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> head;
+  {
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) head.push_back(c);
+  }
+  const auto at = std::find(head.begin(), head.end(), column) - head.begin();
+  REQUIRE(at < static_cast<long>(head.size()));
+  std::vector<double> v;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string c;
+    for (long k = 0; k <= at; ++k) std::getline(ss, c, ',');
+    v.push_back(c.empty() ? std::numeric_limits<double>::quiet_NaN() : std::stod(c));
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("on grown packings N_zero, the pebble game's floppy modes and N_u agree at jamming, targets and phi_2",
+          "[spectrum][cli]") {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const fs::path dir = grown_demo(seed);
+    const fs::path log = dir / "dos.csv";
+    REQUIRE(fs::exists(log));
+    const auto N_zero = csv_column(log, "N_zero"), floppy = csv_column(log, "floppy_modes"),
+               N_u = csv_column(log, "N_u"), omega = csv_column(log, "omega_star");
+    REQUIRE(N_zero.size() >= 3);  // jamming, two targets (and φ_2 if reached)
+    for (std::size_t r = 0; r < N_zero.size(); ++r) {
+      INFO("seed " << seed << ", row " << r);
+      CHECK(N_zero[r] == floppy[r]);
+      CHECK(N_zero[r] >= N_u[r]);
+      CHECK(N_zero[r] <= N_u[r] + 2);
+      CHECK(omega[r] > 0);
+    }
+    // The sidecar beside the jammed packing carries the same numbers, for `budjam analyse`.
+    const io::Json j = io::read_json(dir / "packings" / "jammed.dos.json");
+    CHECK(j["N_zero"].get<double>() == N_zero[0]);
+    CHECK(j["N_u"].get<double>() == N_u[0]);
+    CHECK(j["omega_star"].is_number());
+  }
+}
+
+TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agrees with dense", "[spectrum][cli]") {
+  const fs::path dir = grown_demo(1);
+  const fs::path pack = dir / "packings" / "target_1.pack";
+  const fs::path base = work_dir() / "t1";
+  Exit r = budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("dos: dense") != std::string::npos);
+  CHECK(slurp(base.string() + ".dos.json") == slurp(dir / "packings" / "target_1.dos.json"));
+  CHECK(slurp(base.string() + ".dos.csv") == slurp(dir / "packings" / "target_1.dos.csv"));
+
+  const fs::path lb = work_dir() / "t1-arpack";
+  r = budjam("dos '" + pack.string() + "' --method arpack --modes 30 --out '" + lb.string() + "' --quiet");
+  REQUIRE(r.code == 0);
+  const io::Json j = io::read_json(lb.string() + ".dos.json");
+  CHECK(j["method"] == "arpack");
+  CHECK(j["modes_computed"] == 30);
+  const auto dense = csv_column(base.string() + ".dos.csv", "lambda");
+  const auto lanczos = csv_column(lb.string() + ".dos.csv", "lambda");
+  REQUIRE(lanczos.size() == 30);
+  for (std::size_t k = 0; k < 30; ++k) {
+    if (dense[k] > 1e-6) CHECK(std::abs(lanczos[k] - dense[k]) <= 1e-8 * dense[k]);
+    else CHECK(std::abs(lanczos[k]) < 1e-10);
+  }
+}
+
+TEST_CASE("budjam dos refuses bad options with one line naming the option", "[spectrum][cli]") {
+  const fs::path pack = grown_demo(1) / "packings" / "jammed.pack";
+  Exit r = budjam("dos '" + pack.string() + "' --method lanczos");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("--method") != std::string::npos);
+  r = budjam("dos '" + pack.string() + "' --method arpack --modes 100000");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("--modes") != std::string::npos);
+  r = budjam("dos '" + pack.string() + "' --sigma 0.1");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("--sigma") != std::string::npos);
 }

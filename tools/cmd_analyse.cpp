@@ -396,10 +396,11 @@ void run(const Options& o) {
   std::size_t moduli_found = 0, dos_found = 0;
   for (const auto& d : dirs) {
     const tools::RunData r = tools::load_run(d);
-    if (r.status() != "finished") {
-      failed.push_back(d.string() + " (" + r.status() + ")");
-      continue;
-    }
+    // A run that stopped early (step limit, say) still landed every state it recorded: its jamming
+    // point, targets and φ_2 are used; it is listed so that the report can say so. One that never
+    // jammed has nothing to contribute.
+    if (r.status() != "finished") failed.push_back(d.string() + " (" + r.status() + ")");
+    if (!r.jammed()) continue;
     rows.push_back(extract(r, need_moduli, moduli_found));
     // spectra beside any packing of the run
     for (const auto& e : fs::directory_iterator(d / "packings")) {
@@ -429,7 +430,7 @@ void run(const Options& o) {
       dos_rows.push_back(q);
     }
   }
-  if (rows.empty()) throw InputError("analyse: no finished run among the inputs");
+  if (rows.empty()) throw InputError("analyse: no run among the inputs reached jamming");
 
   std::map<GroupKey, std::vector<const RunRow*>> groups;
   std::set<double> lengths;
@@ -619,8 +620,8 @@ void run(const Options& o) {
   J["format"] = "budjam-analysis";
   J["version"] = 1;
   J["inputs"] = Json{{"runs", dirs.size()},
-                     {"finished", rows.size()},
-                     {"failed", failed},
+                     {"used", rows.size()},
+                     {"not_finished", failed},
                      {"moduli_files", moduli_found},
                      {"dos_files", dos_found}};
   J["main_L"] = main_L;
@@ -753,7 +754,7 @@ void run(const Options& o) {
   write_csv(out / "trajectory.csv", {"L", "P0", "dphi", "P", "G", "runs", "endpoint"}, traj_rows);
   write_csv(out / "dos.csv", {"run", "packing", "L", "P0", "dphi", "omega_star", "dZ", "Z_minus_6", "N_zero", "N_u", "N_u_buds"},
             dos_out);
-  std::cerr << "analyse: " << rows.size() << " finished runs (" << failed.size() << " failed) in " << groups.size()
+  std::cerr << "analyse: " << rows.size() << " runs used (" << failed.size() << " not finished) in " << groups.size()
             << " groups; moduli files " << moduli_found << ", spectra " << dos_found << " -> " << out.string() << "\n";
 }
 

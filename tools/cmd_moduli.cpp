@@ -173,7 +173,8 @@ void run(const Options& o) {
   const ElasticResponse e = elastic_response(p, contacts, net);
   Json j;
   j["file"] = o.packing;
-  for (auto& [k, v] : response_json(e).items()) j[k] = v;
+  const Json body = response_json(e);  // named: items() of a temporary would dangle
+  for (const auto& [k, v] : body.items()) j[k] = v;
   if (o.check) {
     const double h = o.strain > 0 ? o.strain : automatic_strain(load_bearing(contacts, net));
     const auto strains = symmetric_strains(h, 2);

@@ -96,7 +96,7 @@ class ModuliLog : public Observer {
     const double n_J = s.jamming ? s.jamming->n_J : nan;
     if (!r) {
       std::vector<io::CsvField> row{event, s.step, s.phi, dphi};
-      while (row.size() < kColumns.size() - 6) row.push_back(io::CsvField::missing());
+      while (row.size() < kColumns.size() - 7) row.push_back(io::CsvField::missing());
       row.insert(row.end(), {error, io::CsvField::missing(), io::CsvField::missing(), io::CsvField::missing(),
                              io::CsvField::missing(), io::CsvField::missing(), false});
       log_->row(row);

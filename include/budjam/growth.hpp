@@ -28,8 +28,9 @@ inline bool ready_to_divide(double b, double alpha0) { return 1.0 + b / kMotherD
 // b after a step: b² ← (1 + γΔt)(D² + b²) − D² (all new area goes into the bud).
 double grown_bud(double b, double gamma, double dt);
 
-// exp(−p/P0): 1 without feedback (nullopt) or for p ≤ 0; exactly 0 when it underflows (never NaN,
-// also for p = +∞). Throws InputError for P0 ≤ 0 or NaN p.
+// exp(−p/P0): 1 without feedback (nullopt) or for p ≤ 0; exactly 0 when it would fall below DBL_MIN
+// (never a denormal, never NaN, also for p = +∞). Throws InputError for P0 ≤ 0, std::domain_error
+// for a NaN pressure.
 double growth_factor(double bud_pressure, std::optional<double> P0);
 
 // γ_i for the next step: γ0_i, times exp(−p_i/P0) when `bud_pressures` is given (feedback on:
