@@ -152,6 +152,8 @@ def fig2(T):
     rem = same_L(T.csv("remaining.csv"), L)
     for lab in labels:
         rows = [r for r in rem if r["P0"] == lab]
+        most = max([int(r["runs"]) for r in rows] or [0])
+        rows = [r for r in rows if 2 * int(r["runs"]) >= most]  # where at least half the runs still contribute
         x = [num(r["dphi"]) for r in rows]
         y = [num(r["mean"]) for r in rows]
         e = [num(r["se"]) if r["se"] else 0.0 for r in rows]
@@ -412,31 +414,38 @@ def figE1(T):
     if not gs:
         raise Missing("Fig. E1: no run has a target at Δφ = 3·10⁻³ (add it to TARGETS)")
     hist = same_L(T.csv("growth_rates.csv"), L)
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    shown = [l for l in sorted({r["P0"] for r in hist if r["P0"] != "none"}, key=float, reverse=True)
+             if float(l) in (1e-1, 1e-2, 1e-3, 1e-4)]
+    fig = plt.figure(figsize=(10, 6.5))
+    grid = fig.add_gridspec(2, max(1, len(shown)), height_ratios=[1.5, 1], hspace=0.45)
+    ax = fig.add_subplot(grid[0, :])
     x = [p0_value(g["P0_label"]) for g in gs]
     y = [g["h_gamma"]["median"] for g in gs]
     ax.errorbar(x, y, yerr=[g["h_gamma"]["se"] for g in gs], fmt="ko-", capsize=3)
     p0_axis(ax, [g["P0_label"] for g in gs])
-    ax.set_yscale("symlog", linthresh=1e-4)
-    ax.set_ylabel(r"$h_\gamma=\mathrm{Var}(g)/\langle g\rangle^2$")
+    ax.set_yscale("symlog", linthresh=1e-5)
+    ax.set_ylim(0, 3 * max(y))
+    ax.set_ylabel(r"$h_\gamma=\mathrm{Var}(g)/\langle g\rangle^2$ (median)")
     ax.set_title(r"Growth-rate crossover, $\Delta\phi=3\times10^{-3}$, L = %g" % L, fontsize=10)
-    shown = [l for l in ("0.1", "0.01", "0.001", "0.0001") if any(g["P0_label"] == l for g in gs)]
+    panel(ax, "A")
     for k, lab in enumerate(shown):
-        ins = ax.inset_axes([0.02 + 0.245 * k, 0.6, 0.2, 0.32])
+        ins = fig.add_subplot(grid[1, k])
         rr = [r for r in hist if r["P0"] == lab]
         bars = [r for r in rr if r["delta_at_1"] == "false"]
-        ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars], width=0.05, align="edge", color="tab:blue")
+        ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars], width=0.05, align="edge",
+                color="tab:blue", label="compressed buds")
         delta = [num(r["density"]) for r in rr if r["delta_at_1"] == "true"]
         if delta:
-            ins.annotate("", xy=(1.0, 1.0), xytext=(1.0, 0.0), xycoords=("data", "axes fraction"),
-                         arrowprops=dict(arrowstyle="->", color="tab:red"))
-            ins.text(0.98, 0.9, "%.2f" % delta[0], color="tab:red", fontsize=6, ha="right",
+            ins.annotate("", xy=(1.0, 0.95), xytext=(1.0, 0.0), xycoords=("data", "axes fraction"),
+                         arrowprops=dict(arrowstyle="->", color="tab:red", lw=1.5))
+            ins.text(0.97, 0.85, r"$u\,\delta(g-1)$: %.2f" % delta[0], color="tab:red", fontsize=7, ha="right",
                      transform=ins.transAxes)
         ins.set_xlim(0, 1.05)
-        ins.set_title(p0_text(lab), fontsize=7)
-        ins.set_xlabel(r"$g$", fontsize=7, labelpad=1)
-        ins.set_ylabel(r"$\Pi(g)$", fontsize=7, labelpad=1)
-        ins.tick_params(labelsize=5)
+        ins.set_title(p0_text(lab), fontsize=8)
+        ins.set_xlabel(r"$g=\gamma/\gamma_0$", fontsize=8)
+        if k == 0:
+            ins.set_ylabel(r"$\Pi(g)$", fontsize=8)
+        ins.tick_params(labelsize=6)
     save(fig, T.out, "figE1")
 
 
@@ -467,7 +476,7 @@ def figF1(T):
         first_run = sorted({r["run"] for r in rr})[0]
         rr = sorted([r for r in rr if r["run"] == first_run], key=lambda r: num(r["dphi"]) if r["dphi"] else 0.0)
         for k, r in enumerate(rr):
-            path = os.path.join(r["run"], "packings", r["packing"] + ".eigenvalues.csv")
+            path = os.path.join(r["run"], "packings", r["packing"] + ".dos.csv")
             if not os.path.exists(path):
                 raise Missing(f"{path}: eigenvalues missing (`budjam dos` must write them)")
             w = [x for x in read_eigenvalues(path) if x > 1e-3]  # the band only; N_u quasi-zero modes in panel C

@@ -63,7 +63,10 @@ def main():
     L = A["main_L"]
     M = A["main"]
     C = A["constants"]
-    groups = {g["P0_label"]: g for g in A["groups"] if g["L"] == L}
+    # keyed by the label a reader expects ("none", "0.1", ..., "1e-05"), whatever budjam printed
+    def label(p0):
+        return "none" if p0 is None else {1e-1: "0.1", 1e-2: "0.01", 1e-3: "0.001", 1e-4: "0.0001", 1e-5: "1e-05"}.get(p0, repr(p0))
+    groups = {label(g["P0"]): g for g in A["groups"] if g["L"] == L}
     have_moduli = a.moduli == "1" and A["inputs"]["moduli_files"] > 0
     have_dos = a.dos == "1" and A["inputs"]["dos_files"] > 0
     figdir = os.path.relpath(a.figures, os.path.dirname(os.path.abspath(a.out)) or ".")

@@ -1,6 +1,6 @@
 #include "budjam/pebble_game.hpp"
 
-#include <boost/graph/depth_first_search.hpp>
+#include <boost/graph/breadth_first_search.hpp>
 #include <algorithm>
 #include <deque>
 #include <numeric>
@@ -107,34 +107,48 @@ std::uint32_t PebbleGame::search(std::uint32_t from, std::uint32_t keep1, std::u
   ++work_.searches;
   std::uint32_t found = none;
 
-  struct Recorder : boost::default_dfs_visitor {
+  // Breadth first, so that the nearest free pebble is taken: paths stay short and pebbles stay
+  // local (depth first wanders through the whole rigid region before turning back).
+  struct Recorder : boost::default_bfs_visitor {
     PebbleGame* game;
-    void discover_vertex(Vertex v, const Digraph&) const { game->visited_.push_back(static_cast<std::uint32_t>(v)); }
+    std::uint32_t from, keep1, keep2;
+    std::uint32_t* found;
     void tree_edge(Digraph::edge_descriptor e, const Digraph& g) const {
       game->pred_[boost::target(e, g)] = static_cast<std::uint32_t>(boost::source(e, g));
     }
-  };
-  // Stops expanding once a free pebble is found (BGL's terminator only prunes the vertex it is
-  // called on; with out-degree ≤ 2 the remaining work after the hit is a few edges per stack level).
-  struct Stop {
-    const PebbleGame* game;
-    std::uint32_t from, keep1, keep2;
-    std::uint32_t* found;
-    bool operator()(Vertex v, const Digraph&) const {
-      if (*found != none) return true;
-      if (v != from && v != keep1 && v != keep2 && game->free_[v] > 0) {
+    void discover_vertex(Vertex v, const Digraph&) const {
+      game->visited_.push_back(static_cast<std::uint32_t>(v));
+      if (*found == none && v != from && v != keep1 && v != keep2 && game->free_[v] > 0)
         *found = static_cast<std::uint32_t>(v);
-        return true;
-      }
-      return false;
     }
+  };
+  // BGL's BFS runs while its buffer is not empty: this buffer reports empty once a free pebble
+  // has been found, which ends the search cleanly.
+  struct StoppingQueue {
+    std::vector<std::uint32_t>* items;
+    std::size_t head = 0;
+    const std::uint32_t* found;
+    void push(Vertex v) { items->push_back(static_cast<std::uint32_t>(v)); }
+    Vertex top() const { return (*items)[head]; }
+    void pop() { ++head; }
+    bool empty() const { return *found != none || head == items->size(); }
   };
 
   Recorder recorder;
   recorder.game = this;
-  boost::depth_first_visit(g_, from, recorder, StampedColor{stamp_.data(), color_.data(), now_},
-                           Stop{this, from, keep1, keep2, &found});
+  recorder.from = from;
+  recorder.keep1 = keep1;
+  recorder.keep2 = keep2;
+  recorder.found = &found;
+  queue_.clear();
+  StoppingQueue queue{&queue_, 0, &found};
+  boost::breadth_first_visit(g_, static_cast<Vertex>(from), queue, recorder,
+                             StampedColor{stamp_.data(), color_.data(), now_});
   work_.visited += visited_.size();
+  if (found == none) {
+    ++work_.failed;
+    work_.visited_failed += visited_.size();
+  }
 
   if (found != none && move) {
     // Reverse the covered bars along the path from → … → found: the pebble at `found` now covers
@@ -160,7 +174,7 @@ bool PebbleGame::gather(std::uint32_t a, int want_a, std::uint32_t b, int want_b
   return true;
 }
 
-bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
+bool PebbleGame::test(std::uint32_t a, std::uint32_t b) {
   ++work_.bars_tested;
   if (const int r = region_root(a); r >= 0 && r == region_root(b)) {
     ++work_.quick_rejections;
@@ -170,7 +184,12 @@ bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
     record_region(visited_);
     return false;
   }
-  boost::add_edge(a, b, g_);                // one of a's pebbles covers the bar
+  return true;
+}
+
+bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
+  if (!test(a, b)) return false;
+  boost::add_edge(a, b, g_);  // one of a's four pebbles covers the bar
   --free_[a];
   return true;
 }
@@ -179,9 +198,7 @@ bool PebbleGame::independent_if_added(std::uint32_t a, std::uint32_t b) {
   if (a == b || a >= joints() || b >= joints())
     throw std::invalid_argument("pebble game: bar (" + std::to_string(a) + ", " + std::to_string(b) +
                                 ") needs two distinct existing joints");
-  ++work_.bars_tested;
-  if (const int r = region_root(a); r >= 0 && r == region_root(b)) return false;
-  return gather(a, 2, b, 2);
+  return test(a, b);
 }
 
 bool PebbleGame::add_bar(std::uint32_t a, std::uint32_t b) {

@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Householder>
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -107,6 +108,35 @@ void check_problem(const Sparse& H, const Eigen::VectorXd& mass) {
     throw std::invalid_argument("spectrum: masses must be positive and finite");
 }
 
+// Null vectors of K on single cells: right singular vectors of the cell's 3 columns (gathered
+// densely: a handful of rows per neighbour) with singular value ≤ tol·max|K|.
+std::vector<LocalMode> local_null_vectors(const Sparse& K, double tol) {
+  std::vector<LocalMode> out;
+  const double cut = tol * max_abs(K);
+  const Eigen::Index n = K.cols() / 3;
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index c = 0; c < n; ++c) {
+    rows.clear();
+    for (int j = 0; j < 3; ++j)
+      for (Sparse::InnerIterator it(K, 3 * c + j); it; ++it) rows.push_back(it.row());
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    if (rows.empty()) {  // a cell without any stiffness: all three directions are free
+      for (int j = 0; j < 3; ++j) out.push_back({static_cast<std::size_t>(c), Eigen::Vector3d::Unit(j)});
+      continue;
+    }
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 3);
+    for (int j = 0; j < 3; ++j)
+      for (Sparse::InnerIterator it(K, 3 * c + j); it; ++it)
+        B(std::lower_bound(rows.begin(), rows.end(), it.row()) - rows.begin(), j) = it.value();
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeFullV);
+    const Eigen::VectorXd sv = svd.singularValues();  // descending; fewer than 3 if B has < 3 rows
+    for (int j = 0; j < 3; ++j)
+      if (j >= sv.size() || sv[j] <= cut) out.push_back({static_cast<std::size_t>(c), svd.matrixV().col(j)});
+  }
+  return out;
+}
+
 Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
   const Eigen::Index n3 = mass.size(), nd = n3 - 2;
   Spectrum s;
@@ -140,10 +170,6 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
 Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
   const Eigen::Index n3 = mass.size(), nd = n3 - 2;
   if (opt.modes <= 0) throw std::invalid_argument("spectrum: ARPACK needs modes > 0");
-  if (opt.modes >= nd)
-    throw std::invalid_argument("spectrum: ARPACK computes fewer modes than the problem has (asked for " +
-                                std::to_string(opt.modes) + " of " + std::to_string(nd) +
-                                "); use the dense method for the whole spectrum");
   Spectrum s;
   s.method = SpectrumMethod::arpack;
   s.n_cells = static_cast<std::size_t>(n3 / 3);
@@ -153,6 +179,40 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   s.translation_residual = translation_residual(K, T);
 
   const auto t0 = Clock::now();
+  // Cell-local zero modes, deflated below (spectrum.hpp).
+  if (opt.deflate_local) s.local = local_null_vectors(K, opt.local_zero_tol);
+  const Eigen::Index n_local = static_cast<Eigen::Index>(s.local.size());
+  // Translations made orthogonal to the local modes (disjoint supports make the local modes
+  // orthonormal among themselves): Q = [local | Tq] is orthonormal.
+  Eigen::MatrixXd Tq = T;
+  for (const LocalMode& m : s.local)
+    Tq.middleRows<3>(3 * static_cast<Eigen::Index>(m.block)) -=
+        m.e * (m.e.transpose() * Tq.middleRows<3>(3 * static_cast<Eigen::Index>(m.block)));
+  Tq = Eigen::HouseholderQR<Eigen::MatrixXd>(Tq).householderQ() * Eigen::MatrixXd::Identity(n3, 2);
+  auto project = [&](Eigen::Ref<Eigen::VectorXd> x) {
+    for (const LocalMode& m : s.local) {
+      auto seg = x.segment<3>(3 * static_cast<Eigen::Index>(m.block));
+      seg -= m.e * m.e.dot(seg);
+    }
+    x -= Tq * (Tq.transpose() * x);
+  };
+
+  // How many modes below inertia_tol exist in all (one LDLᵀ): the Lanczos run must take every
+  // one that is not deflated, or it would cut through a degenerate cluster.
+  int nev = opt.modes;
+  if (opt.inertia_tol > 0) {
+    CholmodSolver ldlt(Factorisation::ldlt);
+    if (ldlt.factor(K, opt.inertia_tol, Eigen::VectorXd())) {
+      s.inertia_count = ldlt.negative_pivots() - 2;
+      nev = static_cast<int>(std::max<long>(nev, s.inertia_count - n_local + 1));
+    }
+  }
+  const Eigen::Index dim = nd - n_local;  // dimension of the space Lanczos works in
+  if (nev >= dim)
+    throw std::invalid_argument("spectrum: ARPACK computes fewer modes than the problem has (asked for " +
+                                std::to_string(nev) + " of " + std::to_string(dim) +
+                                " after deflation); use the dense method for the whole spectrum");
+
   double sigma = opt.sigma;
   CholmodSolver chol(Factorisation::llt);
   const Eigen::VectorXd unit;  // empty: identity mass (K is already mass-weighted)
@@ -167,12 +227,13 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   s.sigma = sigma;
   s.seconds_factorise = seconds_since(t0);
 
-  // Lanczos on T^⊥: OP = P (K − σI)⁻¹ P, P = 1 − T Tᵀ.
-  auto project = [&](Eigen::Ref<Eigen::VectorXd> x) { x -= T * (T.transpose() * x); };
+  // Lanczos on Q^⊥: OP = P (K − σI)⁻¹ P. Q spans exact eigenvectors of K, so P commutes with
+  // (K − σI)⁻¹ and the spectrum of OP on Q^⊥ is the rest of the spectrum.
   Eigen::VectorXd buf(n3);
   LanczosOptions lo;
-  lo.nev = opt.modes;
-  lo.ncv = opt.ncv > 0 ? std::min<int>(opt.ncv, static_cast<int>(nd)) : std::min<int>(static_cast<int>(nd), std::max(2 * lo.nev + 1, lo.nev + 20));
+  lo.nev = nev;
+  const int idim = static_cast<int>(dim);
+  lo.ncv = opt.ncv > 0 ? std::min(opt.ncv, idim) : std::min(idim, std::max(2 * nev + 1, nev + 20));
   lo.tol = opt.tol;
   lo.vectors = opt.vectors;
   lo.start.resize(n3);
@@ -192,7 +253,15 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
       },
       lo);
   s.seconds_lanczos = seconds_since(t1);
-  s.lambda = res.values;
+
+  s.lambda.resize(n_local + nev);
+  for (Eigen::Index k = 0; k < n_local; ++k) {
+    const LocalMode& m = s.local[static_cast<std::size_t>(k)];
+    const Eigen::Index b = 3 * static_cast<Eigen::Index>(m.block);
+    // Rayleigh quotient eᵀ K e from the cell's columns.
+    s.lambda[k] = m.e.dot((K.middleCols(b, 3) * m.e).segment<3>(b));
+  }
+  s.lambda.tail(nev) = res.values;
   s.modes = res.vectors;
   s.ncv = res.ncv;
   s.restarts = res.restarts;
@@ -212,6 +281,22 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
                  ? SpectrumMethod::dense
                  : SpectrumMethod::arpack;
   return method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
+}
+
+std::vector<LocalMode> cell_local_zero_modes(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
+                                             double tol) {
+  check_problem(H, mass);
+  return local_null_vectors(dynamical_matrix(H, mass), tol);
+}
+
+Eigen::VectorXd Spectrum::mode(Eigen::Index k) const {
+  if (!has_vectors()) throw std::invalid_argument("Spectrum::mode: the spectrum was computed without eigenvectors");
+  const Eigen::Index n_local = static_cast<Eigen::Index>(local.size());
+  if (k >= n_local) return modes.col(k - n_local);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * n_cells));
+  v.segment<3>(3 * static_cast<Eigen::Index>(local[static_cast<std::size_t>(k)].block)) =
+      local[static_cast<std::size_t>(k)].e;
+  return v;
 }
 
 // ---- observables ---------------------------------------------------------------------------
@@ -242,10 +327,12 @@ BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule) {
 }
 
 Eigen::VectorXd participation_ratios(const Spectrum& s) {
-  if (s.modes.cols() != s.lambda.size())
+  if (!s.has_vectors() || s.lambda.size() == 0)
     throw std::invalid_argument("participation_ratios: the spectrum was computed without eigenvectors");
-  const Eigen::Index n = s.modes.rows() / 3;
-  Eigen::VectorXd pr(s.modes.cols());
+  const Eigen::Index n = static_cast<Eigen::Index>(s.n_cells);
+  const Eigen::Index n_local = static_cast<Eigen::Index>(s.local.size());
+  Eigen::VectorXd pr(s.lambda.size());
+  for (Eigen::Index k = 0; k < n_local; ++k) pr[k] = 1.0 / static_cast<double>(n);  // one cell
   for (Eigen::Index k = 0; k < s.modes.cols(); ++k) {
     double sum = 0, sum2 = 0;
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -253,7 +340,7 @@ Eigen::VectorXd participation_ratios(const Spectrum& s) {
       sum += w;
       sum2 += w * w;
     }
-    pr[k] = sum * sum / (static_cast<double>(n) * sum2);
+    pr[n_local + k] = sum * sum / (static_cast<double>(n) * sum2);
   }
   return pr;
 }
@@ -325,7 +412,10 @@ PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& c
   if (net.N_nr == 0) throw InputError("packing: no non-rattler cells (unjammed): no vibrational spectrum");
   const VibrationalProblem prob = vibrational_problem(p, contacts, net);
   const std::size_t nd = static_cast<std::size_t>(prob.mass.size()) - 2;
-  if (options.modes <= 0) options.modes = modes_for_band_edge(nd, net.N_u, rule);
+  // Enough modes for ω*: the quasi-zero modes (≈ N_u; with deflation the cell-local ones come for
+  // free and the inertia count adds any other) plus n_band and a margin.
+  if (options.modes <= 0)
+    options.modes = modes_for_band_edge(nd, net.N_u, rule) - (options.deflate_local ? static_cast<int>(net.N_u) : 0);
   PackingSpectrum out;
   out.cells = prob.cells;
   out.spectrum = solve_spectrum(prob.H, prob.mass, options);

@@ -6,9 +6,20 @@
 #include "budjam/moduli.hpp"
 #include "budjam/strain.hpp"
 
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 using namespace budjam;
 
@@ -44,6 +55,39 @@ Relaxed jammed(std::size_t n, double P, double b_min, double b_max, std::uint64_
   const CompressionResult c = compress_to_pressure(random_dumbbells(n, 0.4, b_min, b_max, seed), P, tight_fire());
   REQUIRE(c.converged);
   return analyse(c.packing);
+}
+
+namespace fs = std::filesystem;
+
+// A scratch directory for this process, removed at exit.
+struct WorkDir {
+  fs::path path = fs::temp_directory_path() / ("budjam-moduli-" + std::to_string(::getpid()));
+  WorkDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+const fs::path& work_dir() {
+  static const WorkDir dir;
+  return dir.path;
+}
+
+// Runs `budjam <args>`; returns the exit code and stdout.
+std::pair<int, std::string> run_budjam(const std::string& args) {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const fs::path out = work_dir() / "stdout";
+  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>/dev/null";
+  const int status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  std::ifstream in(out);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return {WEXITSTATUS(status), text.str()};
 }
 
 double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
@@ -169,6 +213,60 @@ TEST_CASE("Mean-field estimates use n = N_nr/L², ℓ_c = mean lobe-centre dista
   // The paper's affine B_ext is within a factor ~2 of the measured bulk moduli, and above the relaxed one.
   CHECK(e.moduli.B < e.B_ext * 1.2);
   CHECK(e.moduli.B > 0.4 * e.B_ext);
+}
+
+TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports agreement", "[fast]") {
+  const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 8);
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  const fs::path pack = work_dir() / "p.pack";
+  io::write_packing(pack, r.p);
+  const auto [code, out] = run_budjam("moduli '" + pack.string() + "' --check");
+  REQUIRE(code == 0);
+  const io::Json j = io::Json::parse(out);
+  CHECK(j["B"].get<double>() == Approx(e.moduli.B).epsilon(1e-9));
+  CHECK(j["G"].get<double>() == Approx(e.moduli.G_simple).epsilon(1e-9));
+  CHECK(j["moduli"]["G_pure"].get<double>() == Approx(e.moduli.G_pure).epsilon(1e-9));
+  CHECK(j["elastic_tensor"]["C_xyxy"].get<double>() == Approx(e.C(2, 2)).epsilon(1e-9));
+  CHECK(j["kernel"]["method"] == "cholesky");
+  CHECK(j["kernel"]["pinned_lobe_rotation"].get<std::size_t>() == r.net.N_u);
+  CHECK(j["check"]["agree_within_1_percent"].get<bool>());
+  CHECK(j["check"]["simple_shear_G"]["relative_difference"].get<double>() < 0.01);
+  CHECK(j["check"]["isotropic_B"]["relative_difference"].get<double>() < 0.01);
+  // Deterministic output: the same file gives the same bytes.
+  CHECK(run_budjam("moduli '" + pack.string() + "'").second == run_budjam("moduli '" + pack.string() + "'").second);
+}
+
+TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal to budjam moduli on the saved packings", "[.slow]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const fs::path run = work_dir() / "demo";
+  const auto [code, out] = run_budjam("grow '" + std::string(src) + "/data/scenes/demo.toml' --quiet --out '" + run.string() +
+                                      "' --set observe.moduli.at_jamming=true --set observe.moduli.at_targets=true");
+  REQUIRE(code == 0);
+  std::ifstream csv(run / "moduli.csv");
+  REQUIRE(csv.good());
+  std::string header, line;
+  std::getline(csv, header);
+  std::vector<std::string> cols;
+  for (std::stringstream hs(header); std::getline(hs, line, ',');) cols.push_back(line);
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), name) - cols.begin());
+  };
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    for (std::stringstream ls(line); std::getline(ls, header, ',');) f.push_back(header);
+    rows.push_back(f);
+  }
+  REQUIRE(rows.size() == 3);  // jamming + two targets of the demo scene
+  CHECK(rows[0][col("event")] == "jamming");
+  const std::vector<std::string> packs{"jammed", "target_0", "target_1"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    CHECK(rows[k][col("well_posed")] == "true");
+    const io::Json j = io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").second);
+    CHECK(std::stod(rows[k][col("B")]) == Approx(j["B"].get<double>()).epsilon(1e-9));
+    CHECK(std::stod(rows[k][col("G_simple")]) == Approx(j["G"].get<double>()).epsilon(1e-9));
+  }
 }
 
 // ---- hard cases (issue 3.6) -----------------------------------------------------------------

@@ -237,29 +237,75 @@ TEST_CASE("dense and ARPACK eigenvalues of a 300-cell packing agree to 1e-8 rela
   opt.method = SpectrumMethod::dense;
   const Spectrum dense = solve_spectrum(prob.H, prob.mass, opt);
   const std::size_t n_zero = count_below(dense.lambda, 1e-6);
-  opt.method = SpectrumMethod::arpack;
-  opt.modes = static_cast<int>(n_zero) + 60;  // all quasi-zero modes and 60 of the band
-  const Spectrum lanczos = solve_spectrum(prob.H, prob.mass, opt);
-  REQUIRE(lanczos.lambda.size() == opt.modes);
+  REQUIRE(n_zero > 30);
+  const double scale = dense.lambda.cwiseAbs().maxCoeff();
+
   // Both solvers are backward stable: eigenvalues agree to ~ε‖K‖ in absolute terms, which for the
   // band (λ ≳ 1e-4) is far inside 1e-8 relative; the quasi-zero modes (|λ| ~ 1e-14) can only be
   // compared in absolute terms.
-  const double scale = dense.lambda.cwiseAbs().maxCoeff();
-  for (int k = 0; k < opt.modes; ++k) {
-    if (dense.lambda[k] > 1e-6)
-      CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-8 * dense.lambda[k]);
-    else
-      CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-12 * scale);
+  auto compare = [&](const Spectrum& lanczos) {
+    REQUIRE(lanczos.has_vectors());
+    for (Eigen::Index k = 0; k < lanczos.lambda.size(); ++k) {
+      if (dense.lambda[k] > 1e-6)
+        CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-8 * dense.lambda[k]);
+      else
+        CHECK(std::abs(lanczos.lambda[k] - dense.lambda[k]) <= 1e-12 * scale);
+    }
+    // Non-degenerate band modes are the same vectors up to sign.
+    for (Eigen::Index k = static_cast<Eigen::Index>(n_zero); k < lanczos.lambda.size(); ++k) {
+      const double gap = std::min(dense.lambda[k] - dense.lambda[k - 1], dense.lambda[k + 1] - dense.lambda[k]);
+      if (gap < 1e-3 * dense.lambda[k]) continue;
+      CHECK(std::abs(dense.modes.col(k).dot(lanczos.mode(k))) == Approx(1.0).epsilon(1e-8));
+    }
+    CHECK(lanczos.sigma < 0);
+    CHECK(lanczos.translation_residual < 1e-12);
+  };
+
+  SECTION("with the cell-local zero modes deflated (default)") {
+    opt.method = SpectrumMethod::arpack;
+    opt.modes = 60;
+    const Spectrum lanczos = solve_spectrum(prob.H, prob.mass, opt);
+    // The deflated modes are exactly the unconstrained lobes'; the rest of the quasi-zero modes
+    // and 60 more come from Lanczos; the inertia count covers them all.
+    CHECK(lanczos.local.size() == cp.network.N_u);
+    CHECK(lanczos.inertia_count == static_cast<long>(n_zero));
+    REQUIRE(lanczos.lambda.size() >= static_cast<Eigen::Index>(cp.network.N_u + 60));
+    CHECK(count_below(lanczos.lambda, 1e-6) == n_zero);
+    compare(lanczos);
   }
-  // Non-degenerate band modes are the same vectors up to sign.
-  for (int k = static_cast<int>(n_zero); k < opt.modes; ++k) {
-    const double gap = std::min(k > 0 ? dense.lambda[k] - dense.lambda[k - 1] : 1.0,
-                                dense.lambda[k + 1] - dense.lambda[k]);
-    if (gap < 1e-3 * dense.lambda[k]) continue;
-    CHECK(std::abs(dense.modes.col(k).dot(lanczos.modes.col(k))) == Approx(1.0).epsilon(1e-8));
+  SECTION("without deflation, asking for all quasi-zero modes and 60 more") {
+    opt.method = SpectrumMethod::arpack;
+    opt.deflate_local = false;
+    opt.modes = static_cast<int>(n_zero) + 60;
+    const Spectrum lanczos = solve_spectrum(prob.H, prob.mass, opt);
+    CHECK(lanczos.local.empty());
+    REQUIRE(lanczos.lambda.size() == opt.modes);
+    compare(lanczos);
   }
-  CHECK(lanczos.sigma < 0);
-  CHECK(lanczos.translation_residual < 1e-12);
+  SECTION("fewer modes than the zero cluster still returns the whole cluster") {
+    opt.method = SpectrumMethod::arpack;
+    opt.modes = 10;
+    const Spectrum lanczos = solve_spectrum(prob.H, prob.mass, opt);
+    CHECK(count_below(lanczos.lambda, 1e-6) == n_zero);
+    CHECK(lanczos.lambda.size() >= static_cast<Eigen::Index>(n_zero) + 1);
+    compare(lanczos);
+  }
+}
+
+TEST_CASE("the cell-local zero modes of a packing are the rotations about the contacted lobe of its free lobes",
+          "[spectrum]") {
+  const auto& cp = compressed(150, 3);
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  const std::vector<LocalMode> local = cell_local_zero_modes(prob.H, prob.mass);
+  REQUIRE(local.size() == cp.network.N_u);
+  for (const LocalMode& m : local) {
+    const std::size_t cell = prob.cells[m.block];
+    const bool bud_free = cp.network.lobe_contacts[bud_lobe(cell)] == 0;
+    REQUIRE((bud_free || cp.network.lobe_contacts[mother_lobe(cell)] == 0));
+    const Eigen::VectorXd pivot =
+        pivot_mode(cp.packing, prob.cells, m.block, bud_free ? bud_lobe(cell) : mother_lobe(cell), prob.mass);
+    CHECK(std::abs(pivot.segment<3>(3 * static_cast<Eigen::Index>(m.block)).dot(m.e)) == Approx(1.0).epsilon(1e-9));
+  }
 }
 
 TEST_CASE("modes of a packing solve H v = ω² M v and carry no translation", "[spectrum]") {

@@ -547,6 +547,13 @@ void run(const Options& o) {
       pooled["dphi_2_pred_area"] = io::number_or_null(p.dphi2_area);
       pooled["dphi_2_pred_diameter_sq"] = io::number_or_null(p.dphi2_diameter_sq);
     }
+    // mean completion size a_c = ∫_0^∞ S da (restricted to the last completion), as a true area
+    {
+      double last_event = 0;
+      for (const auto& st : km.steps())
+        if (st.events > 0) last_event = st.a;
+      pooled["a_c_mean_area"] = km.events() ? Json(kDiameterSquaredToArea * km.integral(last_event)) : Json(nullptr);
+    }
     g["pooled_survival"] = pooled;
     surv_rows.push_back({num(key.L), P0s, "0", "1", "0", "1", "1", std::to_string(km.records())});
     for (const auto& st : km.steps()) {
@@ -673,24 +680,27 @@ void run(const Options& o) {
     }
     // P_2 ∝ exp(−P†/P0) (Eq. 22, D11): slope of ln P_2 against 1/P0 over the feedback groups with
     // P0 ≤ 10⁻², and the crossover estimate P* = n_J (6 + 2u_J) a_c / (8 ln 10) (Eq. E13) with a_c the
-    // per-group mean a_ε (true area) of those groups.
+    // mean completion size ∫S da (true area) of the pooled survival curve of those groups.
     {
       std::vector<double> x, y, ac;
       for (const auto& [key, rs] : groups) {
         if (key.L != main_L || !key.P0 || *key.P0 > 1e-2 + 1e-15) continue;
-        std::vector<double> p2, ae;
-        for (const auto* r : rs)
-          if (r->depleted) {
-            p2.push_back(r->P_2);
-            ae.push_back(kDiameterSquaredToArea * r->a_eps);
-          }
+        std::vector<double> p2;
+        std::vector<SurvivalRecord> pool;
+        for (const auto* r : rs) {
+          if (r->depleted) p2.push_back(r->P_2);
+          pool.insert(pool.end(), r->survival.begin(), r->survival.end());
+        }
         p2 = finite(p2);
-        ae = finite(ae);
         if (!p2.empty() && mean(p2) > 0) {
           x.push_back(1.0 / *key.P0);
           y.push_back(std::log(mean(p2)));
         }
-        if (!ae.empty()) ac.push_back(mean(ae));
+        const auto km = kaplan_meier(pool);
+        double last_event = 0;
+        for (const auto& st : km.steps())
+          if (st.events > 0) last_event = st.a;
+        if (km.events() > 0) ac.push_back(kDiameterSquaredToArea * km.integral(last_event));
       }
       if (x.size() >= 2) {
         const auto f = linear_fit(x, y);

@@ -5,7 +5,7 @@
 // Every joint carries two pebbles (its two degrees of freedom). A bar is independent when four
 // pebbles can be gathered on its two ends; one of them is then spent to cover the bar, which is
 // recorded as a directed edge (tail = the joint whose pebble covers it) in a Boost.Graph digraph.
-// Pebbles are moved by depth-first search along covered bars and reversing the path.
+// Pebbles are moved by a breadth-first search (BGL) along covered bars and reversing the path.
 //
 // The game is purely combinatorial (generic positions): it knows nothing of a periodic box.
 // Counting conventions (floppy modes, trivial motions) belong to the caller (budjam/rigidity.hpp).
@@ -34,6 +34,8 @@ struct RigidClusters {
 struct PebbleWork {
   std::size_t searches = 0;      // depth-first pebble searches started
   std::size_t visited = 0;       // joints discovered by those searches
+  std::size_t failed = 0;        // searches that found no free pebble
+  std::size_t visited_failed = 0;  // joints discovered by the failed ones
   std::size_t bars_tested = 0;   // independence tests (insertions and re-tests)
   std::size_t quick_rejections = 0;  // redundant bars recognised from known rigid regions, no search
 };
@@ -86,13 +88,14 @@ class PebbleGame {
   using Digraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS>;
   using Vertex = Digraph::vertex_descriptor;
 
-  // Depth-first search from `from` along covered bars for a joint other than `from`, `keep1`,
+  // Breadth-first search from `from` along covered bars for a joint other than `from`, `keep1`,
   // `keep2` holding a free pebble. If found and `move`, the pebble is brought to `from` by
   // reversing the path. Returns the joint found or `none`. The joints discovered by the search
   // are left in `visited_`.
   static constexpr std::uint32_t none = 0xffffffffu;
   std::uint32_t search(std::uint32_t from, std::uint32_t keep1, std::uint32_t keep2, bool move);
   bool gather(std::uint32_t a, int want_a, std::uint32_t b, int want_b);
+  bool test(std::uint32_t a, std::uint32_t b);  // could 4 pebbles be gathered on a, b?
   bool play(std::uint32_t a, std::uint32_t b);  // test + cover; true if independent
   void next_stamp();
 
@@ -115,6 +118,7 @@ class PebbleGame {
   std::vector<boost::default_color_type> color_;
   std::vector<std::uint32_t> pred_;
   std::vector<std::uint32_t> visited_;
+  std::vector<std::uint32_t> queue_;
   std::uint32_t now_ = 0;
   std::vector<int> region_;         // per joint: a region id, −1 if none
   std::vector<int> region_parent_;  // union–find over region ids

@@ -13,8 +13,19 @@
 // eigenvector of K, so K maps the complement T^⊥ into itself and the spectrum on T^⊥ is the
 // rest of the spectrum. Dense: K is rotated by the two Householder reflectors that map T onto
 // the first two axes and the (3n−2)² complement block is diagonalised. ARPACK: the Lanczos
-// operator is P (K − σI)⁻¹ P with P = 1 − T Tᵀ and the start vector lies in T^⊥. No other mode is
-// removed: the unconstrained-bud modes stay in the spectrum and are counted.
+// operator is P (K − σI)⁻¹ P with P = 1 − Q Qᵀ (Q orthonormal, spanning T and the cell-local zero
+// modes below) and the start vector lies in Q^⊥.
+//
+// Cell-local zero modes (ARPACK only). An unconstrained lobe leaves an exact zero mode supported
+// on its cell alone (rotation about the other lobe's centre). A packing near jamming has hundreds
+// to thousands of them, all at λ = 0 to rounding; a single-vector Lanczos method resolves such a
+// degenerate cluster only through rounding and takes hundreds of restarts when K cuts through it
+// (measured: 389 s instead of 1 s for K = 100 at N = 1000, docs/spectrum.md). They are therefore
+// found exactly first: for every cell, the right singular vectors of its three columns of K with
+// singular value ≤ local_zero_tol · max|K| are null vectors of K on that cell. They are kept as
+// modes of the spectrum (λ = their Rayleigh quotient, ~1e-17) and deflated from the Lanczos
+// operator, which then finds the other modes. Nothing is assumed about the packing: the test is
+// on K alone, and the independent inertia count (count_below_by_inertia) checks the total.
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
@@ -53,8 +64,9 @@ SpectrumMethod parse_spectrum_method(const std::string& text, const std::string&
 struct SpectrumOptions {
   SpectrumMethod method = SpectrumMethod::automatic;
   std::size_t dense_max_dof = 2000;  // automatic: dense when 3n − 2 ≤ this (≈ 670 cells, ~1 s)
-  int modes = 100;                   // ARPACK: the lowest K modes (< 3n − 2); packing_spectrum():
-                                     // ≤ 0 means as many as ω* needs (modes_for_band_edge)
+  int modes = 100;                   // ARPACK: K modes by Lanczos besides the deflated cell-local
+                                     // zero modes (so at least the lowest K); packing_spectrum():
+                                     // ≤ 0 means as many as ω* needs
   int ncv = 0;                       // ARPACK Lanczos vectors; 0 = min(3n−2, max(2K+1, K+20))
   double tol = 0.0;                  // ARPACK relative residual tolerance; 0 = machine precision
   double sigma = -1e-3;              // ARPACK shift (units k/m); negative so K − σI is positive
@@ -62,22 +74,44 @@ struct SpectrumOptions {
                                      // (up to 4 times) if the factorisation finds K − σI indefinite.
   bool vectors = true;               // eigenvectors (needed for participation ratios)
   std::uint64_t seed = 1;            // ARPACK start vector
+  bool deflate_local = true;         // ARPACK: find and deflate cell-local zero modes (see above)
+  double local_zero_tol = 1e-10;     // ... singular value threshold relative to max|K|
+  double inertia_tol = 1e-6;         // ARPACK: also count #{λ < inertia_tol} by Sylvester inertia
+                                     // (one LDLᵀ); the Lanczos run then takes all of them (0: skip)
+};
+
+// A zero mode supported on one cell: mass-weighted unit 3-vector e on block `block` (the cell's
+// position among the kept cells).
+struct LocalMode {
+  std::size_t block = 0;
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();
 };
 
 struct Spectrum {
   SpectrumMethod method = SpectrumMethod::dense;  // the one used (never automatic)
   std::size_t n_cells = 0;       // n
   std::size_t n_dof = 0;         // 3n − 2: modes of the full problem
-  Eigen::VectorXd lambda;        // ω², ascending: all n_dof (dense) or the lowest K (ARPACK)
-  Eigen::MatrixXd modes;         // mass-weighted eigenvectors as columns (3n rows), orthonormal,
-                                 // orthogonal to both translations; empty without vectors
+  // ω² of the computed modes. Dense: all n_dof, ascending. ARPACK: first the local.size()
+  // deflated cell-local zero modes, then the Lanczos modes ascending, i.e. ascending except for
+  // rounding-level order inside the zero cluster (all below any cutoff in use). ARPACK computes the
+  // local modes plus max(K, N_inertia − local + 1) more, so every mode below inertia_tol is in.
+  Eigen::VectorXd lambda;
+  std::vector<LocalMode> local;  // ARPACK: the deflated cell-local zero modes (lambda[0 … local.size()))
+  // Mass-weighted eigenvectors (3n rows) of lambda[local.size() …] as columns, orthonormal and
+  // orthogonal to the translations and to the local modes; empty without vectors. (The local modes
+  // are kept as LocalMode: storing them densely would take 3n × N_u doubles.)
+  Eigen::MatrixXd modes;
   double translation_residual = 0;  // ‖K T‖/‖K‖_max: 0 up to rounding for a correct Hessian
   // ARPACK only:
   double sigma = 0;              // shift actually used
   int ncv = 0, restarts = 0, operator_applications = 0;
+  long inertia_count = -1;       // #{λ < inertia_tol} by Sylvester inertia; −1 if not computed
   double seconds_factorise = 0, seconds_lanczos = 0;
 
   bool complete() const { return static_cast<std::size_t>(lambda.size()) == n_dof; }
+  bool has_vectors() const { return static_cast<Eigen::Index>(local.size()) + modes.cols() == lambda.size(); }
+  // Mass-weighted eigenvector of lambda[k] (3n entries).
+  Eigen::VectorXd mode(Eigen::Index k) const;
 };
 
 // Solves a problem given by H and diag(M) (any matrix, not only a packing's).
@@ -85,6 +119,11 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
                         const SpectrumOptions& options = {});
 
 // ---- spectral observables ------------------------------------------------------------------
+
+// Null vectors of K = M^{-1/2} H M^{-1/2} supported on a single cell (see the top of this file):
+// singular value of the cell's three columns of K ≤ tol · max|K|.
+std::vector<LocalMode> cell_local_zero_modes(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
+                                             double tol = 1e-10);
 
 // Number of modes with λ < tol (quasi-zero modes; negative rounding noise included).
 std::size_t count_below(const Eigen::VectorXd& lambda, double tol);
@@ -164,8 +203,8 @@ struct PackingSpectrum {
 };
 
 // Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +
-// summarise). With options.modes ≤ 0 the ARPACK path computes modes_for_band_edge(n_dof, N_u)
-// modes. Throws InputError if the packing has no non-rattler cell (unjammed: no spectrum).
+// summarise). With options.modes ≤ 0 the ARPACK path computes as many modes as ω* needs:
+// modes_for_band_edge(n_dof, N_u), less the N_u cell-local zero modes when they are deflated. Throws InputError if the packing has no non-rattler cell (unjammed: no spectrum).
 PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  SpectrumOptions options = {}, const BandEdgeRule& rule = {});
 
