@@ -214,7 +214,8 @@ bool PebbleGame::add_bar(std::uint32_t a, std::uint32_t b) {
 
 std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   if (remove.size() != bars_.size()) throw std::invalid_argument("pebble game: remove mask has wrong size");
-  bool lost_independent = false;
+  std::size_t lost = 0;
+  std::vector<std::uint32_t> sources;  // ends of the independent bars that left
   std::size_t kept = 0;
   for (std::size_t k = 0; k < bars_.size(); ++k) {
     if (remove[k]) {
@@ -229,7 +230,9 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
           ++free_[b];
         }
         --n_independent_;
-        lost_independent = true;
+        ++lost;
+        sources.push_back(a);
+        sources.push_back(b);
       }
       continue;
     }
@@ -239,17 +242,55 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   }
   bars_.resize(kept);
   independent_.resize(kept);
-  if (!lost_independent) return 0;  // the rank and the rigid regions are unchanged
+  if (lost == 0) return 0;  // a redundant bar's departure changes neither the rank nor any region
   forget_regions();
-  // The remaining independent bars are still independent; extend them greedily by the bars that
-  // were redundant, which yields a basis of the new bar set.
-  std::size_t retested = 0;
-  for (std::size_t k = 0; k < bars_.size(); ++k) {
-    if (independent_[k]) continue;
-    ++retested;
-    if (play(bars_[k].a, bars_[k].b)) {
-      independent_[k] = 1;
-      ++n_independent_;
+
+  // The surviving independent bars stay independent; extending them by redundant bars gives a
+  // basis of what is left. Rank(after) ≤ rank(before), so at most `lost` redundant bars can be
+  // promoted, and only one whose circuit contained a removed bar — a rigidity circuit is
+  // 2-connected, so it is still connected to the removed bar's ends. Test the redundant bars in
+  // breadth-first order from those ends (the likely replacements are close) and stop once `lost`
+  // have been promoted.
+  const std::size_t n = joints(), m = bars_.size();
+  std::vector<std::size_t> start(n + 1, 0);
+  for (const Bar& e : bars_) {
+    ++start[e.a + 1];
+    ++start[e.b + 1];
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> inc(2 * m);
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < m; ++k) {
+      inc[fill[bars_[k].a]++] = {bars_[k].b, static_cast<std::uint32_t>(k)};
+      inc[fill[bars_[k].b]++] = {bars_[k].a, static_cast<std::uint32_t>(k)};
+    }
+  }
+  std::vector<char> seen(n, 0), tested(m, 0);
+  std::deque<std::uint32_t> frontier;
+  for (std::uint32_t x : sources)
+    if (!seen[x]) {
+      seen[x] = 1;
+      frontier.push_back(x);
+    }
+  std::size_t retested = 0, promoted = 0;
+  while (!frontier.empty() && promoted < lost) {
+    const std::uint32_t x = frontier.front();
+    frontier.pop_front();
+    for (std::size_t s = start[x]; s < start[x + 1] && promoted < lost; ++s) {
+      const auto [y, k] = inc[s];
+      if (!seen[y]) {
+        seen[y] = 1;
+        frontier.push_back(y);
+      }
+      if (independent_[k] || tested[k]) continue;
+      tested[k] = 1;
+      ++retested;
+      if (play(bars_[k].a, bars_[k].b)) {
+        independent_[k] = 1;
+        ++n_independent_;
+        ++promoted;
+      }
     }
   }
   return retested;

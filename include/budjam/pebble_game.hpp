@@ -32,7 +32,7 @@ struct RigidClusters {
 
 // Cumulative work counters, to measure what an update costs.
 struct PebbleWork {
-  std::size_t searches = 0;      // depth-first pebble searches started
+  std::size_t searches = 0;      // pebble searches started
   std::size_t visited = 0;       // joints discovered by those searches
   std::size_t failed = 0;        // searches that found no free pebble
   std::size_t visited_failed = 0;  // joints discovered by the failed ones
@@ -63,8 +63,9 @@ class PebbleGame {
 
   // Removes the bars flagged in `remove` (size = bars()); the survivors keep their order.
   // A redundant bar leaves without any work (the independent set is still a basis). An
-  // independent bar gives its pebble back to its tail; then every surviving redundant bar is
-  // re-tested, because it may have depended on the removed one. Returns the number re-tested.
+  // independent bar gives its pebble back to its tail; then redundant bars are re-tested, nearest
+  // to the removed bars first, until as many have become independent as independent bars left
+  // (the rank cannot exceed its old value) or none can. Returns the number re-tested.
   std::size_t remove_bars(const std::vector<bool>& remove);
 
   std::size_t joints() const { return free_.size(); }
