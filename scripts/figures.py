@@ -472,20 +472,26 @@ def figF1(T):
     ax = axes[0]
     strong = min((l for l in labels if l != "none"), key=float, default=None)
     if strong is not None:
+        # pooled over the runs of the strongest feedback, one curve per saved state φ_J … φ_2
         rr = [r for r in rows if r["P0"] == strong]
-        first_run = sorted({r["run"] for r in rr})[0]
-        rr = sorted([r for r in rr if r["run"] == first_run], key=lambda r: num(r["dphi"]) if r["dphi"] else 0.0)
-        for k, r in enumerate(rr):
-            path = os.path.join(r["run"], "packings", r["packing"] + ".dos.csv")
-            if not os.path.exists(path):
-                raise Missing(f"{path}: eigenvalues missing (`budjam dos` must write them)")
-            w = [x for x in read_eigenvalues(path) if x > 1e-3]  # the band only; N_u quasi-zero modes in panel C
+        names = sorted({r["packing"] for r in rr}, key=lambda n: (n != "jammed", n == "phi2", n))
+        for k, name in enumerate(names):
+            w, ws = [], []
+            for r in (r for r in rr if r["packing"] == name):
+                path = os.path.join(r["run"], "packings", r["packing"] + ".dos.csv")
+                if not os.path.exists(path):
+                    raise Missing(f"{path}: eigenvalues missing (`budjam dos` writes them)")
+                w += [x for x in read_eigenvalues(path) if x > 1e-3]  # the band; quasi-zero modes in panel C
+                ws.append(num(r["omega_star"]))
             if not w:
                 continue
-            c = cm.plasma(k / max(1, len(rr) - 1))
-            ax.hist(w, bins=40, density=True, histtype="step", color=c, label=r["packing"])
-            ax.plot(num(r["omega_star"]), 0, "v", color=c, ms=8, clip_on=False)
-        ax.set_title(p0_text(strong), fontsize=8)
+            c = cm.plasma(0.85 * k / max(1, len(names) - 1))
+            dphi = [num(r["dphi"]) for r in rr if r["packing"] == name]
+            lab = r"$\phi_J$" if name == "jammed" else (r"$\phi_2$" if name == "phi2" else
+                                                       r"$\Delta\phi=%g$" % dphi[0])
+            ax.hist(w, bins=30, density=True, histtype="step", color=c, label=lab)
+            ax.plot(sum(ws) / len(ws), 0, "v", color=c, ms=9, clip_on=False)
+        ax.set_title(p0_text(strong) + f", {len({r['run'] for r in rr})} runs pooled", fontsize=8)
     ax.set_xlabel(r"$\omega$")
     ax.set_ylabel(r"$D(\omega)$")
     ax.legend(fontsize=6, frameon=False)

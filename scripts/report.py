@@ -104,9 +104,9 @@ def main():
     for lab in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05"):
         if lab in groups:
             x = groups[lab]
-            claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14 (a as true area | as diameter²)",
+            claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14 (a as true area; as diameter²)",
                   "theory slightly overestimates",
-                  f"{pm(x['dphi_2'])} vs {pm(x['dphi_2_pred_area'])} | {pm(x['dphi_2_pred_diameter_sq'])}", fig("fig2"))
+                  f"{pm(x['dphi_2'])} vs {pm(x['dphi_2_pred_area'])}; {pm(x['dphi_2_pred_diameter_sq'])}", fig("fig2"))
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     means = [groups[l]["dphi_2"]["mean"] for l in order]
     if len([m for m in means if m is not None]) >= 2:
@@ -155,16 +155,22 @@ def main():
         x = groups[lab]
         if lab == "none":
             continue
-        claim(f"Π(g): weight at g = 1 | compressed-sector peak, {p0_name(lab)}",
-              f"{paper_w.get(lab, '—')} | {paper_peak.get(lab, '—')}",
-              f"{fmt(x.get('g_peak_weight_at_1'))} | {fmt(x.get('g_compressed_peak'))}", fig("figE1"))
+        claim(f"Π(g): weight at g = 1; compressed-sector peak, {p0_name(lab)}",
+              f"{paper_w.get(lab, '—')}; {paper_peak.get(lab, '—')}",
+              f"{fmt(x.get('g_peak_weight_at_1'))}; {fmt(x.get('g_compressed_peak'))}", fig("figE1"))
     if "P_star_range" in M:
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E13)", "1.3e-3 – 4.3e-3",
               f"{fmt(M['P_star_range'][0])} – {fmt(M['P_star_range'][1])} (a_c = {fmt(M['a_c_range_area'][0])} – "
               f"{fmt(M['a_c_range_area'][1])}; paper 4.7e-3 – 1.6e-2)", fig("figE1"))
     # spectrum
-    claim("N_zero ≃ N_u (Eq. F3)", "tracks", needs(have_dos, "see figure", "dos"), fig("figF1"))
-    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F4)", "collapse", needs(have_dos, "see figure", "dos"), fig("figF1"))
+    D = M.get("dos") or {}
+    claim("N_zero ≃ N_u (Eq. F3)", "tracks",
+          needs(have_dos and D, f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} packings; "
+                                f"mean |N_zero − N_u| = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), fig("figF1"))
+    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F4)", "collapse; > half of Z − 6 < 0",
+          needs(have_dos and D, f"R² of ω* vs ΔZ {fmt(D.get('r2_dZ'))}, vs Z − 6 {fmt(D.get('r2_Z_minus_6'))}; "
+                                f"ΔZ < 0 in {fmt(D.get('fraction_dZ_negative'))}, Z − 6 < 0 in "
+                                f"{fmt(D.get('fraction_Z_minus_6_negative'))} of packings", "dos"), fig("figF1"))
 
     inp = A["inputs"]
     lines = [

@@ -3,6 +3,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -157,6 +158,18 @@ struct GrowthDriver::Impl {
     rates = growth_rates(packing, feedback ? &pressures : nullptr, scene.P0);
   }
 
+  // Δt that the next step starts from (before any bisection halving), from the accepted state.
+  // MODEL.md: the nominal growth.dt. With growth.adaptive_dt, above jamming with feedback:
+  // dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0) = the factor of the least
+  // compressed bud, so that the fastest-growing cell gains γ0_i·dt of relative area, as in a
+  // nominal step. Depends on the accepted state only (a checkpoint restores it with Δt anyway).
+  double start_dt() const {
+    if (!(scene.adaptive_dt && phase == Phase::jammed && scene.P0 && have_pressures)) return scene.dt;
+    double g_max = 0.0;
+    for (double p : pressures) g_max = std::max(g_max, growth_factor(p, scene.P0));
+    return scene.dt / std::max(g_max, scene.adaptive_floor);
+  }
+
   StateView view() const {
     StateView v;
     v.step = step;
@@ -309,7 +322,6 @@ struct GrowthDriver::Impl {
     ++step;
     ++result.accepted;
     last_dt = dt;
-    dt = scene.dt;
     result.divisions += static_cast<long>(divisions.size());
 
     bool jammed_now = false, unjammed_now = false;
@@ -323,6 +335,7 @@ struct GrowthDriver::Impl {
       divisions_since_jamming += static_cast<long>(divisions.size());
     }
     derive();
+    dt = start_dt();
 
     // Records first, so that every event of this state sees the same, final view.
     std::vector<BudEvent> bud_events;

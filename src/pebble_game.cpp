@@ -49,6 +49,7 @@ void PebbleGame::reset(std::size_t joints) {
   now_ = 0;
   region_.clear();
   region_parent_.clear();
+  neighbours_.clear();
   for (std::size_t k = 0; k < joints; ++k) add_joint();
 }
 
@@ -59,6 +60,7 @@ std::uint32_t PebbleGame::add_joint() {
   color_.push_back(boost::white_color);
   pred_.push_back(v);
   region_.push_back(-1);
+  neighbours_.emplace_back();
   return v;
 }
 
@@ -87,6 +89,29 @@ void PebbleGame::record_region(const std::vector<std::uint32_t>& joints) {
     k = e;
   }
   for (std::uint32_t x : joints) region_[x] = id;
+  absorb(joints, id);
+}
+
+bool PebbleGame::attached(std::uint32_t joint, int root) {
+  // Two bars to two distinct joints of a rigid region pin a joint to it (a triangle on a rigid
+  // base, generic positions).
+  std::uint32_t first = none;
+  for (std::uint32_t y : neighbours_[joint]) {
+    if (region_root(y) != root) continue;
+    if (first == none) first = y;
+    else if (y != first) return true;
+  }
+  return false;
+}
+
+void PebbleGame::absorb(const std::vector<std::uint32_t>& from, int root) {
+  std::vector<std::uint32_t> queue(from);
+  for (std::size_t h = 0; h < queue.size(); ++h)
+    for (std::uint32_t y : neighbours_[queue[h]])
+      if (region_[y] < 0 && attached(y, root)) {
+        region_[y] = root;
+        queue.push_back(y);
+      }
 }
 
 void PebbleGame::forget_regions() {
@@ -194,6 +219,17 @@ bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
   return true;
 }
 
+void PebbleGame::link(std::uint32_t a, std::uint32_t b) {
+  neighbours_[a].push_back(b);
+  neighbours_[b].push_back(a);
+  // A new bar can pin an unlabelled end to its partner's rigid region.
+  for (const auto [x, y] : {std::pair{a, b}, std::pair{b, a}})
+    if (const int r = region_root(x); r >= 0 && region_[y] < 0 && attached(y, r)) {
+      region_[y] = r;
+      absorb({y}, r);
+    }
+}
+
 bool PebbleGame::independent_if_added(std::uint32_t a, std::uint32_t b) {
   if (a == b || a >= joints() || b >= joints())
     throw std::invalid_argument("pebble game: bar (" + std::to_string(a) + ", " + std::to_string(b) +
@@ -206,6 +242,7 @@ bool PebbleGame::add_bar(std::uint32_t a, std::uint32_t b) {
     throw std::invalid_argument("pebble game: bar (" + std::to_string(a) + ", " + std::to_string(b) +
                                 ") needs two distinct existing joints");
   const bool ind = play(a, b);
+  link(a, b);
   bars_.push_back({a, b});
   independent_.push_back(ind ? 1 : 0);
   n_independent_ += ind ? 1 : 0;
@@ -242,6 +279,11 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   }
   bars_.resize(kept);
   independent_.resize(kept);
+  for (auto& list : neighbours_) list.clear();
+  for (const Bar& e : bars_) {
+    neighbours_[e.a].push_back(e.b);
+    neighbours_[e.b].push_back(e.a);
+  }
   if (lost == 0) return 0;  // a redundant bar's departure changes neither the rank nor any region
   forget_regions();
 

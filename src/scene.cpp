@@ -110,6 +110,9 @@ void validate(const Scene& s) {
   positive("growth.dt_min", s.dt_min);
   if (!(s.dt_min < s.dt)) fail("growth.dt_min", "must be smaller than growth.dt = " + show(s.dt), s.dt_min);
   if (s.max_steps <= 0) fail("growth.max_steps", "must be positive", s.max_steps);
+  finite("growth.adaptive_floor", s.adaptive_floor);
+  if (!(s.adaptive_floor > 0 && s.adaptive_floor <= 1))
+    fail("growth.adaptive_floor", "must lie in (0, 1]", s.adaptive_floor);
 
   // [jamming]
   positive("jamming.epsilon_U", s.epsilon_U);

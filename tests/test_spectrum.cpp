@@ -584,7 +584,7 @@ struct Exit {
   std::string out, err;
 };
 
-Exit budjam(const std::string& args) {
+Exit run_budjam(const std::string& args) {
   const char* exe = std::getenv("BUDJAM_EXE");
   REQUIRE(exe != nullptr);
   const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
@@ -604,7 +604,7 @@ fs::path scene(const std::string& name) {
 fs::path grown_demo(std::uint64_t seed) {
   const fs::path dir = work_dir() / ("demo-" + std::to_string(seed));
   if (!fs::exists(dir / "summary.json")) {
-    const Exit r = budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
+    const Exit r = run_budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
                           " --out '" + dir.string() +
                           "' --set observe.dos.at_jamming=true --set observe.dos.at_targets=true"
                           " --set observe.dos.at_phi2=true --set jamming.continue_to_phi2=true");
@@ -666,7 +666,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   const fs::path dir = grown_demo(1);
   const fs::path pack = dir / "packings" / "target_1.pack";
   const fs::path base = work_dir() / "t1";
-  Exit r = budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
+  Exit r = run_budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.out.find("dos: dense") != std::string::npos);
@@ -674,7 +674,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   CHECK(slurp(base.string() + ".dos.csv") == slurp(dir / "packings" / "target_1.dos.csv"));
 
   const fs::path lb = work_dir() / "t1-arpack";
-  r = budjam("dos '" + pack.string() + "' --method arpack --modes 30 --out '" + lb.string() + "' --quiet");
+  r = run_budjam("dos '" + pack.string() + "' --method arpack --modes 30 --out '" + lb.string() + "' --quiet");
   REQUIRE(r.code == 0);
   const io::Json j = io::read_json(lb.string() + ".dos.json");
   CHECK(j["method"] == "arpack");
@@ -690,13 +690,13 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
 
 TEST_CASE("budjam dos refuses bad options with one line naming the option", "[spectrum][cli]") {
   const fs::path pack = grown_demo(1) / "packings" / "jammed.pack";
-  Exit r = budjam("dos '" + pack.string() + "' --method lanczos");
+  Exit r = run_budjam("dos '" + pack.string() + "' --method lanczos");
   CHECK(r.code == 2);
   CHECK(r.err.find("--method") != std::string::npos);
-  r = budjam("dos '" + pack.string() + "' --method arpack --modes 100000");
+  r = run_budjam("dos '" + pack.string() + "' --method arpack --modes 100000");
   CHECK(r.code == 2);
   CHECK(r.err.find("--modes") != std::string::npos);
-  r = budjam("dos '" + pack.string() + "' --sigma 0.1");
+  r = run_budjam("dos '" + pack.string() + "' --sigma 0.1");
   CHECK(r.code == 2);
   CHECK(r.err.find("--sigma") != std::string::npos);
 }

@@ -717,6 +717,34 @@ void run(const Options& o) {
         h["P_star_range"] = Json::array({k * *lo, k * *hi});
       }
     }
+    // Spectrum: N_zero against N_u, and how well ω* follows ΔZ compared with the naive Z − 6.
+    {
+      std::vector<double> w, dz, z6, diff;
+      std::size_t equal = 0, neg_dz = 0, neg_z6 = 0;
+      for (const auto& q : dos_rows) {
+        if (q.L != main_L) continue;
+        w.push_back(q.omega_star);
+        dz.push_back(q.dZ);
+        z6.push_back(q.Z - 6.0);
+        diff.push_back(std::abs(q.N_zero - q.N_u));
+        equal += q.N_zero == q.N_u;
+        neg_dz += q.dZ < 0;
+        neg_z6 += q.Z - 6.0 < 0;
+      }
+      if (w.size() >= 3) {
+        const double n = static_cast<double>(w.size());
+        const auto fd = linear_fit(dz, w);
+        const auto f6 = linear_fit(z6, w);
+        h["dos"] = Json{{"packings", w.size()},
+                        {"N_zero_equals_N_u", equal / n},
+                        {"N_zero_minus_N_u_abs", mean(diff)},
+                        {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd.slope_se}, {"intercept", fd.intercept}}},
+                        {"r2_dZ", fd.r2},
+                        {"r2_Z_minus_6", f6.r2},
+                        {"fraction_dZ_negative", neg_dz / n},
+                        {"fraction_Z_minus_6_negative", neg_z6 / n}};
+      }
+    }
     J["main"] = h;
   }
   J["groups"] = jgroups;

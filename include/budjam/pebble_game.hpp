@@ -105,9 +105,14 @@ class PebbleGame {
   // rigid region, and it stays rigid as bars are added. Regions sharing ≥ 2 joints are merged
   // (union–find); a joint keeps the label of the last region recorded on it, so a lookup may miss
   // (then the search decides) but never errs. Removing an independent bar forgets them all.
+  // A joint with bars to two distinct joints of a region joins it (generic triangle), which
+  // propagates; this labels rigidly attached joints before any search fails on them.
   int region_root(std::uint32_t joint);
   void record_region(const std::vector<std::uint32_t>& joints);
   void forget_regions();
+  bool attached(std::uint32_t joint, int root);
+  void absorb(const std::vector<std::uint32_t>& from, int root);
+  void link(std::uint32_t a, std::uint32_t b);  // adjacency + absorption for a new bar
 
   Digraph g_;
   std::vector<std::uint8_t> free_;
@@ -123,6 +128,7 @@ class PebbleGame {
   std::uint32_t now_ = 0;
   std::vector<int> region_;         // per joint: a region id, −1 if none
   std::vector<int> region_parent_;  // union–find over region ids
+  std::vector<std::vector<std::uint32_t>> neighbours_;  // per joint, over all bars
   PebbleWork work_;
 };
 

@@ -50,6 +50,13 @@ struct Scene {
   double dt = 1.0;               // nominal growth step
   double dt_min = 1e-12;         // bisection below this is a failure
   long max_steps = 2000000;      // growth steps (accepted + rejected) before failing
+  // Adaptive growth step (docs/growth.md, not in MODEL.md; off = MODEL.md's protocol). Above
+  // jamming with feedback, strongly compressed buds grow at γ0·exp(−p/P0) ≪ γ0, so Δt = 1 barely
+  // moves φ. With adaptive_dt every step (before any bisection halving) starts from
+  // Δt = dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0): the fastest-growing cell
+  // then gains the same relative area γ0_i·dt as in a nominal step. The floor keeps Δt finite.
+  bool adaptive_dt = false;
+  double adaptive_floor = 1e-6;  // in (0, 1]
 
   // [jamming]
   double epsilon_U = 1e-16;          // E/N below this: unjammed

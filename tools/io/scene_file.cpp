@@ -206,6 +206,11 @@ std::vector<Entry> make_entries() {
   e.push_back(real("growth", "dt_min", "a bisected step below this is a failure", BUDJAM_FIELD(dt_min)));
   e.push_back(integer("growth", "max_steps", "growth steps (accepted + rejected) before the run fails",
                       BUDJAM_FIELD(max_steps)));
+  e.push_back(boolean("growth", "adaptive_dt",
+                      "above jamming with feedback, start each step from dt / max(max_i exp(-p_i/P0), adaptive_floor)",
+                      BUDJAM_FIELD(adaptive_dt)));
+  e.push_back(real("growth", "adaptive_floor", "smallest growth factor used by adaptive_dt, in (0, 1]",
+                   BUDJAM_FIELD(adaptive_floor)));
 
   e.push_back(real("jamming", "epsilon_U", "energy per cell below which a packing is unjammed", BUDJAM_FIELD(epsilon_U)));
   e.push_back(real("jamming", "target_tolerance", "landing tolerance |φ − (φ_J + Δφ)|", BUDJAM_FIELD(target_tolerance)));
