@@ -349,6 +349,8 @@ def figD1(T):
     ax = axes[0]
     for lab in labels:
         rr = [r for r in rows if r["P0"] == lab]
+        most = max([int(r["runs"]) for r in rr] or [0])
+        rr = [r for r in rr if 2 * int(r["runs"]) >= most]  # where at least half the runs still contribute
         x = [num(r["dphi"]) for r in rr]
         c = p0_colour(lab, labels)
         ax.plot(x, [num(r["median"]) for r in rr], "-", color=c, label=p0_text(lab))
@@ -369,6 +371,7 @@ def figD1(T):
     ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="ko", capsize=3)
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_yscale("symlog", linthresh=1e-3)
+    ax.set_ylim(0, 3 * max([g["N_div_2_over_N_J"]["ci95"][1] for g in gm] + [1e-2]))
     ax.set_ylabel(r"median $N_{\rm div}^{\rm all}(\phi_2)/\langle N_J\rangle$")
     panel(ax, "B")
     save(fig, T.out, "figD1")

@@ -166,7 +166,7 @@ def main():
     D = M.get("dos") or {}
     claim("N_zero ≃ N_u (Eq. F3)", "tracks",
           needs(have_dos and D, f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} packings; "
-                                f"mean |N_zero − N_u| = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), fig("figF1"))
+                                f"mean abs(N_zero − N_u) = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), fig("figF1"))
     claim("ω* collapses against ΔZ, not Z − 6 (Eq. F4)", "collapse; > half of Z − 6 < 0",
           needs(have_dos and D, f"R² of ω* vs ΔZ {fmt(D.get('r2_dZ'))}, vs Z − 6 {fmt(D.get('r2_Z_minus_6'))}; "
                                 f"ΔZ < 0 in {fmt(D.get('fraction_dZ_negative'))}, Z − 6 < 0 in "

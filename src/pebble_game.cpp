@@ -105,6 +105,7 @@ bool PebbleGame::attached(std::uint32_t joint, int root) {
 }
 
 void PebbleGame::absorb(const std::vector<std::uint32_t>& from, int root) {
+  if (!spanned_) return;
   std::vector<std::uint32_t> queue(from);
   for (std::size_t h = 0; h < queue.size(); ++h)
     for (std::uint32_t y : neighbours_[queue[h]])
@@ -223,7 +224,7 @@ void PebbleGame::link(std::uint32_t a, std::uint32_t b) {
   neighbours_[a].push_back(b);
   neighbours_[b].push_back(a);
   // A new bar can pin an unlabelled end to its partner's rigid region.
-  for (const auto [x, y] : {std::pair{a, b}, std::pair{b, a}})
+  for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}})
     if (const int r = region_root(x); r >= 0 && region_[y] < 0 && attached(y, r)) {
       region_[y] = r;
       absorb({y}, r);
@@ -316,6 +317,9 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
       frontier.push_back(x);
     }
   std::size_t retested = 0, promoted = 0;
+  // Until the re-test is over, a redundant bar may not be in the span of the independent ones:
+  // it cannot certify that a joint is attached to a region.
+  spanned_ = false;
   while (!frontier.empty() && promoted < lost) {
     const std::uint32_t x = frontier.front();
     frontier.pop_front();
@@ -335,6 +339,7 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
       }
     }
   }
+  spanned_ = true;
   return retested;
 }
 

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -346,4 +347,66 @@ TEST_CASE("a bisection whose step falls below growth.dt_min fails with status dt
   CHECK(d.result().message.find("dt_min") != std::string::npos);
   CHECK(rec.failed == 1);
   CHECK_FALSE(d.result().jamming);  // never reports a jammed state it did not find
+}
+
+// growth.adaptive_dt (docs/growth.md, "Adaptive growth step"). L = 6, seed 3, P0 = 1e-4: the
+// packing jams (for good, after two unjammings) near step 1520; above it every bud is compressed
+// and g_max = max exp(−p/P0) soon falls below the floor 1e-6, so steps start from Δt = 10⁶.
+// Measured: Δφ = 1e-2 is reached ~100 accepted steps (≈ 500 attempts with the landings) after
+// jamming in the CLI run with targets [1e-3, 1e-2, 3e-2] (growth time Σ Δt ≈ 3·10⁷: a nominal step
+// advances the time by at most dt = 1). With these two targets the run ends after 1762 steps.
+TEST_CASE("adaptive_dt lands strong-feedback targets in far fewer steps, each starting from dt / max(g_max, floor)",
+          "[driver][adaptive]") {
+  Scene s = small_scene();
+  s.P0 = 1e-4;
+  s.adaptive_dt = true;
+  s.targets = {1e-3, 1e-2};
+  Recorder rec{Needs{false, false, true, false}};
+  GrowthDriver d(s);
+  d.add_observer(rec);
+  REQUIRE(d.run() == RunStatus::finished);
+  const RunResult& res = d.result();
+  REQUIRE(res.jamming);
+  REQUIRE(res.targets.size() == 2);
+  for (std::size_t k = 0; k < 2; ++k) CHECK(std::abs(res.targets[k].phi - (res.jamming->phi + s.targets[k])) <= 5e-9);
+
+  // Every accepted step above jamming started from dt / max(g_max, floor) of the previous accepted
+  // state and was halved a whole number of times (the bisection restarts from the adaptive Δt).
+  const auto& steps = rec.steps;
+  double growth_time = 0;
+  std::size_t above_nominal = 0;
+  for (std::size_t k = 1; k < steps.size(); ++k) {
+    const auto& a = steps[k - 1];
+    const auto& b = steps[k];
+    if (b.step <= res.jamming->step) continue;  // the final jamming episode only
+    REQUIRE(a.phase == Phase::jammed);
+    REQUIRE(a.pressures.size() == a.packing.size());
+    double g_max = 0;
+    for (double p : a.pressures) g_max = std::max(g_max, growth_factor(p, s.P0));
+    const double start = s.dt / std::max(g_max, s.adaptive_floor);
+    const double lg = std::log2(start / b.dt);
+    CHECK(lg >= 0);
+    CHECK(lg == std::round(lg));
+    growth_time += b.dt;
+    if (b.dt > s.dt) ++above_nominal;
+  }
+  CHECK(above_nominal > 0);
+  const long attempts = res.accepted + res.rejected;
+  INFO("growth steps (accepted + rejected) = " << attempts << ", growth time above jamming = " << growth_time);
+  CHECK(attempts < 3000);  // measured ≈ 2000 in all (≈ 1500 before the final jamming)
+  // Steps longer than the nominal one were taken (a nominal run needs ≥ growth_time steps above jamming).
+  CHECK(growth_time > static_cast<double>(above_nominal));
+
+  // Same seed ⇒ the same run.
+  GrowthDriver again(s);
+  again.run();
+  CHECK(same_result(again.result(), res));
+  CHECK(same_packing(again.packing(), d.packing()));
+}
+
+TEST_CASE("adaptive_dt off keeps MODEL.md's nominal step above jamming", "[driver]") {
+  // The reference run (adaptive_dt = false): no accepted step is longer than growth.dt.
+  const Reference& r = reference();
+  CHECK_FALSE(r.scene.adaptive_dt);
+  for (const auto& st : r.rec.steps) CHECK(st.dt <= r.scene.dt);
 }

@@ -216,7 +216,7 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
     std::string toml, message;
   };
   const std::vector<Case> cases = {
-      {"[growth]\nP00 = 1\n", "test.toml:2:1: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps)"},
+      {"[growth]\nP00 = 1\n", "test.toml:2:1: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps, adaptive_dt, adaptive_floor)"},
       {"[grwoth]\nP0 = 1\n", "test.toml:1:2: grwoth: unknown section"},
       {"L = 8\n", "test.toml:1:1: L: unknown key"},
       {"[observe.moduli]\nevery_step = 1\n", "observe.moduli.every_step: unknown key"},
@@ -263,7 +263,7 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[minimiser]\nf_dec = 1\n", "minimiser.f_dec: must lie in (0, 1)"},
       {"[minimiser]\nalpha_start = 0\n", "minimiser.alpha_start: must lie in (0, 1)"},
       {"[minimiser]\nf_alpha = 1.5\n", "minimiser.f_alpha: must lie in (0, 1]"},
-      {"[minimiser]\ndt_start = 2\n", "minimiser.dt_start: must not exceed minimiser.dt_max = 1"},
+      {"[minimiser]\ndt_max = 1.0\ndt_start = 2\n", "minimiser.dt_start: must not exceed minimiser.dt_max = 1"},
       {"[minimiser]\ndt_min = 0.5\n", "minimiser.dt_min: must not exceed minimiser.dt_start = 0.1"},
       {"[minimiser]\nn_delay = -1\n", "minimiser.n_delay: must be zero or positive"},
       {"[minimiser]\nforce_tol = 0\n", "minimiser.force_tol: must be positive"},

@@ -129,6 +129,7 @@ class PebbleGame {
   std::vector<int> region_;         // per joint: a region id, −1 if none
   std::vector<int> region_parent_;  // union–find over region ids
   std::vector<std::vector<std::uint32_t>> neighbours_;  // per joint, over all bars
+  bool spanned_ = true;  // every bar lies in the span of the independent ones (false mid-removal)
   PebbleWork work_;
 };
 
