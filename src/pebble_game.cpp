@@ -95,8 +95,10 @@ void PebbleGame::record_region(const std::vector<std::uint32_t>& joints) {
 bool PebbleGame::attached(std::uint32_t joint, int root) {
   // Two bars to two distinct joints of a rigid region pin a joint to it (a triangle on a rigid
   // base, generic positions).
+  // Mid-removal, only bars known to lie in the span of the independent ones may certify it.
   std::uint32_t first = none;
-  for (std::uint32_t y : neighbours_[joint]) {
+  for (const auto& [y, k] : neighbours_[joint]) {
+    if (!spanned_ && !independent_[k] && !certified_[k]) continue;
     if (region_root(y) != root) continue;
     if (first == none) first = y;
     else if (y != first) return true;
@@ -105,10 +107,9 @@ bool PebbleGame::attached(std::uint32_t joint, int root) {
 }
 
 void PebbleGame::absorb(const std::vector<std::uint32_t>& from, int root) {
-  if (!spanned_) return;
   std::vector<std::uint32_t> queue(from);
   for (std::size_t h = 0; h < queue.size(); ++h)
-    for (std::uint32_t y : neighbours_[queue[h]])
+    for (const auto& [y, k] : neighbours_[queue[h]])
       if (region_[y] < 0 && attached(y, root)) {
         region_[y] = root;
         queue.push_back(y);
@@ -220,9 +221,9 @@ bool PebbleGame::play(std::uint32_t a, std::uint32_t b) {
   return true;
 }
 
-void PebbleGame::link(std::uint32_t a, std::uint32_t b) {
-  neighbours_[a].push_back(b);
-  neighbours_[b].push_back(a);
+void PebbleGame::link(std::uint32_t a, std::uint32_t b, std::uint32_t bar) {
+  neighbours_[a].push_back({b, bar});
+  neighbours_[b].push_back({a, bar});
   // A new bar can pin an unlabelled end to its partner's rigid region.
   for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}})
     if (const int r = region_root(x); r >= 0 && region_[y] < 0 && attached(y, r)) {
@@ -243,7 +244,7 @@ bool PebbleGame::add_bar(std::uint32_t a, std::uint32_t b) {
     throw std::invalid_argument("pebble game: bar (" + std::to_string(a) + ", " + std::to_string(b) +
                                 ") needs two distinct existing joints");
   const bool ind = play(a, b);
-  link(a, b);
+  link(a, b, static_cast<std::uint32_t>(bars_.size()));
   bars_.push_back({a, b});
   independent_.push_back(ind ? 1 : 0);
   n_independent_ += ind ? 1 : 0;
@@ -281,9 +282,9 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   bars_.resize(kept);
   independent_.resize(kept);
   for (auto& list : neighbours_) list.clear();
-  for (const Bar& e : bars_) {
-    neighbours_[e.a].push_back(e.b);
-    neighbours_[e.b].push_back(e.a);
+  for (std::size_t k = 0; k < bars_.size(); ++k) {
+    neighbours_[bars_[k].a].push_back({bars_[k].b, static_cast<std::uint32_t>(k)});
+    neighbours_[bars_[k].b].push_back({bars_[k].a, static_cast<std::uint32_t>(k)});
   }
   if (lost == 0) return 0;  // a redundant bar's departure changes neither the rank nor any region
   forget_regions();
@@ -309,7 +310,8 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
       inc[fill[bars_[k].b]++] = {bars_[k].a, static_cast<std::uint32_t>(k)};
     }
   }
-  std::vector<char> seen(n, 0), tested(m, 0);
+  std::vector<char> seen(n, 0);
+  certified_.assign(m, 0);  // re-tested: in the span again
   std::deque<std::uint32_t> frontier;
   for (std::uint32_t x : sources)
     if (!seen[x]) {
@@ -317,8 +319,8 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
       frontier.push_back(x);
     }
   std::size_t retested = 0, promoted = 0;
-  // Until the re-test is over, a redundant bar may not be in the span of the independent ones:
-  // it cannot certify that a joint is attached to a region.
+  // Until it has been re-tested, a redundant bar may not be in the span of the independent ones:
+  // it cannot certify that a joint is attached to a region (attached()).
   spanned_ = false;
   while (!frontier.empty() && promoted < lost) {
     const std::uint32_t x = frontier.front();
@@ -329,14 +331,14 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
         seen[y] = 1;
         frontier.push_back(y);
       }
-      if (independent_[k] || tested[k]) continue;
-      tested[k] = 1;
+      if (independent_[k] || certified_[k]) continue;
       ++retested;
       if (play(bars_[k].a, bars_[k].b)) {
         independent_[k] = 1;
         ++n_independent_;
         ++promoted;
       }
+      certified_[k] = 1;
     }
   }
   spanned_ = true;

@@ -233,7 +233,8 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   LanczosOptions lo;
   lo.nev = nev;
   const int idim = static_cast<int>(dim);
-  lo.ncv = opt.ncv > 0 ? std::min(opt.ncv, idim) : std::min(idim, std::max(2 * nev + 1, nev + 20));
+  // An explicit ncv is raised to nev + 1 if the inertia count raised nev past it.
+  lo.ncv = opt.ncv > 0 ? std::min(idim, std::max(opt.ncv, nev + 1)) : std::min(idim, std::max(2 * nev + 1, nev + 20));
   lo.tol = opt.tol;
   lo.vectors = opt.vectors;
   lo.start.resize(n3);

@@ -112,7 +112,7 @@ class PebbleGame {
   void forget_regions();
   bool attached(std::uint32_t joint, int root);
   void absorb(const std::vector<std::uint32_t>& from, int root);
-  void link(std::uint32_t a, std::uint32_t b);  // adjacency + absorption for a new bar
+  void link(std::uint32_t a, std::uint32_t b, std::uint32_t bar);  // adjacency + absorption for a new bar
 
   Digraph g_;
   std::vector<std::uint8_t> free_;
@@ -128,8 +128,9 @@ class PebbleGame {
   std::uint32_t now_ = 0;
   std::vector<int> region_;         // per joint: a region id, −1 if none
   std::vector<int> region_parent_;  // union–find over region ids
-  std::vector<std::vector<std::uint32_t>> neighbours_;  // per joint, over all bars
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> neighbours_;  // per joint: (joint, bar)
   bool spanned_ = true;  // every bar lies in the span of the independent ones (false mid-removal)
+  std::vector<char> certified_;  // mid-removal: redundant bars already re-tested
   PebbleWork work_;
 };
 

@@ -67,7 +67,8 @@ struct SpectrumOptions {
   int modes = 100;                   // ARPACK: K modes by Lanczos besides the deflated cell-local
                                      // zero modes (so at least the lowest K); packing_spectrum():
                                      // ≤ 0 means as many as ω* needs
-  int ncv = 0;                       // ARPACK Lanczos vectors; 0 = min(3n−2, max(2K+1, K+20))
+  int ncv = 0;                       // ARPACK Lanczos vectors; 0 = max(2K+1, K+20) (K: Lanczos modes,
+                                     // after the inertia guard); at least K + 1
   double tol = 0.0;                  // ARPACK relative residual tolerance; 0 = machine precision
   double sigma = -1e-3;              // ARPACK shift (units k/m); negative so K − σI is positive
                                      // definite despite the zero modes. Retried ×10 more negative
