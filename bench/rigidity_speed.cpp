@@ -112,12 +112,10 @@ int main(int argc, char** argv) {
     // From scratch, in parts.
     const Framework fw = build_framework(p, s.lobes, s.contacts, s.net, RigidityNetwork::load_bearing);
     PebbleGame game;
-    const double t_game = timed(repeat, [&] {  // cell bars first, as analyse_rigidity plays them
+    const std::vector<std::size_t> order = play_order(fw, s.lobes, p.box);  // as analyse_rigidity
+    const double t_game = timed(repeat, [&] {
       game.reset(fw.joints);
-      for (const Bar& e : fw.bars)
-        if (is_cell_bar(e)) game.add_bar(e.a, e.b);
-      for (const Bar& e : fw.bars)
-        if (!is_cell_bar(e)) game.add_bar(e.a, e.b);
+      for (std::size_t k : order) game.add_bar(fw.bars[k].a, fw.bars[k].b);
     });
     RigidClusters rc;
     const double t_clusters = timed(repeat, [&] { rc = game.rigid_clusters(); });
@@ -168,12 +166,14 @@ int main(int argc, char** argv) {
       t_ins_update = per_update[per_update.size() / 2];
     }
 
-    // Removal of one contact (an independent bar when possible): retest vs rebuild, game only.
+    // Removal of one contact (an independent bar): re-test vs replaying the game, game only.
     double t_rm_retest = 0, t_rm_rebuild = 0;
     std::size_t retested = 0;
     {
+      std::vector<Bar> played_bars;
+      for (std::size_t k : order) played_bars.push_back(fw.bars[k]);
       PebbleGame g(fw.joints);
-      for (const Bar& e : fw.bars) g.add_bar(e.a, e.b);
+      for (const Bar& e : played_bars) g.add_bar(e.a, e.b);
       std::size_t victim = 0;
       for (std::size_t k = 0; k < g.bars(); ++k)
         if (g.independent(k) && !is_cell_bar(g.bar(k))) {
@@ -183,12 +183,12 @@ int main(int argc, char** argv) {
       std::vector<bool> mask(g.bars(), false);
       mask[victim] = true;
       std::vector<Bar> kept;
-      for (std::size_t k = 0; k < fw.bars.size(); ++k)
-        if (!mask[k]) kept.push_back(fw.bars[k]);
+      for (std::size_t k = 0; k < played_bars.size(); ++k)
+        if (!mask[k]) kept.push_back(played_bars[k]);
       std::vector<double> a, b;
       for (int r = 0; r < repeat; ++r) {
         PebbleGame h(fw.joints);
-        for (const Bar& e : fw.bars) h.add_bar(e.a, e.b);
+        for (const Bar& e : played_bars) h.add_bar(e.a, e.b);
         auto t0 = Clock::now();
         retested = h.remove_bars(mask);
         a.push_back(seconds_since(t0));

@@ -5,6 +5,7 @@
 #include <boost/property_map/property_map.hpp>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 namespace budjam {
@@ -34,20 +35,32 @@ ImageShift image_shift(const Box& box, const Lobes& lobes, std::uint32_t a, std:
   return s;
 }
 
-// The framework's bars in the order they are played from scratch: the cells' own bars first
-// (each one is independent and costs no search), then the contacts. Measured on jammed packings
-// this is ~15 % faster than lobe order.
-std::vector<std::size_t> play_order(const std::vector<Bar>& bars) {
-  std::vector<std::size_t> order;
-  order.reserve(bars.size());
-  for (std::size_t k = 0; k < bars.size(); ++k)
-    if (is_cell_bar(bars[k])) order.push_back(k);
-  for (std::size_t k = 0; k < bars.size(); ++k)
-    if (!is_cell_bar(bars[k])) order.push_back(k);
-  return order;
+// Z-order (Morton) index of a point of the box on a 2¹⁶ × 2¹⁶ grid.
+std::uint32_t morton(const Box& box, double x, double y) {
+  wrap(box, x, y);
+  const auto cell = [&](double v) {
+    return static_cast<std::uint32_t>(std::clamp(v / box.L * 65536.0, 0.0, 65535.0));
+  };
+  const std::uint32_t ix = cell(x), iy = cell(y);
+  std::uint32_t key = 0;
+  for (int bit = 0; bit < 16; ++bit) key |= (((ix >> bit) & 1u) << (2 * bit)) | (((iy >> bit) & 1u) << (2 * bit + 1));
+  return key;
 }
 
+
 }  // namespace
+
+std::vector<std::size_t> play_order(const Framework& fw, const Lobes& lobes, const Box& box) {
+  std::vector<std::uint32_t> key(fw.bars.size());
+  for (std::size_t k = 0; k < fw.bars.size(); ++k) {
+    const std::uint32_t mother = fw.bars[k].a & ~1u;
+    key[k] = morton(box, lobes.x[mother], lobes.y[mother]);
+  }
+  std::vector<std::size_t> order(fw.bars.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return key[p] < key[q]; });
+  return order;
+}
 
 Framework build_framework(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
                           const ContactNetwork& net, RigidityNetwork which) {
@@ -206,7 +219,7 @@ RigidityState analyse_rigidity(const Packing& p, const Lobes& lobes, const std::
   PebbleGame game(fw.joints);
   std::vector<ImageShift> shift;
   shift.reserve(fw.bars.size());
-  for (std::size_t k : play_order(fw.bars)) {
+  for (std::size_t k : play_order(fw, lobes, p.box)) {
     game.add_bar(fw.bars[k].a, fw.bars[k].b);
     shift.push_back(fw.shift[k]);
   }
@@ -228,10 +241,11 @@ const char* to_string(RigidityEventKind kind) {
 
 RigidityTracker::RigidityTracker(RigidityNetwork which, RemovalPolicy policy) : which_(which), policy_(policy) {}
 
-void RigidityTracker::rebuild(const Framework& fw, const std::vector<std::uint64_t>& keys) {
+void RigidityTracker::rebuild(const Framework& fw, const std::vector<std::uint64_t>& keys, const Lobes& lobes,
+                              const Box& box) {
   game_.reset(fw.joints);
   keys_.clear();
-  for (std::size_t k : play_order(fw.bars)) {
+  for (std::size_t k : play_order(fw, lobes, box)) {
     game_.add_bar(fw.bars[k].a, fw.bars[k].b);
     keys_.push_back(keys[k]);
   }
@@ -247,9 +261,9 @@ const std::vector<RigidityEvent>& RigidityTracker::update(const Packing& p, cons
   const auto in_new = [&](std::uint64_t key) { return std::binary_search(keys.begin(), keys.end(), key); };
 
   last_ = RigidityUpdate{};
-  if (!has_state_ || game_.joints() > fw.joints) {
+  if (!game_current_ || game_.joints() > fw.joints) {
     last_.bars_added = fw.bars.size();
-    rebuild(fw, keys);
+    rebuild(fw, keys, lobes, p.box);
   } else {
     std::vector<bool> remove(keys_.size(), false);
     for (std::size_t k = 0; k < keys_.size(); ++k) {
@@ -264,7 +278,7 @@ const std::vector<RigidityEvent>& RigidityTracker::update(const Packing& p, cons
       if (!std::binary_search(old_sorted.begin(), old_sorted.end(), key)) ++last_.bars_added;
 
     if (last_.bars_removed > 0 && policy_ == RemovalPolicy::rebuild) {
-      rebuild(fw, keys);
+      rebuild(fw, keys, lobes, p.box);
     } else {
       while (game_.joints() < fw.joints) game_.add_joint();  // newborn cells
       if (last_.bars_removed > 0) {
@@ -287,32 +301,40 @@ const std::vector<RigidityEvent>& RigidityTracker::update(const Packing& p, cons
   for (std::size_t k = 0; k < keys_.size(); ++k)
     shift[k] = fw.shift[static_cast<std::size_t>(std::lower_bound(keys.begin(), keys.end(), keys_[k]) - keys.begin())];
 
-  const RigidityState before = std::move(state_);
+  game_current_ = true;
   state_ = summarise_rigidity(game_, shift, fw.cell_included, which_);
-  diff_events(p, before, !has_state_);
-  has_state_ = true;
+  diff_events(p);
   return events_;
 }
 
-void RigidityTracker::diff_events(const Packing& p, const RigidityState& before, bool first) {
+void RigidityTracker::restore(const RigidityMemory& memory) {
+  if (!std::is_sorted(memory.cells.begin(), memory.cells.end()))
+    throw std::invalid_argument("rigidity tracker: remembered cells are not sorted by id");
+  memory_ = memory;
+  game_current_ = false;
+  keys_.clear();
+}
+
+void RigidityTracker::diff_events(const Packing& p) {
   events_.clear();
-  const auto code = [](const RigidityState& s) { return long{s.spans_x} + 2L * long{s.spans_y}; };
-  if (first || before.floppy_plane != state_.floppy_plane)
-    events_.push_back({RigidityEventKind::floppy_modes, -1, first ? -1L : before.floppy_plane, state_.floppy_plane});
-  if (!first && code(before) != code(state_))
-    events_.push_back({RigidityEventKind::spanning, -1, code(before), code(state_)});
-  if (!spanned_ && code(state_) != 0) {
-    spanned_ = true;
-    events_.push_back({RigidityEventKind::first_spanning, -1, 0, code(state_)});
+  const bool first = !memory_.has_state;
+  const long code = long{state_.spans_x} + 2L * long{state_.spans_y};
+  if (first || memory_.floppy_plane != state_.floppy_plane)
+    events_.push_back({RigidityEventKind::floppy_modes, -1, first ? -1L : memory_.floppy_plane, state_.floppy_plane});
+  if (!first && memory_.span_code != code) events_.push_back({RigidityEventKind::spanning, -1, memory_.span_code, code});
+  if (!memory_.spanned && code != 0) {
+    memory_.spanned = true;
+    events_.push_back({RigidityEventKind::first_spanning, -1, 0, code});
   }
 
-  std::vector<std::pair<std::int64_t, std::uint8_t>> flags(p.size());
+  std::vector<std::pair<std::int64_t, std::uint8_t>> cells(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) {
     const std::uint8_t f = static_cast<std::uint8_t>((state_.in_largest(i) ? 1 : 0) | (state_.bud_rigid(i) ? 2 : 0));
-    flags[i] = {p.id[i], f};
+    cells[i] = {p.id[i], f};
     if (first) continue;
-    const auto it = std::lower_bound(flags_.begin(), flags_.end(), std::make_pair(p.id[i], std::uint8_t{0}));
-    const std::uint8_t old = (it != flags_.end() && it->first == p.id[i]) ? it->second : 0;  // newborn: 0
+    const auto& old_cells = memory_.cells;
+    const auto it = std::lower_bound(old_cells.begin(), old_cells.end(), std::make_pair(p.id[i], std::uint8_t{0}));
+    const std::uint8_t old = (it != old_cells.end() && it->first == p.id[i]) ? it->second : 0;  // newborn: 0
     if ((old & 2) != (f & 2))
       events_.push_back({(f & 2) ? RigidityEventKind::bud_rigid : RigidityEventKind::bud_released, p.id[i],
                          (old & 2) ? 1L : 0L, (f & 2) ? 1L : 0L});
@@ -320,8 +342,11 @@ void RigidityTracker::diff_events(const Packing& p, const RigidityState& before,
       events_.push_back({(f & 1) ? RigidityEventKind::joined_largest : RigidityEventKind::left_largest, p.id[i],
                          (old & 1) ? 1L : 0L, (f & 1) ? 1L : 0L});
   }
-  std::sort(flags.begin(), flags.end());
-  flags_ = std::move(flags);
+  std::sort(cells.begin(), cells.end());
+  memory_.cells = std::move(cells);
+  memory_.has_state = true;
+  memory_.floppy_plane = state_.floppy_plane;
+  memory_.span_code = code;
 }
 
 }  // namespace budjam

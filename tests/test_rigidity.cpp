@@ -596,3 +596,34 @@ TEST_CASE("the first spanning rigid cluster is reported once, when it appears", 
   CHECK(spanned_before);
   CHECK(reported == 1);
 }
+
+TEST_CASE("a tracker restored from another's memory reports the same events for the next state", "[fast]") {
+  const Packing p = random_packing(150, 1.8, 13);
+  const Analysed a = analyse(p);
+  std::vector<Contact> order(a.contacts);
+  std::mt19937_64 rng(8);
+  std::shuffle(order.begin(), order.end(), rng);
+  const std::vector<Contact> first(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(order.size() * 8 / 10));
+  std::vector<Contact> second(order.begin() + 40, order.end());  // some contacts lost, others gained
+  const ContactNetwork n1 = analyse_network(p.size(), first), n2 = analyse_network(p.size(), second);
+
+  RigidityTracker original;
+  original.update(p, a.lobes, first, n1);
+  RigidityTracker resumed;
+  resumed.restore(original.memory());
+  const std::vector<RigidityEvent> expected = original.update(p, a.lobes, second, n2);
+  const std::vector<RigidityEvent> got = resumed.update(p, a.lobes, second, n2);
+  CHECK(resumed.last_update().rebuilt);
+  REQUIRE(got.size() == expected.size());
+  REQUIRE(!got.empty());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    CHECK(got[k].kind == expected[k].kind);
+    CHECK(got[k].cell == expected[k].cell);
+    CHECK(got[k].before == expected[k].before);
+    CHECK(got[k].after == expected[k].after);
+  }
+  require_same(resumed.state(), original.state());
+  RigidityMemory unsorted = original.memory();
+  std::reverse(unsorted.cells.begin(), unsorted.cells.end());
+  CHECK_THROWS_AS(resumed.restore(unsorted), std::invalid_argument);
+}

@@ -25,9 +25,9 @@ struct Options {
   std::string packing;
   std::string method = "auto";
   int modes = 0;
-  double tol = 0.0;
+  double tol = SpectrumOptions{}.tol;
   int ncv = 0;
-  double sigma = -1e-3;
+  double sigma = SpectrumOptions{}.sigma;
   double lambda_tol = 1e-6;
   std::size_t bins = 50;
   std::size_t dense_max_dof = SpectrumOptions{}.dense_max_dof;

@@ -51,6 +51,12 @@ inline bool is_cell_bar(const Bar& bar) { return bar.a % 2 == 0 && bar.b == bar.
 Framework build_framework(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
                           const ContactNetwork& net, RigidityNetwork which);
 
+// The order in which analyse_rigidity (and a tracker rebuild) plays the bars: cell by cell along
+// a Z-order curve through the box (a cell's own bar, then its contacts with higher lobes).
+// Spatially coherent insertion keeps the known rigid regions compact, so joints get attached to
+// them before a search fails on them; on jammed packings it halves the search work of lobe order.
+std::vector<std::size_t> play_order(const Framework& fw, const Lobes& lobes, const Box& box);
+
 // Rigidity percolation. Breadth-first search over the bars of each cluster (Boost.Graph),
 // carrying the image offset of every joint; a joint reached with two different offsets closes a
 // cycle that winds around the box: in x if the offsets differ in x, in y if they differ in y.
@@ -133,6 +139,16 @@ struct RigidityUpdate {
   std::size_t retested = 0;         // redundant bars re-tested after an independent bar left
 };
 
+// What a tracker remembers of the previous state: all it needs to diff the next one. Plain data,
+// so that a checkpoint can store it (the pebble game itself is rebuilt after a restore).
+struct RigidityMemory {
+  bool has_state = false;
+  bool spanned = false;    // the first spanning cluster has been reported
+  long floppy_plane = 0;
+  long span_code = 0;      // spans_x + 2·spans_y
+  std::vector<std::pair<std::int64_t, std::uint8_t>> cells;  // sorted by id: bit 0 in largest, bit 1 bud rigid
+};
+
 // How the tracker handles contacts that disappear. `retest`: remove them from the pebble state
 // (free for a redundant bar) and re-test the redundant bars once if an independent one left.
 // `rebuild`: replay the whole game (the reference, to compare costs).
@@ -155,20 +171,24 @@ class RigidityTracker {
   const RigidityUpdate& last_update() const { return last_; }
   const std::vector<RigidityEvent>& events() const { return events_; }
   const PebbleGame& game() const { return game_; }
-  bool has_spanned() const { return spanned_; }
+  bool has_spanned() const { return memory_.spanned; }
+
+  const RigidityMemory& memory() const { return memory_; }
+  // Continue from a remembered state (e.g. after --resume): the next update replays the game
+  // and reports the changes since `memory`.
+  void restore(const RigidityMemory& memory);
 
  private:
-  void rebuild(const Framework& fw, const std::vector<std::uint64_t>& keys);
-  void diff_events(const Packing& p, const RigidityState& before, bool first);
+  void rebuild(const Framework& fw, const std::vector<std::uint64_t>& keys, const Lobes& lobes, const Box& box);
+  void diff_events(const Packing& p);
 
   RigidityNetwork which_;
   RemovalPolicy policy_;
   PebbleGame game_;
+  bool game_current_ = false;        // the game holds the framework of the last state
   std::vector<std::uint64_t> keys_;  // (a << 32) | b of every game bar
   RigidityState state_;
-  bool has_state_ = false;
-  bool spanned_ = false;
-  std::vector<std::pair<std::int64_t, std::uint8_t>> flags_;  // by id: bit 0 in largest, bit 1 bud rigid
+  RigidityMemory memory_;
   std::vector<RigidityEvent> events_;
   RigidityUpdate last_;
 };
