@@ -3,6 +3,7 @@
 #include "io/scene_file.hpp"
 
 #include <catch2/catch.hpp>
+#include "scratch.hpp"
 
 #include <cstdlib>
 #include <filesystem>
@@ -22,30 +23,8 @@ struct Result {
   std::string out, err;
 };
 
-// A scratch directory for this process, removed at exit.
-struct WorkDir {
-  fs::path path = fs::temp_directory_path() / ("budjam-cli-" + std::to_string(::getpid()));
-  WorkDir() {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~WorkDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-const fs::path& work_dir() {
-  static const WorkDir dir;
-  return dir.path;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using budjam::testing::work_dir;
+using budjam::testing::slurp;
 
 fs::path write(const std::string& name, const std::string& text) {
   const fs::path p = work_dir() / name;

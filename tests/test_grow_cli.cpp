@@ -3,6 +3,7 @@
 #include "io/packing_file.hpp"
 
 #include <catch2/catch.hpp>
+#include "scratch.hpp"
 
 #include <chrono>
 #include <csignal>
@@ -18,29 +19,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct WorkDir {
-  fs::path path = fs::temp_directory_path() / ("budjam-grow-cli-" + std::to_string(::getpid()));
-  WorkDir() {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~WorkDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-const fs::path& work_dir() {
-  static const WorkDir dir;
-  return dir.path;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using budjam::testing::work_dir;
+using budjam::testing::slurp;
 
 std::string exe() {
   const char* e = std::getenv("BUDJAM_EXE");

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
+#include "scratch.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -59,22 +60,7 @@ Relaxed jammed(std::size_t n, double P, double b_min, double b_max, std::uint64_
 
 namespace fs = std::filesystem;
 
-// A scratch directory for this process, removed at exit.
-struct WorkDir {
-  fs::path path = fs::temp_directory_path() / ("budjam-moduli-" + std::to_string(::getpid()));
-  WorkDir() {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~WorkDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-const fs::path& work_dir() {
-  static const WorkDir dir;
-  return dir.path;
-}
+using budjam::testing::work_dir;
 
 // Runs `budjam <args>`; returns the exit code and stdout.
 std::pair<int, std::string> run_budjam(const std::string& args) {
