@@ -77,7 +77,11 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
                    {"ncv", s.ncv},
                    {"tol", request.spectrum.tol},
                    {"restarts", s.restarts},
-                   {"operator_applications", s.operator_applications}};
+                   {"operator_applications", s.operator_applications},
+                   {"deflated_local_zero_modes", s.local.size()},
+                   {"N_zero_inertia", s.inertia_count >= 0 ? Json(s.inertia_count) : Json(nullptr)},
+                   {"inertia_below_top", s.inertia_below_top >= 0 ? Json(s.inertia_below_top) : Json(nullptr)},
+                   {"retries", s.retries}};
   } else {
     j["arpack"] = nullptr;
   }

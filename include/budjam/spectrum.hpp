@@ -81,6 +81,9 @@ struct SpectrumOptions {
   double local_zero_tol = 1e-10;     // ... singular value threshold relative to max|K|
   double inertia_tol = 1e-6;         // ARPACK: also count #{λ < inertia_tol} by Sylvester inertia
                                      // (one LDLᵀ); the Lanczos run then takes all of them (0: skip)
+  bool verify = true;                // ARPACK: check by inertia that no mode below the highest
+                                     // computed one (less 1e-9 max|K|) was missed; if one was, rerun once with tol 0
+                                     // and 2·ncv, then throw
 };
 
 // A zero mode supported on one cell: mass-weighted unit 3-vector e on block `block` (the cell's
@@ -109,6 +112,8 @@ struct Spectrum {
   double sigma = 0;              // shift actually used
   int ncv = 0, restarts = 0, operator_applications = 0;
   long inertia_count = -1;       // #{λ < inertia_tol} by Sylvester inertia; −1 if not computed
+  long inertia_below_top = -1;   // #{λ < max computed λ − 1e-9 max|K|} by inertia (verify); −1 if not
+  int retries = 0;               // Lanczos reruns after the verification found a missed mode
   double seconds_factorise = 0, seconds_lanczos = 0;
 
   bool complete() const { return static_cast<std::size_t>(lambda.size()) == n_dof; }
