@@ -1,14 +1,24 @@
 // Rigidity of packings: framework construction, floppy-mode conventions against the periodic
 // rigidity matrix, rigidity percolation, and the tracker (incremental = from scratch, events).
 #include "budjam/contact_network.hpp"
+#include "budjam/growth_driver.hpp"
 #include "budjam/rigidity.hpp"
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
+#include <sys/wait.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
+#include <sstream>
+#include <unistd.h>
 
 using namespace budjam;
 
@@ -626,4 +636,96 @@ TEST_CASE("a tracker restored from another's memory reports the same events for 
   RigidityMemory unsorted = original.memory();
   std::reverse(unsorted.cells.begin(), unsorted.cells.end());
   CHECK_THROWS_AS(resumed.restore(unsorted), std::invalid_argument);
+}
+
+TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing as JSON", "[fast]") {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("budjam-test-rigidity-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const Packing p = random_packing(120, 1.6, 4);
+  io::write_packing(dir / "p.pack", p);
+  const Analysed a = analyse(p);  // brute-force contacts: the command finds them by neighbour list
+  const auto run = [&](const std::string& args) {
+    const std::string cmd = "'" + std::string(exe) + "' rigidity '" + (dir / "p.pack").string() + "' " + args +
+                            " >'" + (dir / "out.json").string() + "' 2>/dev/null";
+    const int status = std::system(cmd.c_str());
+    REQUIRE(WIFEXITED(status));
+    std::ifstream in(dir / "out.json");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return std::make_pair(WEXITSTATUS(status), text.str());
+  };
+  for (RigidityNetwork which : {RigidityNetwork::load_bearing, RigidityNetwork::raw}) {
+    const bool lb = which == RigidityNetwork::load_bearing;
+    const auto [code, text] = run(lb ? "" : "--network raw");
+    REQUIRE(code == 0);
+    const io::Json j = io::Json::parse(text);
+    const RigidityState s = analyse_rigidity(p, a.lobes, a.contacts, a.net, which);
+    CHECK(j["N"] == p.size());
+    CHECK(j["N_nr"] == a.net.N_nr);
+    CHECK(j["N_u"] == a.net.N_u);
+    CHECK(j["contacts"] == a.contacts.size());
+    CHECK(j["redundant_bars"] == s.redundant_bars);
+    CHECK(j["floppy_modes"]["plane"] == s.floppy_plane);
+    CHECK(j["floppy_modes"]["periodic"] == s.floppy_periodic);
+    CHECK(j["rigid_clusters"]["count"] == s.clusters.size());
+    CHECK(j["rigid_clusters"]["largest_cells"] == s.largest_cells());
+    CHECK(j["spans_x"] == s.spans_x);
+    CHECK(j["spans_y"] == s.spans_y);
+  }
+  CHECK(run("--network nonsense").first == 2);  // bad input
+  fs::remove_all(dir);
+}
+
+TEST_CASE("along a real growth run above jamming: tracker = scratch at every state, floppy modes = N_u at jamming",
+          "[.hard]") {
+  // Packings a hair above jamming (E/N ~ 1e-16, nearly isostatic), then compressed by growth with
+  // divisions, contact losses and gains: the incremental tracker must agree with a fresh analysis
+  // at every accepted state, and at jamming every floppy mode is an unconstrained lobe.
+  struct Check : Observer {
+    RigidityTracker tracker;
+    Lobes lobes;
+    long states = 0, incremental = 0, jammings = 0;
+    std::string name() const override { return "rigidity-check"; }
+    Needs needs() const override {
+      Needs n;
+      n.contacts = n.network = true;
+      return n;
+    }
+    void on_step_accepted(const StepAccepted& e) override {
+      const StateView& s = e.state;
+      if (s.phase != Phase::jammed || !s.contacts || !s.network) return;
+      place_lobes(*s.packing, lobes);
+      tracker.update(*s.packing, lobes, *s.contacts, *s.network);
+      const RigidityState fresh = analyse_rigidity(*s.packing, lobes, *s.contacts, *s.network);
+      INFO("step " << s.step);
+      require_same(tracker.state(), fresh);
+      CHECK(fresh.floppy_plane >= static_cast<long>(s.network->N_u));
+      ++states;
+      incremental += tracker.last_update().rebuilt ? 0 : 1;
+    }
+    void on_jammed(const Jammed& e) override {
+      ++jammings;
+      const RigidityState& r = tracker.state();
+      CHECK(r.floppy_plane == static_cast<long>(e.jamming.N_u));
+      CHECK((r.spans_x && r.spans_y));
+      CHECK(r.redundant_bars >= 1);  // the pressure at jamming needs a state of self-stress
+    }
+  };
+  for (std::uint64_t seed : {1u, 2u}) {
+    Scene scene;
+    scene.L = 8.0;
+    scene.seed = seed;
+    scene.P0 = 1e-3;
+    scene.targets = {1e-3, 1e-2, 3e-2};
+    Check check;
+    GrowthDriver driver(scene);
+    driver.add_observer(check);
+    REQUIRE(driver.run() == RunStatus::finished);
+    CHECK(check.jammings >= 1);
+    CHECK(check.states > 20);
+    CHECK(check.incremental == check.states - check.jammings);  // only each baseline is a full game
+  }
 }

@@ -77,7 +77,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
        sub.add_option("--method", o->method, "auto (dense up to --dense-max-dof modes, else ARPACK), dense, arpack")
            ->capture_default_str();
-       sub.add_option("--modes", o->modes, "ARPACK: lowest K modes; 0 = as many as ω* needs (N_u + n_band + 16)")
+       sub.add_option("--modes", o->modes, "ARPACK: K Lanczos modes besides the deflated cell-local zero modes (so at least the lowest K); "
+                     "0 = as many as ω* needs (n_band + 16)")
            ->capture_default_str();
        sub.add_option("--tol", o->tol, "ARPACK relative residual tolerance; 0 = machine precision")
            ->capture_default_str();
