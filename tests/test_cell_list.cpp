@@ -2,6 +2,7 @@
 #include "budjam/cell_list.hpp"
 
 #include <catch2/catch.hpp>
+#include "random_packing.hpp"
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -16,23 +17,7 @@ using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 // N cells with bud diameters uniform in [b_min, b_max] at packing fraction φ, uniformly placed and
 // oriented; centroids are then shifted by random whole periods, since q is never wrapped.
 Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min = 0.01, double b_max = 1.02) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<double> b(n);
-  double area = 0;
-  for (auto& bi : b) {
-    bi = b_min + (b_max - b_min) * u(rng);
-    area += 0.25 * std::numbers::pi * (1 + bi * bi);
-  }
-  Packing p;
-  p.box.L = std::sqrt(area / phi);
-  std::uniform_int_distribution<int> period(-3, 3);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = p.box.L * (u(rng) + period(rng));
-    const double y = p.box.L * (u(rng) + period(rng));
-    p.add_cell(x, y, std::numbers::pi * (2 * u(rng) - 1), b[i], 0.002, -1);
-  }
-  return p;
+  return budjam::testing::random_packing(n, phi, seed, b_min, b_max, /*periods=*/3);
 }
 
 PairList sorted(PairList v) {
