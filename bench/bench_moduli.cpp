@@ -1,7 +1,10 @@
 // Time of one modulus computation (what `budjam moduli` does after reading the file: forces and
 // contacts, contact network, elastic_response) against the number of cells.
 //
-//   bench_moduli [N_max=10000] [P=1e-3] [repeats=3]
+//   bench_moduli [N_max=10000] [P=1e-3] [repeats=3] [solvers=cholesky]
+//
+// solvers: a comma-separated list of ModuliOptions solvers (cholesky, ldlt, dense, cg), each timed on
+// the same packings (one row each), e.g. `bench_moduli 10000 1e-3 3 cholesky,ldlt`.
 //
 // Packings: random dumbbells (buds uniform in [0.01, 1.02], the range a growing population spans)
 // placed without overlap at φ = 0.4 and compressed isotropically with FIRE to P ≈ 1e-3 by
@@ -17,6 +20,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <sstream>
+#include <string>
 #include <vector>
 
 using namespace budjam;
@@ -28,6 +33,15 @@ int main(int argc, char** argv) {
   const std::size_t n_max = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 10000;
   const double P = argc > 2 ? std::atof(argv[2]) : 1e-3;
   const int repeats = argc > 3 ? std::atoi(argv[3]) : 3;
+  std::vector<ModuliOptions> solvers;
+  {
+    std::stringstream list(argc > 4 ? argv[4] : "cholesky");
+    for (std::string name; std::getline(list, name, ',');) {
+      ModuliOptions o;
+      o.solver = parse_moduli_solver(name, "solvers");
+      solvers.push_back(o);
+    }
+  }
   FireParams fire;
   fire.dt_max = 0.4;
   std::printf("# bench_moduli: P_target %.1e, best of %d\n", P, repeats);
@@ -42,27 +56,29 @@ int main(int argc, char** argv) {
       std::printf("  %7zu compression did not converge (P %.3e)\n", n, c.P);
       continue;
     }
-    double best_contacts = 1e300, best_response = 1e300, best_total = 1e300;
-    ElasticResponse e;
-    for (int k = 0; k < repeats; ++k) {
-      const auto a = Clock::now();
-      ForceField field;
-      Eigen::VectorXd F;
-      field.evaluate(c.packing, F);
-      const auto contacts = find_contacts(c.packing, field.lobes(), field.neighbours());
-      const ContactNetwork net = analyse_network(c.packing.size(), contacts);
-      const double t_contacts = seconds_since(a);
-      const auto b = Clock::now();
-      e = elastic_response(c.packing, contacts, net);
-      const double t_response = seconds_since(b);
-      best_contacts = std::min(best_contacts, t_contacts);
-      best_response = std::min(best_response, t_response);
-      best_total = std::min(best_total, seconds_since(a));
+    for (const ModuliOptions& options : solvers) {
+      double best_contacts = 1e300, best_response = 1e300, best_total = 1e300;
+      ElasticResponse e;
+      for (int k = 0; k < repeats; ++k) {
+        const auto a = Clock::now();
+        ForceField field;
+        Eigen::VectorXd F;
+        field.evaluate(c.packing, F);
+        const auto contacts = find_contacts(c.packing, field.lobes(), field.neighbours());
+        const ContactNetwork net = analyse_network(c.packing.size(), contacts);
+        const double t_contacts = seconds_since(a);
+        const auto b = Clock::now();
+        e = elastic_response(c.packing, contacts, net, options);
+        const double t_response = seconds_since(b);
+        best_contacts = std::min(best_contacts, t_contacts);
+        best_response = std::min(best_response, t_response);
+        best_total = std::min(best_total, seconds_since(a));
+      }
+      std::printf("  %7zu %7.2f %7zu %8zu %10.3e %10.2f %12.4f %12.4f %12.4f %10.4f %10.5f  %s\n", n, c.packing.box.L, e.N_nr,
+                  e.kernel.dofs, e.P, t_make, best_contacts, best_response, best_total, e.moduli.B, e.moduli.G_simple,
+                  e.kernel.method.c_str());
+      std::fflush(stdout);
     }
-    std::printf("  %7zu %7.2f %7zu %8zu %10.3e %10.2f %12.4f %12.4f %12.4f %10.4f %10.5f  %s\n", n, c.packing.box.L, e.N_nr,
-                e.kernel.dofs, e.P, t_make, best_contacts, best_response, best_total, e.moduli.B, e.moduli.G_simple,
-                e.kernel.method.c_str());
-    std::fflush(stdout);
   }
   return 0;
 }

@@ -20,6 +20,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 from matplotlib import cm, colors  # noqa: E402
 
 PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D22), also in analysis.json
@@ -268,6 +269,8 @@ def fig3(T):
                 yerr=[g["G_2"]["se"] for g in gm], fmt="ko", capsize=3, zorder=2, label="median ± bootstrap SE")
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_ylabel(r"$G_2=G(\phi_2)$")
+    # symlog: a run near a shear instability of its box (G_2 ≪ 0) stays visible without flattening the rest
+    ax.set_yscale("symlog", linthresh=1e-2, linscale=0.5)
     ax.legend(fontsize=7, frameon=False)
     panel(ax, "C")
     fig.suptitle(f"Mechanics, L = {L:g}", fontsize=10)
@@ -281,18 +284,21 @@ def fig4(T):
     L = T.main_L
     rows = same_L(T.csv("trajectory.csv"), L)
     labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
+    # Medians over runs (the paper: means): a packing near a shear instability of its box can have
+    # G ≪ 0 and dominate the mean of a few runs (docs/moduli.md, "Shear stability").
+    P, G = "P_median", "G_median"
     fig, ax = plt.subplots(figsize=(5.8, 4.5))
     for lab in labels:
         rr = sorted([r for r in rows if r["P0"] == lab and r["endpoint"] == "false"], key=lambda r: num(r["dphi"]))
         end = [r for r in rows if r["P0"] == lab and r["endpoint"] == "true"]
-        pts = [(num(r["P"]) / PMAX, num(r["G"]) / PMAX) for r in rr if math.isfinite(num(r["G"])) and num(r["P"]) > 0]
-        if end and math.isfinite(num(end[0]["G"])) and num(end[0]["P"]) > 0:
-            pts.append((num(end[0]["P"]) / PMAX, num(end[0]["G"]) / PMAX))
+        pts = [(num(r[P]) / PMAX, num(r[G]) / PMAX) for r in rr if math.isfinite(num(r[G])) and num(r[P]) > 0]
+        if end and math.isfinite(num(end[0][G])) and num(end[0][P]) > 0:
+            pts.append((num(end[0][P]) / PMAX, num(end[0][G]) / PMAX))
         c = p0_colour(lab, labels)
         if pts:
             ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color=c, label=p0_text(lab))
-        if end and math.isfinite(num(end[0]["G"])):
-            ax.plot(num(end[0]["P"]) / PMAX, num(end[0]["G"]) / PMAX, "o", color=c, ms=7)
+        if end and math.isfinite(num(end[0][G])):
+            ax.plot(num(end[0][P]) / PMAX, num(end[0][G]) / PMAX, "o", color=c, ms=7)
     plateau = T.analysis["main"].get("G2_plateau_over_Pmax")
     if plateau:
         ax.axhline(plateau, ls="--", color="0.4", lw=1, label=r"$G_2(0^+)=n_Jk\ell_c^2M_4u_J$")
@@ -300,7 +306,7 @@ def fig4(T):
     ax.set_xlabel(r"$P/P_{\max}$")
     ax.set_ylabel(r"$G/P_{\max}$")
     ax.legend(fontsize=7, frameon=False)
-    ax.set_title(f"Post-jamming state diagram, L = {L:g}", fontsize=10)
+    ax.set_title(f"Post-jamming state diagram, L = {L:g} (medians over runs)", fontsize=10)
     save(fig, T.out, "fig4")
 
 
@@ -522,23 +528,88 @@ def figF1(T):
 # ---- accuracy against cost (issue 6) -----------------------------------------------------------------------
 
 def accuracy(T):
-    rows = read_csv(os.path.join(T.dir, "accuracy.csv"))
-    quantities = [c[len("err_"):] for c in rows[0].keys() if c.startswith("err_")]
-    n = len(quantities)
-    cols = min(4, n)
-    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(4 * cols, 3.4 * ((n + cols - 1) // cols)), squeeze=False)
-    for ax, q in zip(axes.flat, quantities):
-        for r in rows:
-            e, t = num(r["err_" + q]), num(r["seconds"])
-            if math.isfinite(e) and math.isfinite(t):
-                ax.plot(t, max(e, 1e-17), "o", color="tab:red" if r["variant"] == "default" else "tab:blue")
-                ax.annotate(r["variant"], (t, max(e, 1e-17)), fontsize=6)
+    """Error against cost per quantity and setting set; each knob's non-dominated settings for that
+    quantity (computed by `budjam accuracy`) joined by a line, the default as a red star. Zero errors
+    sit at the bottom of the axis (open markers). The cost is what the front compares (`cost`)."""
+    path = os.path.join(T.dir, "accuracy.json")
+    if not os.path.exists(path):
+        raise Missing(f"{path} missing: run `budjam accuracy` first")
+    with open(path) as f:
+        acc = json.load(f)
+    rows = [r for r in acc["rows"] if not r["reference"] and r["knob"] != "repeat"]
+    labels = {"phi_J": r"$|\Delta\phi_J|$", "u_J": r"$|\Delta u_J|$", "Z_J": r"$|\Delta Z_J|$",
+              "phi_2": r"$|\Delta\phi_2|$", "P": r"$|\Delta P|/P$", "B": r"$|\Delta B|/B$", "G": r"$|\Delta G|/|G|$",
+              "omega_star": r"$|\Delta\omega^*|/\omega^*$", "band": r"band $\max|\Delta\lambda|/\lambda$"}
+    panels = []  # (family, set, quantity)
+    for r in rows:
+        for q in labels:
+            v = r.get("err_" + q)
+            if v is not None and (r["family"], r["set"], q) not in panels:
+                panels.append((r["family"], r["set"], q))
+    if not panels:
+        raise Missing("accuracy.json has no measured errors")
+    knobs = sorted({g["knob"] for g in acc["groups"]})
+    colour = {k: cm.tab10(i % 10) for i, k in enumerate(knobs)}
+    cols = 4
+    nrow = (len(panels) + cols - 1) // cols
+    fig, axes = plt.subplots(nrow, cols, figsize=(4.2 * cols, 3.3 * nrow), squeeze=False)
+    floor = 1e-17
+    for ax, (fam, st, q) in zip(axes.flat, panels):
+        mine = [r for r in rows if r["family"] == fam and r["set"] == st and r.get("err_" + q) is not None]
+        errs = [r["err_" + q] for r in mine if r["err_" + q] > 0]
+        lo = min(errs) / 10 if errs else floor
+        byname = {r["variant"]: r for r in mine}
+        for g in acc["groups"]:
+            if g["family"] != fam or g["set"] != st:
+                continue
+            c = colour[g["knob"]]
+            for name in g["variants"]:
+                r = byname.get(name)
+                if r is None or r["default"]:
+                    continue
+                e = r["err_" + q]
+                ax.plot(r["cost"], max(e, lo), "o" if e > 0 else "o", mfc=c if e > 0 else "none", mec=c, ms=5,
+                        label=g["knob_label"] if name == g["variants"][1] else None)
+                ax.annotate(name.replace("arpack ", "").replace(" ", "\n"), (r["cost"], max(e, lo)), fontsize=5,
+                            xytext=(3, 2), textcoords="offset points")
+            front = [byname[n] for n in g["front_by_quantity"].get(q, []) if n in byname]
+            front.sort(key=lambda r: r["cost"])
+            if len(front) > 1:
+                ax.plot([r["cost"] for r in front], [max(r["err_" + q], lo) for r in front], "-", color=c, lw=1, alpha=0.8)
+        for r in mine:
+            if r["default"]:
+                e = r["err_" + q]
+                ax.plot(r["cost"], max(e, lo), "*", color="tab:red", ms=11, zorder=5, label="default")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time per run [s]")
-        ax.set_ylabel(f"|error| of {q}")
-    for ax in list(axes.flat)[n:]:
+        # Errors that differ by less than a factor error_ratio, or lie below error_floor, tie (the
+        # front rule): show at least three decades so that rounding-level differences do not look big.
+        fl = max([g.get("error_floor", acc["front_rule"]["error_floor"]) for g in acc["groups"]
+                  if g["family"] == fam and g["set"] == st] or [acc["front_rule"]["error_floor"]])
+        y0, y1 = ax.get_ylim()
+        if y1 / y0 < 1e3:
+            mid = math.sqrt(y0 * y1)
+            y0, y1 = mid / 10 ** 1.5, mid * 10 ** 1.5
+            ax.set_ylim(y0, y1)
+        if fl > y0:
+            ax.axhspan(y0, min(fl, y1), color="0.92", zorder=0)
+            ax.text(0.98, 0.02, "below error floor: ties", transform=ax.transAxes, fontsize=5, ha="right", va="bottom",
+                    color="0.4")
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.tick_params(axis="x", labelsize=6)
+        ax.set_xlabel("cost per run [CPU s]\n(force evaluations × mean CPU s per evaluation)" if fam == "growth"
+                      else "CPU seconds per computation (best of interleaved repeats)", fontsize=7)
+        ax.set_ylabel(labels[q])
+        ax.set_title(f"{st}: {fam}", fontsize=8)
+        ax.legend(fontsize=5, frameon=False, loc="best")
+    for ax in list(axes.flat)[len(panels):]:
         ax.axis("off")
+    verdict = "every default is on its knob's front" if acc["defaults_on_front"] else \
+        "NOT on the front: " + "; ".join(acc["not_on_front"])
+    fig.suptitle(f"Accuracy against cost ({verdict}); lines: non-dominated settings per knob", fontsize=10)
+    fig.tight_layout()
     save(fig, T.out, "accuracy")
 
 

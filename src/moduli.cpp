@@ -2,13 +2,18 @@
 
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/hessian.hpp"
+#include "budjam/scene.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 
 namespace budjam {
 
@@ -79,7 +84,120 @@ double column_residual(const Eigen::MatrixXd& rhs, const Eigen::MatrixXd& res) {
   return worst;
 }
 
+// LDLᵀ factors (ldlt, dense) of an exactly singular H_ff have a pivot at rounding level instead of a
+// failure: below this reciprocal condition estimate the system is treated as singular (fallback).
+// Pinned systems of real packings measured rcond ≥ 1e-6 (dense) and ≥ 1e-3 (CHOLMOD's estimate).
+constexpr double kSingularRcond = 1e-14;
+
+// U = A⁻¹ Ξ by a direct factorisation (`solve`), then at most `max_steps` iterative-refinement steps
+// (a couple of cheap solves) while the residual exceeds `threshold`, each kept only if it lowers it.
+template <class Solve>
+Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const Solve& solve, int max_steps,
+                              double threshold, int& steps) {
+  Eigen::MatrixXd Uf = solve(Xf);
+  double res = column_residual(Xf, Xf - Hf * Uf);
+  for (int step = 0; step < max_steps && res > threshold; ++step) {
+    const Eigen::MatrixXd Unew = Uf + solve(Eigen::MatrixXd(Xf - Hf * Uf));
+    const double rnew = column_residual(Xf, Xf - Hf * Unew);
+    if (!(rnew < res)) break;
+    Uf = Unew;
+    res = rnew;
+    ++steps;
+  }
+  return Uf;
+}
+
+// Fallback when the pinned system is singular (a mechanism beyond the pinned modes): LDLᵀ of
+// H_ff + δ1 and the iteration u ← u + (H + δ)⁻¹(Ξ − H u) from u = 0, which converges to the solution
+// without kernel component when Ξ ⊥ kernel. Throws when H_ff has negative eigenvalues.
+Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
+                                       KernelTreatment& k) {
+  k.method = "regularised-refinement";
+  const double diag = Hf.diagonal().cwiseAbs().maxCoeff();
+  CholmodSolver ldl(Factorisation::ldlt);
+  double delta = options.regularisation * diag;
+  bool ok = false;
+  for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
+  delta /= 100;
+  if (!ok || ldl.negative_pivots() > 0)
+    throw std::runtime_error("elastic_response: the Hessian of the non-rattlers has negative eigenvalues (" +
+                             std::to_string(ldl.negative_pivots()) +
+                             " below −δ): the packing is not at an energy minimum; relax it first");
+  k.regularisation = delta;
+  k.rcond = ldl.rcond();
+  Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());
+  double res = 1.0, best = 1.0;
+  int stall = 0;
+  for (int step = 0; step < options.max_refinement_steps; ++step) {
+    const Eigen::MatrixXd R = Xf - Hf * Uf;
+    res = column_residual(Xf, R);
+    if (res <= 0.01 * options.residual_tolerance) break;
+    if (res < 0.9 * best) {
+      best = res;
+      stall = 0;
+    } else if (++stall > 10) {
+      break;
+    }
+    Uf += ldl.solve(R);
+    ++k.refinement_steps;
+  }
+  return Uf;
+}
+
+// Preconditioned conjugate gradients on the SPD pinned system, column by column, to a relative
+// residual cg_tolerance (Eigen's criterion: ‖Ξ − H u‖ ≤ tol ‖Ξ‖, the true residual of its recursion).
+template <class Preconditioner>
+Eigen::MatrixXd cg_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
+                         KernelTreatment& k) {
+  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper, Preconditioner> cg;
+  cg.setTolerance(options.cg_tolerance);
+  cg.setMaxIterations(options.cg_max_iterations > 0 ? options.cg_max_iterations
+                                                    : static_cast<int>(std::min<Eigen::Index>(10 * Hf.rows(), 1 << 30)));
+  cg.compute(Hf);
+  if (cg.info() != Eigen::Success)
+    throw std::runtime_error("elastic_response: the conjugate-gradient preconditioner could not be built");
+  Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());
+  for (Eigen::Index c = 0; c < Xf.cols(); ++c) {
+    if (Xf.col(c).norm() == 0) continue;
+    Uf.col(c) = cg.solve(Xf.col(c));
+    k.iterations += static_cast<int>(cg.iterations());
+  }
+  return Uf;
+}
+
 }  // namespace
+
+const char* to_string(ModuliSolver solver) {
+  switch (solver) {
+    case ModuliSolver::cholesky: return "cholesky";
+    case ModuliSolver::ldlt: return "ldlt";
+    case ModuliSolver::dense: return "dense";
+    case ModuliSolver::cg: return "cg";
+  }
+  return "?";
+}
+
+const char* to_string(CgPreconditioner preconditioner) {
+  switch (preconditioner) {
+    case CgPreconditioner::incomplete_cholesky: return "ichol";
+    case CgPreconditioner::diagonal: return "diagonal";
+  }
+  return "?";
+}
+
+ModuliSolver parse_moduli_solver(const std::string& text, const std::string& key) {
+  if (text == "cholesky") return ModuliSolver::cholesky;
+  if (text == "ldlt") return ModuliSolver::ldlt;
+  if (text == "dense") return ModuliSolver::dense;
+  if (text == "cg") return ModuliSolver::cg;
+  throw InputError(key + ": must be cholesky, ldlt, dense or cg (got '" + text + "')");
+}
+
+CgPreconditioner parse_cg_preconditioner(const std::string& text, const std::string& key) {
+  if (text == "ichol") return CgPreconditioner::incomplete_cholesky;
+  if (text == "diagonal") return CgPreconditioner::diagonal;
+  throw InputError(key + ": must be ichol or diagonal (got '" + text + "')");
+}
 
 Eigen::Matrix2d energy_stress(const Packing& p, const std::vector<Contact>& contacts) {
   Eigen::Matrix2d W = Eigen::Matrix2d::Zero();
@@ -94,6 +212,61 @@ Moduli moduli_from(const Response4& R) {
   m.G_pure = 0.25 * (R(kXX, kXX) - R(kXX, kYY) - R(kYY, kXX) + R(kYY, kYY));
   m.G_mean = 0.5 * (m.G_simple + m.G_pure);
   return m;
+}
+
+namespace {
+
+// ê(φ) = d mᵀ and its derivative dê/dφ = m mᵀ − d dᵀ (d' = m, m' = −d), as 4-vectors (xx, xy, yx, yy).
+std::pair<Eigen::Vector4d, Eigen::Vector4d> simple_shear_direction(double phi) {
+  const Eigen::Vector2d d(std::cos(phi), std::sin(phi)), m(-std::sin(phi), std::cos(phi));
+  Eigen::Vector4d e, de;
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      e[2 * a + b] = d[a] * m[b];
+      de[2 * a + b] = m[a] * m[b] - d[a] * d[b];
+    }
+  return {e, de};
+}
+
+}  // namespace
+
+double shear_modulus_along(const Response4& E, double phi) {
+  const Eigen::Vector4d e = simple_shear_direction(phi).first;
+  return e.dot(E * e);
+}
+
+ShearStability shear_stability(const Response4& E) {
+  // The extremum near the best grid point is the zero of G'(φ) = êᵀ(E + Eᵀ)ê' in the two grid
+  // intervals around it (G is smooth and of degree 4: the grid resolves its extrema), found by
+  // bisection: an extremum is flat, so G itself would locate it only to √ε.
+  constexpr int kGrid = 720;
+  constexpr double step = std::numbers::pi / kGrid;
+  const Response4 Es = E + E.transpose();
+  auto slope = [&](double phi) {
+    const auto [e, de] = simple_shear_direction(phi);
+    return e.dot(Es * de);
+  };
+  auto extremum = [&](double sign) {
+    int best = 0;
+    for (int k = 1; k < kGrid; ++k)
+      if (sign * shear_modulus_along(E, k * step) < sign * shear_modulus_along(E, best * step)) best = k;
+    double a = (best - 1) * step, b = (best + 1) * step;
+    double phi = best * step;
+    if (sign * slope(a) < 0 && sign * slope(b) > 0) {
+      for (int it = 0; it < 200 && b - a > 1e-15; ++it) {
+        const double c = 0.5 * (a + b);
+        (sign * slope(c) < 0 ? a : b) = c;
+      }
+      phi = 0.5 * (a + b);
+    }
+    phi = std::fmod(phi + std::numbers::pi, std::numbers::pi);
+    return std::pair{phi, shear_modulus_along(E, phi)};
+  };
+  ShearStability s;
+  std::tie(s.phi_min, s.G_min) = extremum(1.0);
+  std::tie(s.phi_max, s.G_max) = extremum(-1.0);
+  s.stable = s.G_min > 0;
+  return s;
 }
 
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
@@ -246,65 +419,81 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
   for (Eigen::Index k = 0; k < nr; ++k)
     if (free_index[k] >= 0) Xf.row(free_index[k]) = Xi.row(k);
 
-  // Solve H_ff U_f = Ξ_f: Cholesky, else regularised LDLᵀ with iterative refinement.
+  // Solve H_ff U_f = Ξ_f with the chosen solver (a direct one falls back to regularised LDLᵀ with
+  // iterative refinement when H_ff is singular).
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
   const double xi_scale = Xf.norm();
+  const auto t_solve = std::chrono::steady_clock::now();
   if (nf > 0 && xi_scale > 0) {
-    CholmodSolver llt(Factorisation::llt);
-    if (llt.factor(Hf)) {
-      out.kernel.method = "cholesky";
-      out.kernel.rcond = llt.rcond();
-      Uf = llt.solve(Xf);
-      double res = column_residual(Xf, Xf - Hf * Uf);
-      for (int step = 0; step < 3 && res > 1e-15; ++step) {  // refinement: a couple of cheap solves
-        const Eigen::MatrixXd Unew = Uf + llt.solve(Eigen::MatrixXd(Xf - Hf * Uf));
-        const double rnew = column_residual(Xf, Xf - Hf * Unew);
-        if (!(rnew < res)) break;
-        Uf = Unew;
-        res = rnew;
-        ++out.kernel.refinement_steps;
-      }
-    } else {
-      out.kernel.method = "regularised-refinement";
-      out.kernel.cholesky_failed_column = llt.failed_column();
-      const double diag = Hf.diagonal().cwiseAbs().maxCoeff();
-      CholmodSolver ldl(Factorisation::ldlt);
-      double delta = options.regularisation * diag;
-      bool ok = false;
-      for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
-      delta /= 100;
-      if (!ok || ldl.negative_pivots() > 0)
-        throw std::runtime_error("elastic_response: the Hessian of the non-rattlers has negative eigenvalues (" +
-                                 std::to_string(ldl.negative_pivots()) +
-                                 " below −δ): the packing is not at an energy minimum; relax it first");
-      out.kernel.regularisation = delta;
-      out.kernel.rcond = ldl.rcond();
-      // (H + δ)⁻¹ iteration: converges to the solution without kernel component when Ξ ⊥ kernel.
-      double res = 1.0, best = 1.0;
-      int stall = 0;
-      for (int step = 0; step < options.max_refinement_steps; ++step) {
-        const Eigen::MatrixXd R = Xf - Hf * Uf;
-        res = column_residual(Xf, R);
-        if (res <= 0.01 * options.residual_tolerance) break;
-        if (res < 0.9 * best) {
-          best = res;
-          stall = 0;
-        } else if (++stall > 10) {
-          break;
+    KernelTreatment& k = out.kernel;
+    const int steps = options.direct_refinement_steps;
+    const double threshold = options.refinement_threshold;
+    switch (options.solver) {
+      case ModuliSolver::cholesky: {
+        CholmodSolver llt(Factorisation::llt);
+        if (llt.factor(Hf)) {
+          k.method = "cholesky";
+          k.rcond = llt.rcond();
+          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return llt.solve(b); }, steps, threshold, k.refinement_steps);
+        } else {
+          k.cholesky_failed_column = llt.failed_column();
+          Uf = regularised_refinement(Hf, Xf, options, k);
         }
-        Uf += ldl.solve(R);
-        ++out.kernel.refinement_steps;
+        break;
+      }
+      case ModuliSolver::ldlt: {
+        CholmodSolver ldl(Factorisation::ldlt);
+        if (ldl.factor(Hf) && ldl.negative_pivots() == 0 && ldl.rcond() > kSingularRcond) {
+          k.method = "ldlt";
+          k.rcond = ldl.rcond();
+          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return ldl.solve(b); }, steps, threshold, k.refinement_steps);
+        } else {
+          k.cholesky_failed_column = ldl.failed_column();
+          Uf = regularised_refinement(Hf, Xf, options, k);
+        }
+        break;
+      }
+      case ModuliSolver::dense: {
+        const Eigen::LDLT<Eigen::MatrixXd> ldl{Eigen::MatrixXd(Hf)};
+        if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
+          k.method = "dense";
+          k.rcond = ldl.rcond();
+          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps,
+                             threshold, k.refinement_steps);
+        } else {
+          Uf = regularised_refinement(Hf, Xf, options, k);
+        }
+        break;
+      }
+      case ModuliSolver::cg: {
+        if (!(options.cg_tolerance > 0 && options.cg_tolerance < 1))
+          throw std::invalid_argument("elastic_response: cg_tolerance must lie in (0, 1)");
+        k.solver_tolerance = options.cg_tolerance;
+        if (options.cg_preconditioner == CgPreconditioner::incomplete_cholesky) {
+          k.method = "cg-ichol";
+          Uf = cg_solve<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(Hf, Xf, options, k);
+        } else {
+          k.method = "cg-diagonal";
+          Uf = cg_solve<Eigen::DiagonalPreconditioner<double>>(Hf, Xf, options, k);
+        }
+        break;
       }
     }
   } else {
     out.kernel.method = "none (Ξ = 0)";
   }
+  out.kernel.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_solve).count();
 
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nr, 4);
   for (Eigen::Index k = 0; k < nr; ++k)
     if (free_index[k] >= 0) U.row(k) = Uf.row(free_index[k]);
   out.kernel.residual = column_residual(Xi, Xi - H * U);
-  out.kernel.well_posed = std::isfinite(out.kernel.residual) && out.kernel.residual <= options.residual_tolerance;
+  // An iterative solve is verified against the tolerance it was asked for (its residual is that large
+  // by design); a direct one against residual_tolerance.
+  const double tolerance = options.solver == ModuliSolver::cg && out.kernel.solver_tolerance > 0
+                               ? std::max(options.residual_tolerance, 10 * options.cg_tolerance)
+                               : options.residual_tolerance;
+  out.kernel.well_posed = std::isfinite(out.kernel.residual) && out.kernel.residual <= tolerance;
 
   // Energy expansion and the stress slopes along the relaxed (U) and affine (0) paths.
   out.E_affine = born / A;
@@ -365,6 +554,7 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
   out.moduli_affine = moduli_from(out.R_affine);
   out.moduli_energy = moduli_from(out.R_energy);
   out.moduli_energy_affine = moduli_from(out.R_energy_affine);
+  out.shear = shear_stability(out.E);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

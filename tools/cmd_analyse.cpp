@@ -71,6 +71,7 @@ struct TargetRow {
   double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
   double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
   double B = kNaN, G = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
+  double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
   bool below_phi2 = false;
 };
 
@@ -87,7 +88,7 @@ struct RunRow {
   double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
   double chi_bar = kNaN, lambda_bar = kNaN;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, B_2 = kNaN;
+  double G_2 = kNaN, B_2 = kNaN, G_min_2 = kNaN;
   double h_gamma = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
@@ -104,6 +105,10 @@ struct DosRow {
   double dphi = kNaN, omega_star = kNaN, dZ = kNaN, Z = kNaN, N_zero = kNaN, N_u = kNaN, N_u_buds = kNaN;
 };
 
+Json fraction_json(std::size_t k, std::size_t n) {
+  return Json{{"fraction", n ? Json(static_cast<double>(k) / static_cast<double>(n)) : Json(nullptr)}, {"packings", n}};
+}
+
 std::vector<double> dphi_grid() {
   std::vector<double> g;
   for (int k = 0; k <= 40; ++k) g.push_back(1e-4 * std::pow(10.0, 3.2 * k / 40.0));  // 1e-4 … ≈0.16
@@ -119,20 +124,27 @@ double json_number(const Json& j, std::initializer_list<const char*> keys) {
   return kNaN;
 }
 
-void read_moduli(const fs::path& pack, double& B, double& G, double& B_mf, bool required, std::size_t& found) {
+struct SidecarModuli {
+  double B = kNaN, G = kNaN, B_ext_mf = kNaN, G_min = kNaN;
+};
+
+SidecarModuli read_moduli(const fs::path& pack, bool required, std::size_t& found) {
+  SidecarModuli m;
   const auto j = tools::sidecar(pack, "moduli");
   if (!j) {
     if (required && fs::exists(pack))
       throw InputError(pack.string() + ": no moduli (expected " + fs::path(pack).replace_extension(".moduli.json").string() +
                        "; run `make -f Makefile.analysis moduli`)");
-    return;
+    return m;
   }
   ++found;
-  B = json_number(*j, {"B", "bulk_modulus"});
-  G = json_number(*j, {"G", "shear_modulus"});
-  B_mf = json_number(*j, {"B_ext_mean_field", "B_mf", "B_ext_mf"});
-  if (!std::isfinite(G) || !std::isfinite(B))
+  m.B = json_number(*j, {"B", "bulk_modulus"});
+  m.G = json_number(*j, {"G", "shear_modulus"});
+  m.B_ext_mf = json_number(*j, {"B_ext_mean_field", "B_mf", "B_ext_mf"});
+  if (j->contains("shear_stability")) m.G_min = json_number((*j)["shear_stability"], {"G_min"});
+  if (!std::isfinite(m.G) || !std::isfinite(m.B))
     throw InputError(fs::path(pack).replace_extension(".moduli.json").string() + ": no numeric \"B\" and \"G\"");
+  return m;
 }
 
 RunRow extract(const tools::RunData& r, bool need_moduli, std::size_t& moduli_found) {
@@ -242,7 +254,11 @@ RunRow extract(const tools::RunData& r, bool need_moduli, std::size_t& moduli_fo
     }
     y.below_phi2 = !x.depleted || y.phi <= x.phi_2;
     const fs::path pack = r.dir / "packings" / ("target_" + std::to_string(t.at("index").get<long>()) + ".pack");
-    read_moduli(pack, y.B, y.G, y.B_ext_mf, need_moduli, moduli_found);
+    const SidecarModuli sm = read_moduli(pack, need_moduli, moduli_found);
+    y.B = sm.B;
+    y.G = sm.G;
+    y.B_ext_mf = sm.B_ext_mf;
+    y.G_min = sm.G_min;
     x.targets.push_back(y);
 
     // growth-rate distribution at Δφ = 3·10⁻³ (non-rattler cells; g = exp(−p/P0), 1 without feedback)
@@ -255,8 +271,10 @@ RunRow extract(const tools::RunData& r, bool need_moduli, std::size_t& moduli_fo
     }
   }
   if (x.depleted) {
-    double B_mf = kNaN;
-    read_moduli(r.dir / "packings" / "phi2.pack", x.B_2, x.G_2, B_mf, need_moduli, moduli_found);
+    const SidecarModuli sm = read_moduli(r.dir / "packings" / "phi2.pack", need_moduli, moduli_found);
+    x.B_2 = sm.B;
+    x.G_2 = sm.G;
+    x.G_min_2 = sm.G_min;
   }
   {
     const fs::path jam = r.dir / "packings" / "jammed.pack";
@@ -520,6 +538,17 @@ void run(const Options& o) {
     g["G_2_over_Pmax"] = median_json(collect(dep, [](auto& r) { return r.G_2 / kPmax; }), bo);
     g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
     {
+      // Packings unstable to some simple shear of the box (G_min < 0; moduli.hpp, ShearStability).
+      std::size_t n = 0, k = 0, n2 = 0, k2 = 0;
+      for (const auto* r : jam) {
+        for (const auto& t : r->targets)
+          if (std::isfinite(t.G_min)) ++n, k += t.G_min < 0;
+        if (r->depleted && std::isfinite(r->G_min_2)) ++n2, k2 += r->G_min_2 < 0;
+      }
+      g["shear_unstable_targets"] = fraction_json(k, n);
+      g["shear_unstable_phi2"] = fraction_json(k2, n2);
+    }
+    {
       // Divisions by φ_2 normalised by the mean number of cells at jamming (Fig. D1B)
       const double NJ = mean(finite(collect(jam, [](auto& r) { return r.N_J; })));
       g["N_div_2_over_N_J"] = median_json(collect(dep, [NJ](auto& r) { return r.N_div_2 / NJ; }), bo);
@@ -613,12 +642,18 @@ void run(const Options& o) {
           traj[t.dphi].first.push_back(t.P);
           traj[t.dphi].second.push_back(t.G);
         }
+    // Means as in the paper's caption, and medians: one packing near a shear instability of the box
+    // (G ≪ 0, docs/moduli.md) can dominate the mean of a few runs.
+    auto med = [](const std::vector<double>& v) { return v.empty() ? kNaN : median(v); };
     for (auto& [d, v] : traj)
       traj_rows.push_back({num(key.L), P0s, num(d), cell(mean(v.first)), cell(mean(finite(v.second))),
-                           std::to_string(v.first.size()), "false"});
-    traj_rows.push_back({num(key.L), P0s, cell(mean(finite(collect(dep, [](auto& r) { return r.dphi_2; })))),
-                         cell(mean(finite(collect(dep, [](auto& r) { return r.P_2; })))),
-                         cell(mean(finite(collect(dep, [](auto& r) { return r.G_2; })))), std::to_string(dep.size()), "true"});
+                           cell(med(v.first)), cell(med(finite(v.second))), std::to_string(v.first.size()), "false"});
+    {
+      const auto P2 = finite(collect(dep, [](auto& r) { return r.P_2; }));
+      const auto G2 = finite(collect(dep, [](auto& r) { return r.G_2; }));
+      traj_rows.push_back({num(key.L), P0s, cell(mean(finite(collect(dep, [](auto& r) { return r.dphi_2; })))),
+                           cell(mean(P2)), cell(mean(G2)), cell(med(P2)), cell(med(G2)), std::to_string(dep.size()), "true"});
+    }
     jgroups.push_back(g);
   }
 
@@ -664,6 +699,30 @@ void run(const Options& o) {
       return sq;
     }())));
     h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
+    // Fraction of packings (targets and φ_2, all P0) unstable to some simple shear of the box, in
+    // decades of P N_J²: finite packings jammed at fixed box shape lose that instability as P N²
+    // grows (Dagois-Bohy et al. 2012; Goodrich et al. 2012).
+    {
+      std::map<int, std::pair<std::size_t, std::size_t>> bins;  // decade → (packings, unstable)
+      auto add = [&](double P, double N, double G_min) {
+        if (!std::isfinite(G_min) || !(P > 0) || !(N > 0)) return;
+        auto& b = bins[static_cast<int>(std::floor(std::log10(P * N * N)))];
+        ++b.first;
+        b.second += G_min < 0;
+      };
+      for (const auto* r : m) {
+        for (const auto& t : r->targets) add(t.P, r->N_J, t.G_min);
+        if (r->depleted) add(r->P_2, r->N_J, r->G_min_2);
+      }
+      Json sb = Json::array();
+      for (const auto& [d, c] : bins) {
+        Json b = fraction_json(c.second, c.first);
+        b["PN2_lo"] = std::pow(10.0, d);
+        b["PN2_hi"] = std::pow(10.0, d + 1);
+        sb.push_back(b);
+      }
+      h["shear_unstable_by_PN2"] = sb;
+    }
     // plateau G_2(0+) = n_J k ℓ_c² M_4 u_J from the strongest-feedback jammed packings
     std::optional<double> strongest;
     for (const auto& [key, rs] : groups)
@@ -766,11 +825,11 @@ void run(const Options& o) {
                         cell(r.n_J), cell(r.N_J), cell(r.N_nr_J), cell(r.Z_J), cell(r.dZ_J), cell(r.phi_2), cell(r.dphi_2),
                         cell(r.P_2), cell(r.Z_2), cell(r.dZ_2), cell(r.u_2), cell(r.N_div_2), cell(r.chi_bar),
                         cell(r.lambda_bar), cell(r.a_eps), cell(r.int_S), cell(r.pred_area), cell(r.pred_d2), cell(r.B_2),
-                        cell(r.G_2), cell(r.h_gamma), cell(r.lc2_J)});
+                        cell(r.G_2), cell(r.G_min_2), cell(r.h_gamma), cell(r.lc2_J)});
     for (const auto& t : r.targets)
       tgt_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(t.dphi), cell(t.phi), cell(t.P),
                           cell(t.Z), cell(t.Z_iso), cell(t.dZ), cell(t.dZ_pred), cell(t.u), cell(t.u_lobes), cell(t.chi_c),
-                          cell(t.lambda), cell(t.B_grow), cell(t.B_grow_se), cell(t.B), cell(t.G), cell(t.B_ext_mf),
+                          cell(t.lambda), cell(t.B_grow), cell(t.B_grow_se), cell(t.B), cell(t.G), cell(t.G_min), cell(t.B_ext_mf),
                           cell(t.N_div), t.below_phi2 ? "true" : "false"});
   }
   for (const auto& q : dos_rows)
@@ -779,17 +838,17 @@ void run(const Options& o) {
   write_csv(out / "runs.csv",
             {"run", "L", "P0", "seed", "status", "phi_J", "u_J", "n_J", "N_J", "N_nr_J", "Z_J", "dZ_J", "phi_2", "dphi_2",
              "P_2", "Z_2", "dZ_2", "u_2", "N_div_2", "chi_bar", "lambda_bar", "a_eps", "integral_S", "dphi_2_pred_area",
-             "dphi_2_pred_diameter_sq", "B_2", "G_2", "h_gamma", "lc2_J"},
+             "dphi_2_pred_diameter_sq", "B_2", "G_2", "G_min_2", "h_gamma", "lc2_J"},
             run_rows);
   write_csv(out / "targets.csv",
             {"run", "L", "P0", "seed", "dphi", "phi", "P", "Z", "Z_iso", "dZ", "dZ_pred", "u", "u_lobes", "chi_c",
-             "lambda_c", "B_grow", "B_grow_se", "B", "G", "B_ext_mean_field", "N_div", "below_phi2"},
+             "lambda_c", "B_grow", "B_grow_se", "B", "G", "G_min", "B_ext_mean_field", "N_div", "below_phi2"},
             tgt_rows);
   write_csv(out / "survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, surv_rows);
   write_csv(out / "remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, rem_rows);
   write_csv(out / "division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, div_rows);
   write_csv(out / "growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, g_rows);
-  write_csv(out / "trajectory.csv", {"L", "P0", "dphi", "P", "G", "runs", "endpoint"}, traj_rows);
+  write_csv(out / "trajectory.csv", {"L", "P0", "dphi", "P", "G", "P_median", "G_median", "runs", "endpoint"}, traj_rows);
   write_csv(out / "dos.csv", {"run", "packing", "L", "P0", "dphi", "omega_star", "dZ", "Z_minus_6", "N_zero", "N_u", "N_u_buds"},
             dos_out);
   std::cerr << "analyse: " << rows.size() << " runs used (" << failed.size() << " not finished) in " << groups.size()

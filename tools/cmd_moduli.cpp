@@ -1,4 +1,5 @@
-// `budjam moduli PACKING [--check] [--strain H] [--relax] [--timing]`
+// `budjam moduli PACKING [--check] [--strain H] [--relax] [--timing] [--solver cholesky|ldlt|dense|cg]
+//                [--cg-tol T] [--cg-preconditioner ichol|diagonal] [--refine N] [--refine-above R]`
 // Non-affine linear elastic response of a relaxed packing as JSON on stdout (docs/moduli.md).
 // --check adds the independent finite-strain measurement (Lees–Edwards shear and isotropic
 // rescaling relaxed by FIRE) and the relative differences.
@@ -9,6 +10,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/moduli.hpp"
+#include "budjam/scene.hpp"
 #include "budjam/strain.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <string>
 
 namespace {
@@ -31,7 +34,27 @@ struct Options {
   double strain = 0;  // 0: automatic
   bool relax = false;
   bool timing = false;
+  std::string solver = to_string(ModuliOptions{}.solver);
+  double cg_tol = ModuliOptions{}.cg_tolerance;
+  std::string cg_preconditioner = "ichol";
+  int refine = ModuliOptions{}.direct_refinement_steps;
+  double refine_above = ModuliOptions{}.refinement_threshold;
 };
+
+// The linear-solver options (bad values: InputError naming the option, exit 2).
+ModuliOptions moduli_options(const Options& o) {
+  ModuliOptions m;
+  m.solver = parse_moduli_solver(o.solver, "--solver");
+  if (!(o.cg_tol > 0 && o.cg_tol < 1)) throw InputError("--cg-tol: must lie in (0, 1), got " + std::to_string(o.cg_tol));
+  m.cg_tolerance = o.cg_tol;
+  m.cg_preconditioner = parse_cg_preconditioner(o.cg_preconditioner, "--cg-preconditioner");
+  if (o.refine < 0 || o.refine > 100) throw InputError("--refine: must be in [0, 100], got " + std::to_string(o.refine));
+  m.direct_refinement_steps = o.refine;
+  if (!(o.refine_above >= 0 && o.refine_above < 1))
+    throw InputError("--refine-above: must lie in [0, 1), got " + std::to_string(o.refine_above));
+  m.refinement_threshold = o.refine_above;
+  return m;
+}
 
 FireParams check_fire() {
   FireParams f;
@@ -99,6 +122,12 @@ Json response_json(const ElasticResponse& e) {
   j["moduli_energy_affine"] = moduli_json(e.moduli_energy_affine);
   j["elastic_tensor"] = tensor_json(e.C);
   j["elastic_tensor_affine"] = tensor_json(e.C_affine);
+  // G(φ) = (1/A) d²U/dγ² for simple shear along φ; G_min < 0: the box shape is unstable to that shear.
+  j["shear_stability"] = Json{{"G_min", number_or_null(e.shear.G_min)},
+                              {"phi_min_deg", e.shear.phi_min * 180 / std::numbers::pi},
+                              {"G_max", number_or_null(e.shear.G_max)},
+                              {"phi_max_deg", e.shear.phi_max * 180 / std::numbers::pi},
+                              {"stable", e.shear.stable}};
   j["response"] = Json{{"order", Json::array({"xx", "xy", "yx", "yy"})},
                        {"dS_de", matrix_json(e.R)},
                        {"dS_de_affine", matrix_json(e.R_affine)},
@@ -121,6 +150,8 @@ Json response_json(const ElasticResponse& e) {
                      {"cholesky_failed_column", k.cholesky_failed_column},
                      {"regularisation", k.regularisation},
                      {"refinement_steps", k.refinement_steps},
+                     {"iterations", k.iterations},
+                     {"solver_tolerance", k.solver_tolerance},
                      {"residual", number_or_null(k.residual)},
                      {"kernel_component", number_or_null(k.kernel_component)},
                      {"rcond", number_or_null(k.rcond)},
@@ -162,6 +193,7 @@ Json sweep_json(const StrainSweep& s, double linear, double linear_energy, doubl
 }
 
 void run(const Options& o) {
+  const ModuliOptions options = moduli_options(o);
   io::PackingFile file = io::read_packing(o.packing);
   Packing& p = file.packing;
   ForceField field;
@@ -170,7 +202,7 @@ void run(const Options& o) {
   field.evaluate(p, F);
   const std::vector<Contact> contacts = find_contacts(p, field.lobes(), field.neighbours());
   const ContactNetwork net = analyse_network(p.size(), contacts);
-  const ElasticResponse e = elastic_response(p, contacts, net);
+  const ElasticResponse e = elastic_response(p, contacts, net, options);
   Json j;
   j["file"] = o.packing;
   const Json body = response_json(e);  // named: items() of a temporary would dangle
@@ -189,7 +221,10 @@ void run(const Options& o) {
     c["agree_within_1_percent"] = within(shear, e.moduli.G_simple) && within(iso, e.moduli.B);
     j["check"] = c;
   }
-  if (o.timing) j["seconds"] = e.seconds;
+  if (o.timing) {
+    j["seconds"] = e.seconds;
+    j["solve_seconds"] = e.kernel.solve_seconds;
+  }
   std::cout << io::json_text(j);
 }
 
@@ -202,7 +237,20 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--strain", o->strain, "strain step of --check (default: 1% of the smallest overlap, in [1e-10, 1e-6])")
            ->check(CLI::PositiveNumber);
        sub.add_flag("--relax", o->relax, "FIRE-minimise the packing first");
-       sub.add_flag("--timing", o->timing, "add the computation time (seconds; not deterministic)");
+       sub.add_flag("--timing", o->timing,
+                    "add the computation time and that of the linear solve alone (seconds; not deterministic)");
+       sub.add_option("--solver", o->solver,
+                      "linear solver of the pinned system: cholesky (CHOLMOD LLt + refinement), ldlt (CHOLMOD "
+                      "simplicial LDLt + refinement), dense (Eigen LDLt, small systems), cg (conjugate gradients)")
+           ->capture_default_str();
+       sub.add_option("--cg-tol", o->cg_tol, "cg: relative residual per strain column, in (0, 1)")->capture_default_str();
+       sub.add_option("--cg-preconditioner", o->cg_preconditioner, "cg: ichol (incomplete Cholesky) or diagonal")
+           ->capture_default_str();
+       sub.add_option("--refine", o->refine, "cholesky, ldlt, dense: at most this many iterative-refinement steps")
+           ->capture_default_str();
+       sub.add_option("--refine-above", o->refine_above,
+                      "cholesky, ldlt, dense: refine only while the relative residual exceeds this")
+           ->capture_default_str();
        sub.callback([o] { run(*o); });
      }});
 

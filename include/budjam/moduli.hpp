@@ -45,6 +45,23 @@ struct Moduli {
 };
 Moduli moduli_from(const Response4& R);
 
+// Shear stability of the box shape. A simple shear along the direction d = (cos φ, sin φ), with
+// the displacement gradient along m = (−sin φ, cos φ), is e = γ d mᵀ: it keeps the area exactly, so
+// G(φ) = (1/A) d²U/dγ² along the relaxed path is ê(φ) : E : ê(φ) with E the relaxed energy
+// stiffness (ElasticResponse::E); G(0) = E_xyxy is Lees–Edwards shear. A packing jammed in a box of
+// fixed shape is stable at fixed box (positive-definite Hessian) yet can have G(φ) < 0 for some φ:
+// its energy falls under that deformation of the box. This is physics, common in small packings at
+// low pressure (Dagois-Bohy et al., PRL 109, 095703 (2012)), not a solver failure.
+double shear_modulus_along(const Response4& E, double phi);
+struct ShearStability {
+  double G_min = 0, phi_min = 0;  // softest simple-shear direction, φ in [0, π)
+  double G_max = 0, phi_max = 0;  // stiffest
+  bool stable = false;            // G_min > 0: no simple shear of the box lowers the energy
+};
+// G(φ) is a trigonometric polynomial of degree 4 with period π; its extrema are found on a grid of
+// 720 directions and refined by bisection on dG/dφ.
+ShearStability shear_stability(const Response4& E);
+
 // How the singular Hessian was handled (issue 3.4, 3.6).
 struct KernelTreatment {
   std::size_t dofs = 0;                 // 3 N_nr (reduced system before pinning)
@@ -54,11 +71,16 @@ struct KernelTreatment {
                                         // prestress term); pinning θ leaves that mode out
   std::size_t pinned_zero_rows = 0;     // other dofs whose Hessian row is exactly zero
   std::size_t reference_cell = 0;       // packing index of the cell whose x, y are pinned
-  std::string method;                   // "cholesky" or "regularised-refinement" (fallback when the
-                                        // pinned system is still singular: a mechanism beyond the above)
-  long cholesky_failed_column = -1;     // where plain Cholesky stopped (fallback only)
+  std::string method;                   // the solver used: "cholesky", "ldlt", "dense", "cg-ichol",
+                                        // "cg-diagonal", or "regularised-refinement" (fallback of the direct
+                                        // solvers when the pinned system is still singular: a mechanism
+                                        // beyond the above)
+  long cholesky_failed_column = -1;     // where the direct factorisation stopped (fallback only)
   double regularisation = 0;            // δ of the fallback (H + δ1) factor, 0 otherwise
   int refinement_steps = 0;             // iterative-refinement steps taken
+  int iterations = 0;                   // cg: iterations, summed over the strain columns
+  double solver_tolerance = 0;          // cg: the relative residual asked for per column; 0 otherwise
+  double solve_seconds = 0;             // wall time of the solve of H_ff U_f = Ξ_f alone (not deterministic)
   double residual = 0;                  // max over strain columns of ‖H u − Ξ‖ / ‖Ξ‖ on ALL non-rattler
                                         // rows (pinned rows included: they check Ξ ⊥ kernel)
   double kernel_component = 0;          // max over columns and pinned kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖)
@@ -67,10 +89,38 @@ struct KernelTreatment {
                                         // response is unique where it is measured
 };
 
+// Linear solver for the pinned system H_ff U_f = Ξ_f (accuracy against cost: docs/analysis.md).
+//  - ldlt: CHOLMOD simplicial LDLᵀ (no supernodes, no square roots) + ≤ direct_refinement_steps
+//    iterative-refinement steps (the default: on the accuracy-against-cost front, 15–25 % faster than
+//    cholesky up to 3000 cells, within 7 % at 10⁴; docs/analysis.md);
+//  - cholesky: CHOLMOD LLᵀ (supernodal when it pays) + the same refinement;
+//  - dense: Eigen's dense LDLᵀ (pivoted) of H_ff + the same refinement: O(n³), an independent
+//    reference for small systems;
+//  - cg: Eigen's preconditioned conjugate gradients, per strain column, to ‖Ξ_f − H_ff u‖ ≤
+//    cg_tolerance ‖Ξ_f‖ (no factorisation; the error of B, G is then of order κ·cg_tolerance).
+// A direct solver that finds H_ff singular or indefinite falls back to the regularised refinement
+// (method "regularised-refinement"); every solver goes through the same residual verification.
+enum class ModuliSolver { cholesky, ldlt, dense, cg };
+enum class CgPreconditioner { incomplete_cholesky, diagonal };
+const char* to_string(ModuliSolver solver);
+const char* to_string(CgPreconditioner preconditioner);
+// "cholesky" | "ldlt" | "dense" | "cg"; throws InputError naming `key` otherwise.
+ModuliSolver parse_moduli_solver(const std::string& text, const std::string& key = "solver");
+// "ichol" | "diagonal"; throws InputError naming `key` otherwise.
+CgPreconditioner parse_cg_preconditioner(const std::string& text, const std::string& key = "cg-preconditioner");
+
 struct ModuliOptions {
-  double residual_tolerance = 1e-8;     // relative; above it well_posed = false
+  double residual_tolerance = 1e-8;     // relative; above it well_posed = false (cg: above
+                                        // max(residual_tolerance, 10·cg_tolerance))
   double regularisation = 1e-10;        // fallback δ relative to the largest Hessian diagonal entry
   int max_refinement_steps = 200;
+  ModuliSolver solver = ModuliSolver::ldlt;
+  int direct_refinement_steps = 3;      // ldlt, cholesky, dense: at most this many refinement steps …
+  double refinement_threshold = 1e-12;  // … taken while the relative residual on the free rows exceeds this
+                                        //   (a safety net: the first solve gives ≲ 2e-14 on grown packings; docs/analysis.md)
+  double cg_tolerance = 1e-10;          // cg: relative residual per strain column, in (0, 1)
+  CgPreconditioner cg_preconditioner = CgPreconditioner::incomplete_cholesky;
+  int cg_max_iterations = 0;            // cg: 0 = 10 × the number of free dofs
 };
 
 struct ElasticResponse {
@@ -104,6 +154,7 @@ struct ElasticResponse {
   Moduli moduli_affine;         // from R_affine
   Moduli moduli_energy;         // from R_energy
   Moduli moduli_energy_affine;  // from R_energy_affine
+  ShearStability shear;         // from E: the softest and stiffest simple shear of the box
 
   // Mean-field estimates of the paper (Eqs. S-Bext, S-G), with this packing's n, Z, ΔZ.
   double ell_c = 0;             // ℓ_c: mean lobe-centre distance r of the load-bearing contacts

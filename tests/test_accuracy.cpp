@@ -1,0 +1,156 @@
+// `budjam accuracy --packings`: the post-processing knobs (moduli linear solver, ARPACK tol and ncv)
+// measured against dense references on the same packings, and the front verdict (issue 6).
+#include "budjam/fire.hpp"
+#include "budjam/strain.hpp"
+
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+
+#include <catch2/catch.hpp>
+#include "scratch.hpp"
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <string>
+
+using namespace budjam;
+namespace fs = std::filesystem;
+using budjam::testing::work_dir;
+
+namespace {
+
+int run_budjam(const std::string& args) {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const std::string cmd = "'" + std::string(exe) + "' " + args + " >/dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  return WEXITSTATUS(status);
+}
+
+// Two small compressed packings in <dir>/<k>/packings/, as a growth run stores them.
+fs::path packing_set() {
+  const fs::path dir = work_dir() / "set";
+  FireParams fire;
+  fire.dt_max = 0.4;
+  fire.force_tol = 1e-14;
+  for (std::uint64_t seed : {1, 2}) {
+    const CompressionResult c = compress_to_pressure(random_dumbbells(70, 0.4, 0.01, 1.02, seed), 1e-3, fire);
+    REQUIRE(c.converged);
+    fs::create_directories(dir / std::to_string(seed) / "packings");
+    io::write_packing(dir / std::to_string(seed) / "packings" / "target_0.pack", c.packing);
+  }
+  return dir;
+}
+
+const io::Json* row(const io::Json& acc, const std::string& family, const std::string& variant) {
+  for (const auto& r : acc["rows"])
+    if (r["family"] == family && r["variant"] == variant) return &r;
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against dense references, with a front verdict",
+          "[fast]") {
+  const fs::path set = packing_set();
+  const fs::path out = work_dir() / "acc";
+  REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'") == 0);
+  const io::Json acc = io::read_json(out / "accuracy.json");
+
+  // Direct solvers agree with the dense reference at rounding level; CG to its tolerance (relative to
+  // B; G relative to itself can be larger when G ≪ B).
+  for (const std::string v : {"ldlt", "ldlt refine=0", "ldlt refine_above=1e-15", "cholesky", "cholesky refine_above=1e-15"}) {
+    const io::Json* r = row(acc, "moduli", v);
+    REQUIRE(r != nullptr);
+    INFO(v);
+    CHECK((*r)["n"].get<int>() == 2);
+    CHECK((*r)["err_B"].get<double>() < 1e-10);
+    CHECK((*r)["max_err_G"].get<double>() < 1e-8);
+    CHECK((*r)["well_posed"].get<bool>());
+    CHECK((*r)["seconds"].get<double>() > 0);
+  }
+  const io::Json* cg = row(acc, "moduli", "cg-ichol tol=1e-4");
+  REQUIRE(cg != nullptr);
+  CHECK((*cg)["max_err_B"].get<double>() < 1e-3);
+  CHECK((*cg)["max_residual"].get<double>() <= 1e-3);
+  CHECK((*cg)["err_B"].get<double>() > (*row(acc, "moduli", "cg-ichol tol=1e-10"))["err_B"].get<double>());
+  CHECK((*row(acc, "moduli", "dense"))["reference"].get<bool>());
+  CHECK((*row(acc, "moduli", "dense"))["err_B"].is_null());
+
+  // ARPACK at its default reproduces the dense ω* and band eigenvalues; every setting was computed.
+  const io::Json* arpack = row(acc, "spectrum", "arpack tol=1e-10 ncv=auto");
+  REQUIRE(arpack != nullptr);
+  CHECK((*arpack)["default"].get<bool>());
+  CHECK((*arpack)["err_omega_star"].get<double>() < 1e-9);
+  CHECK((*arpack)["max_err_band"].get<double>() < 1e-9);
+  for (const auto& r : acc["rows"])
+    if (r["family"] == "spectrum") CHECK(r["failures"].get<int>() == 0);
+
+  // One group per knob, the default first; the verdict is consistent with the dominance lists.
+  std::set<std::string> knobs;
+  bool all = true;
+  for (const auto& g : acc["groups"]) {
+    knobs.insert(g["knob"].get<std::string>());
+    CHECK(g["variants"][0] == g["default"]);
+    CHECK(g["default_on_front"].get<bool>() == g["default_dominated_by"].empty());
+    all = all && g["default_on_front"].get<bool>();
+  }
+  CHECK(knobs == std::set<std::string>{"solver", "arpack_tol", "arpack_ncv"});
+  CHECK(acc["defaults_on_front"].get<bool>() == all);
+  CHECK(fs::exists(out / "accuracy.csv"));
+  CHECK(fs::exists(out / "accuracy.md"));
+}
+
+TEST_CASE("budjam accuracy refuses incomplete or malformed requests with exit code 2", "[fast]") {
+  const fs::path out = work_dir() / "bad";
+  CHECK(run_budjam("accuracy --out '" + out.string() + "'") == 2);  // nothing to measure
+  CHECK(run_budjam("accuracy --packings 'x=" + (work_dir() / "missing").string() + "' --out '" + out.string() + "'") == 2);
+  CHECK(run_budjam("accuracy --packings nodir --out '" + out.string() + "'") == 2);
+  CHECK(run_budjam("accuracy --reference '" + work_dir().string() + "' --out '" + out.string() + "'") == 2);
+  CHECK(run_budjam("accuracy --packings 'a,b=" + work_dir().string() + "' --out '" + out.string() + "'") == 2);
+}
+
+TEST_CASE("a knob measured on two packing sets is judged on its joint front: geometric-mean relative cost, worst error",
+          "[fast]") {
+  const fs::path set = packing_set();
+  const fs::path out = work_dir() / "acc_joint";
+  REQUIRE(run_budjam("accuracy --packings 'a=" + (set / "1").string() + "' --packings 'b=" + (set / "2").string() +
+                     "' --min-seconds 0 --out '" + out.string() + "'") == 0);
+  const io::Json acc = io::read_json(out / "accuracy.json");
+  auto cost = [&](const std::string& set_name, const std::string& family, const std::string& variant) {
+    for (const auto& r : acc["rows"])
+      if (r["set"] == set_name && r["family"] == family && r["variant"] == variant) return r["cost"].get<double>();
+    FAIL("no row " << set_name << " " << variant);
+    return 0.0;
+  };
+  auto default_of = [&](const std::string& set_name, const std::string& family) {
+    for (const auto& r : acc["rows"])
+      if (r["set"] == set_name && r["family"] == family && r["default"].get<bool>()) return r["variant"].get<std::string>();
+    FAIL("no default");
+    return std::string();
+  };
+  std::set<std::string> knobs;
+  bool all = true;
+  for (const auto& j : acc["joint_groups"]) {
+    knobs.insert(j["knob"].get<std::string>());
+    CHECK(j["sets"] == io::Json::array({"a", "b"}));
+    const std::string family = j["family"].get<std::string>();
+    for (const auto& s : j["settings"]) {
+      const std::string name = s["setting"].get<std::string>();
+      const std::string v = name == "default" ? default_of("a", family) : name;
+      const double expect = std::sqrt(cost("a", family, v) / cost("a", family, default_of("a", family)) *
+                                      cost("b", family, v) / cost("b", family, default_of("b", family)));
+      CHECK(s["relative_cost"].get<double>() == Approx(expect).epsilon(1e-12));
+    }
+    CHECK(j["settings"][0]["setting"] == "default");
+    CHECK(j["default_on_front"].get<bool>() == j["default_dominated_by"].empty());
+    all = all && j["default_on_front"].get<bool>();
+  }
+  CHECK(knobs == std::set<std::string>{"solver", "arpack_tol", "arpack_ncv"});
+  // With every knob measured on both sets, the verdict is that of the joint fronts alone.
+  CHECK(acc["defaults_on_front"].get<bool>() == all);
+}

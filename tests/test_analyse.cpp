@@ -1,0 +1,158 @@
+// `budjam analyse` end to end on real runs: the ensemble tables carry each run's own numbers
+// (summary.json, the moduli files beside its packings), are deterministic, and a missing input is
+// refused. The estimators themselves are tested on known answers in test_statistics,
+// test_survival and test_depletion.
+#include "io/json.hpp"
+
+#include <catch2/catch.hpp>
+#include "scratch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using budjam::testing::slurp;
+using budjam::testing::work_dir;
+
+int run_budjam(const std::string& args, const fs::path& err = "/dev/null", const fs::path& out = "/dev/null") {
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe != nullptr);
+  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// Rows of a CSV file as column → text.
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  auto split = [](const std::string& s) {
+    std::vector<std::string> f;
+    std::stringstream ss(s);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (!s.empty() && s.back() == ',') f.emplace_back();
+    return f;
+  };
+  if (std::getline(in, line)) header = split(line);
+  while (std::getline(in, line)) {
+    const auto f = split(line);
+    std::map<std::string, std::string> row;
+    for (std::size_t k = 0; k < header.size() && k < f.size(); ++k) row[header[k]] = f[k];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Three small runs (L = 6: no feedback, and P0 = 1e-3 on two seeds), each to two targets and on to
+// φ_2, with bud events and the moduli of every saved packing: what Makefile.analysis feeds analyse.
+const std::vector<fs::path>& runs() {
+  static const std::vector<fs::path> dirs = [] {
+    const fs::path scene = work_dir() / "small.toml";
+    std::ofstream(scene) << "[run]\nname = \"small\"\nseed = 1\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
+                         << "[jamming]\ntargets = [1e-3, 1e-2]\ncontinue_to_phi2 = true\n[observe]\nbud_events = true\n";
+    std::vector<fs::path> d;
+    for (const auto& [P0, seed] : std::vector<std::pair<std::string, int>>{{"none", 3}, {"1e-3", 3}, {"1e-3", 4}}) {
+      const fs::path dir = work_dir() / "runs" / ("P0_" + P0) / ("seed" + std::to_string(seed));
+      REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir) + " --seed " + std::to_string(seed) +
+                     " --set growth.P0=" + P0) == 0);
+      for (const auto& e : fs::directory_iterator(dir / "packings"))
+        if (e.path().extension() == ".pack")
+          REQUIRE(run_budjam("moduli " + q(e.path()), "/dev/null", fs::path(e.path()).replace_extension(".moduli.json")) == 0);
+      d.push_back(dir);
+    }
+    return d;
+  }();
+  return dirs;
+}
+
+std::string all_runs() {
+  std::string s;
+  for (const auto& d : runs()) s += q(d) + " ";
+  return s;
+}
+
+double number(const std::string& s) { return s.empty() ? NAN : std::stod(s); }
+
+}  // namespace
+
+TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its moduli files", "[analyse]") {
+  const fs::path out = work_dir() / "tables";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6 --require moduli") == 0);
+  const auto run_rows = read_csv(out / "runs.csv");
+  const auto tgt_rows = read_csv(out / "targets.csv");
+  REQUIRE(run_rows.size() == runs().size());
+  for (const auto& dir : runs()) {
+    const auto s = budjam::io::read_json(dir / "summary.json");
+    const auto it = std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& r) { return r.at("run") == dir.string(); });
+    REQUIRE(it != run_rows.end());
+    const auto& r = *it;
+    CHECK(number(r.at("phi_J")) == Approx(s.at("phi_J").get<double>()).epsilon(1e-12));
+    CHECK(number(r.at("u_J")) == Approx(s.at("u_J").get<double>()).epsilon(1e-12));
+    if (s.at("phi_2").is_number()) {
+      CHECK(number(r.at("dphi_2")) == Approx(s.at("phi_2").get<double>() - s.at("phi_J").get<double>()).epsilon(1e-9));
+      const auto side = budjam::io::read_json(dir / "packings" / "phi2.moduli.json");
+      CHECK(number(r.at("G_2")) == Approx(side.at("G").get<double>()).epsilon(1e-12));
+      CHECK(number(r.at("G_min_2")) == Approx(side.at("shear_stability").at("G_min").get<double>()).epsilon(1e-12));
+    }
+    // one targets.csv row per landed target, with that packing's moduli
+    for (const auto& t : s.at("targets")) {
+      const double dphi = t.at("dphi").get<double>();
+      const auto row = std::find_if(tgt_rows.begin(), tgt_rows.end(), [&](const auto& x) {
+        return x.at("run") == dir.string() && std::abs(number(x.at("dphi")) - dphi) < 1e-12;
+      });
+      REQUIRE(row != tgt_rows.end());
+      CHECK(number(row->at("P")) == Approx(t.at("P").get<double>()).epsilon(1e-12));
+      const auto side = budjam::io::read_json(dir / "packings" / ("target_" + std::to_string(t.at("index").get<long>()) +
+                                                                  ".moduli.json"));
+      CHECK(number(row->at("G")) == Approx(side.at("G").get<double>()).epsilon(1e-12));
+      CHECK(number(row->at("B")) == Approx(side.at("B").get<double>()).epsilon(1e-12));
+    }
+  }
+  // groups: (L = 6, none) with one run and (L = 6, 1e-3) with two
+  const auto A = budjam::io::read_json(out / "analysis.json");
+  std::map<std::string, long> runs_in;
+  for (const auto& g : A.at("groups")) runs_in[g.at("P0_label").get<std::string>()] = g.at("runs").get<long>();
+  CHECK(runs_in.at("none") == 1);
+  CHECK(runs_in.at("0.001") == 2);
+  CHECK(A.at("inputs").at("used").get<long>() == 3);
+}
+
+TEST_CASE("analyse is deterministic: the same runs give byte-identical tables", "[analyse]") {
+  const fs::path a = work_dir() / "det_a", b = work_dir() / "det_b";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(b) + " --main-L 6") == 0);
+  for (const char* f : {"analysis.json", "runs.csv", "targets.csv", "survival.csv", "trajectory.csv"}) {
+    INFO(f);
+    CHECK(slurp(a / f) == slurp(b / f));
+    CHECK(!slurp(a / f).empty());
+  }
+}
+
+TEST_CASE("analyse --require moduli refuses a packing without its moduli file: exit 2, one line naming it", "[analyse]") {
+  const fs::path copy = work_dir() / "incomplete";
+  fs::copy(runs().front(), copy, fs::copy_options::recursive);
+  fs::remove(copy / "packings" / "target_0.moduli.json");
+  const fs::path err = work_dir() / "analyse.err";
+  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_incomplete") + " --main-L 6 --require moduli", err) == 2);
+  const std::string e = slurp(err);
+  CHECK(e.find("target_0.pack") != std::string::npos);
+  CHECK(e.find("no moduli") != std::string::npos);
+  CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+  // without --require the same run is analysed, its moduli left empty
+  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6") == 0);
+}
