@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cstdint>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -113,6 +114,11 @@ void validate(const Scene& s) {
   finite("growth.adaptive_floor", s.adaptive_floor);
   if (!(s.adaptive_floor > 0 && s.adaptive_floor <= 1))
     fail("growth.adaptive_floor", "must lie in (0, 1]", s.adaptive_floor);
+  // The adaptive step is dt / max(g_max, floor): it must stay finite, or a bud whose growth factor
+  // is exactly 0 would grow by 0 · ∞ = NaN.
+  if (s.adaptive_floor < std::numeric_limits<double>::min() || !std::isfinite(s.dt / s.adaptive_floor))
+    fail("growth.adaptive_floor", "must be at least " + show(std::numeric_limits<double>::min()) +
+                                      " and keep growth.dt / adaptive_floor finite", s.adaptive_floor);
 
   // [jamming]
   positive("jamming.epsilon_U", s.epsilon_U);

@@ -1,11 +1,19 @@
 // Growth, growth law, division and initial states follow MODEL.md ("Growth") exactly.
 #include "budjam/growth.hpp"
 
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+
+#include "compressed_packing.hpp"
+
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 using namespace budjam;
 
@@ -277,4 +285,115 @@ TEST_CASE("random seeds are newborn cells that overlap nowhere, also across the 
   s.n_seeds = 1000;  // cannot fit in 400 D²
   Rng r2(1);
   CHECK_THROWS_AS(random_seeds(s, r2), InputError);
+}
+
+// ---- hard case (issue 6): a division into a crowded neighbourhood ------------------------------
+// A jammed packing of random dumbbells (tests/support/compressed_packing.hpp) compressed well past
+// jamming, in which the most crowded cell is one growth step from dividing. The step goes through
+// the library's own path (growth_rates → grow_step → divide, one random stream) and FIRE relaxes
+// the result as the growth driver does.
+TEST_CASE("a division into a crowded neighbourhood places newborns exactly and FIRE relaxes them to a finite force balance",
+          "[.hard][growth]") {
+  testing::CompressionProtocol proto;
+  proto.b_max = 1.0;  // every other cell stays below the division threshold during the step
+  testing::CompressedPacking cp = testing::compress_random_dumbbells(40, 7, proto);
+  Packing p = cp.packing;
+  const std::size_t n = p.size();
+
+  // The most crowded cell (most contacts) gets a bud just below the threshold b = 2α0 − 1 = 1.02.
+  std::vector<int> contacts_of(n, 0);
+  for (const Contact& c : cp.contacts) ++contacts_of[cell_of(c.i)], ++contacts_of[cell_of(c.j)];
+  const std::size_t k = static_cast<std::size_t>(std::max_element(contacts_of.begin(), contacts_of.end()) -
+                                                 contacts_of.begin());
+  p.b[k] = 1.0199;
+  // Squeeze φ up by 0.08 and relax, so that every lobe is pressed into its neighbours.
+  testing::rescale_to(p, p.packing_fraction() + 0.08);
+  Scene scene = base_scene();
+  scene.L = p.box.L;
+  ForceField field(scene.skin);
+  REQUIRE(minimise(p, field, scene.fire).converged);
+  Eigen::VectorXd f;
+  field.invalidate();
+  const double E_before = field.evaluate(p, f) / static_cast<double>(n);
+  INFO("E/N before = " << E_before << ", contacts of the dividing cell = " << contacts_of[k]);
+  REQUIRE(E_before > 1e-6);  // well past jamming: a crowded neighbourhood
+
+  const Packing before = p;
+  Rng rng(3);  // this stream points a newborn bud into a neighbour (checked below)
+  const std::vector<double> rates = growth_rates(p, nullptr, std::nullopt);
+  const std::vector<Division> divisions = grow_step(p, rates, 1.0, scene, rng);
+
+  // Exactly the one division, bookkept as MODEL.md says.
+  REQUIRE(divisions.size() == 1);
+  const Division& d = divisions[0];
+  REQUIRE(p.size() == n + 1);
+  CHECK(d.mother_index == k);
+  CHECK(d.daughter_index == n);
+  CHECK(p.id[k] == before.id[k]);
+  CHECK(p.parent[k] == before.parent[k]);
+  CHECK(p.id[n] == before.next_id);
+  CHECK(p.parent[n] == before.id[k]);
+  CHECK(p.next_id == before.next_id + 1);
+  CHECK(p.b[k] == newborn_bud(scene.alpha0));
+  CHECK(p.b[n] == newborn_bud(scene.alpha0));
+  const double h = 0.5 * scene.alpha0, c = std::cos(before.theta(k)), s = std::sin(before.theta(k));
+  CHECK(p.x(k) == Approx(before.x(k) - h * c).margin(1e-14));
+  CHECK(p.y(k) == Approx(before.y(k) - h * s).margin(1e-14));
+  CHECK(p.x(n) == Approx(before.x(k) + h * c).margin(1e-14));
+  CHECK(p.y(n) == Approx(before.y(k) + h * s).margin(1e-14));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i == k) continue;
+    CHECK(p.x(i) == before.x(i));
+    CHECK(p.b[i] == grown_bud(before.b[i], rates[i], 1.0));
+  }
+
+  // The newborns land inside their neighbours: a 0.01 bud swallowed whole by a neighbour's lobe,
+  // and the newborn mothers pressed into theirs.
+  Lobes lobes;
+  place_lobes(p, lobes);
+  double bud_depth = 0;     // largest overlap of a newborn bud with another cell's lobe / bud diameter
+  double mother_depth = 0;  // largest overlap of a newborn mother with another cell's lobe
+  for (std::size_t cell : {k, n})
+    for (std::size_t a : {mother_lobe(cell), bud_lobe(cell)})
+      for (std::size_t o = 0; o < lobes.size(); ++o) {
+        if (cell_of(o) == cell) continue;
+        double dx = lobes.x[a] - lobes.x[o], dy = lobes.y[a] - lobes.y[o];
+        p.box.minimum_image(dx, dy);
+        const double overlap = lobes.R[a] + lobes.R[o] - std::hypot(dx, dy);
+        if (is_bud(a)) bud_depth = std::max(bud_depth, overlap / (2 * lobes.R[a]));
+        else mother_depth = std::max(mother_depth, overlap);
+      }
+  INFO("newborn bud overlap / its diameter = " << bud_depth << ", newborn mother overlap = " << mother_depth);
+  REQUIRE(bud_depth >= 1.0);
+  REQUIRE(mother_depth > 0.05);
+
+  field.invalidate();
+  const double U_divided = field.evaluate(p, f);
+  REQUIRE(std::isfinite(U_divided));
+  REQUIRE(f.allFinite());
+
+  field.invalidate();
+  const FireResult fr = minimise(p, field, scene.fire);
+  const double tol = std::max(scene.fire.force_tol, force_resolution(p));
+  CHECK(fr.converged);
+  CHECK(fr.max_force <= tol);
+  CHECK(std::isfinite(fr.energy));
+  CHECK(p.q.allFinite());
+  CHECK(fr.energy <= U_divided);
+
+  // An independent evaluation of the relaxed state: a true force and torque balance.
+  ForceField fresh(scene.skin);
+  const double U_after = fresh.evaluate(p, f);
+  REQUIRE(f.allFinite());
+  CHECK(U_after == Approx(fr.energy).epsilon(1e-12));
+  double fmax = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    fmax = std::max({fmax, std::abs(f[3 * i]), std::abs(f[3 * i + 1]), std::abs(f[3 * i + 2]) / p.dumbbell(i).gyration});
+  }
+  CHECK(fmax <= tol);
+  CHECK(U_after / static_cast<double>(p.size()) > scene.epsilon_U);  // still jammed: the division did not open space
+  // The sisters are neighbours, not on top of each other.
+  double dx = p.x(n) - p.x(k), dy = p.y(n) - p.y(k);
+  p.box.minimum_image(dx, dy);
+  CHECK(std::hypot(dx, dy) > 0.9);
 }

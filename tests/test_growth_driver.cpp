@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -409,4 +411,198 @@ TEST_CASE("adaptive_dt off keeps MODEL.md's nominal step above jamming", "[drive
   const Reference& r = reference();
   CHECK_FALSE(r.scene.adaptive_dt);
   for (const auto& st : r.rec.steps) CHECK(st.dt <= r.scene.dt);
+}
+
+// ---- hard cases (issue 6) -----------------------------------------------------------------------
+namespace {
+
+bool all_finite(const Packing& p) {
+  return p.q.allFinite() && std::all_of(p.b.begin(), p.b.end(), [](double b) { return std::isfinite(b); });
+}
+
+// Checks, at every event it sees, that what the driver reports is finite and what it claims:
+// a Jammed state has ε_U ≤ E/N ≤ 2ε_U, a TargetReached state lies within the landing tolerance.
+struct Audit : Observer {
+  Needs wanted;
+  explicit Audit(Needs n = {}) : wanted(n) {}
+  std::string name() const override { return "audit"; }
+  Needs needs() const override { return wanted; }
+
+  long states = 0, jammed = 0, targets = 0, finished = 0, failed = 0;
+  double last_phi = 0;
+  std::optional<double> phi_J;
+
+  void on_step_accepted(const StepAccepted& e) override {
+    const StateView& s = e.state;
+    ++states;
+    CHECK(std::isfinite(s.phi));
+    CHECK(std::isfinite(s.P));
+    CHECK(std::isfinite(s.E_per_cell));
+    CHECK(std::isfinite(s.chi_c));
+    CHECK(s.chi_c >= 0.0);
+    CHECK(s.chi_c <= 1.0);
+    if (s.step > 0) {
+      CHECK(std::isfinite(s.dt));
+      CHECK(s.dt > 0.0);
+    }
+    CHECK(all_finite(*s.packing));
+    last_phi = s.phi;
+  }
+  void on_jammed(const Jammed& e) override {
+    ++jammed;
+    const double eps = e.state.scene->epsilon_U;
+    CHECK(e.state.E_per_cell >= eps);
+    CHECK(e.state.E_per_cell <= 2 * eps);
+    CHECK(e.jamming.phi == e.state.phi);
+    phi_J = e.jamming.phi;
+  }
+  void on_unjammed(const Unjammed& e) override {
+    CHECK(e.state.E_per_cell < e.state.scene->epsilon_U);
+    phi_J.reset();
+  }
+  void on_target_reached(const TargetReached& e) override {
+    ++targets;
+    REQUIRE(phi_J);
+    CHECK(e.target.phi_target == *phi_J + e.target.dphi);
+    CHECK(std::abs(e.state.phi - e.target.phi_target) <= e.state.scene->target_tolerance);
+    CHECK(e.state.E_per_cell >= e.state.scene->epsilon_U);
+  }
+  void on_finished(const Finished&) override { ++finished; }
+  void on_failed(const Failed&) override { ++failed; }
+};
+
+// With feedback: every growth factor exp(−p/P0) of every accepted state, and the buds whose factor
+// underflowed, which the next accepted step must leave bit for bit as they are.
+struct FactorAudit : Audit {
+  FactorAudit() : Audit(Needs{false, false, true, true}) {}
+  long factors = 0, underflows = 0, frozen_checked = 0;
+  long denormal = 0;  // factors whose bare exp(−p/P0) would be a denormal (708.4 < p/P0 < 745.1)
+  double max_ratio = 0;  // largest p/P0 seen
+  std::vector<std::size_t> frozen;  // cells with factor 0 in the previous accepted state (feedback on)
+  std::vector<double> frozen_b;
+
+  void on_step_accepted(const StepAccepted& e) override {
+    Audit::on_step_accepted(e);
+    const StateView& s = e.state;
+    const Packing& p = *s.packing;
+    // The buds frozen by the previous state's factors did not move by a single bit.
+    for (std::size_t k = 0; k < frozen.size(); ++k) {
+      REQUIRE(frozen[k] < p.size());
+      CHECK(p.b[frozen[k]] == frozen_b[k]);
+      ++frozen_checked;
+    }
+    frozen.clear();
+    frozen_b.clear();
+    REQUIRE(s.bud_pressures);
+    REQUIRE(s.bud_pressures->size() == p.size());
+    const double P0 = *s.scene->P0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double pi = (*s.bud_pressures)[i];
+      REQUIRE(std::isfinite(pi));
+      CHECK(pi >= 0.0);
+      const double g = growth_factor(pi, P0);
+      ++factors;
+      CHECK(std::isfinite(g));
+      CHECK(g >= 0.0);
+      CHECK(g <= 1.0);
+      CHECK((g == 0.0 || g >= std::numeric_limits<double>::min()));  // never a denormal
+      const double x = pi / P0;
+      max_ratio = std::max(max_ratio, x);
+      const double e = std::exp(-x);
+      if (e > 0.0 && e < std::numeric_limits<double>::min()) ++denormal;  // where a bare exp gives a denormal
+      if (e < std::numeric_limits<double>::min()) CHECK(g == 0.0);  // an underflow is exactly 0
+      else if (g != 0.0) CHECK(g == Approx(e).epsilon(1e-15));
+      if (g == 0.0) {
+        CHECK(e < 2 * std::numeric_limits<double>::min());  // only a genuine underflow is zeroed
+        if (s.phase == Phase::jammed) {  // feedback on: the next step grows this bud at γ0·0
+          ++underflows;
+          frozen.push_back(i);
+          frozen_b.push_back(p.b[i]);
+        }
+      }
+    }
+  }
+};
+
+}  // namespace
+
+// L = 6, two-cell start, seed 2. With MODEL.md's nominal Δt = 1, or adaptive_dt at its default
+// floor 1e-6, P0 = 1e-5 stalls growth before any bud reaches p = 708 P0 (measured with the default
+// floor, L = 6, six seeds: max p/P0 ≈ 260–460 after 8 s), so this run uses adaptive_dt with a floor
+// of 1e-300: every step starts from Δt = 1/g_max (up to ~1e300 when every bud is compressed), the
+// regime where a denormal instead of an exact 0 would let a "stopped" bud grow. Measured (FIRE
+// defaults of 2026-11-23): ~1900 accepted and ~230 rejected steps, the first underflow at
+// Δφ ≈ 0.02, max p/P0 ≈ 1460, ~470 underflowed factors (~60 where a bare exp() is a denormal).
+TEST_CASE("with P0 = 1e-5 through a run above jamming every growth factor is finite in [0, 1] and an underflowed one is exactly 0 and freezes its bud",
+          "[.hard][driver]") {
+  Scene s = small_scene();
+  s.seed = 2;
+  s.P0 = 1e-5;
+  s.adaptive_dt = true;
+  s.adaptive_floor = 1e-300;
+  s.targets = {1e-3, 1e-2, 3e-2};
+  FactorAudit audit;
+  GrowthDriver d(s);
+  d.add_observer(audit);
+  REQUIRE(d.run() == RunStatus::finished);
+  const RunResult& r = d.result();
+  INFO("accepted " << r.accepted << ", rejected " << r.rejected << ", max p/P0 = " << audit.max_ratio
+                   << ", underflowed factors " << audit.underflows
+                   << " (" << audit.denormal << " in the denormal range)");
+  REQUIRE(r.jamming);
+  REQUIRE(r.targets.size() == s.targets.size());
+  CHECK(audit.targets == static_cast<long>(s.targets.size()));
+  CHECK(audit.jammed >= 1);
+  CHECK(audit.finished == 1);
+  CHECK(audit.failed == 0);
+  CHECK(audit.states == r.accepted + 1);
+  // The test proves something only if factors really underflowed while feedback was on, and the
+  // next step then had to leave those buds alone.
+  CHECK(audit.max_ratio > 708.4);
+  CHECK(audit.denormal > 0);  // ... including the range where a bare exp() returns a denormal
+  CHECK(audit.underflows > 0);
+  CHECK(audit.frozen_checked > 0);
+  for (const TargetRecord& t : r.targets) {
+    CHECK(std::isfinite(t.chi_c));
+    CHECK(t.chi_c >= 0.0);
+    CHECK(t.chi_c <= 1.0);
+  }
+}
+
+// A landing tolerance no growth step can meet (1e-300: only an exact hit of φ_J + Δφ counts) with
+// MODEL.md's dt_min = 1e-12: after each accepted step below the target the bisection starts again
+// from Δt = 1 and must halve further, until Δt = 2⁻⁴⁰ < 1e-12. Measured (L = 6, seed 3, P0 = 1e-3):
+// ~1440 accepted and ~620 rejected steps; the last accepted state lies ~1e-15 below the target.
+TEST_CASE("a landing no step can reach halves dt from 1 past growth.dt_min = 1e-12 and fails with dt_underflow, reporting no false target",
+          "[.hard][driver]") {
+  Scene s = small_scene();
+  s.targets = {1e-3};
+  s.target_tolerance = 1e-300;
+  REQUIRE(s.dt_min == 1e-12);
+  Audit audit;
+  GrowthDriver d(s);
+  d.add_observer(audit);
+  REQUIRE(d.run() == RunStatus::dt_underflow);
+  const RunResult& r = d.result();
+  INFO("accepted " << r.accepted << ", rejected " << r.rejected << ", " << r.message);
+  CHECK(r.message.find("dt_min") != std::string::npos);
+  CHECK(audit.failed == 1);
+  CHECK(audit.finished == 0);
+  // Δt was halved from 1 a whole number of times, to the first power of two below dt_min.
+  CHECK(d.dt() < s.dt_min);
+  CHECK(d.dt() == std::ldexp(1.0, -40));
+  // The run jammed (ε_U ≤ E/N ≤ 2ε_U, checked by the audit) and then homed in on the target from
+  // below without ever claiming it.
+  REQUIRE(r.jamming);
+  CHECK(audit.jammed >= 1);
+  CHECK(r.targets.empty());
+  CHECK(audit.targets == 0);
+  CHECK(d.phase() == Phase::jammed);
+  const double target = r.jamming->phi + s.targets[0];
+  CHECK(audit.last_phi == d.view().phi);
+  CHECK(audit.last_phi < target);
+  CHECK(target - audit.last_phi < 1e-11);  // a step of 2⁻³⁹ would have overshot it
+  CHECK(r.rejected >= 40);
+  CHECK(std::isfinite(d.view().E_per_cell));
+  CHECK(d.view().E_per_cell >= s.epsilon_U);
 }
