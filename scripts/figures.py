@@ -72,6 +72,8 @@ def p0_colour(label, labels):
 
 def save(fig, out, name):
     os.makedirs(out, exist_ok=True)
+    # Room for every panel's axis labels (a log axis' label can otherwise reach into its neighbour).
+    fig.subplots_adjust(wspace=0.32)
     for ext in ("png", "pdf"):
         fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
     plt.close(fig)

@@ -429,26 +429,18 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
     const int steps = options.direct_refinement_steps;
     const double threshold = options.refinement_threshold;
     switch (options.solver) {
-      case ModuliSolver::cholesky: {
-        CholmodSolver llt(Factorisation::llt);
-        if (llt.factor(Hf)) {
-          k.method = "cholesky";
-          k.rcond = llt.rcond();
-          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return llt.solve(b); }, steps, threshold, k.refinement_steps);
-        } else {
-          k.cholesky_failed_column = llt.failed_column();
-          Uf = regularised_refinement(Hf, Xf, options, k);
-        }
-        break;
-      }
+      case ModuliSolver::cholesky:
       case ModuliSolver::ldlt: {
-        CholmodSolver ldl(Factorisation::ldlt);
-        if (ldl.factor(Hf) && ldl.negative_pivots() == 0 && ldl.rcond() > kSingularRcond) {
-          k.method = "ldlt";
-          k.rcond = ldl.rcond();
-          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return ldl.solve(b); }, steps, threshold, k.refinement_steps);
+        const bool llt = options.solver == ModuliSolver::cholesky;
+        CholmodSolver f(llt ? Factorisation::llt : Factorisation::ldlt);
+        // LLᵀ stops at the first non-positive pivot; LDLᵀ accepts any nonzero one, so it must also
+        // show no negative pivot and no rounding-level one (an exactly singular system).
+        if (f.factor(Hf) && (llt || (f.negative_pivots() == 0 && f.rcond() > kSingularRcond))) {
+          k.method = to_string(options.solver);
+          k.rcond = f.rcond();
+          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold, k.refinement_steps);
         } else {
-          k.cholesky_failed_column = ldl.failed_column();
+          k.cholesky_failed_column = f.failed_column();
           Uf = regularised_refinement(Hf, Xf, options, k);
         }
         break;
