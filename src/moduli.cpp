@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -109,7 +110,8 @@ Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
 
 // Fallback when the pinned system is singular (a mechanism beyond the pinned modes): LDLᵀ of
 // H_ff + δ1 and the iteration u ← u + (H + δ)⁻¹(Ξ − H u) from u = 0, which converges to the solution
-// without kernel component when Ξ ⊥ kernel. Throws when H_ff has negative eigenvalues.
+// without kernel component when Ξ ⊥ kernel. When H_ff has eigenvalues below −δ the packing is a
+// saddle and has no linear response: method "unstable", their number in unstable_modes, U = NaN.
 Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
                                        KernelTreatment& k) {
   k.method = "regularised-refinement";
@@ -119,12 +121,18 @@ Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::Matr
   bool ok = false;
   for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
   delta /= 100;
-  if (!ok || ldl.negative_pivots() > 0)
-    throw std::runtime_error("elastic_response: the Hessian of the non-rattlers has negative eigenvalues (" +
-                             std::to_string(ldl.negative_pivots()) +
-                             " below −δ): the packing is not at an energy minimum; relax it first");
+  if (!ok)
+    throw std::runtime_error("elastic_response: no LDLᵀ factor of the regularised Hessian (zero pivot at column " +
+                             std::to_string(ldl.failed_column()) + ")");
   k.regularisation = delta;
   k.rcond = ldl.rcond();
+  // Sylvester's law of inertia: the negative pivots of LDLᵀ(H_ff + δ1) count the eigenvalues of H_ff
+  // below −δ, and pinning kernel dofs leaves that count unchanged, so they are the unstable modes of H.
+  if (ldl.negative_pivots() > 0) {
+    k.method = "unstable";
+    k.unstable_modes = static_cast<std::size_t>(ldl.negative_pivots());
+    return Eigen::MatrixXd::Constant(Hf.rows(), Xf.cols(), std::numeric_limits<double>::quiet_NaN());
+  }
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());
   double res = 1.0, best = 1.0;
   int stall = 0;
@@ -236,6 +244,10 @@ double shear_modulus_along(const Response4& E, double phi) {
 }
 
 ShearStability shear_stability(const Response4& E) {
+  if (!E.allFinite()) {  // no relaxed response (a saddle): no direction is known to be stable
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return ShearStability{nan, nan, nan, nan, false};
+  }
   // The extremum near the best grid point is the zero of G'(φ) = êᵀ(E + Eᵀ)ê' in the two grid
   // intervals around it (G is smooth and of degree 4: the grid resolves its extrema), found by
   // bisection: an extremum is flat, so G itself would locate it only to √ε.
@@ -479,7 +491,7 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nr, 4);
   for (Eigen::Index k = 0; k < nr; ++k)
     if (free_index[k] >= 0) U.row(k) = Uf.row(free_index[k]);
-  out.kernel.residual = column_residual(Xi, Xi - H * U);
+  out.kernel.residual = out.energy_minimum() ? column_residual(Xi, Xi - H * U) : std::numeric_limits<double>::quiet_NaN();
   // An iterative solve is verified against the tolerance it was asked for (its residual is that large
   // by design); a direct one against residual_tolerance.
   const double tolerance = options.solver == ModuliSolver::cg && out.kernel.solver_tolerance > 0

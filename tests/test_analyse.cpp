@@ -156,3 +156,26 @@ TEST_CASE("analyse --require moduli refuses a packing without its moduli file: e
   // without --require the same run is analysed, its moduli left empty
   CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6") == 0);
 }
+
+TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of the moduli and counts it", "[analyse]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const fs::path copy = work_dir() / "with_saddle";
+  fs::copy(runs().front(), copy, fs::copy_options::recursive);
+  // a real saddle's JSON (budjam moduli exits 1 on it) in place of target_0's
+  REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack"), "/dev/null",
+                     copy / "packings" / "target_0.moduli.json") == 1);
+  const fs::path out = work_dir() / "t_saddle";
+  REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli") == 0);
+  CHECK(budjam::io::read_json(out / "analysis.json").at("inputs").at("moduli_saddles").get<long>() == 1);
+  const auto s = budjam::io::read_json(copy / "summary.json");
+  const double dphi0 = s.at("targets").at(0).at("dphi").get<double>();
+  std::size_t seen = 0;
+  for (const auto& row : read_csv(out / "targets.csv")) {
+    if (std::abs(number(row.at("dphi")) - dphi0) > 1e-12) continue;
+    ++seen;
+    CHECK(std::isnan(number(row.at("G"))));
+    CHECK(std::isnan(number(row.at("B"))));
+  }
+  CHECK(seen == 1);
+}

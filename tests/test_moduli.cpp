@@ -3,6 +3,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
+#include "budjam/hessian.hpp"
 #include "budjam/moduli.hpp"
 #include "budjam/strain.hpp"
 
@@ -435,6 +436,62 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
     CHECK(rel(f.moduli.B, ref.moduli.B) < 1e-6);
     CHECK(rel(f.moduli.G_simple, ref.moduli.G_simple) < 1e-6);
   }
+}
+
+// The jamming point of an L = 15 run (paper-L15.toml, P0 = none, seed 3: E/N = 1.16e-16, P = 6.9e-9)
+// found by MODEL.md's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
+// λ ≈ −1e-8, the order of the prestress f/ℓ. Such a state has no linear response.
+TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, and no relaxed modulus is reported",
+          "[.hard]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  Relaxed r;
+  r.p = io::read_packing(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
+  ForceField field;
+  Eigen::VectorXd F;
+  field.evaluate(r.p, F);
+  r.contacts = find_contacts(r.p, field.lobes(), field.neighbours());
+  r.net = analyse_network(r.p.size(), r.contacts);
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  REQUIRE(e.kernel.method == "unstable");
+  CHECK_FALSE(e.energy_minimum());
+  CHECK_FALSE(e.kernel.well_posed);
+  CHECK(std::isnan(e.moduli.B));
+  CHECK(std::isnan(e.moduli.G_simple));
+  CHECK(std::isnan(e.shear.G_min));
+  CHECK_FALSE(e.shear.stable);
+  CHECK(e.moduli_affine.B > 0);  // the affine response needs no solve
+  CHECK(e.moduli_affine.G_simple > 0);
+
+  // Independent count: eigenvalues of the dense Hessian of the non-rattlers below −δ.
+  const DofMap map = non_rattler_dofs(r.net);
+  const SparseMatrix H = restrict_matrix(hessian(r.p, load_bearing(r.contacts, r.net)), map);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(H)};
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const auto below = static_cast<std::size_t>((lambda.array() < -e.kernel.regularisation).count());
+  INFO("λ_min = " << lambda[0] << ", δ = " << e.kernel.regularisation);
+  CHECK(below == 1);
+  CHECK(e.kernel.unstable_modes == below);
+  for (const ModuliSolver solver : {ModuliSolver::cholesky, ModuliSolver::dense}) {
+    ModuliOptions o;
+    o.solver = solver;
+    CHECK(elastic_response(r.p, r.contacts, r.net, o).kernel.unstable_modes == below);
+  }
+
+}
+
+TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, and exits 1", "[fast]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const auto [code, out] = run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
+  CHECK(code == 1);
+  const io::Json j = io::Json::parse(out);
+  CHECK(j["energy_minimum"] == false);
+  CHECK(j["G"].is_null());
+  CHECK(j["B"].is_null());
+  CHECK(j["kernel"]["method"] == "unstable");
+  CHECK(j["kernel"]["unstable_modes"] == 1);
+  CHECK(j["moduli_affine"]["B"].get<double>() > 0);
 }
 
 // ---- linear solver of the pinned system (accuracy against cost, issue 6) ----------------------

@@ -128,7 +128,12 @@ struct SidecarModuli {
   double B = kNaN, G = kNaN, B_ext_mf = kNaN, G_min = kNaN;
 };
 
-SidecarModuli read_moduli(const fs::path& pack, bool required, std::size_t& found) {
+struct ModuliFiles {
+  std::size_t found = 0;
+  std::size_t saddles = 0;  // "energy_minimum": false — no relaxed B, G (NaN here, left out of every statistic)
+};
+
+SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& files) {
   SidecarModuli m;
   const auto j = tools::sidecar(pack, "moduli");
   if (!j) {
@@ -137,17 +142,21 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, std::size_t& foun
                        "; run `make -f Makefile.analysis moduli`)");
     return m;
   }
-  ++found;
+  ++files.found;
+  m.B_ext_mf = json_number(*j, {"B_ext_mean_field", "B_mf", "B_ext_mf"});
+  if (j->contains("energy_minimum") && (*j)["energy_minimum"].is_boolean() && !(*j)["energy_minimum"].get<bool>()) {
+    ++files.saddles;
+    return m;
+  }
   m.B = json_number(*j, {"B", "bulk_modulus"});
   m.G = json_number(*j, {"G", "shear_modulus"});
-  m.B_ext_mf = json_number(*j, {"B_ext_mean_field", "B_mf", "B_ext_mf"});
   if (j->contains("shear_stability")) m.G_min = json_number((*j)["shear_stability"], {"G_min"});
   if (!std::isfinite(m.G) || !std::isfinite(m.B))
     throw InputError(fs::path(pack).replace_extension(".moduli.json").string() + ": no numeric \"B\" and \"G\"");
   return m;
 }
 
-RunRow extract(const tools::RunData& r, bool need_moduli, std::size_t& moduli_found) {
+RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_found) {
   RunRow x;
   x.dir = r.dir;
   x.L = r.L();
@@ -411,7 +420,8 @@ void run(const Options& o) {
   std::vector<RunRow> rows;
   std::vector<DosRow> dos_rows;
   std::vector<std::string> failed;
-  std::size_t moduli_found = 0, dos_found = 0;
+  ModuliFiles moduli_found;
+  std::size_t dos_found = 0;
   for (const auto& d : dirs) {
     const tools::RunData r = tools::load_run(d);
     // A run that stopped early (step limit, say) still landed every state it recorded: its jamming
@@ -664,7 +674,8 @@ void run(const Options& o) {
   J["inputs"] = Json{{"runs", dirs.size()},
                      {"used", rows.size()},
                      {"not_finished", failed},
-                     {"moduli_files", moduli_found},
+                     {"moduli_files", moduli_found.found},
+                     {"moduli_saddles", moduli_found.saddles},
                      {"dos_files", dos_found}};
   J["main_L"] = main_L;
   J["bootstrap"] = Json{{"resamples", bo.resamples}, {"seed", bo.seed}};
@@ -852,7 +863,7 @@ void run(const Options& o) {
   write_csv(out / "dos.csv", {"run", "packing", "L", "P0", "dphi", "omega_star", "dZ", "Z_minus_6", "N_zero", "N_u", "N_u_buds"},
             dos_out);
   std::cerr << "analyse: " << rows.size() << " runs used (" << failed.size() << " not finished) in " << groups.size()
-            << " groups; moduli files " << moduli_found << ", spectra " << dos_found << " -> " << out.string() << "\n";
+            << " groups; moduli files " << moduli_found.found << " (" << moduli_found.saddles << " saddles), spectra " << dos_found << " -> " << out.string() << "\n";
 }
 
 const bool registered = budjam::cli::register_command(

@@ -112,6 +112,8 @@ Json response_json(const ElasticResponse& e) {
   j["u"] = e.u;
   j["u_buds"] = e.u_buds;
   j["n"] = e.n;
+  // false: the Hessian has kernel.unstable_modes negative eigenvalues, the relaxed moduli are null.
+  j["energy_minimum"] = e.energy_minimum();
   j["P"] = e.P;
   j["P_energy"] = e.P_energy;
   j["stress"] = stress_json(e.stress);
@@ -124,9 +126,9 @@ Json response_json(const ElasticResponse& e) {
   j["elastic_tensor_affine"] = tensor_json(e.C_affine);
   // G(φ) = (1/A) d²U/dγ² for simple shear along φ; G_min < 0: the box shape is unstable to that shear.
   j["shear_stability"] = Json{{"G_min", number_or_null(e.shear.G_min)},
-                              {"phi_min_deg", e.shear.phi_min * 180 / std::numbers::pi},
+                              {"phi_min_deg", number_or_null(e.shear.phi_min * 180 / std::numbers::pi)},
                               {"G_max", number_or_null(e.shear.G_max)},
-                              {"phi_max_deg", e.shear.phi_max * 180 / std::numbers::pi},
+                              {"phi_max_deg", number_or_null(e.shear.phi_max * 180 / std::numbers::pi)},
                               {"stable", e.shear.stable}};
   j["response"] = Json{{"order", Json::array({"xx", "xy", "yx", "yy"})},
                        {"dS_de", matrix_json(e.R)},
@@ -149,6 +151,7 @@ Json response_json(const ElasticResponse& e) {
                      {"reference_cell", k.reference_cell},
                      {"cholesky_failed_column", k.cholesky_failed_column},
                      {"regularisation", k.regularisation},
+                     {"unstable_modes", k.unstable_modes},
                      {"refinement_steps", k.refinement_steps},
                      {"iterations", k.iterations},
                      {"solver_tolerance", k.solver_tolerance},
@@ -226,6 +229,10 @@ void run(const Options& o) {
     j["solve_seconds"] = e.kernel.solve_seconds;
   }
   std::cout << io::json_text(j);
+  if (!e.energy_minimum())
+    throw cli::RunFailure("moduli: " + o.packing + " is a saddle, not an energy minimum (" +
+                          std::to_string(e.kernel.unstable_modes) +
+                          " unstable modes): no relaxed response; the JSON has the affine moduli");
 }
 
 const bool registered = budjam::cli::register_command(

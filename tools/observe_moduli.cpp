@@ -1,7 +1,8 @@
 // Observer "moduli": the non-affine elastic response along a growth run, written to
 // <run_dir>/moduli.csv, only when the scene asks ([observe.moduli]: at_jamming, at_phi2,
 // at_targets, every k accepted steps above jamming). One row per (state, reason); a state that is
-// several things at once (e.g. a target on an `every` step) is computed once. docs/moduli.md.
+// several things at once (e.g. a target on an `every` step) is computed once. A saddle (kernel_method
+// "unstable") is logged with its unstable_modes and empty relaxed moduli. docs/moduli.md.
 #include "observers.hpp"
 
 #include "budjam/moduli.hpp"
@@ -25,7 +26,7 @@ const std::vector<std::string> kColumns{
     "P_energy", "B", "G_simple", "G_pure", "G_mean", "B_affine", "G_simple_affine", "G_pure_affine", "B_energy",
     "G_energy_simple", "G_energy_pure", "G_min", "shear_stable", "C_xxxx", "C_yyyy", "C_xxyy", "C_xyxy", "C_xxxy", "C_yyxy", "n", "n_J",
     "ell_c", "M4", "B_ext", "G_mf", "B_ext_nJ", "G_mf_nJ", "kernel_method", "pinned_translation",
-    "pinned_lobe_rotation", "pinned_zero_rows", "residual", "kernel_component", "well_posed"};
+    "pinned_lobe_rotation", "pinned_zero_rows", "residual", "kernel_component", "well_posed", "unstable_modes"};
 
 class ModuliLog : public Observer {
  public:
@@ -96,9 +97,9 @@ class ModuliLog : public Observer {
     const double n_J = s.jamming ? s.jamming->n_J : nan;
     if (!r) {
       std::vector<io::CsvField> row{event, s.step, s.phi, dphi};
-      while (row.size() < kColumns.size() - 7) row.push_back(io::CsvField::missing());
+      while (row.size() < kColumns.size() - 8) row.push_back(io::CsvField::missing());
       row.insert(row.end(), {error, io::CsvField::missing(), io::CsvField::missing(), io::CsvField::missing(),
-                             io::CsvField::missing(), io::CsvField::missing(), false});
+                             io::CsvField::missing(), io::CsvField::missing(), false, io::CsvField::missing()});
       log_->row(row);
       return;
     }
@@ -111,7 +112,7 @@ class ModuliLog : public Observer {
                e.moduli_energy.G_pure, e.shear.G_min, e.shear.stable, e.C(0, 0), e.C(1, 1), e.C(0, 1), e.C(2, 2), e.C(0, 2), e.C(1, 2), e.n, n_J,
                e.ell_c, e.M4, e.B_ext, e.G_mf, n_J * kSpring * l2 * e.Z / 8.0, n_J * kSpring * l2 * e.M4 * e.dZ / 2.0,
                k.method, k.pinned_translation, k.pinned_lobe_rotation, k.pinned_zero_rows, k.residual,
-               k.kernel_component, k.well_posed});
+               k.kernel_component, k.well_posed, k.unstable_modes});
   }
 
   Schedule schedule_;

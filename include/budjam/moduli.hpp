@@ -72,11 +72,15 @@ struct KernelTreatment {
   std::size_t pinned_zero_rows = 0;     // other dofs whose Hessian row is exactly zero
   std::size_t reference_cell = 0;       // packing index of the cell whose x, y are pinned
   std::string method;                   // the solver used: "cholesky", "ldlt", "dense", "cg-ichol",
-                                        // "cg-diagonal", or "regularised-refinement" (fallback of the direct
+                                        // "cg-diagonal", "regularised-refinement" (fallback of the direct
                                         // solvers when the pinned system is still singular: a mechanism
-                                        // beyond the above)
+                                        // beyond the above), or "unstable" (H has negative eigenvalues: a
+                                        // saddle, no relaxed response; the relaxed moduli are NaN)
   long cholesky_failed_column = -1;     // where the direct factorisation stopped (fallback only)
   double regularisation = 0;            // δ of the fallback (H + δ1) factor, 0 otherwise
+  std::size_t unstable_modes = 0;       // eigenvalues of H below −δ (inertia of the LDLᵀ factor); > 0 only
+                                        // with method "unstable". Jamming points found by MODEL.md's energy
+                                        // rule can be such saddles (docs/moduli.md, "Saddles")
   int refinement_steps = 0;             // iterative-refinement steps taken
   int iterations = 0;                   // cg: iterations, summed over the strain columns
   double solver_tolerance = 0;          // cg: the relative residual asked for per column; 0 otherwise
@@ -165,13 +169,15 @@ struct ElasticResponse {
   double G_mf_iso = 0;          // same with M4 = 1/8
 
   KernelTreatment kernel;
+  bool energy_minimum() const { return kernel.unstable_modes == 0; }  // false: a saddle (see kernel)
   double seconds = 0;           // wall time of the computation (not part of any result file's physics)
 };
 
 // The response of a relaxed packing. `contacts` are all contacts of the current state (find_contacts),
-// `net` their network (analyse_network). Rattlers and their contacts are removed. Throws
-// std::invalid_argument for inconsistent input and std::runtime_error when the Hessian is
-// indefinite (the packing is not at an energy minimum: relax it first).
+// `net` their network (analyse_network). Rattlers and their contacts are removed. A packing whose
+// Hessian has negative eigenvalues (a saddle, not a minimum) is a result, not an error: kernel.method
+// "unstable", kernel.unstable_modes > 0, the relaxed response NaN, the affine one finite. Throws
+// std::invalid_argument for inconsistent input.
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  const ModuliOptions& options = {});
 
