@@ -47,6 +47,20 @@ def p0_name(label):
     return "no feedback" if label == "none" else f"P0={label}"
 
 
+def not_finished_text(entries):
+    """Runs that stopped early ("runs/<preset>/L8/P0_1e-3/seed4 (step_limit)"): listed when few, else
+    counted per system size, P0 and status."""
+    if len(entries) <= 8:
+        return "; ".join(entries)
+    groups = {}
+    for e in entries:
+        path, _, status = e.partition(" (")
+        parts = path.split("/")
+        key = (parts[-3], parts[-2].removeprefix("P0_"), status.rstrip(")"))
+        groups[key] = groups.get(key, 0) + 1
+    return "; ".join(f"{L} P0={p0}: {n} {status}" for (L, p0, status), n in groups.items())
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--tables", required=True)
@@ -201,7 +215,7 @@ def main():
         "",
         f"Runs: {inp['used']} of {inp['runs']} reached jamming and are used; "
         f"{len(inp['not_finished'])} stopped before their last target"
-        + (" (" + "; ".join(inp["not_finished"]) + ": their recorded states are used)" if inp["not_finished"] else "")
+        + (" (" + not_finished_text(inp["not_finished"]) + ": their recorded states are used)" if inp["not_finished"] else "")
         + ". "
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
         f"resamples, seed {A['bootstrap']['seed']}.",
