@@ -2,6 +2,7 @@
 
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
+#include "budjam/stability.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -124,6 +125,13 @@ struct GrowthDriver::Impl {
     field.invalidate();
     const double U = field.evaluate(p, force);
     return p.size() ? U / static_cast<double>(p.size()) : 0.0;
+  }
+
+  // Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires the field to be current
+  // for `p` (fresh_energy_per_cell just called on it).
+  bool is_minimum(const Packing& p) {
+    const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
+    return stability(p, c, analyse_network(p.size(), c)).minimum();
   }
 
   // Contacts, P, network, bud pressures, rates for the accepted state. Requires the field to be
@@ -287,9 +295,26 @@ struct GrowthDriver::Impl {
                                             std::to_string(attempts) + ", dt = " + num(dt) + ")");
       return result.status;
     }
-    const double E_trial = fresh_energy_per_cell(trial);
-    const double phi_trial = trial.packing_fraction();
     const double eps = scene.epsilon_U;
+    double E_trial = fresh_energy_per_cell(trial);
+    if (scene.check_minimum && phase == Phase::unjammed && E_trial >= eps && E_trial <= 2.0 * eps &&
+        !is_minimum(trial)) {
+      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
+      FireParams deep = scene.fire;
+      deep.force_tol = 0;
+      const FireResult fd = minimise(trial, field, deep);
+      result.force_evaluations += fd.evaluations + 1;
+      result.fire_iterations += fd.iterations;
+      ++result.saddles_relaxed;
+      if (!fd.converged) {
+        fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
+                                              std::to_string(scene.fire.max_iterations) +
+                                              " relaxing a saddle (growth step " + std::to_string(attempts) + ")");
+        return result.status;
+      }
+      E_trial = fresh_energy_per_cell(trial);
+    }
+    const double phi_trial = trial.packing_fraction();
 
     bool reject = false;
     if (phase == Phase::unjammed) {
@@ -434,13 +459,13 @@ struct GrowthDriver::Impl {
   // ---- checkpoints ---------------------------------------------------------------------------
   std::string save() {
     std::ostringstream os;
-    os << "budjam-checkpoint 1\n";
+    os << "budjam-checkpoint 2\n";
     os << "seed " << seed << '\n';
     os << "rng " << rng << '\n';
     os << "state " << to_string(phase) << ' ' << num(dt) << ' ' << num(last_dt) << ' ' << step << ' ' << attempts
        << ' ' << next_target << ' ' << divisions_since_jamming << ' ' << episodes << '\n';
     os << "counters " << result.accepted << ' ' << result.rejected << ' ' << result.force_evaluations << ' '
-       << result.fire_iterations << ' ' << result.divisions << '\n';
+       << result.fire_iterations << ' ' << result.divisions << ' ' << result.saddles_relaxed << '\n';
     os << "jamming " << (result.jamming ? 1 : 0);
     if (const auto& j = result.jamming)
       os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
@@ -483,7 +508,11 @@ struct GrowthDriver::Impl {
     std::istringstream is(text);
     Reader r{is};
     r.expect("budjam-checkpoint");
-    if (r.integer() != 1) throw InputError("checkpoint: unknown version");
+    const long version = r.integer();
+    if (version == 1)
+      throw InputError("checkpoint: version 1 was written before jamming candidates were checked for saddles "
+                       "(jamming.check_minimum); start the run again");
+    if (version != 2) throw InputError("checkpoint: unknown version");
     r.expect("seed");
     const std::string s = r.word();
     if (std::to_string(seed) != s)
@@ -509,6 +538,7 @@ struct GrowthDriver::Impl {
     result.force_evaluations = r.integer();
     result.fire_iterations = r.integer();
     result.divisions = r.integer();
+    result.saddles_relaxed = r.integer();
     r.expect("jamming");
     if (r.integer()) {
       JammingRecord j;

@@ -1,7 +1,10 @@
 // The quasistatic growth loop (MODEL.md, "Growth", "Jamming and compression targets", "Bud events").
 #include "budjam/growth_driver.hpp"
 
+#include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/stability.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -605,4 +608,60 @@ TEST_CASE("a landing no step can reach halves dt from 1 past growth.dt_min = 1e-
   CHECK(r.rejected >= 40);
   CHECK(std::isfinite(d.view().E_per_cell));
   CHECK(d.view().E_per_cell >= s.epsilon_U);
+}
+
+namespace {
+
+// The jamming point of a run and whether it is a minimum of U.
+struct JammingPoint : Observer {
+  std::optional<Packing> packing;
+  std::optional<JammingRecord> record;
+  std::string name() const override { return "jamming_point"; }
+  void on_jammed(const Jammed& e) override {
+    packing = *e.state.packing;
+    record = e.jamming;
+  }
+  bool minimum() const {
+    ForceField field;
+    Eigen::VectorXd F;
+    field.evaluate(*packing, F);
+    const std::vector<Contact> c = find_contacts(*packing, field.lobes(), field.neighbours());
+    return stability(*packing, c, analyse_network(packing->size(), c)).minimum();
+  }
+};
+
+}  // namespace
+
+// L = 15, seed 3, no feedback: FIRE (|F| < 1e-12) stops on a saddle at E/N = 1.16e-16 that is one
+// contact short of isostatic (tests/data/saddle_jamming_L15_seed3.pack is that state).
+TEST_CASE("a jamming candidate that is a saddle is relaxed on: the jamming point found is a minimum, isostatic, and a little denser",
+          "[.slow][driver]") {
+  Scene s;
+  s.L = 15.0;
+  s.seed = 3;
+  s.P0.reset();
+  s.targets = {};
+  JammingPoint with, without;
+  s.check_minimum = false;
+  GrowthDriver d0(s);
+  d0.add_observer(without);
+  REQUIRE(d0.run() == RunStatus::finished);
+  s.check_minimum = true;
+  GrowthDriver d1(s);
+  d1.add_observer(with);
+  REQUIRE(d1.run() == RunStatus::finished);
+  REQUIRE(without.record);
+  REQUIRE(with.record);
+  // MODEL.md's energy rule alone accepts the saddle, a hypostatic state
+  CHECK(d0.result().saddles_relaxed == 0);
+  CHECK_FALSE(without.minimum());
+  CHECK(without.record->dZ < 0);
+  // with the check the saddle relaxes to E ≈ 0, growth goes on, and the jamming point is a minimum
+  CHECK(d1.result().saddles_relaxed >= 1);
+  CHECK(with.minimum());
+  CHECK(with.record->dZ >= 0);
+  CHECK(with.record->E_per_cell >= s.epsilon_U);
+  CHECK(with.record->E_per_cell <= 2 * s.epsilon_U);
+  CHECK(with.record->phi > without.record->phi);
+  CHECK(with.record->phi - without.record->phi < 1e-5);
 }

@@ -287,6 +287,7 @@ Json summary_json(const GrowthDriver& driver) {
   j["divisions"] = r.divisions;
   j["force_evaluations"] = r.force_evaluations;
   j["fire_iterations"] = r.fire_iterations;
+  j["saddles_relaxed"] = r.saddles_relaxed;
   return j;
 }
 

@@ -112,6 +112,7 @@ struct RunResult {
   long accepted = 0, rejected = 0;            // growth steps
   long force_evaluations = 0, fire_iterations = 0;
   long divisions = 0;                          // all divisions in accepted steps
+  long saddles_relaxed = 0;                    // jamming candidates found to be saddles and relaxed on
 };
 
 // Read-only view of an accepted state. Pointers are null when not computed for this state.

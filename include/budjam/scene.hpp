@@ -64,6 +64,9 @@ struct Scene {
   std::vector<double> targets;       // Δφ, strictly increasing, > 0
   bool continue_to_phi2 = false;     // keep growing past the last target until φ_2 is found
   double max_dphi = 0.2;             // ... but never beyond φ_J + max_dphi
+  // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
+  // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
+  bool check_minimum = true;
 
   // [minimiser]
   FireParams fire;

@@ -229,6 +229,9 @@ std::vector<Entry> make_entries() {
   e.push_back(boolean("jamming", "continue_to_phi2", "keep growing past the last target until φ_2 is found",
                       BUDJAM_FIELD(continue_to_phi2)));
   e.push_back(real("jamming", "max_dphi", "never grow beyond φ_J + max_dphi", BUDJAM_FIELD(max_dphi)));
+  e.push_back(boolean("jamming", "check_minimum",
+                      "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
+                      BUDJAM_FIELD(check_minimum)));
 
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", BUDJAM_FIELD(fire.dt_start)));
   e.push_back(real("minimiser", "dt_max", "FIRE largest time step", BUDJAM_FIELD(fire.dt_max)));
