@@ -127,6 +127,18 @@ struct GrowthDriver::Impl {
     return p.size() ? U / static_cast<double>(p.size()) : 0.0;
   }
 
+  // FIRE on a trial, counted; false (and the run failed) if it did not converge.
+  bool relax(Packing& p, const FireParams& params, const std::string& where) {
+    field.invalidate();
+    const FireResult fr = minimise(p, field, params);
+    result.force_evaluations += fr.evaluations + 1;
+    result.fire_iterations += fr.iterations;
+    if (!fr.converged)
+      fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
+                                            std::to_string(params.max_iterations) + " (" + where + ")");
+    return fr.converged;
+  }
+
   // Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires the field to be current
   // for `p` (fresh_energy_per_cell just called on it).
   bool is_minimum(const Packing& p) {
@@ -284,17 +296,8 @@ struct GrowthDriver::Impl {
     Packing trial = packing;
     Rng trial_rng = rng;
     const std::vector<Division> divisions = grow_step(trial, rates, dt, scene, trial_rng);
-    field.invalidate();
-    const FireResult fr = minimise(trial, field, scene.fire);
     ++attempts;
-    result.force_evaluations += fr.evaluations + 1;
-    result.fire_iterations += fr.iterations;
-    if (!fr.converged) {
-      fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
-                                            std::to_string(scene.fire.max_iterations) + " (growth step " +
-                                            std::to_string(attempts) + ", dt = " + num(dt) + ")");
-      return result.status;
-    }
+    if (!relax(trial, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(dt))) return result.status;
     const double eps = scene.epsilon_U;
     double E_trial = fresh_energy_per_cell(trial);
     if (scene.check_minimum && phase == Phase::unjammed && E_trial >= eps && E_trial <= 2.0 * eps &&
@@ -302,16 +305,8 @@ struct GrowthDriver::Impl {
       // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
       FireParams deep = scene.fire;
       deep.force_tol = 0;
-      const FireResult fd = minimise(trial, field, deep);
-      result.force_evaluations += fd.evaluations + 1;
-      result.fire_iterations += fd.iterations;
       ++result.saddles_relaxed;
-      if (!fd.converged) {
-        fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
-                                              std::to_string(scene.fire.max_iterations) +
-                                              " relaxing a saddle (growth step " + std::to_string(attempts) + ")");
-        return result.status;
-      }
+      if (!relax(trial, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return result.status;
       E_trial = fresh_energy_per_cell(trial);
     }
     const double phi_trial = trial.packing_fraction();
