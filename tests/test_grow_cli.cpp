@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include "scratch.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -146,6 +147,15 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   r = grow("--resume " + q(work_dir() / "no-such-run") + " --quiet");
   CHECK(r.code == 2);
   CHECK(r.err.find("checkpoint") != std::string::npos);
+  // a checkpoint of format 1 (written before jamming candidates were checked for saddles) is refused
+  const fs::path old = work_dir() / "old-checkpoint";
+  fs::create_directories(old);
+  fs::copy_file(small_scene("old"), old / "scene.toml");
+  std::ofstream(old / "checkpoint.txt") << "budjam-checkpoint 1\nseed 3\n";
+  r = grow("--resume " + q(old) + " --quiet");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("checkpoint: version 1") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   // an existing directory that is not a run directory is never overwritten
   const fs::path foreign = work_dir() / "foreign";
   fs::create_directories(foreign);
