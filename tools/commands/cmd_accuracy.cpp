@@ -11,7 +11,7 @@
 // from the .moduli.json / .dos.json beside the target packings).
 //
 // Post-processing knobs (--packings NAME=DIR, repeatable): the moduli's linear solver and ARPACK's
-// tol and ncv, measured on every packings/*.pack below DIR (tools/accuracy_post.hpp).
+// tol and ncv, measured on every packings/*.pack below DIR (tools/analysis/accuracy_post.hpp).
 //
 // For every knob the default and that knob's variants form one group; the default is "on the front"
 // when no variant dominates it (budjam/pareto.hpp: no more than the cost tie band dearer, no error
@@ -22,9 +22,9 @@
 // default the model fixes (kPinnedByModel) is reported, not judged. Writes
 // DIR/accuracy.csv (one row per setting), DIR/accuracy.json (rows, groups with their fronts, the
 // verdict) and DIR/accuracy.md (the table as Markdown).
-#include "accuracy_post.hpp"
-#include "command.hpp"
-#include "run_data.hpp"
+#include "analysis/accuracy_post.hpp"
+#include "commands/command.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/pareto.hpp"
 #include "budjam/scene.hpp"

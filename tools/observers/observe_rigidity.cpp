@@ -8,7 +8,7 @@
 // of an episode is the baseline: it logs the floppy-mode count (before = -1) and, if a rigid
 // cluster already spans the box, first_spanning. An unjamming logs `unjammed` and ends the episode;
 // the next jamming starts a new baseline.
-#include "observers.hpp"
+#include "observers/observers.hpp"
 
 #include "budjam/rigidity.hpp"
 #include "io/atomic_file.hpp"

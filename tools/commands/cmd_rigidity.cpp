@@ -2,7 +2,7 @@
 // Rigidity of a packing's contact network by the (2,3) pebble game, as JSON on stdout
 // (docs/rigidity.md). The packing is taken as it is (nothing is relaxed): contacts are the
 // overlapping lobe pairs, rattlers are removed by the iterative rule for the load-bearing network.
-#include "command.hpp"
+#include "commands/command.hpp"
 
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"

@@ -1,4 +1,4 @@
-#include "dos_report.hpp"
+#include "analysis/dos_report.hpp"
 
 #include "io/atomic_file.hpp"
 #include "io/text.hpp"

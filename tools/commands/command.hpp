@@ -1,5 +1,5 @@
 #pragma once
-// Subcommands register themselves: each tools/cmd_<name>.cpp holds
+// Subcommands register themselves: each tools/commands/cmd_<name>.cpp holds
 //
 //   namespace {
 //   const bool registered = budjam::cli::register_command({"grow", "Grow a packing from a scene",

@@ -3,9 +3,9 @@
 // Grows a packing as the scene says (MODEL.md protocol, docs/growth.md) and writes the run
 // directory: scene.toml (the effective scene, seed included), steps.csv, divisions.csv,
 // bud_events.csv, packings/*.pack, checkpoint.txt while running, summary.json last.
-#include "command.hpp"
-#include "observers.hpp"
-#include "run_outputs.hpp"
+#include "commands/command.hpp"
+#include "observers/observers.hpp"
+#include "observers/run_outputs.hpp"
 
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"

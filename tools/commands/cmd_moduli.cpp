@@ -3,7 +3,7 @@
 // Non-affine linear elastic response of a relaxed packing as JSON on stdout (docs/moduli.md).
 // --check adds the independent finite-strain measurement (Lees–Edwards shear and isotropic
 // rescaling relaxed by FIRE) and the relative differences.
-#include "command.hpp"
+#include "commands/command.hpp"
 
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"

@@ -1,6 +1,6 @@
 // `budjam`: builds the command line from the self-registered subcommands (command.hpp), runs the
 // chosen one, and turns every failure into one line on stderr and an exit code.
-#include "command.hpp"
+#include "commands/command.hpp"
 
 #include "budjam/scene.hpp"
 #include "io/atomic_file.hpp"

@@ -1,7 +1,7 @@
 // `budjam validate FILE`: checks a scene (or a packing file) and prints what budjam would use.
 // For a scene: the effective scene, every key, as TOML (or JSON), after any --set overrides.
 // For a packing: its header, metadata and packing fraction.
-#include "command.hpp"
+#include "commands/command.hpp"
 
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"

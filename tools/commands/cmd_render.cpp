@@ -2,8 +2,8 @@
 // Draws a packing file as SVG (budjam/render.hpp): lobes with their periodic images, contacts
 // coloured by force, rattlers greyed, unconstrained buds marked. --png also converts it with
 // Debian's rsvg-convert (package librsvg2-bin) to FILE.png.
-#include "command.hpp"
-#include "run_data.hpp"
+#include "commands/command.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/render.hpp"
 #include "budjam/scene.hpp"

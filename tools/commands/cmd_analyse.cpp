@@ -16,8 +16,8 @@
 // Moduli and spectra are read from packings/<name>.moduli.json / .dos.json (written by
 // `budjam moduli` / `budjam dos` in the Makefile pipeline). --require moduli,dos makes their absence
 // an error instead of empty columns.
-#include "command.hpp"
-#include "run_data.hpp"
+#include "commands/command.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"

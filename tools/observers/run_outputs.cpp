@@ -1,8 +1,8 @@
-#include "run_outputs.hpp"
+#include "observers/run_outputs.hpp"
 
 #include "io/packing_file.hpp"
 #include "io/text.hpp"
-#include "observers.hpp"
+#include "observers/observers.hpp"
 
 #include <chrono>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "observers.hpp"
+#include "observers/observers.hpp"
 
 #include <algorithm>
 

@@ -5,8 +5,8 @@
 //   spectra/step_<n>.dos.{json,csv}  for `every`
 //   dos.csv  one row per spectrum (resumable log)
 // Defaults of `budjam dos`: automatic method, as many modes as ω* needs.
-#include "dos_report.hpp"
-#include "observers.hpp"
+#include "analysis/dos_report.hpp"
+#include "observers/observers.hpp"
 
 #include "io/atomic_file.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Registry of growth-run observers. A tools/observe_<name>.cpp file adds itself with
+// Registry of growth-run observers. A tools/observers/observe_<name>.cpp file adds itself with
 //
 //   namespace {
 //   const budjam::tools::ObserverRegistration reg{"moduli", [](const budjam::tools::ObserverContext& c)

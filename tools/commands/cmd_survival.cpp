@@ -4,8 +4,8 @@
 // censor. Writes the curve as CSV (a in diameter squared and as true area, Ŝ, Greenwood SE and a
 // 95 % band) and prints a JSON summary on stdout: a_ε with u_J S(a_ε) = ε (ε = 1/⟨N_nr,J⟩ unless
 // given) and ∫_0^{a_ε} S da, in both units (paper Eq. 14).
-#include "command.hpp"
-#include "run_data.hpp"
+#include "commands/command.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/depletion.hpp"
 #include "budjam/scene.hpp"

@@ -1,6 +1,6 @@
-#include "accuracy_post.hpp"
+#include "analysis/accuracy_post.hpp"
 
-#include "run_data.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/moduli.hpp"
 #include "budjam/scene.hpp"

@@ -1,4 +1,4 @@
-#include "run_data.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/cell_list.hpp"
 #include "budjam/scene.hpp"

@@ -3,7 +3,7 @@
 // at_targets, every k accepted steps above jamming). One row per (state, reason); a state that is
 // several things at once (e.g. a target on an `every` step) is computed once. A saddle (kernel_method
 // "unstable") is logged with its unstable_modes and empty relaxed moduli. docs/moduli.md.
-#include "observers.hpp"
+#include "observers/observers.hpp"
 
 #include "budjam/moduli.hpp"
 #include "io/atomic_file.hpp"

@@ -4,9 +4,9 @@
 // frequencies, participation ratios) and BASE.dos.json (N_zero at four cutoffs, ω*, N_u from the
 // contact network, floppy modes from the pebble game, D(ω), the method used). BASE defaults to the
 // packing path without ".pack", so a run's packings/<name>.dos.json is found by `budjam analyse`.
-#include "command.hpp"
-#include "dos_report.hpp"
-#include "run_data.hpp"
+#include "commands/command.hpp"
+#include "analysis/dos_report.hpp"
+#include "io/run_data.hpp"
 
 #include "budjam/scene.hpp"
 #include "io/packing_file.hpp"
