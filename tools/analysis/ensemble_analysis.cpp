@@ -64,7 +64,7 @@ struct TargetRow {
   double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
   double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
   double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
-  double B = kNaN, G = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
+  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
   double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
   bool below_phi2 = false;
 };
@@ -89,7 +89,7 @@ struct RunRow {
   double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
   double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, B_2 = kNaN, G_min_2 = kNaN;
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;
   double h_gamma = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
@@ -128,8 +128,10 @@ double json_number(const Json& j, std::initializer_list<const char*> keys) {
   return kNaN;
 }
 
+// G is the lobe-centre stress response (the paper's); G_energy = (1/A) d²U/dγ² where `budjam
+// moduli` writes it (docs/moduli.md): the two differ by the prestress term.
 struct SidecarModuli {
-  double B = kNaN, G = kNaN, B_ext_mf = kNaN, G_min = kNaN;
+  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN, G_min = kNaN;
 };
 
 struct ModuliFiles {
@@ -154,6 +156,7 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& file
   }
   m.B = json_number(*j, {"B", "bulk_modulus"});
   m.G = json_number(*j, {"G", "shear_modulus"});
+  m.G_energy = json_number(*j, {"G_energy"});
   if (j->contains("shear_stability")) m.G_min = json_number((*j)["shear_stability"], {"G_min"});
   if (!std::isfinite(m.G) || !std::isfinite(m.B))
     throw InputError(fs::path(pack).replace_extension(".moduli.json").string() + ": no numeric \"B\" and \"G\"");
@@ -277,6 +280,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     const SidecarModuli sm = read_moduli(pack, need_moduli, moduli_found);
     y.B = sm.B;
     y.G = sm.G;
+    y.G_energy = sm.G_energy;
     y.B_ext_mf = sm.B_ext_mf;
     y.G_min = sm.G_min;
     x.targets.push_back(y);
@@ -294,6 +298,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     const SidecarModuli sm = read_moduli(r.dir / "packings" / "phi2.pack", need_moduli, moduli_found);
     x.B_2 = sm.B;
     x.G_2 = sm.G;
+    x.G_2_energy = sm.G_energy;
     x.G_min_2 = sm.G_min;
   }
   {
@@ -607,6 +612,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["u_2"] = mean_se_json(collect(dep, [](auto& r) { return r.u_2; }));
   g["G_2"] = median_json(collect(dep, [](auto& r) { return r.G_2; }), bo);
   g["G_2_mean"] = mean_se_json(collect(dep, [](auto& r) { return r.G_2; }));
+  g["G_2_energy"] = median_json(collect(dep, [](auto& r) { return r.G_2_energy; }), bo);
   g["G_2_over_Pmax"] = median_json(collect(dep, [](auto& r) { return r.G_2 / kPmax; }), bo);
   g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
   // The paper's definitions and selection: φ_2 = first state with no tagged bud left; χ̄ and λ̄_c
@@ -701,7 +707,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
         if (std::abs(x.dphi - kDphiGrowth) < 1e-12) u_at.push_back(x.u);
     g["g_cells"] = d.cells;
     g["g_peak_weight_at_1"] = d.weight_at_one;
-    g["g_peak_weight_at_1_paper"] = io::number_or_null(mean(u_at));
+    g["g_peak_weight_at_1_paper"] = mean_se_json(u_at);
     g["g_compressed_median"] = io::number_or_null(d.median);
     g["g_compressed_q25"] = io::number_or_null(d.q25);
     g["g_compressed_q75"] = io::number_or_null(d.q75);
@@ -864,21 +870,36 @@ void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*
   range(ac_median, "a_c_median_range_area", "P_star_range_paper");
 }
 
-Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
-                   const std::vector<DosRow>& dos_rows, const BootstrapOptions& bo) {
-  std::vector<const RunRow*> m;
-  for (const auto& r : rows)
-    if (r.L == main_L) m.push_back(&r);
+// The numbers the size-effects figure compares across L, from the runs of one size: quantities
+// fixed at jamming (over distinct states), the ΔZ identity and B_grow = λ_c B_ext.
+Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) {
   Json h;
-  // Quantities fixed at jamming, over every run of the main L (feedback acts only above jamming),
-  // one sample per distinct jamming state. budjam's u_J counts contact-free buds; the paper's counts
-  // contact-free lobes (mothers included) on the strongest-feedback packings.
+  h["runs"] = m.size();
+  // budjam's u_J counts contact-free buds; the lobe count includes contact-free mothers
   h["u_J"] = states_json(m, [](auto& r) { return r.u_J; }, bo);
   h["u_J_lobes"] = states_json(m, [](auto& r) { return r.u_J_lobes; }, bo);
   h["n_J"] = states_json(m, [](auto& r) { return r.n_J; }, bo);
   h["phi_J"] = states_json(m, [](auto& r) { return r.phi_J; }, bo);
   h["N_J"] = states_json(m, [](auto& r) { return r.N_J; }, bo);
   h["jamming_states"] = h["u_J"]["n"];
+  h["dZ_identity"] = dz_identity_json(m);
+  std::vector<double> rel_b;
+  for (const auto* r : m)
+    for (const auto& t : r->targets)
+      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0) rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
+  h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
+  return h;
+}
+
+Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
+                   const std::vector<DosRow>& dos_rows, const BootstrapOptions& bo) {
+  std::vector<const RunRow*> m;
+  for (const auto& r : rows)
+    if (r.L == main_L) m.push_back(&r);
+  // Quantities fixed at jamming over every run of the main L (feedback acts only above jamming), one
+  // sample per distinct jamming state; the paper's u_J counts contact-free lobes on the
+  // strongest-feedback packings.
+  Json h = size_json(m, bo);
   std::optional<double> strongest;
   for (const auto& [key, rs] : groups)
     if (key.L == main_L && key.P0 && (!strongest || *key.P0 < *strongest)) strongest = key.P0;
@@ -890,14 +911,6 @@ Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::ma
   }
   const double phiJ = h["phi_J"]["mean"].is_number() ? h["phi_J"]["mean"].get<double>() : kNaN;
   h["P_max_formula_measured_phiJ"] = io::number_or_null(2.0 / std::numbers::pi * (1.0 - phiJ));
-  h["dZ_identity"] = dz_identity_json(m);
-  {
-    std::vector<double> rel_b;
-    for (const auto* r : m)
-      for (const auto& t : r->targets)
-        if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0) rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
-    h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
-  }
   h["shear_unstable_by_PN2"] = shear_instability_by_PN2(m);
   // plateau G_2(0+) = n_J k ℓ_c² M_4 u_J from the strongest-feedback jammed packings
   if (strongest) {
@@ -927,11 +940,11 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
                         cell(r.N_div_2), cell(r.chi_bar), cell(r.lambda_bar), cell(r.phi_2_paper), cell(r.dphi_2_paper),
                         cell(r.P_2_paper), cell(r.N_div_2_paper), cell(r.chi_bar_paper), cell(r.lambda_bar_paper),
                         cell(r.N_div_end), cell(r.a_eps), cell(r.int_S), cell(r.pred_area), cell(r.pred_d2), cell(r.B_2),
-                        cell(r.G_2), cell(r.G_min_2), cell(r.h_gamma), cell(r.lc2_J)});
+                        cell(r.G_2), cell(r.G_2_energy), cell(r.G_min_2), cell(r.h_gamma), cell(r.lc2_J)});
     for (const auto& x : r.targets)
       tgt_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(x.dphi), cell(x.phi), cell(x.P),
                           cell(x.Z), cell(x.Z_iso), cell(x.dZ), cell(x.dZ_pred), cell(x.u), cell(x.u_lobes), cell(x.chi_c),
-                          cell(x.lambda), cell(x.B_grow), cell(x.B_grow_se), cell(x.B), cell(x.G), cell(x.G_min), cell(x.B_ext_mf),
+                          cell(x.lambda), cell(x.B_grow), cell(x.B_grow_se), cell(x.B), cell(x.G), cell(x.G_energy), cell(x.G_min), cell(x.B_ext_mf),
                           cell(x.N_div), x.below_phi2 ? "true" : "false"});
   }
   for (const auto& q : e.dos_rows)
@@ -942,11 +955,12 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
             {"run", "L", "P0", "seed", "status", "jamming_state", "phi_J", "u_J", "u_J_lobes", "n_J", "N_J", "N_nr_J", "Z_J",
              "dZ_J", "phi_2", "dphi_2", "P_2", "Z_2", "dZ_2", "u_2", "N_div_2", "chi_bar", "lambda_bar", "phi_2_paper",
              "dphi_2_paper", "P_2_paper", "N_div_2_paper", "chi_bar_paper", "lambda_bar_paper", "N_div_end", "a_eps",
-             "integral_S", "dphi_2_pred_area", "dphi_2_pred_diameter_sq", "B_2", "G_2", "G_min_2", "h_gamma", "lc2_J"},
+             "integral_S", "dphi_2_pred_area", "dphi_2_pred_diameter_sq", "B_2", "G_2", "G_2_energy", "G_min_2", "h_gamma",
+             "lc2_J"},
             run_rows);
   write_csv(out / "targets.csv",
             {"run", "L", "P0", "seed", "dphi", "phi", "P", "Z", "Z_iso", "dZ", "dZ_pred", "u", "u_lobes", "chi_c",
-             "lambda_c", "B_grow", "B_grow_se", "B", "G", "G_min", "B_ext_mean_field", "N_div", "below_phi2"},
+             "lambda_c", "B_grow", "B_grow_se", "B", "G", "G_energy", "G_min", "B_ext_mean_field", "N_div", "below_phi2"},
             tgt_rows);
   write_csv(out / "survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, t.survival);
   write_csv(out / "remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
@@ -1006,6 +1020,18 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
                         {"lambert_w0_of_minus_2_e_minus_2", lambert_w0(-2.0 * std::exp(-2.0))}};
   J["main"] = headline_json(main_L, e.rows, groups, e.dos_rows, o.bootstrap);
   J["groups"] = jgroups;
+  {
+    Json sizes = Json::array();
+    for (double L : lengths) {
+      std::vector<const RunRow*> m;
+      for (const auto& r : e.rows)
+        if (r.L == L) m.push_back(&r);
+      Json x = size_json(m, o.bootstrap);
+      x["L"] = L;
+      sizes.push_back(x);
+    }
+    J["sizes"] = sizes;
+  }
   {
     Json br = Json::array();
     for (const auto& [L, f] : branch) {
