@@ -43,6 +43,40 @@ def ci(stat):
     return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={stat['n']})"
 
 
+def near(stat, paper, half_digit, key="mean", se_key="se"):
+    """Verdict on a '≃ paper' claim: confirmed when |x − paper| ≤ 2 SE + half the paper's last digit."""
+    if not stat or stat.get(key) is None:
+        return "awaits data"
+    tol = 2 * (stat.get(se_key) or 0) + half_digit
+    return "confirmed" if abs(stat[key] - paper) <= tol else "not confirmed"
+
+
+def monotone(values, increasing=False):
+    """Verdict on a trend claim over the feedback groups (weak → strong)."""
+    v = [x for x in values if x is not None]
+    if len(v) < 3:
+        return "awaits data"
+    ok = all((b >= a) if increasing else (b <= a) for a, b in zip(v, v[1:]))
+    return "confirmed" if ok else "not confirmed"
+
+
+def shear_note(bins):
+    """Not a claim of the paper: why some measured G are negative (docs/moduli.md, "Shear stability")."""
+    return [
+        "",
+        "**Negative shear moduli are physics, not a solver failure.** A packing jammed in a box of fixed shape "
+        "is stable at that box (positive-definite Hessian) but can have a negative modulus for some simple shear "
+        "of the box, G_min = min_φ (1/A) d²U/dγ_φ² < 0; finite Lees–Edwards strains relaxed with FIRE confirm "
+        "the linear response on such packings (`budjam moduli --check`). Small packings at low P N² are often "
+        "unstable in this sense (Dagois-Bohy et al., PRL 109, 095703 (2012)); the fraction falls as P N² grows. "
+        "Every statistic above keeps these packings except the paper's selection (G_2 > 0); the G_2 rows are medians, "
+        "as in the paper.",
+        "",
+        "| P N_J² | packings (targets and φ_2, all P0) | fraction with G_min < 0 |",
+        "| --- | --- | --- |",
+    ] + [f"| {fmt(b['PN2_lo'])} – {fmt(b['PN2_hi'])} | {b['packings']} | {fmt(b['fraction'])} |" for b in bins]
+
+
 def p0_name(label):
     return "no feedback" if label == "none" else f"P0={label}"
 
@@ -116,21 +150,6 @@ def main():
             return "not measured"
         return (f"{fmt(stat['mean'])} ± {fmt(stat['se'], 2)} (n={stat['n']} jamming states of {stat['runs']} runs; "
                 f"bootstrap by seed ± {fmt(stat['bootstrap_se_by_seed'], 2)})")
-
-    def near(stat, paper, half_digit, key="mean", se_key="se"):
-        """A '≃ paper' claim: confirmed when |x − paper| ≤ 2 SE + half the paper's last digit."""
-        if not stat or stat.get(key) is None:
-            return "awaits data"
-        tol = 2 * (stat.get(se_key) or 0) + half_digit
-        return "confirmed" if abs(stat[key] - paper) <= tol else "not confirmed"
-
-    def monotone(values, increasing=False):
-        v = [x for x in values if x is not None]
-        if len(v) < 3:
-            return "awaits data"
-        pairs = list(zip(v, v[1:]))
-        ok = all((b >= a) if increasing else (b <= a) for a, b in pairs)
-        return "confirmed" if ok else "not confirmed"
 
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     fed = [l for l in order if l != "none"]
@@ -317,22 +336,8 @@ def main():
         if not any(sz["L"] == Lp for sz in A.get("sizes", [])):
             size_rows.append(f"| {Lp} | not run | | | | | | | |")
 
-    # Not a claim of the paper: why some measured G are negative (docs/moduli.md, "Shear stability").
-    shear_note = []
     bins = M.get("shear_unstable_by_PN2") or []
-    if have_moduli and bins:
-        shear_note = [
-            "",
-            "**Negative shear moduli are physics, not a solver failure.** A packing jammed in a box of fixed shape "
-            "is stable at that box (positive-definite Hessian) but can have a negative modulus for some simple shear "
-            "of the box, G_min = min_φ (1/A) d²U/dγ_φ² < 0; finite Lees–Edwards strains relaxed with FIRE confirm "
-            "the linear response on such packings (`budjam moduli --check`). Small packings at low P N² are often "
-            "unstable in this sense (Dagois-Bohy et al., PRL 109, 095703 (2012)); the fraction falls as P N² grows. "
-            "Every statistic above keeps these packings; the G_2 rows are medians, as in the paper.",
-            "",
-            "| P N_J² | packings (targets and φ_2, all P0) | fraction with G_min < 0 |",
-            "| --- | --- | --- |",
-        ] + [f"| {fmt(b['PN2_lo'])} – {fmt(b['PN2_hi'])} | {b['packings']} | {fmt(b['fraction'])} |" for b in bins]
+    shear = shear_note(bins) if have_moduli and bins else []
     scope = ("The quick preset uses L = 8 and few seeds: it checks trends and orders of magnitude, not the paper's "
              "L = 15 values to their last digit (run `make -f Makefile.analysis -j2 paper` for that)."
              if a.preset == "quick" else
@@ -365,7 +370,7 @@ def main():
         "",
         "| Claim of the paper | Paper | budjam's definition | Paper's definition | Verdict | Figure |",
         "| --- | --- | --- | --- | --- | --- |",
-    ] + rows + size_rows + shear_note + [
+    ] + rows + size_rows + shear + [
         "",
         "Per-group tables: " + ", ".join(f"`{n}`" for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv",
                                                                   "remaining.csv", "division_curve.csv",
