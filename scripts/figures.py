@@ -377,14 +377,14 @@ def figD1(T):
     ax = axes[1]
     # φ_2 as the paper's figure takes it (no tagged bud left), and budjam's (at most one left)
     top = [1e-2]
-    for key, style, text in (("N_div_2_over_N_J_paper", "ko", "no tagged bud left"),
-                             ("N_div_2_over_N_J", "s", "at most one left")):
+    for key, filled, text in (("N_div_2_over_N_J_paper", True, "no tagged bud left"),
+                              ("N_div_2_over_N_J", False, "at most one left")):
         gm = [g for g in gs if g.get(key, {}).get("median") is not None]
         med = [g[key]["median"] for g in gm]
         lo = [m - g[key]["ci95"][0] for m, g in zip(med, gm)]
         hi = [g[key]["ci95"][1] - m for m, g in zip(med, gm)]
-        ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt=style, capsize=3,
-                    mfc="k" if style == "ko" else "none", color="k" if style == "ko" else "0.5", label=r"$\phi_2$: " + text)
+        ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="o" if filled else "s", capsize=3,
+                    mfc="k" if filled else "none", color="k" if filled else "0.5", label=r"$\phi_2$: " + text)
         top += [g[key]["ci95"][1] for g in gm]
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.legend(fontsize=7, frameon=False)
@@ -528,7 +528,7 @@ def figF1(T):
             label=r"naive $Z-6$")
     fit = (T.analysis["main"].get("dos") or {}).get("paper")
     if fit and tg:
-        xs = [min(num(r["Z_minus_6"]) for r in tg), max(num(r["dZ"]) for r in tg)]
+        xs = [0.0, max(num(r["dZ"]) for r in tg)]
         ax.plot(xs, [fit["through_origin_dZ"]["slope"] * x for x in xs], "-", color="tab:blue", lw=1,
                 label=r"$\omega^\ast\propto\Delta Z$")
     ax.axvline(0, color="0.8", lw=1)

@@ -154,7 +154,7 @@ def main():
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     fed = [l for l in order if l != "none"]
     paper_P0 = M.get("paper_P0")
-    strong = f"P0={fmt(paper_P0)}" if paper_P0 is not None else "strongest P0"
+    strong = f"P0={label(paper_P0)}" if paper_P0 is not None else "strongest P0"
 
     # ---- jamming ----
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
@@ -180,7 +180,7 @@ def main():
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
           f", RMS {fmt(ident['all_targets'].get('rms'))}",
           "residual per P0, feedback runs only: " +
-          "; ".join(f"P0={fmt(x['P0'])} {fmt(x['mean'])} ± {fmt(x['se'], 2)} (n={x['n']}, RMS {fmt(x['rms'])})" for x in per),
+          "; ".join(f"P0={label(x['P0'])} {fmt(x['mean'])} ± {fmt(x['se'], 2)} (n={x['n']}, RMS {fmt(x['rms'])})" for x in per),
           "awaits data" if worst is None else ("confirmed" if worst < 0.1 else "not confirmed") +
           " (|mean residual| < 0.1 at every P0)", fig("fig2"))
     # ---- depletion ----
@@ -365,7 +365,9 @@ def main():
         "percentile interval. Quantities fixed at jamming count each distinct jamming state once (runs of one seed "
         "share their growth up to jamming in every P0 group), with a bootstrap that resamples seeds beside it; "
         "per-P0 statistics have one run per seed. The paper's selection keeps runs with ≤ 10 divisions after φ_J at "
-        "their end and G_2 > 0, then Tukey's 1.5·IQR fences per P0. A '≃ x' claim is confirmed when the measured "
+        "their end and G_2 > 0, then Tukey's 1.5·IQR fences per P0. A run ends at budjam's φ_2 once its targets are "
+        "done, so only runs whose targets lie beyond it reach the paper's φ_2 (no tagged bud left): n says how many. "
+        "A '≃ x' claim is confirmed when the measured "
         "value lies within 2 SE plus half the paper's last digit. " + scope,
         "",
         "| Claim of the paper | Paper | budjam's definition | Paper's definition | Verdict | Figure |",
