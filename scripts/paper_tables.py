@@ -18,7 +18,7 @@ import math
 import os
 from collections import defaultdict
 
-from report import fmt, monotone, near, p0_name, pm, shear_note
+from report import TABLE_FILES, fmt, monotone, near, p0_name, pm, shear_note, write_lines
 
 AWAIT_STEPS = "awaits a re-run (needs steps.csv)"
 
@@ -278,16 +278,10 @@ def main():
         "| --- | --- | --- | --- | --- | --- |",
     ] + rows + size_rows + shear_note(M["shear_unstable_by_PN2"]) + [
         "",
-        "Per-group tables: " + ", ".join(f"`{x}`" for x in ("analysis.json", "runs.csv", "targets.csv", "survival.csv",
-                                                              "remaining.csv", "division_curve.csv", "growth_rates.csv",
-                                                              "trajectory.csv", "dos.csv")) +
-        " (format of the earlier budjam: analysis.json version 1).",
+        "Per-group tables: " + TABLE_FILES + " (format of the earlier budjam: analysis.json version 1).",
         "",
     ]
-    tmp = a.out + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines))
-    os.replace(tmp, a.out)
+    write_lines(a.out, lines)
 
 
 if __name__ == "__main__":

@@ -15,6 +15,18 @@ import math
 import os
 
 
+TABLE_FILES = ", ".join(f"`{n}`" for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv", "remaining.csv",
+                                           "division_curve.csv", "growth_rates.csv", "trajectory.csv", "dos.csv"))
+
+
+def write_lines(path, lines):
+    """The report as a whole or not at all (temporary file, then rename)."""
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines))
+    os.replace(tmp, path)
+
+
 def fmt(v, digits=3):
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "—"
@@ -374,15 +386,10 @@ def main():
         "| --- | --- | --- | --- | --- | --- |",
     ] + rows + size_rows + shear + [
         "",
-        "Per-group tables: " + ", ".join(f"`{n}`" for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv",
-                                                                  "remaining.csv", "division_curve.csv",
-                                                                  "growth_rates.csv", "trajectory.csv", "dos.csv")),
+        "Per-group tables: " + TABLE_FILES,
         "",
     ]
-    tmp = a.out + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines))
-    os.replace(tmp, a.out)
+    write_lines(a.out, lines)
 
 
 if __name__ == "__main__":
