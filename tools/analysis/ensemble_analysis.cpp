@@ -617,13 +617,14 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
   // The paper's definitions and selection: φ_2 = first state with no tagged bud left; χ̄ and λ̄_c
   // over [φ_J, that φ_2]; runs with ≤ 10 divisions at their end and G_2 > 0, Tukey fences per P0.
-  // G_2 is measured on the packing saved at budjam's φ_2 (the only one saved near the depletion point).
+  // G_2, and so G_2/P_2, are those of the packing saved at budjam's φ_2 (the only one saved near the
+  // depletion point).
   g["dphi_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.dphi_2_paper; }, bo);
   g["P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper; }, bo);
   g["P_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
   g["G_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2; }, bo);
   g["G_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / kPmax; }, bo);
-  g["G_2_over_P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / r.P_2_paper; }, bo);
+  g["G_2_over_P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / r.P_2; }, bo);  // one packing
   g["chi_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.chi_bar_paper; }, bo);
   g["lambda_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.lambda_bar_paper; }, bo);
   {
