@@ -375,14 +375,21 @@ def figD1(T):
     ax.legend(fontsize=7, frameon=False)
     panel(ax, "A")
     ax = axes[1]
-    gm = [g for g in gs if g["N_div_2_over_N_J"]["median"] is not None]
-    med = [g["N_div_2_over_N_J"]["median"] for g in gm]
-    lo = [m - g["N_div_2_over_N_J"]["ci95"][0] for m, g in zip(med, gm)]
-    hi = [g["N_div_2_over_N_J"]["ci95"][1] - m for m, g in zip(med, gm)]
-    ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="ko", capsize=3)
+    # φ_2 as the paper's figure takes it (no tagged bud left), and budjam's (at most one left)
+    top = [1e-2]
+    for key, filled, text in (("N_div_2_over_N_J_paper", True, "no tagged bud left"),
+                              ("N_div_2_over_N_J", False, "at most one left")):
+        gm = [g for g in gs if g.get(key, {}).get("median") is not None]
+        med = [g[key]["median"] for g in gm]
+        lo = [m - g[key]["ci95"][0] for m, g in zip(med, gm)]
+        hi = [g[key]["ci95"][1] - m for m, g in zip(med, gm)]
+        ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="o" if filled else "s", capsize=3,
+                    mfc="k" if filled else "none", color="k" if filled else "0.5", label=r"$\phi_2$: " + text)
+        top += [g[key]["ci95"][1] for g in gm]
     p0_axis(ax, [g["P0_label"] for g in gs])
+    ax.legend(fontsize=7, frameon=False)
     ax.set_yscale("symlog", linthresh=1e-3)
-    ax.set_ylim(0, 3 * max([g["N_div_2_over_N_J"]["ci95"][1] for g in gm] + [1e-2]))
+    ax.set_ylim(0, 3 * max(top))
     ax.set_ylabel(r"median $N_{\rm div}^{\rm all}(\phi_2)/\langle N_J\rangle$")
     panel(ax, "B")
     save(fig, T.out, "figD1")
@@ -446,8 +453,9 @@ def figE1(T):
         ins = fig.add_subplot(grid[1, k])
         rr = [r for r in hist if r["P0"] == lab]
         bars = [r for r in rr if r["delta_at_1"] == "false"]
-        ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars], width=0.05, align="edge",
-                color="tab:blue", label="compressed buds")
+        ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars],
+                width=[num(r["g_hi"]) - num(r["g_lo"]) for r in bars], align="edge", color="tab:blue",
+                label="compressed buds")
         delta = [num(r["density"]) for r in rr if r["delta_at_1"] == "true"]
         if delta:
             ins.annotate("", xy=(1.0, 0.95), xytext=(1.0, 0.0), xycoords=("data", "axes fraction"),
@@ -484,9 +492,11 @@ def figF1(T):
     labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     ax = axes[0]
-    strong = min((l for l in labels if l != "none"), key=float, default=None)
+    # the paper's panel A is at P0 = 1e-4; the strongest feedback present stands in without it
+    fed = [l for l in labels if l != "none"]
+    strong = next((l for l in fed if float(l) == 1e-4), min(fed, key=float, default=None))
     if strong is not None:
-        # pooled over the runs of the strongest feedback, one curve per saved state φ_J … φ_2
+        # pooled over the runs of that P0, one curve per saved state φ_J … φ_2
         rr = [r for r in rows if r["P0"] == strong]
         names = sorted({r["packing"] for r in rr}, key=lambda n: (n != "jammed", n == "phi2", n))
         for k, name in enumerate(names):
@@ -511,9 +521,16 @@ def figF1(T):
     ax.legend(fontsize=6, frameon=False)
     panel(ax, "A")
     ax = axes[1]
-    ax.plot([num(r["dZ"]) for r in rows], [num(r["omega_star"]) for r in rows], "o", ms=4, label=r"$\Delta Z=Z-Z_{\rm iso}(u)$")
-    ax.plot([num(r["Z_minus_6"]) for r in rows], [num(r["omega_star"]) for r in rows], "x", ms=4, color="0.5",
+    # the paper's test: Δφ-target packings, ω* proportional to ΔZ (fit through the origin)
+    tg = [r for r in rows if r["packing"].startswith("target_")]
+    ax.plot([num(r["dZ"]) for r in tg], [num(r["omega_star"]) for r in tg], "o", ms=4, label=r"$\Delta Z=Z-Z_{\rm iso}(u)$")
+    ax.plot([num(r["Z_minus_6"]) for r in tg], [num(r["omega_star"]) for r in tg], "x", ms=4, color="0.5",
             label=r"naive $Z-6$")
+    fit = (T.analysis["main"].get("dos") or {}).get("paper")
+    if fit and tg:
+        xs = [0.0, max(num(r["dZ"]) for r in tg)]
+        ax.plot(xs, [fit["through_origin_dZ"]["slope"] * x for x in xs], "-", color="tab:blue", lw=1,
+                label=r"$\omega^\ast\propto\Delta Z$")
     ax.axvline(0, color="0.8", lw=1)
     ax.set_xlabel(r"$\Delta Z$")
     ax.set_ylabel(r"$\omega^\ast$")

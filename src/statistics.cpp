@@ -129,4 +129,30 @@ MeanSE mean_se(std::span<const double> x) {
   return m;
 }
 
+OriginFit fit_through_origin(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size()) throw std::invalid_argument("fit_through_origin: x and y differ in length");
+  if (x.empty()) throw std::invalid_argument("fit_through_origin: no data");
+  double sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    sxx += x[k] * x[k];
+    sxy += x[k] * y[k];
+    syy += y[k] * y[k];
+  }
+  if (!(sxx > 0)) throw std::invalid_argument("fit_through_origin: all x are zero");
+  OriginFit f;
+  f.n = x.size();
+  f.slope = sxy / sxx;
+  double rss = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) rss += (y[k] - f.slope * x[k]) * (y[k] - f.slope * x[k]);
+  f.r2 = syy > 0 ? 1.0 - rss / syy : 1.0;
+  f.rms = std::sqrt(rss / static_cast<double>(f.n));
+  if (f.n > 1) f.slope_se = std::sqrt(rss / static_cast<double>(f.n - 1) / sxx);
+  return f;
+}
+
+Fences tukey_fences(std::vector<double> x, double k) {
+  const double q1 = quantile(x, 0.25), q3 = quantile(std::move(x), 0.75);
+  return {q1 - k * (q3 - q1), q3 + k * (q3 - q1)};
+}
+
 }  // namespace budjam

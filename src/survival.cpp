@@ -88,4 +88,13 @@ std::optional<double> a_epsilon(const KaplanMeierCurve& S, double u_J, double ep
   return S.quantile_point(epsilon / u_J);
 }
 
+double mean_completion_size(const KaplanMeierCurve& S) {
+  double last_event = 0;
+  for (const auto& st : S.steps())
+    if (st.events > 0) last_event = st.a;
+  return S.integral(last_event);
+}
+
+std::optional<double> median_completion_size(const KaplanMeierCurve& S) { return S.quantile_point(0.5); }
+
 }  // namespace budjam

@@ -179,3 +179,68 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
   }
   CHECK(seen == 1);
 }
+
+TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] and the paper's φ_2 at no tagged bud left",
+          "[analyse]") {
+  const fs::path out = work_dir() / "t_definitions";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6") == 0);
+  const auto run_rows = read_csv(out / "runs.csv");
+  for (const auto& dir : runs()) {
+    const auto s = budjam::io::read_json(dir / "summary.json");
+    const auto& r = *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
+    const double step_J = s.at("step_J").get<double>();
+    const double step_2 = s.at("step_2").is_number() ? s.at("step_2").get<double>() : INFINITY;
+    double chi_sum = 0, n = 0, phi_2_paper = NAN;
+    for (const auto& row : read_csv(dir / "steps.csv")) {
+      const double step = number(row.at("step"));
+      if (step < step_J) continue;
+      if (step <= step_2) chi_sum += number(row.at("chi_c")), ++n;
+      if (step > step_J && std::isnan(phi_2_paper) && number(row.at("tagged_active")) == 0) phi_2_paper = number(row.at("phi"));
+    }
+    INFO(dir.string());
+    if (std::isfinite(step_2)) CHECK(number(r.at("chi_bar")) == Approx(chi_sum / n).epsilon(1e-12));
+    if (std::isfinite(phi_2_paper)) {
+      CHECK(number(r.at("phi_2_paper")) == Approx(phi_2_paper).epsilon(1e-14));
+      CHECK(number(r.at("phi_2_paper")) >= number(r.at("phi_2")));  // none left comes no earlier than one left
+    } else {
+      CHECK(r.at("phi_2_paper").empty());
+    }
+  }
+}
+
+TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[analyse]") {
+  const fs::path pool = work_dir() / "with_copies";
+  fs::create_directories(pool);
+  fs::copy(runs()[1], pool / "copy_a", fs::copy_options::recursive);
+  fs::copy(runs()[1], pool / "copy_b", fs::copy_options::recursive);
+  const fs::path out = work_dir() / "t_copies", err = work_dir() / "copies.err";
+  REQUIRE(run_budjam("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", err) == 0);
+  const auto A = budjam::io::read_json(out / "analysis.json");
+  CHECK(A.at("inputs").at("runs").get<long>() == 5);
+  CHECK(A.at("inputs").at("used").get<long>() == 3);
+  REQUIRE(A.at("inputs").at("duplicates").size() == 1);
+  CHECK(A.at("inputs").at("duplicates").at(0).size() == 3);
+  CHECK(read_csv(out / "runs.csv").size() == 3);
+  CHECK(slurp(err).find("duplicate") != std::string::npos);
+  // the P0 = 1e-3 group still holds its two seeds, not four copies
+  for (const auto& g : A.at("groups"))
+    if (g.at("P0_label") == "0.001") CHECK(g.at("runs").get<long>() == 2);
+}
+
+TEST_CASE("analyse refuses an episode number no integer holds: exit 2, one line naming file and line", "[analyse]") {
+  const fs::path copy = work_dir() / "huge_episode";
+  fs::copy(runs().front(), copy, fs::copy_options::recursive);
+  const fs::path ev = copy / "bud_events.csv";
+  std::string text = slurp(ev);
+  const auto header_end = text.find('\n');
+  const auto header = text.substr(0, header_end);
+  REQUIRE(header.rfind("episode,", 0) == 0);  // the episode is the first field
+  const auto field_end = text.find(',', header_end + 1);
+  text.replace(header_end + 1, field_end - header_end - 1, "1e300");
+  std::ofstream(ev) << text;
+  const fs::path err = work_dir() / "huge_episode.err";
+  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", err) == 2);
+  const std::string e = slurp(err);
+  CHECK(e.find("bud_events.csv:2: episode") != std::string::npos);
+  CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+}

@@ -99,3 +99,35 @@ TEST_CASE("linear fit slope error matches the hand-worked residual variance") {
   CHECK(f.intercept_se == Approx(std::sqrt(1.5 * (1.0 / 3 + 1.0 / 2))));
   CHECK_THROWS(linear_fit(std::vector<double>{1, 1}, std::vector<double>{0, 1}));
 }
+
+TEST_CASE("fit through the origin matches the hand-worked slope, residuals and uncentred R²") {
+  // y = 2x + (0.1, −0.1, 0.1): Σxy = 1·2.1 + 2·3.9 + 3·6.1 = 28.2, Σx² = 14 → slope = 28.2/14.
+  const std::vector<double> x{1, 2, 3}, y{2.1, 3.9, 6.1};
+  const auto f = fit_through_origin(x, y);
+  const double b = 28.2 / 14;
+  double rss = 0, syy = 0;
+  for (std::size_t k = 0; k < 3; ++k) rss += (y[k] - b * x[k]) * (y[k] - b * x[k]), syy += y[k] * y[k];
+  CHECK(f.slope == Approx(b));
+  CHECK(f.slope_se == Approx(std::sqrt(rss / 2 / 14)));
+  CHECK(f.r2 == Approx(1 - rss / syy));
+  CHECK(f.rms == Approx(std::sqrt(rss / 3)));
+  CHECK(f.n == 3);
+  // A line with an offset is no proportionality: the free fit is exact, the origin fit leaves
+  // RSS = Σy² − (Σxy)²/Σx² = 50 − 26²/14 = 12/7, though its uncentred R² is still 0.966.
+  const std::vector<double> shifted{3, 4, 5};  // y = x + 2
+  CHECK(linear_fit(x, shifted).r2 == Approx(1.0));
+  CHECK(fit_through_origin(x, shifted).rms == Approx(std::sqrt(4.0 / 7)));
+  CHECK(fit_through_origin(x, shifted).r2 == Approx(1 - (12.0 / 7) / 50));
+  CHECK_THROWS_AS(fit_through_origin(std::vector<double>{0, 0}, std::vector<double>{1, 2}), std::invalid_argument);
+}
+
+TEST_CASE("Tukey fences lie 1.5 IQR beyond the type-7 quartiles") {
+  // 1…8 and 30: Q1 = 3, Q3 = 7, IQR = 4 → fences [−3, 13]; 30 is an outlier.
+  const std::vector<double> x{1, 2, 3, 4, 5, 6, 7, 8, 30};
+  const auto f = tukey_fences(x);
+  CHECK(f.lo == Approx(-3.0));
+  CHECK(f.hi == Approx(13.0));
+  CHECK(f.contains(8.0));
+  CHECK_FALSE(f.contains(30.0));
+  CHECK(tukey_fences(x, 3.0).hi == Approx(19.0));
+}

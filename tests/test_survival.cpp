@@ -2,6 +2,7 @@
 #include "budjam/survival.hpp"
 
 #include <catch2/catch.hpp>
+#include <array>
 #include <cmath>
 
 using namespace budjam;
@@ -154,4 +155,35 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   CHECK(csv.find("\n3,") != std::string::npos);
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia table") {
+  // Remission times of the 6-MP arm of Freireich et al. (1963), + = censored; the estimates and
+  // Greenwood standard errors of Klein & Moeschberger, Survival Analysis, Table 4.1A.
+  const std::vector<SurvivalRecord> sixmp{{6, true},   {6, true},   {6, true},   {6, false},  {7, true},   {9, false},
+                                          {10, true},  {10, false}, {11, false}, {13, true},  {16, true},  {17, false},
+                                          {19, false}, {20, false}, {22, true},  {23, true},  {25, false}, {32, false},
+                                          {32, false}, {34, false}, {35, false}};
+  const auto km = kaplan_meier(sixmp);
+  const std::vector<std::array<double, 3>> table{{6, 0.857, 0.0764},  {7, 0.807, 0.0869},  {10, 0.753, 0.0963},
+                                                 {13, 0.690, 0.1068}, {16, 0.627, 0.1141}, {22, 0.538, 0.1282},
+                                                 {23, 0.448, 0.1346}};
+  for (const auto& [t, S, se] : table) {
+    INFO("t = " << t);
+    CHECK(km.S(t) == Approx(S).margin(5e-4));
+    CHECK(std::sqrt(km.variance(t)) == Approx(se).margin(5e-5));
+  }
+  CHECK(km.S(35) == Approx(0.448).margin(5e-4));  // no completion after 23: Ŝ stays, undefined beyond 35
+  CHECK(*median_completion_size(km) == 23.0);      // the textbook median remission time
+  // mean up to the last event: 6·1 + 1·6/7·... = ∫_0^23 Ŝ
+  const double mean23 = 6 + (7 - 6) * (18.0 / 21) + (10 - 7) * km.S(7) + (13 - 10) * km.S(10) + (16 - 13) * km.S(13) +
+                        (22 - 16) * km.S(16) + (23 - 22) * km.S(22);
+  CHECK(mean_completion_size(km) == Approx(mean23));
+}
+
+TEST_CASE("the median completion size is absent while Ŝ stays above one half") {
+  const auto km = kaplan_meier({{1, true}, {2, false}, {3, false}, {4, false}});  // Ŝ = 3/4 after a = 1
+  CHECK_FALSE(median_completion_size(km));
+  CHECK(mean_completion_size(km) == Approx(1.0));
+  CHECK(mean_completion_size(kaplan_meier({{1, false}})) == 0.0);
 }

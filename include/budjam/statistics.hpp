@@ -70,4 +70,23 @@ struct MeanSE {
 };
 MeanSE mean_se(std::span<const double> x);
 
+// Least squares through the origin, y = slope x: the test of a proportionality (ω* ∝ ΔZ) rather
+// than of a linear relation. r2 is uncentred, 1 − RSS/Σy², as is usual without an intercept.
+struct OriginFit {
+  double slope = 0, slope_se = 0;  // slope_se from σ² = RSS/(n − 1); 0 for n = 1
+  double r2 = 0;
+  double rms = 0;  // √(RSS/n)
+  std::size_t n = 0;
+};
+// Throws std::invalid_argument for mismatched sizes, no data or all x zero.
+OriginFit fit_through_origin(std::span<const double> x, std::span<const double> y);
+
+// Tukey's fences [Q1 − k·IQR, Q3 + k·IQR] with type-7 quartiles (see quantile); values outside are
+// outliers. NaN fences for no data.
+struct Fences {
+  double lo = 0, hi = 0;
+  bool contains(double v) const { return v >= lo && v <= hi; }
+};
+Fences tukey_fences(std::vector<double> x, double k = 1.5);
+
 }  // namespace budjam

@@ -53,6 +53,12 @@ class KaplanMeierCurve {
 // Throws std::invalid_argument for a negative or non-finite a.
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records);
 
+// Typical completion size a_c of a curve, in its own units (diameter squared for bud events):
+// the mean ∫_0^{a_last} Ŝ da up to the last completion (the mean itself when Ŝ falls to 0 there;
+// 0 with no completion), and the median, the smallest a with Ŝ(a) ≤ 1/2 (nullopt if Ŝ stays above).
+double mean_completion_size(const KaplanMeierCurve& S);
+std::optional<double> median_completion_size(const KaplanMeierCurve& S);
+
 // a_ε with u_J Ŝ(a_ε) = ε (paper Eq. 14).
 std::optional<double> a_epsilon(const KaplanMeierCurve& S, double u_J, double epsilon);
 

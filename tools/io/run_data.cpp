@@ -32,6 +32,15 @@ double CsvTable::number(std::size_t row, std::size_t col) const {
   throw InputError(source + ":" + std::to_string(row + 2) + ": " + columns[col] + ": not a number (got \"" + t + "\")");
 }
 
+long long CsvTable::integer(std::size_t row, std::size_t col, long long lo, long long hi) const {
+  const double v = number(row, col);
+  // compare as doubles before converting: a cast of a value outside the integer's range is undefined
+  if (!(v >= static_cast<double>(lo) && v <= static_cast<double>(hi)) || v != std::floor(v))
+    throw InputError(source + ":" + std::to_string(row + 2) + ": " + columns[col] + ": not an integer in [" +
+                     std::to_string(lo) + ", " + std::to_string(hi) + "] (got \"" + rows[row][col] + "\")");
+  return static_cast<long long>(v);
+}
+
 std::vector<double> CsvTable::numbers(const std::string& name) const {
   const std::size_t c = column(name);
   std::vector<double> out(rows.size());
@@ -122,6 +131,18 @@ std::string RunData::P0_label() const {
   return p ? io::format_double(*p) : std::string("none");
 }
 
+long long json_integer(const io::Json& j, const std::string& key, const fs::path& file) {
+  const auto it = j.find(key);
+  if (it != j.end() && it->is_number_integer()) return it->get<long long>();
+  throw InputError(file.string() + ": " + key + ": not an integer");
+}
+
+std::uint64_t RunData::seed() const {
+  const auto& s = summary.contains("seed") ? summary["seed"] : io::Json();
+  if (!s.is_number_unsigned()) throw InputError((dir / "summary.json").string() + ": seed: not a non-negative integer");
+  return s.get<std::uint64_t>();
+}
+
 double RunData::get(const std::string& key) const {
   if (!summary.contains(key) || !summary[key].is_number()) return std::numeric_limits<double>::quiet_NaN();
   return summary[key].get<double>();
@@ -144,15 +165,17 @@ RunData load_run(const fs::path& dir) {
 std::vector<SurvivalRecord> survival_records(const CsvTable& ev, int episode) {
   const std::size_t c_ep = ev.column("episode"), c_id = ev.column("cell_id"), c_kind = ev.column("event"),
                     c_a = ev.column("a");
+  constexpr long long kMaxEpisode = std::numeric_limits<int>::max();
+  auto episode_of = [&](std::size_t r) { return static_cast<int>(ev.integer(r, c_ep, 0, kMaxEpisode)); };
   if (episode < 0) {
-    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, static_cast<int>(ev.number(r, c_ep)));
+    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, episode_of(r));
     if (episode < 0) return {};
   }
   // Last row per tagged bud (rows are in time order), in order of first appearance.
   std::map<std::string, std::pair<std::string, double>> last;
   std::vector<std::string> order;
   for (std::size_t r = 0; r < ev.size(); ++r) {
-    if (static_cast<int>(ev.number(r, c_ep)) != episode) continue;
+    if (episode_of(r) != episode) continue;
     const std::string& id = ev.text(r, c_id);
     const std::string& kind = ev.text(r, c_kind);
     auto it = last.find(id);

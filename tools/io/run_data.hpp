@@ -29,6 +29,9 @@ struct CsvTable {
   // NaN for an empty field; InputError "<source>:<line>: <column>: not a number".
   double number(std::size_t row, std::size_t col) const;
   const std::string& text(std::size_t row, std::size_t col) const { return rows[row][col]; }
+  // A whole number in [lo, hi]; InputError "<source>:<line>: <column>: not an integer in [lo, hi]"
+  // for anything else (a fraction, NaN, or a value no integer type holds).
+  long long integer(std::size_t row, std::size_t col, long long lo, long long hi) const;
   std::vector<double> numbers(const std::string& name) const;
   std::size_t size() const { return rows.size(); }
 };
@@ -47,11 +50,15 @@ struct RunData {
   double L() const { return summary.at("L").get<double>(); }
   std::optional<double> P0() const;  // nullopt = no feedback
   std::string P0_label() const;      // "none" or the number as text
-  std::uint64_t seed() const { return summary.at("seed").get<std::uint64_t>(); }
+  std::uint64_t seed() const;  // InputError naming summary.json unless a non-negative integer
   // A number from summary.json, NaN for null or absent.
   double get(const std::string& key) const;
   bool jammed() const { return summary.contains("phi_J") && !summary["phi_J"].is_null(); }
 };
+
+// An integer field of a JSON object read from `file`; InputError "<file>: <key>: not an integer"
+// for a fraction, a string or a number no long long holds.
+long long json_integer(const io::Json& j, const std::string& key, const std::filesystem::path& file);
 
 // Reads a finished run (summary.json present). InputError naming the file otherwise.
 RunData load_run(const std::filesystem::path& dir);

@@ -1,0 +1,161 @@
+// The ensemble estimators of budjam_analysis against hand-worked answers: independent samples
+// (jamming states, seeds, duplicate runs), the depletion point and interval averages under both
+// definitions, the paper's run selection, P*, the ΔZ identity, the ω* collapse and Π(g).
+#include "analysis/depletion_estimators.hpp"
+#include "analysis/jamming_states.hpp"
+#include "analysis/structure_estimators.hpp"
+#include "budjam/depletion.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace budjam;
+using namespace budjam::tools;
+
+TEST_CASE("runs of one size and seed that jam identically share one jamming state") {
+  const std::vector<JammingKey> keys{{15, 1, 100, 176, 0.8387}, {15, 1, 100, 176, 0.8387}, {15, 2, 90, 170, 0.8391},
+                                     {8, 1, 100, 176, 0.8387},  {15, 1, 101, 176, 0.8387}, {15, 2, 90, 170, 0.8391}};
+  CHECK(jamming_state_ids(keys) == std::vector<std::size_t>{0, 0, 1, 2, 3, 1});
+}
+
+TEST_CASE("the mean over jamming states counts each state once: copies do not shrink the SE") {
+  // states 0, 1, 2 with means 0.2, 0.3, 0.25 (state 2: one NaN left out) → mean 0.25,
+  // s² = (0.05² + 0.05² + 0)/2 = 0.0025, SE = √(0.0025/3)
+  const std::vector<double> v{0.2, 0.2, 0.3, 0.25, NAN};
+  const std::vector<std::size_t> s{0, 0, 1, 2, 2};
+  const MeanSE m = mean_over_states(v, s);
+  CHECK(m.n == 3);
+  CHECK(m.mean == Approx(0.25));
+  CHECK(m.se == Approx(std::sqrt(0.0025 / 3)));
+  // six runs per state (six P0 groups sharing their jamming) give the same answer
+  std::vector<double> v6;
+  std::vector<std::size_t> s6;
+  for (int copy = 0; copy < 6; ++copy)
+    for (std::size_t k = 0; k < 4; ++k) v6.push_back(v[k]), s6.push_back(s[k]);
+  CHECK(mean_over_states(v6, s6).se == Approx(m.se));
+  CHECK(mean_over_states(v6, s6).n == 3);
+  CHECK_THROWS_AS(mean_over_states(v, std::vector<std::size_t>{0}), std::invalid_argument);
+}
+
+TEST_CASE("bootstrap by seed resamples whole seeds") {
+  BootstrapOptions bo;
+  bo.resamples = 4000;
+  SECTION("one state per seed: the plain bootstrap of the state means in seed order, draw for draw") {
+    const std::vector<double> v{1, 4, 2, 8};
+    const auto b = cluster_bootstrap_mean(v, std::vector<std::size_t>{0, 1, 2, 3}, std::vector<std::uint64_t>{7, 3, 5, 1}, bo);
+    const auto plain = bootstrap_mean(std::vector<double>{8, 4, 2, 1}, bo);  // seeds 1, 3, 5, 7
+    CHECK(b.estimate == Approx(3.75));
+    CHECK(b.n == 4);
+    CHECK(b.se == Approx(plain.se).epsilon(1e-12));
+  }
+  SECTION("two seeds, one holding two states: the exact resampling distribution") {
+    // seed a: states 1 and 3; seed b: state 5. Draws (a,a) → 2, (a,b), (b,a) → 3, (b,b) → 5,
+    // each with probability 1/4: variance 1.1875.
+    bo.resamples = 20000;
+    const auto b = cluster_bootstrap_mean(std::vector<double>{1, 3, 5}, std::vector<std::size_t>{0, 1, 2},
+                                          std::vector<std::uint64_t>{10, 10, 20}, bo);
+    CHECK(b.estimate == Approx(3.0));
+    CHECK(b.se == Approx(std::sqrt(1.1875)).epsilon(0.02));
+  }
+}
+
+TEST_CASE("identical summaries are one run copied: grouped, the first copy first") {
+  const std::vector<std::string> f{"a", "b", "a", "c", "b", "a"};
+  const auto d = duplicate_runs(f);
+  REQUIRE(d.size() == 2);
+  CHECK(d[0] == std::vector<std::size_t>{0, 2, 5});
+  CHECK(d[1] == std::vector<std::size_t>{1, 4});
+  CHECK(duplicate_runs(std::vector<std::string>{"a", "b"}).empty());
+}
+
+TEST_CASE("depletion point: budjam's at most one tagged bud left, the paper's none left") {
+  const std::vector<double> active{5, 3, 1, 1, 0, 0};
+  CHECK(*depletion_state(active, 1, 1) == 2);
+  CHECK(*depletion_state(active, 1, 0) == 4);
+  CHECK_FALSE(depletion_state(std::vector<double>{5, 3, 2}, 1, 1));
+  CHECK(*depletion_state(std::vector<double>{0, 0}, 1, 0) == 1);  // the jamming state itself is not above jamming
+}
+
+TEST_CASE("χ̄ is the plain mean over the accepted states, not a trapezoid in φ") {
+  // χ_c falls 0.9, 0.5, 0.1 over steps at φ − φ_J = 0, 0.001, 0.01: one growth step each, so Eq. 13's
+  // average over a is (0.9 + 0.5 + 0.1)/3 = 0.5; the trapezoid in φ weights the long last step:
+  // [(0.9+0.5)/2 · 0.001 + (0.5+0.1)/2 · 0.009] / 0.01 = 0.34.
+  const std::vector<double> chi{0.9, 0.5, 0.1, 0.7}, phi{0.8, 0.801, 0.81, 0.82};
+  CHECK(growth_coordinate_average(chi, 0, 2) == Approx(0.5));
+  CHECK(interval_average(phi, chi, 0.8, 0.81) == Approx(0.34));
+  CHECK(growth_coordinate_average(chi, 1, 1) == Approx(0.5));
+  CHECK(growth_coordinate_average(std::vector<double>{NAN, 0.4, 0.2}, 0, 2) == Approx(0.3));
+  CHECK(std::isnan(growth_coordinate_average(chi, 5, 6)));
+}
+
+TEST_CASE("the paper's selection: at most 10 divisions at the end, G_2 > 0, then Tukey fences") {
+  const std::vector<double> div{0, 10, 11, 3, 2}, G2{0.1, 0.2, 0.3, -0.1, NAN};
+  CHECK(paper_admitted(div, G2) == std::vector<bool>{true, true, false, false, true});
+  CHECK(paper_admitted(div, G2, 11) == std::vector<bool>{true, true, true, false, true});
+  // admitted 1…8 and 30 (fences [−3, 13]); 100 is not admitted and does not move the fences
+  const std::vector<double> v{1, 2, 3, 4, 5, 6, 7, 8, 30, 100};
+  std::vector<bool> adm(v.size(), true);
+  adm.back() = false;
+  CHECK(tukey_inliers(v, adm) == std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8});
+  CHECK(tukey_inliers(v, std::vector<bool>(v.size(), false)).empty());
+}
+
+TEST_CASE("P* = n_J (6 + 2 u_J) a_c / (8 ln 10)") {
+  CHECK(crossover_pressure(0.775, 0.2, 0.01) == Approx(0.775 * 6.4 * 0.01 / (8 * std::log(10.0))));
+  CHECK(crossover_pressure(0.775, 0.2, 0.01) == Approx(0.0026927).epsilon(1e-4));
+}
+
+TEST_CASE("excess contacts are integers whose sign is that of ΔZ") {
+  // N_nr = 10, N_u = 2: N_c,iso = 60 − 4 − 2 = 54
+  CHECK(excess_contacts(54, 10, 2) == 0);
+  CHECK(excess_contacts(53, 10, 2) == -1);
+  CHECK(excess_contacts(58, 10, 2) == 4);
+}
+
+TEST_CASE("ω* collapse: proportionality fits through the origin and integer sign counts") {
+  // (N_c, N_nr, N_u) → ΔZ, Z − 6: (56, 10, 2) → 0.2, −0.4; (62, 10, 0) → 0.4, 0.2; (108, 20, 4) → −0.1, −0.6
+  const std::vector<CollapsePoint> p{{0.1, 56, 10, 2}, {0.2, 62, 10, 0}, {0.01, 108, 20, 4}};
+  const auto c = omega_collapse(p);
+  CHECK(c.packings == 3);
+  CHECK(c.dZ_negative == 1);
+  CHECK(c.Z_minus_6_negative == 2);
+  CHECK(c.dZ.slope == Approx(0.099 / 0.21));                  // Σ ΔZ ω* / Σ ΔZ²
+  CHECK(c.Z_minus_6.slope == Approx((-0.04 + 0.04 - 0.006) / 0.56));
+  CHECK(c.dZ.r2 > c.Z_minus_6.r2);
+  CHECK_THROWS_AS(omega_collapse({}), std::invalid_argument);
+}
+
+TEST_CASE("ΔZ identity residuals per P0, in order of appearance") {
+  const std::vector<IdentityPoint> pts{{1e-3, 0.1}, {1e-3, -0.1}, {1e-5, 0.2}, {1e-3, 0.3}, {1e-5, NAN}};
+  const auto r = dz_identity_residuals(pts);
+  REQUIRE(r.size() == 2);
+  CHECK(r[0].P0 == 1e-3);
+  CHECK(r[0].residual.n == 3);
+  CHECK(r[0].residual.mean == Approx(0.1));
+  CHECK(r[0].residual.se == Approx(0.2 / std::sqrt(3.0)));
+  CHECK(r[0].rms == Approx(std::sqrt(0.11 / 3)));
+  CHECK(r[1].P0 == 1e-5);
+  CHECK(r[1].residual.n == 1);
+  CHECK(r[1].rms == Approx(0.2));
+}
+
+TEST_CASE("Π(g): the δ peak at g = 1, densities on the paper's bins and quartiles of the rest") {
+  const auto edges = paper_growth_rate_edges();
+  REQUIRE(edges.size() == 13);
+  CHECK(edges.back() == 0.995);
+  const std::vector<double> g{1, 1, 0.98, 0.5, 0.5, 0.02, 0.999};
+  const auto d = growth_rate_distribution(g, edges);
+  CHECK(d.cells == 7);
+  CHECK(d.weight_at_one == Approx(2.0 / 7));
+  REQUIRE(d.density.size() == 12);
+  CHECK(d.density[0] == Approx(1.0 / 7 / 0.03));   // 0.02 in [0, 0.03)
+  CHECK(d.density[7] == Approx(2.0 / 7 / 0.15));   // two at 0.5 in [0.45, 0.60)
+  CHECK(d.density[11] == Approx(1.0 / 7 / 0.025)); // 0.98 in [0.97, 0.995); 0.999 is beyond the last edge
+  CHECK(d.density[5] == 0.0);
+  CHECK(d.median == Approx(0.5));  // of {0.02, 0.5, 0.5, 0.98, 0.999}
+  CHECK(d.q25 == Approx(0.5));
+  CHECK(d.q75 == Approx(0.98));
+  CHECK_THROWS_AS(growth_rate_distribution(std::vector<double>{}, edges), std::invalid_argument);
+}

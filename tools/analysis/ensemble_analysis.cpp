@@ -1,0 +1,1060 @@
+// Ensemble analysis of finished growth runs. A run argument may also be a folder that holds run
+// directories (searched recursively for summary.json). Runs are grouped by (L, P0).
+//
+// Outputs (docs/analysis.md, "analyse outputs"):
+//   analysis.json     per-group statistics and the headline numbers, under budjam's definitions
+//                     and the paper's (key suffix _paper), errors over independent samples
+//   runs.csv          one row per run (φ_J, u_J, n_J, φ_2 both ways, predictions, P_2, G_2, divisions, h_γ ...)
+//   targets.csv       one row per (run, Δφ target): P, Z, ΔZ, u, χ_c, λ_c, B_grow, ΔZ_0(P) + 2(u_J − u), B, G
+//   survival.csv      pooled Kaplan–Meier S(a) per group with Greenwood band (Fig. 2B)
+//   remaining.csv     fraction of the buds free at jamming still free against φ − φ_J (Fig. 2B)
+//   division_curve.csv  cumulative post-jamming divisions / ⟨N_J⟩ against Δφ: median and quartiles (Fig. D1)
+//   growth_rates.csv  Π(g) at Δφ = 3·10⁻³ per group on the paper's bins (Fig. E1)
+//   trajectory.csv    mean (P, G) per (group, Δφ) below φ_2, and the endpoints (Fig. 4)
+//   dos.csv           per packing with a DOS: ω*, ΔZ, Z − 6, integer contact counts, N_zero, N_u (Fig. F1)
+// Moduli and spectra are read from packings/<name>.moduli.json / .dos.json (written by
+// `budjam moduli` / `budjam dos` in the Makefile pipeline).
+#include "analysis/ensemble_analysis.hpp"
+
+#include "analysis/depletion_estimators.hpp"
+#include "analysis/jamming_states.hpp"
+#include "analysis/structure_estimators.hpp"
+#include "io/run_data.hpp"
+
+#include "budjam/depletion.hpp"
+#include "budjam/growth.hpp"
+#include "budjam/scene.hpp"
+#include "budjam/statistics.hpp"
+#include "budjam/survival.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
+#include "io/text.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+using io::Json;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPmax = 0.1;      // confluence pressure scale (paper Eq. D22)
+constexpr double kM4 = 0.125;      // ⟨n_x² n_y²⟩ of an isotropic network
+constexpr double kDphiGrowth = 3e-3;  // Δφ of the growth-rate crossover (appendix E)
+
+std::string num(double v) { return io::format_double(v); }
+
+// ---- per-run extraction ------------------------------------------------------------------------
+
+struct TargetRow {
+  double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
+  double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
+  double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
+  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
+  double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
+  bool below_phi2 = false;
+};
+
+struct RunRow {
+  fs::path dir;
+  double L = kNaN;
+  std::optional<double> P0;
+  std::string P0_label;
+  std::uint64_t seed = 0;
+  std::string status;
+  std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
+  bool depleted = false;
+  double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN, P_J = kNaN;
+  double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (the paper's u_J ≃ 0.23)
+  double tagged = kNaN, lc2_J = kNaN;
+  double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
+  // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
+  double chi_bar = kNaN, lambda_bar = kNaN;
+  // the paper's φ_2: first state with no tagged bud left; its P, divisions and interval averages
+  double phi_2_paper = kNaN, dphi_2_paper = kNaN, P_2_paper = kNaN, N_div_2_paper = kNaN;
+  double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
+  double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
+  double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;
+  double h_gamma = kNaN;
+  std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
+  std::vector<SurvivalRecord> survival;
+  std::vector<TargetRow> targets;
+  // curves on the Δφ grid
+  std::vector<double> remaining;  // tagged_active / tagged (NaN beyond the run)
+  std::vector<double> divisions;  // cumulative divisions after φ_J
+};
+
+struct DosRow {
+  std::string run, packing;
+  double L = kNaN;
+  std::string P0_label;
+  double dphi = kNaN, omega_star = kNaN, dZ = kNaN, Z = kNaN, N_zero = kNaN, N_u = kNaN, N_u_buds = kNaN;
+  long N_c = 0, N_nr = 0;  // integer counts: the sign of ΔZ without rounding
+  std::size_t state = 0;   // the run's jamming state (a jammed packing is shared by its runs)
+  bool target = false;     // a Δφ-target packing (the paper's ω* figure uses only these)
+};
+
+Json fraction_json(std::size_t k, std::size_t n) {
+  return Json{{"fraction", n ? Json(static_cast<double>(k) / static_cast<double>(n)) : Json(nullptr)}, {"packings", n}};
+}
+
+std::vector<double> dphi_grid() {
+  std::vector<double> g;
+  for (int k = 0; k <= 40; ++k) g.push_back(1e-4 * std::pow(10.0, 3.2 * k / 40.0));  // 1e-4 … ≈0.16
+  return g;
+}
+
+// A number from a sidecar JSON: the first of `keys` present (top level, then under "moduli").
+double json_number(const Json& j, std::initializer_list<const char*> keys) {
+  for (const char* k : keys) {
+    if (j.contains(k) && j[k].is_number()) return j[k].get<double>();
+    if (j.contains("moduli") && j["moduli"].contains(k) && j["moduli"][k].is_number()) return j["moduli"][k].get<double>();
+  }
+  return kNaN;
+}
+
+// G is the lobe-centre stress response (the paper's); G_energy = (1/A) d²U/dγ² where `budjam
+// moduli` writes it (docs/moduli.md): the two differ by the prestress term.
+struct SidecarModuli {
+  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN, G_min = kNaN;
+};
+
+struct ModuliFiles {
+  std::size_t found = 0;
+  std::size_t saddles = 0;  // "energy_minimum": false — no relaxed B, G (NaN here, left out of every statistic)
+};
+
+SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& files) {
+  SidecarModuli m;
+  const auto j = tools::sidecar(pack, "moduli");
+  if (!j) {
+    if (required && fs::exists(pack))
+      throw InputError(pack.string() + ": no moduli (expected " + fs::path(pack).replace_extension(".moduli.json").string() +
+                       "; run `make -f Makefile.analysis moduli`)");
+    return m;
+  }
+  ++files.found;
+  m.B_ext_mf = json_number(*j, {"B_ext_mean_field", "B_mf", "B_ext_mf"});
+  if (j->contains("energy_minimum") && (*j)["energy_minimum"].is_boolean() && !(*j)["energy_minimum"].get<bool>()) {
+    ++files.saddles;
+    return m;
+  }
+  m.B = json_number(*j, {"B", "bulk_modulus"});
+  m.G = json_number(*j, {"G", "shear_modulus"});
+  m.G_energy = json_number(*j, {"G_energy"});
+  if (j->contains("shear_stability")) m.G_min = json_number((*j)["shear_stability"], {"G_min"});
+  if (!std::isfinite(m.G) || !std::isfinite(m.B))
+    throw InputError(fs::path(pack).replace_extension(".moduli.json").string() + ": no numeric \"B\" and \"G\"");
+  return m;
+}
+
+// One jammed run's row (the caller skips runs that never jammed).
+RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_found) {
+  RunRow x;
+  x.dir = r.dir;
+  x.L = r.L();
+  x.P0 = r.P0();
+  x.P0_label = r.P0_label();
+  x.seed = r.seed();
+  x.status = r.status();
+  x.phi_J = r.get("phi_J");
+  x.u_J = r.get("u_J");
+  x.n_J = r.get("n_J");
+  x.N_J = r.get("N_J");
+  x.N_nr_J = r.get("N_nr_J");
+  x.Z_J = r.get("Z_J");
+  x.dZ_J = r.get("dZ_J");
+  x.P_J = r.get("P_J");
+  x.tagged = r.get("tagged_J");
+  x.step_J = r.get("step_J");
+  x.u_J_lobes = r.get("u_J_lobes");
+  x.phi_2 = r.get("phi_2");
+  x.depleted = std::isfinite(x.phi_2);
+  const double step_2 = r.get("step_2");
+  if (x.depleted) {
+    x.dphi_2 = x.phi_2 - x.phi_J;
+    x.P_2 = r.get("P_2");
+    x.Z_2 = r.get("Z_2");
+    x.dZ_2 = r.get("dZ_2");
+    x.N_div_2 = r.get("N_div_2");
+  }
+
+  // steps.csv from jamming on (the current episode starts at step_J)
+  const auto& S = r.steps;
+  const std::size_t c_step = S.column("step"), c_phi = S.column("phi"), c_P = S.column("P"), c_N = S.column("N"),
+                    c_Nf = S.column("N_f"), c_Nub = S.column("N_u_buds"), c_chi = S.column("chi_c"),
+                    c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming");
+  std::vector<double> st, phi, P, u, chi, lambda, active, divisions;
+  for (std::size_t k = 0; k < S.size(); ++k) {
+    const double s = S.number(k, c_step);
+    if (s < x.step_J) continue;
+    st.push_back(s);
+    phi.push_back(S.number(k, c_phi));
+    P.push_back(S.number(k, c_P));
+    const double N = S.number(k, c_N), Nf = S.number(k, c_Nf);
+    u.push_back(S.number(k, c_Nub) / (N - Nf));
+    chi.push_back(S.number(k, c_chi));
+    lambda.push_back(lambda_c(u.back(), chi.back()));
+    active.push_back(S.number(k, c_act));
+    divisions.push_back(S.number(k, c_div));
+  }
+  if (!divisions.empty()) x.N_div_end = divisions.back();
+  if (x.depleted) {
+    const auto k2 = static_cast<std::size_t>(std::find(st.begin(), st.end(), step_2) - st.begin());
+    if (k2 < st.size()) {
+      x.u_2 = u[k2];
+      x.chi_bar = growth_coordinate_average(chi, 0, k2);
+      x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
+    }
+  }
+  if (const auto k2 = depletion_state(active, 1, 0)) {
+    x.phi_2_paper = phi[*k2];
+    x.dphi_2_paper = phi[*k2] - x.phi_J;
+    x.P_2_paper = P[*k2];
+    x.N_div_2_paper = divisions[*k2];
+    x.chi_bar_paper = growth_coordinate_average(chi, 0, *k2);
+    x.lambda_bar_paper = growth_coordinate_average(lambda, 0, *k2);
+  }
+
+  // Survival of the tagged buds: per-run a_ε with ε = 1/N_nr,J (at most one left = φ_2's definition)
+  if (r.bud_events) {
+    x.survival = tools::survival_records(*r.bud_events);
+    if (!x.survival.empty() && x.u_J > 0) {
+      const auto km = kaplan_meier(x.survival);
+      if (const auto ae = a_epsilon(km, x.u_J, 1.0 / x.N_nr_J)) {
+        x.a_eps = *ae;
+        x.int_S = km.integral(*ae);
+        if (std::isfinite(x.chi_bar)) {
+          const auto p = predict_phi2(x.n_J, x.u_J, x.chi_bar, x.a_eps, x.int_S);
+          x.pred_area = p.dphi2_area;
+          x.pred_d2 = p.dphi2_diameter_sq;
+        }
+      }
+    }
+  }
+
+  // Targets
+  for (const auto& t : r.summary.at("targets")) {
+    TargetRow y;
+    y.dphi = t.at("dphi").get<double>();
+    y.phi = t.at("phi").get<double>();
+    y.P = t.at("P").get<double>();
+    y.Z = t.at("Z").get<double>();
+    y.dZ = t.at("dZ").get<double>();
+    y.Z_iso = t.at("Z_iso").get<double>();
+    y.u = t.at("u_buds").get<double>();
+    y.u_lobes = t.at("u").get<double>();
+    y.chi_c = t.at("chi_c").get<double>();
+    y.N_div = t.at("N_div").get<double>();
+    y.N_nr = t.at("N_nr").get<double>();
+    y.lambda = lambda_c(y.u, y.chi_c);
+    const fs::path summary = r.dir / "summary.json";
+    const long long tstep = json_integer(t, "step", summary);
+    std::vector<double> ph, pp;
+    for (std::size_t k = 0; k < st.size(); ++k)
+      if (st[k] <= tstep) {
+        ph.push_back(phi[k]);
+        pp.push_back(P[k]);
+      }
+    if (const auto b = b_grow(ph, pp, y.phi, 5)) {
+      y.B_grow = b->B;
+      y.B_grow_se = b->B_se;
+    }
+    y.below_phi2 = !x.depleted || y.phi <= x.phi_2;
+    const fs::path pack = r.dir / "packings" / ("target_" + std::to_string(json_integer(t, "index", summary)) + ".pack");
+    const SidecarModuli sm = read_moduli(pack, need_moduli, moduli_found);
+    y.B = sm.B;
+    y.G = sm.G;
+    y.G_energy = sm.G_energy;
+    y.B_ext_mf = sm.B_ext_mf;
+    y.G_min = sm.G_min;
+    x.targets.push_back(y);
+
+    // growth-rate distribution at Δφ = 3·10⁻³ (non-rattler cells; g = exp(−p/P0), 1 without feedback)
+    if (std::abs(y.dphi - kDphiGrowth) < 1e-12 && fs::exists(pack)) {
+      const io::PackingFile f = io::read_packing(pack);
+      const auto pc = tools::analyse_contacts(f.packing);
+      for (std::size_t i = 0; i < f.packing.size(); ++i)
+        if (!pc.network.rattler[i]) x.g.push_back(growth_factor(pc.bud_pressures[i], x.P0));
+      x.h_gamma = growth_heterogeneity(x.g);
+    }
+  }
+  if (x.depleted) {
+    const SidecarModuli sm = read_moduli(r.dir / "packings" / "phi2.pack", need_moduli, moduli_found);
+    x.B_2 = sm.B;
+    x.G_2 = sm.G;
+    x.G_2_energy = sm.G_energy;
+    x.G_min_2 = sm.G_min;
+  }
+  {
+    const fs::path jam = r.dir / "packings" / "jammed.pack";
+    if (fs::exists(jam)) x.lc2_J = tools::analyse_contacts(io::read_packing(jam).packing).lc2;
+  }
+
+  // Curves on the Δφ grid
+  const auto grid = dphi_grid();
+  const double last = phi.empty() ? x.phi_J : phi.back();
+  for (double d : grid) {
+    double v = kNaN;
+    if (x.phi_J + d <= last && x.tagged > 0)
+      for (std::size_t k = 0; k < phi.size() && phi[k] - x.phi_J <= d; ++k) v = active[k] / x.tagged;
+    x.remaining.push_back(v);
+  }
+  {
+    const auto& D = r.divisions;
+    const std::size_t c_s = D.column("step"), c_p = D.column("phi");
+    std::vector<double> dd;
+    for (std::size_t k = 0; k < D.size(); ++k)
+      if (D.number(k, c_s) > x.step_J) dd.push_back(D.number(k, c_p) - x.phi_J);
+    for (double d : grid) {
+      if (x.phi_J + d > last) {
+        x.divisions.push_back(kNaN);
+        continue;
+      }
+      x.divisions.push_back(static_cast<double>(std::count_if(dd.begin(), dd.end(), [&](double v) { return v <= d; })));
+    }
+  }
+  return x;
+}
+
+// ---- grouping and statistics ---------------------------------------------------------------------
+
+struct GroupKey {
+  double L;
+  std::optional<double> P0;
+  bool operator<(const GroupKey& o) const {
+    if (L != o.L) return L < o.L;
+    // none first, then decreasing P0 (weak → strong feedback), as in the paper's figures
+    if (P0.has_value() != o.P0.has_value()) return !P0.has_value();
+    return P0 && *P0 > *o.P0;
+  }
+};
+
+std::vector<double> finite(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  return v;
+}
+
+Json mean_se_json(const std::vector<double>& v0) {
+  const auto v = finite(v0);
+  Json j;
+  j["n"] = v.size();
+  j["mean"] = io::number_or_null(mean(v));
+  j["se"] = io::number_or_null(v.size() >= 2 ? standard_error(v) : kNaN);
+  return j;
+}
+
+Json median_json(const std::vector<double>& v0, const BootstrapOptions& bo) {
+  const auto v = finite(v0);
+  Json j;
+  j["n"] = v.size();
+  if (v.empty()) {
+    j["median"] = nullptr;
+    j["se"] = nullptr;
+    j["ci95"] = Json::array({nullptr, nullptr});
+    return j;
+  }
+  const auto b = bootstrap_median(v, bo);
+  j["median"] = b.estimate;
+  j["se"] = b.se;  // bootstrap SE of the median
+  j["ci95"] = Json::array({b.lo, b.hi});
+  j["q25"] = quantile(v, 0.25);
+  j["q75"] = quantile(v, 0.75);
+  return j;
+}
+
+template <class F>
+std::vector<double> collect(const std::vector<const RunRow*>& rs, F f) {
+  std::vector<double> v;
+  for (const auto* r : rs) v.push_back(f(*r));
+  return v;
+}
+
+std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
+  std::set<fs::path> runs;
+  for (const auto& in : inputs) {
+    const fs::path p(in);
+    if (!fs::exists(p)) throw InputError(in + ": no such run directory");
+    if (fs::exists(p / "summary.json")) {
+      runs.insert(p);
+      continue;
+    }
+    if (!fs::is_directory(p)) throw InputError(in + ": not a directory");
+    bool any = false;
+    for (const auto& e : fs::recursive_directory_iterator(p))
+      if (e.is_regular_file() && e.path().filename() == "summary.json") {
+        runs.insert(e.path().parent_path());
+        any = true;
+      }
+    if (!any) throw InputError(in + ": holds no finished run (no summary.json below it)");
+  }
+  return {runs.begin(), runs.end()};
+}
+
+void write_csv(const fs::path& path, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  io::write_atomically(path, [&](std::ostream& os) {
+    for (std::size_t k = 0; k < header.size(); ++k) os << (k ? "," : "") << header[k];
+    os << '\n';
+    for (const auto& r : rows) {
+      for (std::size_t k = 0; k < r.size(); ++k) os << (k ? "," : "") << r[k];
+      os << '\n';
+    }
+  });
+}
+
+std::string cell(double v) { return std::isfinite(v) ? num(v) : std::string(); }
+
+// ---- reading ---------------------------------------------------------------------------------------
+
+struct Ensemble {
+  std::vector<RunRow> rows;
+  std::vector<DosRow> dos_rows;
+  std::vector<std::string> failed;                    // runs that stopped early, with their status
+  std::vector<std::vector<std::string>> duplicates;   // copies of one run: the used one first
+  ModuliFiles moduli;
+  std::size_t dos_found = 0;
+  std::size_t runs = 0;
+};
+
+DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& run) {
+  DosRow q;
+  q.run = run.dir.string();
+  q.packing = pack.stem().string();
+  q.L = run.L;
+  q.P0_label = run.P0_label;
+  q.state = run.state;
+  q.target = q.packing.rfind("target_", 0) == 0;
+  const io::PackingFile f = io::read_packing(pack);
+  q.dphi = f.meta.has("dphi") ? f.meta.number("dphi") : (f.meta.has("phi_J") ? f.meta.number("phi") - f.meta.number("phi_J") : kNaN);
+  q.omega_star = json_number(dos, {"omega_star"});
+  q.N_zero = json_number(dos, {"N_zero"});
+  if (!std::isfinite(q.omega_star) || !std::isfinite(q.N_zero))
+    throw InputError(pack.string() + ": its .dos.json has no numeric \"omega_star\" and \"N_zero\"");
+  const auto pc = analyse_contacts(f.packing);
+  q.Z = pc.network.Z;
+  q.dZ = pc.network.dZ;
+  q.N_u = static_cast<double>(pc.network.N_u);
+  q.N_u_buds = static_cast<double>(pc.network.N_u_buds);
+  q.N_c = static_cast<long>(pc.network.N_c);
+  q.N_nr = static_cast<long>(pc.network.N_nr);
+  return q;
+}
+
+Ensemble read_ensemble(const EnsembleOptions& o) {
+  Ensemble e;
+  const auto dirs = find_runs(o.inputs);
+  e.runs = dirs.size();
+  std::vector<RunData> data;
+  std::vector<std::string> fingerprints;
+  for (const auto& d : dirs) {
+    data.push_back(load_run(d));
+    fingerprints.push_back(data.back().summary.dump());
+  }
+  // A run directory copied elsewhere is one run, not two samples: keep the first copy.
+  std::vector<bool> copy(dirs.size(), false);
+  for (const auto& g : duplicate_runs(fingerprints)) {
+    std::vector<std::string> names;
+    for (std::size_t k : g) {
+      names.push_back(dirs[k].string());
+      copy[k] = k != g.front();
+    }
+    e.duplicates.push_back(names);
+  }
+  for (std::size_t k = 0; k < dirs.size(); ++k) {
+    const RunData& r = data[k];
+    if (copy[k]) continue;
+    // A run that stopped early (step limit, say) still landed every state it recorded: its jamming
+    // point, targets and φ_2 are used; it is listed so that the report can say so. One that never
+    // jammed has nothing to contribute.
+    if (r.status() != "finished") e.failed.push_back(dirs[k].string() + " (" + r.status() + ")");
+    if (!r.jammed()) continue;
+    e.rows.push_back(extract(r, o.require_moduli, e.moduli));
+  }
+  std::vector<JammingKey> keys;
+  for (const auto& r : e.rows) keys.push_back({r.L, r.seed, r.step_J, r.N_J, r.phi_J});
+  const auto states = jamming_state_ids(keys);
+  for (std::size_t k = 0; k < e.rows.size(); ++k) e.rows[k].state = states[k];
+
+  for (const auto& run : e.rows) {
+    std::vector<fs::path> packs;  // in name order: the tables do not depend on the directory order
+    for (const auto& f : fs::directory_iterator(run.dir / "packings"))
+      if (f.path().extension() == ".pack") packs.push_back(f.path());
+    std::sort(packs.begin(), packs.end());
+    for (const auto& pack : packs) {
+      const auto j = sidecar(pack, "dos");
+      if (!j) {
+        if (o.require_dos) throw InputError(pack.string() + ": no spectrum (run `make -f Makefile.analysis dos`)");
+        continue;
+      }
+      ++e.dos_found;
+      e.dos_rows.push_back(read_spectrum(pack, *j, run));
+    }
+  }
+  if (e.rows.empty()) throw InputError("analyse: no run among the inputs reached jamming");
+  return e;
+}
+
+// ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at jamming and at each Δφ target.
+std::map<double, PiecewiseLinear> no_feedback_branch(const std::map<GroupKey, std::vector<const RunRow*>>& groups) {
+  std::map<double, PiecewiseLinear> branch;
+  for (const auto& [key, rs] : groups) {
+    if (key.P0) continue;
+    std::map<double, std::pair<std::vector<double>, std::vector<double>>> by_dphi;
+    std::vector<double> PJ, dZJ;
+    for (const auto* r : rs) {
+      PJ.push_back(r->P_J);
+      dZJ.push_back(r->dZ_J);
+      for (const auto& t : r->targets) {
+        by_dphi[t.dphi].first.push_back(t.P);
+        by_dphi[t.dphi].second.push_back(t.dZ);
+      }
+    }
+    std::vector<std::pair<double, double>> pts;
+    if (!PJ.empty()) pts.emplace_back(mean(PJ), mean(dZJ));
+    for (auto& [d, v] : by_dphi) pts.emplace_back(mean(v.first), mean(v.second));
+    if (!pts.empty()) branch.emplace(key.L, PiecewiseLinear(pts));
+  }
+  return branch;
+}
+
+// ---- statistics ------------------------------------------------------------------------------------
+
+// A quantity fixed at jamming: one sample per distinct jamming state, and the SE of a bootstrap
+// that resamples seeds (runs of one seed share their growth up to jamming).
+template <class F>
+Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
+  std::vector<double> v;
+  std::vector<std::size_t> st;
+  std::vector<std::uint64_t> seed;
+  for (const auto* r : rs) {
+    v.push_back(f(*r));
+    st.push_back(r->state);
+    seed.push_back(r->seed);
+  }
+  const MeanSE m = mean_over_states(v, st);
+  Json j;
+  j["runs"] = rs.size();
+  j["n"] = m.n;  // distinct jamming states
+  j["mean"] = io::number_or_null(m.mean);
+  j["se"] = io::number_or_null(m.se);
+  j["bootstrap_se_by_seed"] = m.n ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
+  return j;
+}
+
+// A per-group statistic under the paper's selection: runs with ≤ 10 divisions at their end and
+// G_2 > 0, then Tukey's 1.5·IQR fences on the quantity itself.
+template <class F>
+Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
+  const auto admitted = paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, [](auto& r) { return r.G_2; }));
+  const auto kept = tukey_inliers(collect(rs, f), admitted);
+  Json j = mean_se_json(kept);
+  const Json m = median_json(kept, bo);
+  j["median"] = m["median"];
+  j["median_se"] = m["se"];
+  j["runs"] = rs.size();
+  j["admitted"] = std::count(admitted.begin(), admitted.end(), true);
+  return j;
+}
+
+struct Tables {
+  std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
+};
+
+Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const BootstrapOptions& bo, Tables& t) {
+  const std::string P0s = key.P0 ? num(*key.P0) : "none";
+  std::vector<const RunRow*> dep;
+  for (const auto* r : rs)
+    if (r->depleted) dep.push_back(r);
+  Json g;
+  g["L"] = key.L;
+  g["P0"] = key.P0 ? Json(*key.P0) : Json(nullptr);
+  g["P0_label"] = P0s;
+  g["runs"] = rs.size();
+  g["jammed"] = rs.size();
+  g["depleted"] = dep.size();
+  g["depleted_paper"] = std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->phi_2_paper); });
+  g["phi_J"] = mean_se_json(collect(rs, [](auto& r) { return r.phi_J; }));
+  g["u_J"] = mean_se_json(collect(rs, [](auto& r) { return r.u_J; }));
+  g["u_J_lobes"] = mean_se_json(collect(rs, [](auto& r) { return r.u_J_lobes; }));
+  g["n_J"] = mean_se_json(collect(rs, [](auto& r) { return r.n_J; }));
+  g["N_J"] = mean_se_json(collect(rs, [](auto& r) { return r.N_J; }));
+  g["N_nr_J"] = mean_se_json(collect(rs, [](auto& r) { return r.N_nr_J; }));
+  g["Z_J"] = mean_se_json(collect(rs, [](auto& r) { return r.Z_J; }));
+  g["dZ_J"] = mean_se_json(collect(rs, [](auto& r) { return r.dZ_J; }));
+  g["lc2_J"] = mean_se_json(collect(rs, [](auto& r) { return r.lc2_J; }));
+  g["dphi_2"] = mean_se_json(collect(dep, [](auto& r) { return r.dphi_2; }));
+  g["phi_2"] = mean_se_json(collect(dep, [](auto& r) { return r.phi_2; }));
+  g["dphi_2_pred_area"] = mean_se_json(collect(dep, [](auto& r) { return r.pred_area; }));
+  g["dphi_2_pred_diameter_sq"] = mean_se_json(collect(dep, [](auto& r) { return r.pred_d2; }));
+  g["a_eps"] = mean_se_json(collect(dep, [](auto& r) { return r.a_eps; }));
+  g["chi_bar"] = mean_se_json(collect(dep, [](auto& r) { return r.chi_bar; }));
+  g["lambda_bar"] = mean_se_json(collect(dep, [](auto& r) { return r.lambda_bar; }));
+  g["P_2"] = mean_se_json(collect(dep, [](auto& r) { return r.P_2; }));
+  g["P_2_over_Pmax"] = mean_se_json(collect(dep, [](auto& r) { return r.P_2 / kPmax; }));
+  g["P_2_median"] = median_json(collect(dep, [](auto& r) { return r.P_2; }), bo);
+  g["a_eps_area"] = mean_se_json(collect(dep, [](auto& r) { return kDiameterSquaredToArea * r.a_eps; }));
+  g["dZ_2"] = mean_se_json(collect(dep, [](auto& r) { return r.dZ_2; }));
+  g["u_2"] = mean_se_json(collect(dep, [](auto& r) { return r.u_2; }));
+  g["G_2"] = median_json(collect(dep, [](auto& r) { return r.G_2; }), bo);
+  g["G_2_mean"] = mean_se_json(collect(dep, [](auto& r) { return r.G_2; }));
+  g["G_2_energy"] = median_json(collect(dep, [](auto& r) { return r.G_2_energy; }), bo);
+  g["G_2_over_Pmax"] = median_json(collect(dep, [](auto& r) { return r.G_2 / kPmax; }), bo);
+  g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
+  // The paper's definitions and selection: φ_2 = first state with no tagged bud left; χ̄ and λ̄_c
+  // over [φ_J, that φ_2]; runs with ≤ 10 divisions at their end and G_2 > 0, Tukey fences per P0.
+  // G_2, and so G_2/P_2, are those of the packing saved at budjam's φ_2 (the only one saved near the
+  // depletion point).
+  g["dphi_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.dphi_2_paper; }, bo);
+  g["P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper; }, bo);
+  g["P_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
+  g["G_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2; }, bo);
+  g["G_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / kPmax; }, bo);
+  g["G_2_over_P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / r.P_2; }, bo);  // one packing
+  g["chi_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.chi_bar_paper; }, bo);
+  g["lambda_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.lambda_bar_paper; }, bo);
+  {
+    // Packings unstable to some simple shear of the box (G_min < 0; moduli.hpp, ShearStability).
+    std::size_t n = 0, k = 0, n2 = 0, k2 = 0;
+    for (const auto* r : rs) {
+      for (const auto& x : r->targets)
+        if (std::isfinite(x.G_min)) ++n, k += x.G_min < 0;
+      if (r->depleted && std::isfinite(r->G_min_2)) ++n2, k2 += r->G_min_2 < 0;
+    }
+    g["shear_unstable_targets"] = fraction_json(k, n);
+    g["shear_unstable_phi2"] = fraction_json(k2, n2);
+  }
+  // Divisions by φ_2 normalised by the mean number of cells at jamming (Fig. D1B), by budjam's φ_2
+  // (summary N_div_2) and by the paper's (every division after φ_J up to no tagged bud left)
+  const double NJ = mean(finite(collect(rs, [](auto& r) { return r.N_J; })));
+  g["N_div_2_over_N_J"] = median_json(collect(dep, [NJ](auto& r) { return r.N_div_2 / NJ; }), bo);
+  g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_paper / NJ; }), bo);
+  g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
+  g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
+
+  // pooled Kaplan–Meier and the pooled prediction
+  std::vector<SurvivalRecord> pool;
+  for (const auto* r : rs) pool.insert(pool.end(), r->survival.begin(), r->survival.end());
+  const auto km = kaplan_meier(pool);
+  const double uJ = mean(finite(collect(rs, [](auto& r) { return r.u_J; })));
+  const double nJ = mean(finite(collect(rs, [](auto& r) { return r.n_J; })));
+  const double NnrJ = mean(finite(collect(rs, [](auto& r) { return r.N_nr_J; })));
+  const double chib = mean(finite(collect(dep, [](auto& r) { return r.chi_bar; })));
+  Json pooled;
+  pooled["records"] = km.records();
+  pooled["events"] = km.events();
+  pooled["epsilon"] = io::number_or_null(1.0 / NnrJ);
+  std::optional<double> ae;
+  if (uJ > 0 && std::isfinite(NnrJ)) ae = a_epsilon(km, uJ, 1.0 / NnrJ);
+  pooled["a_eps"] = io::number_or_null(ae);
+  if (ae) {
+    const auto p = predict_phi2(nJ, uJ, chib, *ae, km.integral(*ae));
+    pooled["integral_S"] = p.integral_S_d2;
+    pooled["dphi_2_pred_area"] = io::number_or_null(p.dphi2_area);
+    pooled["dphi_2_pred_diameter_sq"] = io::number_or_null(p.dphi2_diameter_sq);
+  }
+  // typical completion size a_c as a true area: budjam's mean ∫S da, the paper's median of S
+  pooled["a_c_mean_area"] = km.events() ? Json(kDiameterSquaredToArea * mean_completion_size(km)) : Json(nullptr);
+  const auto a_med = median_completion_size(km);
+  pooled["a_c_median_area"] = a_med ? Json(kDiameterSquaredToArea * *a_med) : Json(nullptr);
+  g["pooled_survival"] = pooled;
+  t.survival.push_back({num(key.L), P0s, "0", "1", "0", "1", "1", std::to_string(km.records())});
+  for (const auto& st : km.steps()) {
+    const double se = std::sqrt(st.greenwood_var);
+    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), num(se), num(std::max(0.0, st.S - 1.96 * se)),
+                          num(std::min(1.0, st.S + 1.96 * se)), std::to_string(st.at_risk)});
+  }
+
+  // Fig. 2B and D1A curves
+  const auto grid = dphi_grid();
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    std::vector<double> rem, dv;
+    for (const auto* r : rs) {
+      if (std::isfinite(r->remaining[k])) rem.push_back(r->remaining[k]);
+      if (std::isfinite(r->divisions[k])) dv.push_back(r->divisions[k] / NJ);
+    }
+    if (!rem.empty())
+      t.remaining.push_back({num(key.L), P0s, num(grid[k]), num(mean(rem)), cell(rem.size() >= 2 ? standard_error(rem) : kNaN),
+                             std::to_string(rem.size())});
+    if (!dv.empty())
+      t.divisions.push_back({num(key.L), P0s, num(grid[k]), num(median(dv)), num(quantile(dv, 0.25)),
+                             num(quantile(dv, 0.75)), std::to_string(dv.size())});
+  }
+  g["dphi_2_median"] = median_json(collect(dep, [](auto& r) { return r.dphi_2; }), bo);
+
+  // Fig. E1: Π(g) pooled over the group's runs, on the paper's bins
+  std::vector<double> gall;
+  for (const auto* r : rs) gall.insert(gall.end(), r->g.begin(), r->g.end());
+  if (!gall.empty()) {
+    const auto edges = paper_growth_rate_edges();
+    const auto d = growth_rate_distribution(gall, edges);
+    std::vector<double> u_at;  // the paper's weight at g = 1: u (buds) at Δφ = 3·10⁻³
+    for (const auto* r : rs)
+      for (const auto& x : r->targets)
+        if (std::abs(x.dphi - kDphiGrowth) < 1e-12) u_at.push_back(x.u);
+    g["g_cells"] = d.cells;
+    g["g_peak_weight_at_1"] = d.weight_at_one;
+    g["g_peak_weight_at_1_paper"] = mean_se_json(u_at);
+    g["g_compressed_median"] = io::number_or_null(d.median);
+    g["g_compressed_q25"] = io::number_or_null(d.q25);
+    g["g_compressed_q75"] = io::number_or_null(d.q75);
+    g["g_mean"] = mean(gall);
+    g["h_gamma_pooled"] = growth_heterogeneity(gall);
+    for (std::size_t k = 0; k < d.density.size(); ++k)
+      t.growth_rates.push_back({num(key.L), P0s, num(edges[k]), num(edges[k + 1]), num(d.density[k]), "false"});
+    t.growth_rates.push_back({num(key.L), P0s, "1", "1", num(d.weight_at_one), "true"});
+  }
+
+  // Fig. 4: mean trajectory in (P, G) over the targets below φ_2, and the endpoint
+  std::map<double, std::pair<std::vector<double>, std::vector<double>>> traj;
+  for (const auto* r : rs)
+    for (const auto& x : r->targets)
+      if (x.below_phi2) {
+        traj[x.dphi].first.push_back(x.P);
+        traj[x.dphi].second.push_back(x.G);
+      }
+  // Means as in the paper's caption, and medians: one packing near a shear instability of the box
+  // (G ≪ 0, docs/moduli.md) can dominate the mean of a few runs.
+  auto med = [](const std::vector<double>& v) { return v.empty() ? kNaN : median(v); };
+  for (auto& [d, v] : traj)
+    t.trajectory.push_back({num(key.L), P0s, num(d), cell(mean(v.first)), cell(mean(finite(v.second))),
+                            cell(med(v.first)), cell(med(finite(v.second))), std::to_string(v.first.size()), "false"});
+  const auto P2 = finite(collect(dep, [](auto& r) { return r.P_2; }));
+  const auto G2 = finite(collect(dep, [](auto& r) { return r.G_2; }));
+  t.trajectory.push_back({num(key.L), P0s, cell(mean(finite(collect(dep, [](auto& r) { return r.dphi_2; })))),
+                          cell(mean(P2)), cell(mean(G2)), cell(med(P2)), cell(med(G2)), std::to_string(dep.size()), "true"});
+  return g;
+}
+
+// Fraction of packings (targets and φ_2, all P0) unstable to some simple shear of the box, in
+// decades of P N_J²: finite packings jammed at fixed box shape lose that instability as P N² grows
+// (Dagois-Bohy et al. 2012; Goodrich et al. 2012).
+Json shear_instability_by_PN2(const std::vector<const RunRow*>& m) {
+  std::map<int, std::pair<std::size_t, std::size_t>> bins;  // decade → (packings, unstable)
+  auto add = [&](double P, double N, double G_min) {
+    if (!std::isfinite(G_min) || !(P > 0) || !(N > 0)) return;
+    auto& b = bins[static_cast<int>(std::floor(std::log10(P * N * N)))];
+    ++b.first;
+    b.second += G_min < 0;
+  };
+  for (const auto* r : m) {
+    for (const auto& t : r->targets) add(t.P, r->N_J, t.G_min);
+    if (r->depleted) add(r->P_2, r->N_J, r->G_min_2);
+  }
+  Json sb = Json::array();
+  for (const auto& [d, c] : bins) {
+    Json b = fraction_json(c.second, c.first);
+    b["PN2_lo"] = std::pow(10.0, d);
+    b["PN2_hi"] = std::pow(10.0, d + 1);
+    sb.push_back(b);
+  }
+  return sb;
+}
+
+// ΔZ = ΔZ_0(P) + 2(u_J − u) (Eq. 6): budjam's residual over every target of the main L, and the
+// paper's test per P0 over the feedback runs only (the no-feedback runs define ΔZ_0(P)).
+Json dz_identity_json(const std::vector<const RunRow*>& m) {
+  std::vector<double> res;
+  std::vector<IdentityPoint> fed;
+  for (const auto* r : m)
+    for (const auto& t : r->targets) {
+      if (!std::isfinite(t.dZ_pred)) continue;
+      res.push_back(t.dZ - t.dZ_pred);
+      if (r->P0) fed.push_back({*r->P0, t.dZ - t.dZ_pred});
+    }
+  double sq = 0;
+  for (double v : res) sq += v * v;
+  Json j;
+  j["all_targets"] = mean_se_json(res);
+  j["all_targets"]["rms"] = res.empty() ? Json(nullptr) : Json(std::sqrt(sq / static_cast<double>(res.size())));
+  Json per = Json::array();
+  for (const auto& x : dz_identity_residuals(fed)) {
+    Json p = Json{{"P0", x.P0}, {"n", x.residual.n}, {"mean", io::number_or_null(x.residual.mean)},
+                  {"se", io::number_or_null(x.residual.se)}, {"rms", x.rms}};
+    per.push_back(p);
+  }
+  j["per_P0_feedback"] = per;
+  return j;
+}
+
+// Spectrum: N_zero against N_u over distinct packings (a jammed packing shared by the runs of one
+// jamming state counts once), and ω* against ΔZ and Z − 6: budjam's free linear fit over every
+// packing, the paper's proportionality through the origin on the Δφ-target packings.
+Json spectrum_json(const std::vector<const DosRow*>& rows) {
+  std::vector<double> w, dz, z6, diff;
+  std::size_t equal = 0;
+  std::set<std::size_t> jammed_seen;
+  std::vector<CollapsePoint> targets;
+  for (const auto* q : rows) {
+    if (q->packing == "jammed" && !jammed_seen.insert(q->state).second) continue;
+    w.push_back(q->omega_star);
+    dz.push_back(q->dZ);
+    z6.push_back(q->Z - 6.0);
+    diff.push_back(std::abs(q->N_zero - q->N_u));
+    equal += q->N_zero == q->N_u;
+    if (q->target) targets.push_back({q->omega_star, q->N_c, q->N_nr, static_cast<long>(q->N_u)});
+  }
+  if (w.size() < 3) return nullptr;
+  const double n = static_cast<double>(w.size());
+  const auto fd = linear_fit(dz, w);
+  const auto f6 = linear_fit(z6, w);
+  Json j{{"packings", w.size()},
+         {"N_zero_equals_N_u", equal / n},
+         {"N_zero_minus_N_u_abs", mean(diff)},
+         {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd.slope_se}, {"intercept", fd.intercept}}},
+         {"r2_dZ", fd.r2},
+         {"r2_Z_minus_6", f6.r2}};
+  if (!targets.empty()) {
+    const auto c = omega_collapse(targets);
+    auto fit = [](const OriginFit& f) {
+      return Json{{"slope", f.slope}, {"slope_se", f.slope_se}, {"r2_uncentred", f.r2}, {"rms", f.rms}};
+    };
+    const double nt = static_cast<double>(c.packings);
+    j["paper"] = Json{{"packings", c.packings},
+                      {"through_origin_dZ", fit(c.dZ)},
+                      {"through_origin_Z_minus_6", fit(c.Z_minus_6)},
+                      {"fraction_dZ_negative", c.dZ_negative / nt},
+                      {"fraction_Z_minus_6_negative", c.Z_minus_6_negative / nt}};
+  }
+  return j;
+}
+
+// P_2 ∝ exp(−P†/P0) (Eq. 22, D11): slope of ln P_2 against 1/P0 over the feedback groups with
+// P0 ≤ 10⁻², and the crossover P* (Eq. E13) over the a_c of those groups: budjam's mean completion
+// size, the paper's median (both as true areas).
+void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*>>& groups, double main_L, double nJ, double uJ) {
+  std::vector<double> x, y, ac_mean, ac_median;
+  for (const auto& [key, rs] : groups) {
+    if (key.L != main_L || !key.P0 || *key.P0 > 1e-2 + 1e-15) continue;
+    std::vector<double> p2;
+    std::vector<SurvivalRecord> pool;
+    for (const auto* r : rs) {
+      if (r->depleted) p2.push_back(r->P_2);
+      pool.insert(pool.end(), r->survival.begin(), r->survival.end());
+    }
+    p2 = finite(p2);
+    if (!p2.empty() && mean(p2) > 0) {
+      x.push_back(1.0 / *key.P0);
+      y.push_back(std::log(mean(p2)));
+    }
+    const auto km = kaplan_meier(pool);
+    if (km.events() > 0) ac_mean.push_back(kDiameterSquaredToArea * mean_completion_size(km));
+    if (const auto a = median_completion_size(km)) ac_median.push_back(kDiameterSquaredToArea * *a);
+  }
+  if (x.size() >= 2) {
+    const auto f = linear_fit(x, y);
+    h["P_dagger"] = -f.slope;
+    h["P_dagger_se"] = f.slope_se;
+    h["P_dagger_points"] = x.size();
+  }
+  auto range = [&](const std::vector<double>& ac, const char* a_key, const char* p_key) {
+    if (ac.empty()) return;
+    const auto [lo, hi] = std::minmax_element(ac.begin(), ac.end());
+    h[a_key] = Json::array({*lo, *hi});
+    h[p_key] = Json::array({crossover_pressure(nJ, uJ, *lo), crossover_pressure(nJ, uJ, *hi)});
+  };
+  range(ac_mean, "a_c_range_area", "P_star_range");
+  range(ac_median, "a_c_median_range_area", "P_star_range_paper");
+}
+
+// The numbers the size-effects figure compares across L, from the runs of one size: quantities
+// fixed at jamming (over distinct states), the ΔZ identity and B_grow = λ_c B_ext.
+Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) {
+  Json h;
+  h["runs"] = m.size();
+  // budjam's u_J counts contact-free buds; the lobe count includes contact-free mothers
+  h["u_J"] = states_json(m, [](auto& r) { return r.u_J; }, bo);
+  h["u_J_lobes"] = states_json(m, [](auto& r) { return r.u_J_lobes; }, bo);
+  h["n_J"] = states_json(m, [](auto& r) { return r.n_J; }, bo);
+  h["phi_J"] = states_json(m, [](auto& r) { return r.phi_J; }, bo);
+  h["N_J"] = states_json(m, [](auto& r) { return r.N_J; }, bo);
+  h["jamming_states"] = h["u_J"]["n"];
+  h["dZ_identity"] = dz_identity_json(m);
+  std::vector<double> rel_b;
+  for (const auto* r : m)
+    for (const auto& t : r->targets)
+      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0) rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
+  h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
+  return h;
+}
+
+Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
+                   const std::vector<DosRow>& dos_rows, const BootstrapOptions& bo) {
+  std::vector<const RunRow*> m;
+  for (const auto& r : rows)
+    if (r.L == main_L) m.push_back(&r);
+  // Quantities fixed at jamming over every run of the main L (feedback acts only above jamming), one
+  // sample per distinct jamming state; the paper's u_J counts contact-free lobes on the
+  // strongest-feedback packings.
+  Json h = size_json(m, bo);
+  std::optional<double> strongest;
+  for (const auto& [key, rs] : groups)
+    if (key.L == main_L && key.P0 && (!strongest || *key.P0 < *strongest)) strongest = key.P0;
+  if (strongest) {
+    const auto& rs = groups.at({main_L, strongest});
+    h["paper_P0"] = *strongest;
+    h["u_J_paper"] = states_json(rs, [](auto& r) { return r.u_J_lobes; }, bo);
+    h["n_J_paper"] = states_json(rs, [](auto& r) { return r.n_J; }, bo);
+  }
+  const double phiJ = h["phi_J"]["mean"].is_number() ? h["phi_J"]["mean"].get<double>() : kNaN;
+  h["P_max_formula_measured_phiJ"] = io::number_or_null(2.0 / std::numbers::pi * (1.0 - phiJ));
+  h["shear_unstable_by_PN2"] = shear_instability_by_PN2(m);
+  // plateau G_2(0+) = n_J k ℓ_c² M_4 u_J from the strongest-feedback jammed packings
+  if (strongest) {
+    const auto& rs = groups.at({main_L, strongest});
+    const double nJ = mean(finite(collect(rs, [](auto& r) { return r.n_J; })));
+    const double lc2 = mean(finite(collect(rs, [](auto& r) { return r.lc2_J; })));
+    const double uJ = mean(finite(collect(rs, [](auto& r) { return r.u_J; })));
+    h["plateau_P0"] = *strongest;
+    h["G2_plateau"] = io::number_or_null(nJ * lc2 * kM4 * uJ);
+    h["G2_plateau_over_Pmax"] = io::number_or_null(nJ * lc2 * kM4 * uJ / kPmax);
+    h["lc2_J"] = io::number_or_null(lc2);
+  }
+  feedback_scales(h, groups, main_L, h["n_J"]["mean"].get<double>(), h["u_J"]["mean"].get<double>());
+  std::vector<const DosRow*> dm;
+  for (const auto& q : dos_rows)
+    if (q.L == main_L) dm.push_back(&q);
+  h["dos"] = spectrum_json(dm);
+  return h;
+}
+
+void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
+  std::vector<std::vector<std::string>> run_rows, tgt_rows, dos_out;
+  for (const auto& r : e.rows) {
+    run_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), r.status, std::to_string(r.state),
+                        cell(r.phi_J), cell(r.u_J), cell(r.u_J_lobes), cell(r.n_J), cell(r.N_J), cell(r.N_nr_J), cell(r.Z_J),
+                        cell(r.dZ_J), cell(r.phi_2), cell(r.dphi_2), cell(r.P_2), cell(r.Z_2), cell(r.dZ_2), cell(r.u_2),
+                        cell(r.N_div_2), cell(r.chi_bar), cell(r.lambda_bar), cell(r.phi_2_paper), cell(r.dphi_2_paper),
+                        cell(r.P_2_paper), cell(r.N_div_2_paper), cell(r.chi_bar_paper), cell(r.lambda_bar_paper),
+                        cell(r.N_div_end), cell(r.a_eps), cell(r.int_S), cell(r.pred_area), cell(r.pred_d2), cell(r.B_2),
+                        cell(r.G_2), cell(r.G_2_energy), cell(r.G_min_2), cell(r.h_gamma), cell(r.lc2_J)});
+    for (const auto& x : r.targets)
+      tgt_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(x.dphi), cell(x.phi), cell(x.P),
+                          cell(x.Z), cell(x.Z_iso), cell(x.dZ), cell(x.dZ_pred), cell(x.u), cell(x.u_lobes), cell(x.chi_c),
+                          cell(x.lambda), cell(x.B_grow), cell(x.B_grow_se), cell(x.B), cell(x.G), cell(x.G_energy), cell(x.G_min), cell(x.B_ext_mf),
+                          cell(x.N_div), x.below_phi2 ? "true" : "false"});
+  }
+  for (const auto& q : e.dos_rows)
+    dos_out.push_back({q.run, q.packing, num(q.L), q.P0_label, std::to_string(q.state), cell(q.dphi), cell(q.omega_star),
+                       cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr), cell(q.N_zero), cell(q.N_u),
+                       cell(q.N_u_buds)});
+  write_csv(out / "runs.csv",
+            {"run", "L", "P0", "seed", "status", "jamming_state", "phi_J", "u_J", "u_J_lobes", "n_J", "N_J", "N_nr_J", "Z_J",
+             "dZ_J", "phi_2", "dphi_2", "P_2", "Z_2", "dZ_2", "u_2", "N_div_2", "chi_bar", "lambda_bar", "phi_2_paper",
+             "dphi_2_paper", "P_2_paper", "N_div_2_paper", "chi_bar_paper", "lambda_bar_paper", "N_div_end", "a_eps",
+             "integral_S", "dphi_2_pred_area", "dphi_2_pred_diameter_sq", "B_2", "G_2", "G_2_energy", "G_min_2", "h_gamma",
+             "lc2_J"},
+            run_rows);
+  write_csv(out / "targets.csv",
+            {"run", "L", "P0", "seed", "dphi", "phi", "P", "Z", "Z_iso", "dZ", "dZ_pred", "u", "u_lobes", "chi_c",
+             "lambda_c", "B_grow", "B_grow_se", "B", "G", "G_energy", "G_min", "B_ext_mean_field", "N_div", "below_phi2"},
+            tgt_rows);
+  write_csv(out / "survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, t.survival);
+  write_csv(out / "remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
+  write_csv(out / "division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, t.divisions);
+  write_csv(out / "growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
+  write_csv(out / "trajectory.csv", {"L", "P0", "dphi", "P", "G", "P_median", "G_median", "runs", "endpoint"}, t.trajectory);
+  write_csv(out / "dos.csv",
+            {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero",
+             "N_u", "N_u_buds"},
+            dos_out);
+}
+
+}  // namespace
+
+std::string analyse_ensemble(const EnsembleOptions& o) {
+  if (o.out.empty()) throw InputError("--out: an output directory is required");
+  Ensemble e = read_ensemble(o);
+
+  std::map<GroupKey, std::vector<const RunRow*>> groups;
+  std::set<double> lengths;
+  for (const auto& r : e.rows) {
+    groups[{r.L, r.P0}].push_back(&r);
+    lengths.insert(r.L);
+  }
+  const double main_L = o.main_L > 0 ? o.main_L : (lengths.count(15.0) ? 15.0 : *lengths.rbegin());
+  if (!lengths.count(main_L)) throw InputError("--main-L: no runs with L = " + num(main_L));
+
+  const auto branch = no_feedback_branch(groups);
+  for (auto& r : e.rows) {
+    auto b = branch.find(r.L);
+    if (b == branch.end()) continue;
+    for (auto& t : r.targets) t.dZ_pred = b->second(t.P) + 2.0 * (r.u_J - t.u);
+  }
+
+  const fs::path out(o.out);
+  fs::create_directories(out);
+  Tables tables;
+  Json jgroups = Json::array();
+  for (const auto& [key, rs] : groups) jgroups.push_back(group_json(key, rs, o.bootstrap, tables));
+
+  Json J;
+  J["format"] = "budjam-analysis";
+  J["version"] = 2;
+  J["inputs"] = Json{{"runs", e.runs},
+                     {"used", e.rows.size()},
+                     {"not_finished", e.failed},
+                     {"duplicates", e.duplicates},
+                     {"moduli_files", e.moduli.found},
+                     {"moduli_saddles", e.moduli.saddles},
+                     {"dos_files", e.dos_found}};
+  J["main_L"] = main_L;
+  J["bootstrap"] = Json{{"resamples", o.bootstrap.resamples}, {"seed", o.bootstrap.seed}};
+  J["constants"] = Json{{"P_max", kPmax},
+                        {"P_max_formula_phiJ_0.84", 2.0 / std::numbers::pi * (1.0 - 0.84)},
+                        {"M4", kM4},
+                        {"u_J_lambert_w", u_J_mean_field()},
+                        {"lambert_w0_of_minus_2_e_minus_2", lambert_w0(-2.0 * std::exp(-2.0))}};
+  J["main"] = headline_json(main_L, e.rows, groups, e.dos_rows, o.bootstrap);
+  J["groups"] = jgroups;
+  {
+    Json sizes = Json::array();
+    for (double L : lengths) {
+      std::vector<const RunRow*> m;
+      for (const auto& r : e.rows)
+        if (r.L == L) m.push_back(&r);
+      Json x = size_json(m, o.bootstrap);
+      x["L"] = L;
+      sizes.push_back(x);
+    }
+    J["sizes"] = sizes;
+  }
+  {
+    Json br = Json::array();
+    for (const auto& [L, f] : branch) {
+      Json pts = Json::array();
+      for (std::size_t k = 0; k < f.xs().size(); ++k) pts.push_back(Json::array({f.xs()[k], f.ys()[k]}));
+      br.push_back(Json{{"L", L}, {"points_P_dZ", pts}});
+    }
+    J["dZ0_branch"] = br;
+  }
+  io::write_json(out / "analysis.json", J);
+  write_tables(out, e, tables);
+
+  std::ostringstream msg;
+  msg << e.rows.size() << " runs used (" << e.failed.size() << " not finished";
+  if (!e.duplicates.empty()) {
+    msg << "; duplicate copies left out:";
+    for (const auto& d : e.duplicates)
+      for (std::size_t k = 1; k < d.size(); ++k) msg << " " << d[k] << " (= " << d[0] << ")";
+  }
+  msg << ") in " << groups.size() << " groups; moduli files " << e.moduli.found << " (" << e.moduli.saddles
+      << " saddles), spectra " << e.dos_found << " -> " << out.string();
+  return msg.str();
+}
+
+}  // namespace budjam::tools
