@@ -38,10 +38,20 @@ struct StrainSweep {
   StrainKind kind = StrainKind::simple_shear;
   std::vector<StrainSample> samples;  // includes strain 0 (the reference, relaxed again)
   // Least-squares slopes over the samples that kept the contact set (strain 0 included):
-  //   simple shear: G = dS_xy/dγ, G_energy = dτ_xy/dγ (symmetrised), and d²U/dγ² / A from a
-  //                 parabola fit;
+  //   simple shear: G = dS_xy/dγ, G_energy = dτ_xy/dγ (symmetrised);
   //   isotropic:    B = −dP/dε, B_energy = −dP_energy/dε with ε = ln(A/A0) (B = −A dP/dA = φ dP/dφ).
-  double modulus = 0, modulus_energy = 0, curvature = 0;
+  double modulus = 0, modulus_energy = 0;
+  // The relaxed energy U(s) alone, per reference area A0: a parabola fit over the same samples gives
+  // energy_slope = (1/A0) dU/ds and curvature = (1/A0) d²U/ds² at s = 0, and for each strain h
+  // whose pair ±h kept the contacts, central_curvatures holds (h, (U(h) − 2U(0) + U(−h)) / (A0 h²)).
+  //   simple shear: energy_slope = τ_xy, curvature = G_energy (= E_xyxy);
+  //   isotropic (A = A0 e^ε): energy_slope = −P_energy, curvature − energy_slope = B_energy
+  //                           (= energy_modulus()).
+  double energy_slope = 0, curvature = 0;
+  std::vector<std::pair<double, double>> central_curvatures;
+  // The modulus from the energy alone: G_energy = curvature (shear), B_energy = A d²U/dA² =
+  // curvature − energy_slope (isotropic).
+  double energy_modulus() const { return kind == StrainKind::simple_shear ? curvature : curvature - energy_slope; }
   std::size_t used = 0;       // samples in the fit
   bool all_converged = true;  // every FIRE relaxation converged
 };
@@ -54,6 +64,10 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
 
 // Symmetric strains ±h, ±2h, …, ±count·h.
 std::vector<double> symmetric_strains(double h, int count);
+// Symmetric doubling strains ±h, ±2h, ±4h, …, ±2^(count−1)·h: for the energy curvature, whose
+// rounding noise (that of the overlaps in U) falls as 1/h², the largest pair that keeps the contacts
+// matters most.
+std::vector<double> doubling_strains(double h, int count);
 
 // ---- packings for tests and benchmarks (no growth driver needed) --------------------------
 
