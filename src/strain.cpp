@@ -55,6 +55,7 @@ Measured relax_and_measure(Packing& p, const FireParams& fire, double skin) {
   m.sample.P = pressure(contacts, p.box);
   m.sample.stress = stress_tensor(contacts, p.box);
   m.sample.stress_energy = energy_stress(p, contacts);
+  m.sample.stress_link = link_stress(p, contacts);
   m.sample.P_energy = -0.5 * m.sample.stress_energy.trace();
   m.pairs = contact_pairs(contacts);
   return m;

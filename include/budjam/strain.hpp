@@ -28,6 +28,7 @@ struct StrainSample {
   double P_energy = 0;       // −tr τ / 2 (energy stress, moduli.hpp)
   Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // MODEL.md S
   Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
+  Eigen::Matrix2d stress_link = Eigen::Matrix2d::Zero();    // load of the mother–bud links (link_stress)
   bool same_contacts = true; // the set of contacting lobe pairs equals the unstrained one
   FireResult fire;
 };
