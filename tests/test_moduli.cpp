@@ -87,7 +87,7 @@ std::pair<int, std::string> run_budjam(const std::string& args) {
 
 double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
-// Finite-strain slopes against the linear response: contact-virial (MODEL.md) and energy stress.
+// Finite-strain slopes against the linear response: lobe-centre contact virial and energy stress.
 void check_finite_strain(const Relaxed& r, const ElasticResponse& e, double h, double tol, double abs_floor = 0) {
   const StrainSweep shear = strain_sweep(r.p, StrainKind::simple_shear, symmetric_strains(h, 2), tight_fire());
   const StrainSweep iso = strain_sweep(r.p, StrainKind::isotropic, symmetric_strains(h, 2), tight_fire());
@@ -504,7 +504,7 @@ TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal t
   }
 }
 
-// ---- hard cases (issue 3.6) -----------------------------------------------------------------
+// ---- hard cases -----------------------------------------------------------------------------
 
 TEST_CASE("A hair above jamming (P ~ 1e-7): finite, well posed, agrees with finite strain", "[.hard]") {
   const Relaxed r = jammed(80, 1e-7, 0.3, 1.0, 11);
@@ -591,7 +591,7 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
 }
 
 // The jamming point of an L = 15 run (paper-L15.toml, P0 = none, seed 3: E/N = 1.16e-16, P = 6.9e-9)
-// found by MODEL.md's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
+// found by the model's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
 // λ ≈ −1e-8, the order of the prestress f/ℓ. Such a state has no linear response.
 TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, and no relaxed modulus is reported",
           "[.hard]") {
@@ -640,7 +640,7 @@ TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false a
   CHECK(j["moduli_affine"]["B"].get<double>() > 0);
 }
 
-// ---- linear solver of the pinned system (accuracy against cost, issue 6) ----------------------
+// ---- linear solver of the pinned system (accuracy against cost) -----------------------------
 
 namespace {
 

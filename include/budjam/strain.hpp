@@ -1,7 +1,7 @@
 #pragma once
 // Finite affine strains of a packing, relaxed with FIRE: the independent check of the linear
-// response (issue 3.5) and the finite-strain definitions of MODEL.md ("Linear-response
-// conventions"), plus the compression protocol used to make test and benchmark packings.
+// response and the paper's finite-strain definitions of B and G (docs/moduli.md), plus the
+// compression protocol used to make test and benchmark packings.
 //
 // The strain maps box and centroids affinely and leaves orientations alone (cells are rigid):
 //  - Lees–Edwards simple shear by δγ: box.shear += δγ, x_i += δγ y_i (unwrapped coordinates, so
@@ -24,9 +24,9 @@ void apply_isotropic_scaling(Packing& p, double factor);
 struct StrainSample {
   double strain = 0;         // γ (shear) or ε = ln(A/A0) (rescaling: A = L², so λ = exp(ε/2))
   double U = 0;              // energy after relaxation
-  double P = 0;              // MODEL.md contact-virial pressure
+  double P = 0;              // lobe-centre contact-virial pressure
   double P_energy = 0;       // −tr τ / 2 (energy stress, moduli.hpp)
-  Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // MODEL.md S
+  Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // S (lobe-centre contact virial)
   Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
   Eigen::Matrix2d stress_link = Eigen::Matrix2d::Zero();    // load of the mother–bud links (link_stress)
   bool same_contacts = true; // the set of contacting lobe pairs equals the unstrained one
