@@ -24,6 +24,7 @@
 #include <numbers>
 #include <random>
 #include <sstream>
+#include <string>
 
 using namespace budjam;
 
@@ -52,6 +53,13 @@ Relaxed at_state(Packing p) {
   r.net = analyse_network(p.size(), r.contacts);
   r.p = std::move(p);
   return r;
+}
+
+// A packing of tests/data, as stored.
+Relaxed data_packing(const std::string& name) {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  return at_state(io::read_packing(std::filesystem::path(src) / "tests/data" / name).packing);
 }
 
 Relaxed analyse(Packing p) {
@@ -188,9 +196,7 @@ TEST_CASE("A grown packing where the two shear moduli differ in sign: finite str
   // `budjam grow data/scenes/demo.toml --set run.seed=24 --set 'jamming.targets=[1e-4,3e-4,1e-3,3e-3]'`,
   // the target Δφ = 1e-3 (L = 8, N = 48, P = 4.4e-4): the lobe-centre stress rises under Lees–Edwards
   // shear while the relaxed energy falls.
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
-  const Relaxed r = at_state(io::read_packing(fs::path(src) / "tests/data/shear_conventions_differ_L8.pack").packing);
+  const Relaxed r = data_packing("shear_conventions_differ_L8.pack");
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   REQUIRE(e.kernel.well_posed);
   CHECK(e.G() > 0);
@@ -595,9 +601,7 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
 // λ ≈ −1e-8, the order of the prestress f/ℓ. Such a state has no linear response.
 TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, and no relaxed modulus is reported",
           "[.hard]") {
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
-  const Relaxed r = at_state(io::read_packing(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing);
+  const Relaxed r = data_packing("saddle_jamming_L15_seed3.pack");
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   REQUIRE(e.kernel.method == SolveMethod::unstable);
   CHECK_FALSE(e.energy_minimum());
