@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
       }
       std::printf("  %7zu %7.2f %7zu %8zu %10.3e %10.2f %12.4f %12.4f %12.4f %10.4f %10.5f  %s\n", n, c.packing.box.L, e.N_nr,
                   e.kernel.dofs, e.P, t_make, best_contacts, best_response, best_total, e.moduli.B, e.moduli.G_simple,
-                  e.kernel.method.c_str());
+                  to_string(e.kernel.method));
       std::fflush(stdout);
     }
   }

@@ -7,7 +7,6 @@
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -20,17 +19,6 @@ namespace budjam {
 
 namespace {
 
-// Everything the response needs about one load-bearing contact.
-struct ContactTerms {
-  Eigen::Matrix<double, 2, 6> J;  // ∂d/∂(q_i, q_j)
-  Eigen::Matrix<double, 2, 4> D;  // ∂d/∂e: column (γδ) = ê_γ C_δ
-  Eigen::Matrix2d K;              // pair stiffness in d (stiffness + prestress)
-  Eigen::Vector2d g;              // f n: the force on lobe i (= −∂V/∂d)
-  Eigen::Vector2d d;              // lobe-centre separation r n
-  Eigen::Vector2d C;              // centroid separation
-  long bi, bj;                    // reduced blocks of the two cells
-};
-
 Eigen::Vector2d centroid_separation(const Packing& p, const Contact& c) {
   // d = C + o_a − o_b with o = s ê(θ): the centroid separation of the same image as the contact.
   const std::size_t i = cell_of(c.i), j = cell_of(c.j);
@@ -40,8 +28,8 @@ Eigen::Vector2d centroid_separation(const Packing& p, const Contact& c) {
   return c.r * Eigen::Vector2d(c.nx, c.ny) - sa * ei + sb * ej;
 }
 
-ContactTerms terms_of(const Packing& p, const Contact& c, const DofMap& map) {
-  ContactTerms t;
+ContactResponseTerms terms_of(const Packing& p, const Contact& c, const DofMap& map) {
+  ContactResponseTerms t;
   const Eigen::Vector2d n(c.nx, c.ny);
   const double f = c.force();
   t.J = contact_jacobian(p, c);
@@ -114,7 +102,7 @@ Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
 // saddle and has no linear response: method "unstable", their number in unstable_modes, U = NaN.
 Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
                                        KernelTreatment& k) {
-  k.method = "regularised-refinement";
+  k.method = SolveMethod::regularised_refinement;
   const double diag = Hf.diagonal().cwiseAbs().maxCoeff();
   CholmodSolver ldl(Factorisation::ldlt);
   double delta = options.regularisation * diag;
@@ -129,7 +117,7 @@ Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::Matr
   // Sylvester's law of inertia: the negative pivots of LDLᵀ(H_ff + δ1) count the eigenvalues of H_ff
   // below −δ, and pinning kernel dofs leaves that count unchanged, so they are the unstable modes of H.
   if (ldl.negative_pivots() > 0) {
-    k.method = "unstable";
+    k.method = SolveMethod::unstable;
     k.unstable_modes = static_cast<std::size_t>(ldl.negative_pivots());
     return Eigen::MatrixXd::Constant(Hf.rows(), Xf.cols(), std::numeric_limits<double>::quiet_NaN());
   }
@@ -281,231 +269,220 @@ ShearStability shear_stability(const Response4& E) {
   return s;
 }
 
-ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
-                                 const ModuliOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (net.rattler.size() != p.size())
-    throw std::invalid_argument("elastic_response: the contact network is not that of this packing (" +
-                                std::to_string(net.rattler.size()) + " cells vs " + std::to_string(p.size()) + ")");
-  ElasticResponse out;
+const char* to_string(SolveMethod method) {
+  switch (method) {
+    case SolveMethod::no_contacts: return "none (no load-bearing contacts)";
+    case SolveMethod::no_force_response: return "none (Ξ = 0)";
+    case SolveMethod::cholesky: return "cholesky";
+    case SolveMethod::ldlt: return "ldlt";
+    case SolveMethod::dense: return "dense";
+    case SolveMethod::cg_ichol: return "cg-ichol";
+    case SolveMethod::cg_diagonal: return "cg-diagonal";
+    case SolveMethod::regularised_refinement: return "regularised-refinement";
+    case SolveMethod::unstable: return "unstable";
+  }
+  return "?";
+}
+
+Eigen::Matrix2d link_stress(const Packing& p, const std::vector<Contact>& contacts) {
+  std::vector<Eigen::Vector2d> bud_force(p.size(), Eigen::Vector2d::Zero());
+  for (const Contact& c : contacts) {
+    const Eigen::Vector2d g = c.force() * Eigen::Vector2d(c.nx, c.ny);  // on lobe i, −g on lobe j
+    if (is_bud(c.i)) bud_force[cell_of(c.i)] += g;
+    if (is_bud(c.j)) bud_force[cell_of(c.j)] -= g;
+  }
+  Eigen::Matrix2d W = Eigen::Matrix2d::Zero();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d n(std::cos(p.theta(i)), std::sin(p.theta(i)));
+    const double s = lobe_offset(p, bud_lobe(i)) - lobe_offset(p, mother_lobe(i));
+    const double load = -bud_force[i].dot(n);  // Λ_i
+    W += s * load * n * n.transpose();
+  }
+  return -W / (p.box.L * p.box.L);
+}
+
+namespace {
+
+// Counts of the network and the stresses at the state (all contacts).
+PackingState describe(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net) {
+  PackingState s;
   const double L = p.box.L, A = L * L;
-  out.N = p.size();
-  out.N_nr = net.N_nr;
-  out.N_f = net.N_f;
-  out.N_u = net.N_u;
-  out.N_u_buds = net.N_u_buds;
-  out.L = L;
-  out.area = A;
-  out.phi = p.packing_fraction();
-  out.Z = net.Z;
-  out.Z_iso = net.Z_iso;
-  out.dZ = net.dZ;
-  out.u = net.u;
-  out.u_buds = net.u_buds;
-  out.n = static_cast<double>(net.N_nr) / A;
-  out.P = pressure(contacts, p.box);
-  out.stress = stress_tensor(contacts, p.box);
-  out.stress_energy = energy_stress(p, contacts);
-  out.P_energy = -0.5 * out.stress_energy.trace();
-  out.max_torque_imbalance = std::abs(out.stress_energy(0, 1) - out.stress_energy(1, 0));
+  s.N = p.size();
+  s.N_nr = net.N_nr;
+  s.N_f = net.N_f;
+  s.N_u = net.N_u;
+  s.N_u_buds = net.N_u_buds;
+  s.L = L;
+  s.area = A;
+  s.phi = p.packing_fraction();
+  s.Z = net.Z;
+  s.Z_iso = net.Z_iso;
+  s.dZ = net.dZ;
+  s.u = net.u;
+  s.u_buds = net.u_buds;
+  s.n = static_cast<double>(net.N_nr) / A;
+  s.P = pressure(contacts, p.box);
+  s.stress = stress_tensor(contacts, p.box);
+  s.stress_energy = energy_stress(p, contacts);
+  s.P_energy = -0.5 * s.stress_energy.trace();
+  s.max_torque_imbalance = std::abs(s.stress_energy(0, 1) - s.stress_energy(1, 0));
+  return s;
+}
 
-  const std::vector<Contact> lb = load_bearing(contacts, net);
-  const DofMap map = non_rattler_dofs(net);
-  const Eigen::Index nr = map.size();
-  out.contacts = lb.size();
-  out.kernel.dofs = static_cast<std::size_t>(nr);
-
-  // Mean-field estimates (paper Eqs. S-Bext, S-G).
-  if (!lb.empty()) {
-    double sr = 0, sr2 = 0, m4 = 0;
-    for (const Contact& c : lb) {
-      sr += c.r;
-      sr2 += c.r * c.r;
-      m4 += c.nx * c.nx * c.ny * c.ny;
-    }
-    const double m = static_cast<double>(lb.size());
-    out.ell_c = sr / m;
-    out.ell_c2_mean = sr2 / m;
-    out.M4 = m4 / m;
-    out.B_ext = out.n * kSpring * out.ell_c * out.ell_c * out.Z / 8.0;
-    out.G_mf = out.n * kSpring * out.ell_c * out.ell_c * out.M4 * out.dZ / 2.0;
-    out.G_mf_iso = out.n * kSpring * out.ell_c * out.ell_c * 0.125 * out.dZ / 2.0;
-  }
-  if (nr == 0 || lb.empty()) {
-    out.kernel.method = "none (no load-bearing contacts)";
-    out.kernel.well_posed = false;
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return out;
-  }
-
-  // Hessian of the non-rattlers from their contacts, force response Ξ, Born term.
-  const SparseMatrix H = restrict_matrix(hessian(p, lb), map);
-  std::vector<ContactTerms> ct;
-  ct.reserve(lb.size());
-  Eigen::MatrixXd Xi = Eigen::MatrixXd::Zero(nr, 4);
-  Response4 born = Response4::Zero();
-  std::vector<int> lobe_count(2 * p.size(), 0);
+// Mean-field estimates (paper Eqs. S-Bext, S-G) over the load-bearing contacts `lb`.
+void add_mean_field(PackingState& s, const std::vector<Contact>& lb) {
+  if (lb.empty()) return;
+  double sr = 0, sr2 = 0, m4 = 0;
   for (const Contact& c : lb) {
-    ct.push_back(terms_of(p, c, map));
-    const ContactTerms& t = ct.back();
-    const Eigen::Matrix<double, 6, 4> x = -t.J.transpose() * t.K * t.D;
-    Xi.middleRows(3 * t.bi, 3) += x.topRows<3>();
-    Xi.middleRows(3 * t.bj, 3) += x.bottomRows<3>();
-    born += t.D.transpose() * t.K * t.D;
-    ++lobe_count[c.i];
-    ++lobe_count[c.j];
+    sr += c.r;
+    sr2 += c.r * c.r;
+    m4 += c.nx * c.nx * c.ny * c.ny;
   }
+  const double m = static_cast<double>(lb.size());
+  s.ell_c = sr / m;
+  s.ell_c2_mean = sr2 / m;
+  s.M4 = m4 / m;
+  s.B_ext = s.n * kSpring * s.ell_c * s.ell_c * s.Z / 8.0;
+  s.G_mf = s.n * kSpring * s.ell_c * s.ell_c * s.M4 * s.dZ / 2.0;
+  s.G_mf_iso = s.n * kSpring * s.ell_c * s.ell_c * 0.125 * s.dZ / 2.0;
+}
 
-  // Kernel: pin the two translations on the best-connected cell, the θ of every cell with
-  // exactly one contact-free lobe, and any dof with an exactly zero Hessian row.
+using KernelVector = std::vector<std::pair<Eigen::Index, double>>;  // sparse (dof, value) list
+
+// The exact kernel directions of H that are pinned (fixed at 0): the two translations on the
+// best-connected cell, the θ of every cell with exactly one contact-free lobe, and any dof with an
+// exactly zero Hessian row. Fills the counts of `k` and returns the pinned flags and the kernel vectors.
+std::pair<std::vector<bool>, std::vector<KernelVector>> pin_kernel(const Packing& p, const DofMap& map,
+                                                                   const SparseMatrix& H,
+                                                                   const std::vector<int>& lobe_count,
+                                                                   KernelTreatment& k) {
+  const Eigen::Index nr = map.size();
   std::vector<bool> pinned(static_cast<std::size_t>(nr), false);
-  // Exact kernel vectors of H, sparse: (dof, value) lists (translations are dense but only two).
-  std::vector<std::vector<std::pair<Eigen::Index, double>>> kernel_vectors;
-  {
-    std::size_t ref = 0;
-    int best = -1;
-    for (std::size_t k = 0; k < map.cells.size(); ++k) {
-      const std::size_t i = map.cells[k];
-      const int cnt = lobe_count[mother_lobe(i)] + lobe_count[bud_lobe(i)];
-      if (cnt > best) {
-        best = cnt;
-        ref = k;
-      }
+  std::vector<KernelVector> kernel;
+  std::size_t ref = 0;
+  int best = -1;
+  for (std::size_t c = 0; c < map.cells.size(); ++c) {
+    const std::size_t i = map.cells[c];
+    const int cnt = lobe_count[mother_lobe(i)] + lobe_count[bud_lobe(i)];
+    if (cnt > best) {
+      best = cnt;
+      ref = c;
     }
-    out.kernel.reference_cell = map.cells[ref];
-    pinned[3 * ref] = pinned[3 * ref + 1] = true;
-    out.kernel.pinned_translation = 2;
-    std::vector<std::pair<Eigen::Index, double>> tx, ty;
-    for (Eigen::Index k = 0; k < nr; k += 3) {
-      tx.emplace_back(k, 1.0);
-      ty.emplace_back(k + 1, 1.0);
-    }
-    kernel_vectors.push_back(std::move(tx));
-    kernel_vectors.push_back(std::move(ty));
   }
-  for (std::size_t k = 0; k < map.cells.size(); ++k) {
-    const std::size_t i = map.cells[k];
+  k.reference_cell = map.cells[ref];
+  pinned[3 * ref] = pinned[3 * ref + 1] = true;
+  k.pinned_translation = 2;
+  KernelVector tx, ty;
+  for (Eigen::Index d = 0; d < nr; d += 3) {
+    tx.emplace_back(d, 1.0);
+    ty.emplace_back(d + 1, 1.0);
+  }
+  kernel.push_back(std::move(tx));
+  kernel.push_back(std::move(ty));
+  for (std::size_t c = 0; c < map.cells.size(); ++c) {
+    const std::size_t i = map.cells[c];
     const int m = lobe_count[mother_lobe(i)], b = lobe_count[bud_lobe(i)];
     if ((m == 0) == (b == 0)) continue;
     // Rotation about the centre of the loaded lobe ℓ: δX = −s_ℓ ê⊥ δθ leaves every contact unchanged.
     const double s = lobe_offset(p, m > 0 ? mother_lobe(i) : bud_lobe(i));
     const double th = p.theta(i);
-    const auto b3 = static_cast<Eigen::Index>(3 * k);
-    kernel_vectors.push_back({{b3, s * std::sin(th)}, {b3 + 1, -s * std::cos(th)}, {b3 + 2, 1.0}});
-    if (!pinned[3 * k + 2]) {
-      pinned[3 * k + 2] = true;
-      ++out.kernel.pinned_lobe_rotation;
+    const auto b3 = static_cast<Eigen::Index>(3 * c);
+    kernel.push_back({{b3, s * std::sin(th)}, {b3 + 1, -s * std::cos(th)}, {b3 + 2, 1.0}});
+    if (!pinned[3 * c + 2]) {
+      pinned[3 * c + 2] = true;
+      ++k.pinned_lobe_rotation;
     }
   }
-  {
-    std::vector<bool> nonzero(static_cast<std::size_t>(nr), false);
-    for (Eigen::Index col = 0; col < H.outerSize(); ++col)
-      for (SparseMatrix::InnerIterator it(H, col); it; ++it)
-        if (it.value() != 0.0) nonzero[static_cast<std::size_t>(col)] = true;
-    for (Eigen::Index k = 0; k < nr; ++k)
-      if (!nonzero[k] && !pinned[k]) {
-        pinned[k] = true;
-        ++out.kernel.pinned_zero_rows;
-        kernel_vectors.push_back({{k, 1.0}});
-      }
-  }
-  for (int col = 0; col < 4; ++col) {
+  std::vector<bool> nonzero(static_cast<std::size_t>(nr), false);
+  for (Eigen::Index col = 0; col < H.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(H, col); it; ++it)
+      if (it.value() != 0.0) nonzero[static_cast<std::size_t>(col)] = true;
+  for (Eigen::Index d = 0; d < nr; ++d)
+    if (!nonzero[d] && !pinned[d]) {
+      pinned[d] = true;
+      ++k.pinned_zero_rows;
+      kernel.push_back({{d, 1.0}});
+    }
+  return {std::move(pinned), std::move(kernel)};
+}
+
+// max over strain columns and kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖): Ξ must have no kernel component.
+double kernel_component(const std::vector<KernelVector>& kernel, const Eigen::MatrixXd& Xi) {
+  double worst = 0;
+  for (int col = 0; col < Xi.cols(); ++col) {
     const double xn = Xi.col(col).norm();
     if (xn == 0) continue;
-    for (const auto& v : kernel_vectors) {
+    for (const auto& v : kernel) {
       double dot = 0, vv = 0;
-      for (const auto& [k, a] : v) {
-        dot += a * Xi(k, col);
+      for (const auto& [d, a] : v) {
+        dot += a * Xi(d, col);
         vv += a * a;
       }
-      out.kernel.kernel_component = std::max(out.kernel.kernel_component, std::abs(dot) / (std::sqrt(vv) * xn));
+      worst = std::max(worst, std::abs(dot) / (std::sqrt(vv) * xn));
     }
   }
+  return worst;
+}
 
-  std::vector<long> free_index(static_cast<std::size_t>(nr), -1);
-  long nf = 0;
-  for (Eigen::Index k = 0; k < nr; ++k)
-    if (!pinned[k]) free_index[k] = nf++;
-  const SparseMatrix Hf = select(H, free_index, nf);
-  Eigen::MatrixXd Xf(nf, 4);
-  for (Eigen::Index k = 0; k < nr; ++k)
-    if (free_index[k] >= 0) Xf.row(free_index[k]) = Xi.row(k);
-
-  // Solve H_ff U_f = Ξ_f with the chosen solver (a direct one falls back to regularised LDLᵀ with
-  // iterative refinement when H_ff is singular).
-  Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
-  const double xi_scale = Xf.norm();
-  const auto t_solve = std::chrono::steady_clock::now();
-  if (nf > 0 && xi_scale > 0) {
-    KernelTreatment& k = out.kernel;
-    const int steps = options.direct_refinement_steps;
-    const double threshold = options.refinement_threshold;
-    switch (options.solver) {
-      case ModuliSolver::cholesky:
-      case ModuliSolver::ldlt: {
-        const bool llt = options.solver == ModuliSolver::cholesky;
-        CholmodSolver f(llt ? Factorisation::llt : Factorisation::ldlt);
-        // LLᵀ stops at the first non-positive pivot; LDLᵀ accepts any nonzero one, so it must also
-        // show no negative pivot and no rounding-level one (an exactly singular system).
-        if (f.factor(Hf) && (llt || (f.negative_pivots() == 0 && f.rcond() > kSingularRcond))) {
-          k.method = to_string(options.solver);
-          k.rcond = f.rcond();
-          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold, k.refinement_steps);
-        } else {
-          k.cholesky_failed_column = f.failed_column();
-          Uf = regularised_refinement(Hf, Xf, options, k);
-        }
-        break;
+// H_ff U_f = Ξ_f with the chosen solver; a direct one falls back to regularised LDLᵀ with iterative
+// refinement when H_ff is singular. Records the method and its diagnostics in `k`.
+Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
+                             KernelTreatment& k) {
+  const int steps = options.direct_refinement_steps;
+  const double threshold = options.refinement_threshold;
+  switch (options.solver) {
+    case ModuliSolver::cholesky:
+    case ModuliSolver::ldlt: {
+      const bool llt = options.solver == ModuliSolver::cholesky;
+      CholmodSolver f(llt ? Factorisation::llt : Factorisation::ldlt);
+      // LLᵀ stops at the first non-positive pivot; LDLᵀ accepts any nonzero one, so it must also
+      // show no negative pivot and no rounding-level one (an exactly singular system).
+      if (f.factor(Hf) && (llt || (f.negative_pivots() == 0 && f.rcond() > kSingularRcond))) {
+        k.method = llt ? SolveMethod::cholesky : SolveMethod::ldlt;
+        k.rcond = f.rcond();
+        return refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold,
+                             k.refinement_steps);
       }
-      case ModuliSolver::dense: {
-        const Eigen::LDLT<Eigen::MatrixXd> ldl{Eigen::MatrixXd(Hf)};
-        if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
-          k.method = "dense";
-          k.rcond = ldl.rcond();
-          Uf = refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps,
+      k.cholesky_failed_column = f.failed_column();
+      return regularised_refinement(Hf, Xf, options, k);
+    }
+    case ModuliSolver::dense: {
+      const Eigen::LDLT<Eigen::MatrixXd> ldl{Eigen::MatrixXd(Hf)};
+      if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
+        k.method = SolveMethod::dense;
+        k.rcond = ldl.rcond();
+        return refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps,
                              threshold, k.refinement_steps);
-        } else {
-          Uf = regularised_refinement(Hf, Xf, options, k);
-        }
-        break;
       }
-      case ModuliSolver::cg: {
-        if (!(options.cg_tolerance > 0 && options.cg_tolerance < 1))
-          throw std::invalid_argument("elastic_response: cg_tolerance must lie in (0, 1)");
-        k.solver_tolerance = options.cg_tolerance;
-        if (options.cg_preconditioner == CgPreconditioner::incomplete_cholesky) {
-          k.method = "cg-ichol";
-          Uf = cg_solve<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(Hf, Xf, options, k);
-        } else {
-          k.method = "cg-diagonal";
-          Uf = cg_solve<Eigen::DiagonalPreconditioner<double>>(Hf, Xf, options, k);
-        }
-        break;
-      }
+      return regularised_refinement(Hf, Xf, options, k);
     }
-  } else {
-    out.kernel.method = "none (Ξ = 0)";
+    case ModuliSolver::cg: {
+      if (!(options.cg_tolerance > 0 && options.cg_tolerance < 1))
+        throw std::invalid_argument("elastic_response: cg_tolerance must lie in (0, 1)");
+      k.solver_tolerance = options.cg_tolerance;
+      if (options.cg_preconditioner == CgPreconditioner::incomplete_cholesky) {
+        k.method = SolveMethod::cg_ichol;
+        return cg_solve<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(Hf, Xf, options, k);
+      }
+      k.method = SolveMethod::cg_diagonal;
+      return cg_solve<Eigen::DiagonalPreconditioner<double>>(Hf, Xf, options, k);
+    }
   }
-  out.kernel.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_solve).count();
+  throw std::invalid_argument("elastic_response: unknown solver");
+}
 
-  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nr, 4);
-  for (Eigen::Index k = 0; k < nr; ++k)
-    if (free_index[k] >= 0) U.row(k) = Uf.row(free_index[k]);
-  out.kernel.residual = out.energy_minimum() ? column_residual(Xi, Xi - H * U) : std::numeric_limits<double>::quiet_NaN();
-  // An iterative solve is verified against the tolerance it was asked for (its residual is that large
-  // by design); a direct one against residual_tolerance.
-  const double tolerance = options.solver == ModuliSolver::cg && out.kernel.solver_tolerance > 0
-                               ? std::max(options.residual_tolerance, 10 * options.cg_tolerance)
-                               : options.residual_tolerance;
-  out.kernel.well_posed = std::isfinite(out.kernel.residual) && out.kernel.residual <= tolerance;
+// Slopes of both stresses along the relaxed path (U = du/de) and the affine one (U = 0).
+// Each stress is −W/A(e) with W = Σ_c g ⊗ v, g = f n (dg = −K dd), v = d (contact virial S) or
+// v = C (energy stress τ); A(e) = A det(1 + e) gives the −Σ_αβ δ_γδ area term.
+struct StressSlopes {
+  Response4 R, R_affine, R_energy, R_energy_affine;
+  Eigen::Matrix2d tau;  // τ over the load-bearing contacts
+};
 
-  // Energy expansion and the stress slopes along the relaxed (U) and affine (0) paths.
-  out.E_affine = born / A;
-  out.E = (born - Xi.transpose() * U) / A;
-  out.E = 0.5 * (out.E + out.E.transpose()).eval();
+StressSlopes stress_slopes(const std::vector<ContactResponseTerms>& terms, const Eigen::MatrixXd& U, double A) {
   Response4 dW = Response4::Zero(), dW_aff = Response4::Zero(), dWm = Response4::Zero(), dWm_aff = Response4::Zero();
   Eigen::Matrix2d W = Eigen::Matrix2d::Zero(), Wm = Eigen::Matrix2d::Zero();
-  for (const ContactTerms& t : ct) {
+  for (const ContactResponseTerms& t : terms) {
     Eigen::Matrix<double, 6, 4> Uc;
     Uc.topRows<3>() = U.middleRows(3 * t.bi, 3);
     Uc.bottomRows<3>() = U.middleRows(3 * t.bj, 3);
@@ -524,8 +501,8 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
     W += t.g * t.d.transpose();
     Wm += t.g * t.C.transpose();
   }
-  // stress = −W/A(e), A(e) = A det(1 + e): d stress_ab/de_gd = −(1/A) dW_ab/de_gd − stress_ab δ_gd
   const Eigen::Matrix2d S = -W / A, T = -Wm / A;
+  // d stress_ab/de_gd = −(1/A) dW_ab/de_gd − stress_ab δ_gd
   auto to_response = [&](const Response4& dw, const Eigen::Matrix2d& s) {
     Response4 R = -dw / A;
     for (int row = 0; row < 4; ++row) {
@@ -534,33 +511,122 @@ ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& c
     }
     return R;
   };
-  out.R = to_response(dW, S);
-  out.R_affine = to_response(dW_aff, S);
-  out.R_energy = to_response(dWm, T);
-  out.R_energy_affine = to_response(dWm_aff, T);
+  return {to_response(dW, S), to_response(dW_aff, S), to_response(dWm, T), to_response(dWm_aff, T), T};
+}
 
-  // Lagrangian-strain stiffness C_abgd = E_abgd − δ_ag τ_bd, Voigt (xx, yy, xy).
-  auto lagrangian = [&](const Response4& E) {
-    Response4 C = E;
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b)
-        for (int d = 0; d < 2; ++d) C(2 * a + b, 2 * a + d) -= T(b, d);
-    const int v[3] = {kXX, kYY, kXY};
-    Eigen::Matrix3d c;
-    for (int r = 0; r < 3; ++r)
-      for (int s = 0; s < 3; ++s) c(r, s) = C(v[r], v[s]);
-    return Eigen::Matrix3d(0.5 * (c + c.transpose()));
-  };
-  out.C = lagrangian(out.E);
-  out.C_affine = lagrangian(out.E_affine);
+// Lagrangian-strain stiffness C_abgd = E_abgd − δ_ag τ_bd, Voigt (xx, yy, xy).
+Eigen::Matrix3d lagrangian_stiffness(const Response4& E, const Eigen::Matrix2d& tau) {
+  Response4 C = E;
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b)
+      for (int d = 0; d < 2; ++d) C(2 * a + b, 2 * a + d) -= tau(b, d);
+  const int v[3] = {kXX, kYY, kXY};
+  Eigen::Matrix3d c;
+  for (int r = 0; r < 3; ++r)
+    for (int s = 0; s < 3; ++s) c(r, s) = C(v[r], v[s]);
+  return Eigen::Matrix3d(0.5 * (c + c.transpose()));
+}
+
+}  // namespace
+
+ResponseProblem response_problem(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net) {
+  if (net.rattler.size() != p.size())
+    throw std::invalid_argument("elastic_response: the contact network is not that of this packing (" +
+                                std::to_string(net.rattler.size()) + " cells vs " + std::to_string(p.size()) + ")");
+  ResponseProblem pr;
+  pr.state = describe(p, contacts, net);
+  const std::vector<Contact> lb = load_bearing(contacts, net);
+  add_mean_field(pr.state, lb);
+  pr.state.contacts = lb.size();
+  const DofMap map = non_rattler_dofs(net);
+  const Eigen::Index nr = map.size();
+  pr.kernel.dofs = static_cast<std::size_t>(nr);
+  if (nr == 0 || lb.empty()) return pr;  // method no_contacts
+
+  // Hessian of the non-rattlers from their contacts, force response Ξ, Born term.
+  pr.H = restrict_matrix(hessian(p, lb), map);
+  pr.Xi = Eigen::MatrixXd::Zero(nr, 4);
+  pr.terms.reserve(lb.size());
+  std::vector<int> lobe_count(2 * p.size(), 0);
+  for (const Contact& c : lb) {
+    pr.terms.push_back(terms_of(p, c, map));
+    const ContactResponseTerms& t = pr.terms.back();
+    const Eigen::Matrix<double, 6, 4> x = -t.J.transpose() * t.K * t.D;
+    pr.Xi.middleRows(3 * t.bi, 3) += x.topRows<3>();
+    pr.Xi.middleRows(3 * t.bj, 3) += x.bottomRows<3>();
+    pr.born += t.D.transpose() * t.K * t.D;
+    ++lobe_count[c.i];
+    ++lobe_count[c.j];
+  }
+  std::vector<KernelVector> kernel;
+  std::tie(pr.pinned, kernel) = pin_kernel(p, map, pr.H, lobe_count, pr.kernel);
+  pr.kernel.kernel_component = kernel_component(kernel, pr.Xi);
+  return pr;
+}
+
+Relaxation relax(const ResponseProblem& pr, const ModuliOptions& options) {
+  Relaxation r;
+  r.kernel = pr.kernel;
+  if (pr.terms.empty()) return r;
+  const Eigen::Index nr = pr.H.rows();
+  std::vector<long> free_index(static_cast<std::size_t>(nr), -1);
+  long nf = 0;
+  for (Eigen::Index d = 0; d < nr; ++d)
+    if (!pr.pinned[d]) free_index[d] = nf++;
+  const SparseMatrix Hf = select(pr.H, free_index, nf);
+  Eigen::MatrixXd Xf(nf, 4);
+  for (Eigen::Index d = 0; d < nr; ++d)
+    if (free_index[d] >= 0) Xf.row(free_index[d]) = pr.Xi.row(d);
+
+  Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
+  if (nf > 0 && Xf.norm() > 0) Uf = solve_pinned(Hf, Xf, options, r.kernel);
+  else r.kernel.method = SolveMethod::no_force_response;
+  r.U = Eigen::MatrixXd::Zero(nr, 4);
+  for (Eigen::Index d = 0; d < nr; ++d)
+    if (free_index[d] >= 0) r.U.row(d) = Uf.row(free_index[d]);
+
+  r.kernel.residual = r.kernel.unstable_modes == 0 ? column_residual(pr.Xi, pr.Xi - pr.H * r.U)
+                                                   : std::numeric_limits<double>::quiet_NaN();
+  // An iterative solve is verified against the tolerance it was asked for (its residual is that large
+  // by design); a direct one against residual_tolerance.
+  const double tolerance = options.solver == ModuliSolver::cg && r.kernel.solver_tolerance > 0
+                               ? std::max(options.residual_tolerance, 10 * options.cg_tolerance)
+                               : options.residual_tolerance;
+  r.kernel.well_posed = std::isfinite(r.kernel.residual) && r.kernel.residual <= tolerance;
+  return r;
+}
+
+ElasticResponse elastic_response(const ResponseProblem& pr, const Relaxation& relaxation) {
+  ElasticResponse out;
+  static_cast<PackingState&>(out) = pr.state;
+  out.kernel = relaxation.kernel;
+  if (pr.terms.empty()) return out;
+  const double A = out.area;
+  // Energy expansion: E = (Born − Ξᵀ du/de)/A along the relaxed path.
+  out.E_affine = pr.born / A;
+  out.E = (pr.born - pr.Xi.transpose() * relaxation.U) / A;
+  out.E = 0.5 * (out.E + out.E.transpose()).eval();
+  const StressSlopes slopes = stress_slopes(pr.terms, relaxation.U, A);
+  out.R = slopes.R;
+  out.R_affine = slopes.R_affine;
+  out.R_energy = slopes.R_energy;
+  out.R_energy_affine = slopes.R_energy_affine;
+  out.C = lagrangian_stiffness(out.E, slopes.tau);
+  out.C_affine = lagrangian_stiffness(out.E_affine, slopes.tau);
 
   out.moduli = moduli_from(out.R);
   out.moduli_affine = moduli_from(out.R_affine);
   out.moduli_energy = moduli_from(out.R_energy);
   out.moduli_energy_affine = moduli_from(out.R_energy_affine);
   out.shear = shear_stability(out.E);
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.shear_stress = shear_stability(out.R);
   return out;
+}
+
+ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 const ModuliOptions& options) {
+  const ResponseProblem problem = response_problem(p, contacts, net);
+  return elastic_response(problem, relax(problem, options));
 }
 
 }  // namespace budjam

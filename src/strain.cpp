@@ -55,21 +55,28 @@ Measured relax_and_measure(Packing& p, const FireParams& fire, double skin) {
   m.sample.P = pressure(contacts, p.box);
   m.sample.stress = stress_tensor(contacts, p.box);
   m.sample.stress_energy = energy_stress(p, contacts);
+  m.sample.stress_link = link_stress(p, contacts);
   m.sample.P_energy = -0.5 * m.sample.stress_energy.trace();
   m.pairs = contact_pairs(contacts);
   return m;
 }
 
-// Least-squares polynomial fit of degree `deg`; returns coefficients c0..c_deg.
+// Least-squares polynomial fit of degree `deg`; returns coefficients c0..c_deg. The abscissae are
+// scaled to [−1, 1] first: strains of 1e-10 would make the x² column fall below the rank threshold.
 Eigen::VectorXd polyfit(const std::vector<double>& x, const std::vector<double>& y, int deg) {
+  double scale = 0;
+  for (double v : x) scale = std::max(scale, std::abs(v));
+  if (scale == 0) scale = 1;
   Eigen::MatrixXd V(static_cast<Eigen::Index>(x.size()), deg + 1);
   Eigen::VectorXd Y(static_cast<Eigen::Index>(x.size()));
   for (std::size_t k = 0; k < x.size(); ++k) {
     double pw = 1;
-    for (int d = 0; d <= deg; ++d, pw *= x[k]) V(static_cast<Eigen::Index>(k), d) = pw;
+    for (int d = 0; d <= deg; ++d, pw *= x[k] / scale) V(static_cast<Eigen::Index>(k), d) = pw;
     Y[static_cast<Eigen::Index>(k)] = y[k];
   }
-  return V.colPivHouseholderQr().solve(Y);
+  Eigen::VectorXd c = V.colPivHouseholderQr().solve(Y);
+  for (int d = 1; d <= deg; ++d) c[d] /= std::pow(scale, d);
+  return c;
 }
 
 }  // namespace
@@ -78,6 +85,13 @@ std::vector<double> symmetric_strains(double h, int count) {
   std::vector<double> s;
   for (int k = count; k >= 1; --k) s.push_back(-k * h);
   for (int k = 1; k <= count; ++k) s.push_back(k * h);
+  return s;
+}
+
+std::vector<double> doubling_strains(double h, int count) {
+  std::vector<double> s;
+  for (int k = count - 1; k >= 0; --k) s.push_back(-std::ldexp(h, k));
+  for (int k = 0; k < count; ++k) s.push_back(std::ldexp(h, k));
   return s;
 }
 
@@ -121,9 +135,21 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
     sweep.modulus = polyfit(x, y, 1)[1];
     sweep.modulus_energy = polyfit(x, ye, 1)[1];
   }
-  if (x.size() >= 3 && kind == StrainKind::simple_shear) {
-    const double A = reference.box.L * reference.box.L;
-    sweep.curvature = 2.0 * polyfit(x, u, 2)[2] / A;
+  const double A = reference.box.L * reference.box.L;
+  if (x.size() >= 3) {
+    const Eigen::VectorXd c = polyfit(x, u, 2);
+    sweep.energy_slope = c[1] / A;
+    sweep.curvature = 2.0 * c[2] / A;
+  }
+  // Central second differences about the relaxed reference (samples sorted by strain).
+  const auto zero = std::find_if(sweep.samples.begin(), sweep.samples.end(), [](const auto& s) { return s.strain == 0; });
+  for (const StrainSample& plus : sweep.samples) {
+    if (!(plus.strain > 0) || !plus.same_contacts) continue;
+    const auto minus = std::find_if(sweep.samples.begin(), sweep.samples.end(),
+                                    [&](const auto& s) { return s.strain == -plus.strain && s.same_contacts; });
+    if (minus == sweep.samples.end()) continue;
+    const double h = plus.strain;
+    sweep.central_curvatures.emplace_back(h, (plus.U - 2 * zero->U + minus->U) / (A * h * h));
   }
   return sweep;
 }

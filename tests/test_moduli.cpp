@@ -22,7 +22,9 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <random>
 #include <sstream>
+#include <string>
 
 using namespace budjam;
 
@@ -41,16 +43,29 @@ struct Relaxed {
   ContactNetwork net;
 };
 
-Relaxed analyse(Packing p) {
+// Contacts and network of a packing as it is (not relaxed again).
+Relaxed at_state(Packing p) {
   Relaxed r;
   ForceField field;
-  minimise(p, field, tight_fire());
   Eigen::VectorXd F;
   field.evaluate(p, F);
   r.contacts = find_contacts(p, field.lobes(), field.neighbours());
   r.net = analyse_network(p.size(), r.contacts);
   r.p = std::move(p);
   return r;
+}
+
+// A packing of tests/data, as stored.
+Relaxed data_packing(const std::string& name) {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  return at_state(io::read_packing(std::filesystem::path(src) / "tests/data" / name).packing);
+}
+
+Relaxed analyse(Packing p) {
+  ForceField field;
+  minimise(p, field, tight_fire());
+  return at_state(std::move(p));
 }
 
 // A jammed packing of n random dumbbells (buds uniform in [b_min, b_max]) at pressure ≈ P.
@@ -80,7 +95,7 @@ std::pair<int, std::string> run_budjam(const std::string& args) {
 
 double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
-// Finite-strain slopes against the linear response: contact-virial (MODEL.md) and energy stress.
+// Finite-strain slopes against the linear response: lobe-centre contact virial and energy stress.
 void check_finite_strain(const Relaxed& r, const ElasticResponse& e, double h, double tol, double abs_floor = 0) {
   const StrainSweep shear = strain_sweep(r.p, StrainKind::simple_shear, symmetric_strains(h, 2), tight_fire());
   const StrainSweep iso = strain_sweep(r.p, StrainKind::isotropic, symmetric_strains(h, 2), tight_fire());
@@ -118,8 +133,141 @@ TEST_CASE("Second strain derivative of the relaxed energy equals the non-affine 
   REQUIRE(shear.used == 5);
   INFO("E_xyxy " << e.E(kXY, kXY) << " d2U/dγ2/A " << shear.curvature);
   CHECK(rel(e.E(kXY, kXY), shear.curvature) < 0.01);
+  REQUIRE(shear.central_curvatures.size() == 2);
+  for (const auto& [h, curvature] : shear.central_curvatures) CHECK(rel(e.G_energy(), curvature) < 0.01);
   // Relaxation can only lower the energy: non-affine ≤ affine.
   CHECK(e.E(kXY, kXY) < e.E_affine(kXY, kXY));
+}
+
+// ---- the two conventions: lobe-centre stress (the paper's) and energy curvature ----------------
+
+TEST_CASE("The lobe-centre stress plus the load of the rigid mother-bud links is the energy stress", "[fast]") {
+  const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 1);
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  const Eigen::Matrix2d link = link_stress(r.p, r.contacts);
+  const double scale = e.stress_energy.norm();
+  INFO("S " << e.stress << "\nlink " << link << "\ntau " << e.stress_energy);
+  CHECK((e.stress + link - e.stress_energy).cwiseAbs().maxCoeff() < 1e-10 * scale);
+  // The links carry a real part of the load: compressed on average (buds pushed towards their
+  // mothers), so the lobe-centre pressure undercounts: P < P_energy.
+  CHECK(-0.5 * link.trace() > 0.05 * e.P);
+  CHECK(e.P < e.P_energy);
+  // The moduli differ accordingly, by far more than the solver's precision.
+  CHECK(std::abs(e.G_energy() - e.G()) > 0.05 * std::abs(e.G()));
+  CHECK(std::abs(e.B_energy() - e.B()) > 0.05 * e.B());
+  // dτ_xy/dγ of the energy stress is the energy curvature (rotation invariance of the relaxed energy).
+  CHECK(std::abs(e.moduli_energy.G_simple - e.G_energy()) < 1e-9 * e.B());
+}
+
+TEST_CASE("G_energy - G is the slope of the link stress under finite Lees-Edwards shear", "[fast]") {
+  // τ_xy = S_xy + link_xy in every relaxed state, so the two shear moduli differ exactly by
+  // d(link_xy)/dγ: the load the lobe-centre stress leaves out.
+  const Relaxed r = jammed(100, 3e-3, 0.3, 1.0, 2);
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  const StrainSweep sweep = strain_sweep(r.p, StrainKind::simple_shear, symmetric_strains(1e-7, 2), tight_fire());
+  REQUIRE(sweep.used == 5);
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const StrainSample& s : sweep.samples) {
+    CHECK((s.stress + s.stress_link - s.stress_energy).cwiseAbs().maxCoeff() < 1e-10 * s.stress_energy.norm());
+    sx += s.strain, sy += s.stress_link(0, 1), sxx += s.strain * s.strain, sxy += s.strain * s.stress_link(0, 1);
+  }
+  const double n = static_cast<double>(sweep.samples.size());
+  const double link_slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  INFO("G " << e.G() << " G_energy " << e.G_energy() << " d link_xy/dγ " << link_slope);
+  CHECK(std::abs(link_slope - (e.G_energy() - e.G())) < 1e-3 * std::abs(e.G_energy() - e.G()));
+}
+
+TEST_CASE("P_energy = -dU/dA and B_energy = A d2U/dA2 from the energy of finite rescalings; the lobe-centre P is not -dU/dA",
+          "[fast]") {
+  const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 3);
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  const StrainSweep iso = strain_sweep(r.p, StrainKind::isotropic, doubling_strains(1e-8, 6), tight_fire());
+  REQUIRE(iso.used == 13);
+  INFO("P " << e.P << " P_energy " << e.P_energy << " -dU/dA " << -iso.energy_slope);
+  INFO("B " << e.B() << " B_energy " << e.B_energy() << " A d2U/dA2 " << iso.energy_modulus());
+  CHECK(rel(-iso.energy_slope, e.P_energy) < 1e-6);
+  CHECK(rel(-iso.energy_slope, e.P) > 0.05);
+  CHECK(rel(iso.energy_modulus(), e.B_energy()) < 1e-4);
+  CHECK(rel(iso.energy_modulus(), e.B()) > 0.05);
+}
+
+TEST_CASE("A grown packing where the two shear moduli differ in sign: finite strains confirm G > 0 and d2U/dγ2 < 0",
+          "[fast]") {
+  // `budjam grow data/scenes/demo.toml --set run.seed=24 --set 'jamming.targets=[1e-4,3e-4,1e-3,3e-3]'`,
+  // the target Δφ = 1e-3 (L = 8, N = 48, P = 4.4e-4): the lobe-centre stress rises under Lees–Edwards
+  // shear while the relaxed energy falls.
+  const Relaxed r = data_packing("shear_conventions_differ_L8.pack");
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  REQUIRE(e.kernel.well_posed);
+  CHECK(e.G() > 0);
+  CHECK(e.G_energy() < 0);
+  CHECK_FALSE(e.shear.stable);  // the box is unstable to Lees–Edwards shear
+  const StrainSweep stress = strain_sweep(r.p, StrainKind::simple_shear, symmetric_strains(1e-7, 2), tight_fire());
+  REQUIRE(stress.used == 5);
+  INFO("G linear " << e.G() << " finite " << stress.modulus);
+  CHECK(rel(stress.modulus, e.G()) < 1e-3);
+  const StrainSweep energy = strain_sweep(r.p, StrainKind::simple_shear, doubling_strains(1e-7, 5), tight_fire());
+  REQUIRE(energy.used == 11);
+  REQUIRE(energy.central_curvatures.size() == 5);
+  INFO("G_energy linear " << e.G_energy() << " parabola " << energy.curvature);
+  CHECK(rel(energy.curvature, e.G_energy()) < 1e-3);
+  // Central differences (rounding noise of U falls as 1/h²): the three widest within 1 %, all negative.
+  for (std::size_t k = 0; k < energy.central_curvatures.size(); ++k) {
+    const auto [h, curvature] = energy.central_curvatures[k];
+    INFO("h " << h << " (U(h) − 2U(0) + U(−h))/(A h²) " << curvature);
+    CHECK(curvature < 0);
+    if (k >= 2) CHECK(rel(curvature, e.G_energy()) < 0.01);
+  }
+}
+
+TEST_CASE("Cells whose buds carry no load: both conventions coincide and equal the closed form of the mother lattice",
+          "[fast]") {
+  // Mothers on a centred rectangular Bravais lattice (7 × 8 in a square box, nearest neighbours
+  // compressed), each bud pointing into a hole, contact-free. No link is loaded, so S = τ, and the
+  // affine deformation of the mother centres is the relaxed one (inversion symmetry): per cell of
+  // area A_c, with bonds b (r, n, f = k(1 − r)) to 3 of the 6 neighbours,
+  //   G = (1/A_c) Σ_b r² n_y² (k n_x² − (f/r) n_y²),   P = (1/(2A_c)) Σ_b f r,
+  //   B = (1/(4A_c)) Σ_b k r² + P/2.
+  const int nx = 7, ny = 8;
+  const double L = 6.93, ax = L / nx, ay = L / ny;
+  Packing p;
+  p.box.L = L;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> bud(0.01, 0.05);
+  std::uniform_int_distribution<int> hole(0, 5);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double b = bud(rng), theta = std::numbers::pi / 6 + hole(rng) * std::numbers::pi / 3;
+      const double off = Dumbbell::of(b).mother_offset;  // centroid = mother centre + off n̂
+      const double x = (i + 0.5 * (j % 2)) * ax, y = j * ay;
+      p.add_cell(x + off * std::cos(theta), y + off * std::sin(theta), theta, b, 0.002, -1);
+    }
+  const Relaxed r = at_state(std::move(p));
+  REQUIRE(r.net.N_nr == static_cast<std::size_t>(nx * ny));
+  REQUIRE(r.net.N_u_buds == r.net.N_nr);  // every bud contact-free
+  const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
+  REQUIRE(e.kernel.well_posed);
+
+  double G = 0, P = 0, born = 0;
+  for (const Eigen::Vector2d bond : {Eigen::Vector2d(ax, 0), Eigen::Vector2d(ax / 2, ay), Eigen::Vector2d(-ax / 2, ay)}) {
+    const double len = bond.norm(), f = kSpring * (1 - len);
+    const Eigen::Vector2d n = bond / len;
+    G += len * len * n.y() * n.y() * (kSpring * n.x() * n.x() - f / len * n.y() * n.y());
+    P += 0.5 * f * len;
+    born += 0.25 * kSpring * len * len;
+  }
+  const double Ac = ax * ay;
+  G /= Ac, P /= Ac;
+  const double B = born / Ac + P / 2;
+  INFO("G " << e.G() << " G_energy " << e.G_energy() << " closed form " << G);
+  INFO("B " << e.B() << " B_energy " << e.B_energy() << " closed form " << B);
+  CHECK(link_stress(r.p, r.contacts).cwiseAbs().maxCoeff() < 1e-15);
+  CHECK((e.stress - e.stress_energy).cwiseAbs().maxCoeff() < 1e-14);
+  CHECK(e.P == Approx(P).epsilon(1e-12));
+  CHECK(e.G() == Approx(G).epsilon(1e-9));
+  CHECK(e.G_energy() == Approx(G).epsilon(1e-9));
+  CHECK(e.B() == Approx(B).epsilon(1e-9));
+  CHECK(e.B_energy() == Approx(B).epsilon(1e-9));
 }
 
 namespace {
@@ -269,7 +417,7 @@ TEST_CASE("Kernel treatment: translations and free-lobe rotations are pinned, Ξ
   const Relaxed r = jammed(120, 1e-3, 0.01, 0.5, 6);
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   REQUIRE(r.net.N_u > 0);
-  CHECK(e.kernel.method == "ldlt");
+  CHECK(e.kernel.method == SolveMethod::ldlt);
   CHECK(e.kernel.pinned_translation == 2);
   CHECK(e.kernel.pinned_lobe_rotation == r.net.N_u);  // one floppy rotation per contact-free lobe
   CHECK(e.kernel.pinned_zero_rows == 0);
@@ -308,11 +456,18 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   const io::Json j = io::Json::parse(out);
   CHECK(j["B"].get<double>() == Approx(e.moduli.B).epsilon(1e-9));
   CHECK(j["G"].get<double>() == Approx(e.moduli.G_simple).epsilon(1e-9));
+  CHECK(j["G_energy"].get<double>() == Approx(e.E(kXY, kXY)).epsilon(1e-9));
+  CHECK(j["B_energy"].get<double>() == Approx(e.moduli_energy.B).epsilon(1e-9));
+  CHECK(j["shear_directions_stress"]["G_min"].get<double>() == Approx(e.shear_stress.G_min).epsilon(1e-9));
+  CHECK(j["shear_directions_stress"]["G_min"].get<double>() <= j["G"].get<double>());
   CHECK(j["moduli"]["G_pure"].get<double>() == Approx(e.moduli.G_pure).epsilon(1e-9));
   CHECK(j["elastic_tensor"]["C_xyxy"].get<double>() == Approx(e.C(2, 2)).epsilon(1e-9));
   CHECK(j["kernel"]["method"] == "ldlt");
   CHECK(j["kernel"]["pinned_lobe_rotation"].get<std::size_t>() == r.net.N_u);
   CHECK(j["check"]["agree_within_1_percent"].get<bool>());
+  CHECK(j["check"]["agree_within_1_percent_energy"].get<bool>());
+  CHECK(j["check"]["simple_shear_G"]["energy_curvature"]["relative_difference"].get<double>() < 0.01);
+  CHECK(j["check"]["isotropic_B"]["energy_curvature"]["relative_difference"].get<double>() < 0.01);
   CHECK(j["check"]["simple_shear_G"]["relative_difference"].get<double>() < 0.01);
   CHECK(j["check"]["isotropic_B"]["relative_difference"].get<double>() < 0.01);
   // Deterministic output: the same file gives the same bytes.
@@ -349,10 +504,13 @@ TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal t
     const io::Json j = io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").second);
     CHECK(std::stod(rows[k][col("B")]) == Approx(j["B"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_simple")]) == Approx(j["G"].get<double>()).epsilon(1e-9));
+    CHECK(std::stod(rows[k][col("G_energy")]) == Approx(j["G_energy"].get<double>()).epsilon(1e-9));
+    CHECK(std::stod(rows[k][col("B_energy")]) == Approx(j["B_energy"].get<double>()).epsilon(1e-9));
+    CHECK(std::stod(rows[k][col("G_min_stress")]) == Approx(j["shear_directions_stress"]["G_min"].get<double>()).epsilon(1e-9));
   }
 }
 
-// ---- hard cases (issue 3.6) -----------------------------------------------------------------
+// ---- hard cases -----------------------------------------------------------------------------
 
 TEST_CASE("A hair above jamming (P ~ 1e-7): finite, well posed, agrees with finite strain", "[.hard]") {
   const Relaxed r = jammed(80, 1e-7, 0.3, 1.0, 11);
@@ -416,7 +574,7 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
   net.rattler[pick] = false;
   net.N_nr += 1;
   const ElasticResponse e = elastic_response(r.p, r.contacts, net);
-  CHECK(e.kernel.method == "regularised-refinement");
+  CHECK(e.kernel.method == SolveMethod::regularised_refinement);
   CHECK(e.kernel.regularisation > 0);
   CHECK(e.kernel.well_posed);
   CHECK(e.kernel.residual < 1e-8);
@@ -430,7 +588,7 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
     o.solver = solver;
     const ElasticResponse f = elastic_response(r.p, r.contacts, net, o);
     INFO(to_string(solver));
-    CHECK(f.kernel.method == "regularised-refinement");
+    CHECK(f.kernel.method == SolveMethod::regularised_refinement);
     if (solver == ModuliSolver::cholesky) CHECK(f.kernel.cholesky_failed_column >= 0);
     CHECK(f.kernel.well_posed);
     CHECK(rel(f.moduli.B, ref.moduli.B) < 1e-6);
@@ -439,21 +597,13 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
 }
 
 // The jamming point of an L = 15 run (paper-L15.toml, P0 = none, seed 3: E/N = 1.16e-16, P = 6.9e-9)
-// found by MODEL.md's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
+// found by the model's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
 // λ ≈ −1e-8, the order of the prestress f/ℓ. Such a state has no linear response.
 TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, and no relaxed modulus is reported",
           "[.hard]") {
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
-  Relaxed r;
-  r.p = io::read_packing(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
-  ForceField field;
-  Eigen::VectorXd F;
-  field.evaluate(r.p, F);
-  r.contacts = find_contacts(r.p, field.lobes(), field.neighbours());
-  r.net = analyse_network(r.p.size(), r.contacts);
+  const Relaxed r = data_packing("saddle_jamming_L15_seed3.pack");
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
-  REQUIRE(e.kernel.method == "unstable");
+  REQUIRE(e.kernel.method == SolveMethod::unstable);
   CHECK_FALSE(e.energy_minimum());
   CHECK_FALSE(e.kernel.well_posed);
   CHECK(std::isnan(e.moduli.B));
@@ -494,7 +644,7 @@ TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false a
   CHECK(j["moduli_affine"]["B"].get<double>() > 0);
 }
 
-// ---- linear solver of the pinned system (accuracy against cost, issue 6) ----------------------
+// ---- linear solver of the pinned system (accuracy against cost) -----------------------------
 
 namespace {
 
@@ -521,14 +671,14 @@ TEST_CASE("Every direct solver (CHOLMOD LDLt, dense LDLt, CHOLMOD LLt without re
   // Two packings: many unconstrained buds (many pinned rotations) near jamming, and a compressed one.
   for (const Relaxed& r : {jammed(120, 1e-4, 0.01, 0.5, 6), jammed(100, 1e-2, 0.3, 1.0, 1)}) {
     const ElasticResponse ref = elastic_response(r.p, r.contacts, r.net);
-    REQUIRE(ref.kernel.method == "ldlt");
+    REQUIRE(ref.kernel.method == SolveMethod::ldlt);
     REQUIRE(ref.kernel.well_posed);
     for (const auto& [solver, name] : {std::pair{ModuliSolver::ldlt, "ldlt"}, std::pair{ModuliSolver::dense, "dense"},
                                        std::pair{ModuliSolver::cholesky, "cholesky"}}) {
       const ElasticResponse e = with_solver(r, solver, 1e-10, CgPreconditioner::incomplete_cholesky,
                                             solver == ModuliSolver::cholesky ? 0 : 3);
       INFO(name);
-      CHECK(e.kernel.method == name);
+      CHECK(std::string(to_string(e.kernel.method)) == name);
       CHECK(e.kernel.well_posed);
       CHECK(e.kernel.residual < 1e-10);  // verified on all non-rattler rows, pinned ones included
       CHECK(e.kernel.rcond > 0);
@@ -553,7 +703,7 @@ TEST_CASE("Conjugate gradients reach their residual tolerance and B, G within 10
     for (const double t : {1e-4, 1e-7, 1e-10}) {
       const ElasticResponse e = with_solver(r, ModuliSolver::cg, t, pre);
       INFO(to_string(pre) << " tol " << t << " residual " << e.kernel.residual << " iterations " << e.kernel.iterations);
-      CHECK(e.kernel.method == (pre == CgPreconditioner::diagonal ? "cg-diagonal" : "cg-ichol"));
+      CHECK(e.kernel.method == (pre == CgPreconditioner::diagonal ? SolveMethod::cg_diagonal : SolveMethod::cg_ichol));
       CHECK(e.kernel.solver_tolerance == t);
       CHECK(e.kernel.iterations > 0);
       CHECK(e.kernel.residual <= 10 * t);
