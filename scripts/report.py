@@ -173,12 +173,12 @@ def main():
           states(M["u_J"]) + "; contact-free buds / N_nr, every run",
           states(M.get("u_J_paper")) + f"; contact-free lobes (mothers included) / N_nr, {strong}",
           near(M.get("u_J_paper"), 0.23, 0.005), "—")
-    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A9)", "≈ 0.20", fmt(C["u_J_lambert_w"], 4) + " (computed)", "same",
+    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(C["u_J_lambert_w"], 4) + " (computed)", "same",
           "confirmed" if round(C["u_J_lambert_w"], 2) == 0.20 else "not confirmed", "—")
     claim("Nonrattler density at jamming n_J", "≃ 0.775", states(M["n_J"]) + "; every run",
           states(M.get("n_J_paper")) + f"; {strong}", near(M.get("n_J_paper"), 0.775, 0.0005), "—")
     claim("Jamming packing fraction φ_J", "—", states(M["phi_J"]), "same", "—", "—")
-    claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D22, φ_J = 0.84)", "≈ 0.1",
+    claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D25, φ_J = 0.84)", "≈ 0.1",
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {fmt(M['P_max_formula_measured_phiJ'])} with the measured φ_J",
           "same", "confirmed" if round(M["P_max_formula_measured_phiJ"], 1) == 0.1 else "not confirmed", "—")
     dzj = groups.get("none", {}).get("dZ_J")
@@ -234,7 +234,7 @@ def main():
           "confirmed" if v2 == vl == "confirmed" else ("awaits data" if "awaits data" in (v2, vl) else "not confirmed"),
           fig("fig3"))
     if "P_dagger" in M:
-        claim("P_2 ∝ exp(−P†/P0) (Eq. D11)", "P† = typical bud pressure",
+        claim("P_2 ∝ exp(−P†/P0) (Eq. D19)", "P† = typical bud pressure",
               f"P† = {fmt(M['P_dagger'])} ± {fmt(M['P_dagger_se'], 2)} (fit over {M['P_dagger_points']} P0 ≤ 1e-2)",
               "same", "—", fig("fig3"))
     for lab in order:
@@ -304,7 +304,7 @@ def main():
     if "P_star_range_paper" in M:
         lo, hi = M["P_star_range_paper"]
         overlap = lo <= 4.3e-3 and hi >= 1.3e-3
-        claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E13)", "1.3e-3 – 4.3e-3",
+        claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
               f"{fmt(M['P_star_range'][0])} – {fmt(M['P_star_range'][1])} (a_c = mean completion size "
               f"{fmt(M['a_c_range_area'][0])} – {fmt(M['a_c_range_area'][1])}, true area)",
               f"{fmt(lo)} – {fmt(hi)} (a_c = median of S, {fmt(M['a_c_median_range_area'][0])} – "
@@ -313,7 +313,7 @@ def main():
     # ---- spectrum ----
     D = M.get("dos") or {}
     Dp = D.get("paper") or {}
-    claim("N_zero ≃ N_u (Eq. F3)", "tracks",
+    claim("N_zero ≃ N_u (Eq. F4)", "tracks",
           needs(have_dos and D, f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
                                 f"mean abs(N_zero − N_u) = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), "same",
           "awaits data" if not (have_dos and D) else
@@ -327,7 +327,7 @@ def main():
         verdict = "confirmed" if ok else "not confirmed"
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", "awaits data"
-    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F4)", "collapse; > half of Z − 6 < 0",
+    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5)", "collapse; > half of Z − 6 < 0",
           needs(have_dos and D, f"free linear fits over every packing: R² {fmt(D.get('r2_dZ'))} for ΔZ, "
                                 f"{fmt(D.get('r2_Z_minus_6'))} for Z − 6 (cannot tell a shift apart)", "dos"),
           theirs, verdict, fig("figF1"))
