@@ -296,7 +296,7 @@ TEST_CASE("analyse --tables recomputes from an analysis' own tables exactly what
   CHECK(jb["inputs"]["tables"] == a.string());
 }
 
-TEST_CASE("analyse --tables on tables without the steps.csv columns names them unavailable and leaves them empty",
+TEST_CASE("analyse --tables on tables of an earlier format names what they lack or define otherwise and leaves it empty",
           "[analyse]") {
   runs();
   const fs::path a = work_dir() / "old_runs", old = work_dir() / "old_tables", b = work_dir() / "old_out";
@@ -320,8 +320,15 @@ TEST_CASE("analyse --tables on tables without the steps.csv columns names them u
       out << "\n";
     }
   }
+  std::ofstream(old / "analysis.json") << "{\"format\": \"budjam-analysis\", \"version\": 1}\n";
   REQUIRE(run_budjam("analyse --tables " + q(old) + " --out " + q(b) + " --main-L 6") == 0);
   const auto j = budjam::io::read_json(b / "analysis.json");
+  // format 1 held χ̄ and λ̄_c as trapezoids in φ: not reported as today's plain means
+  for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area"}) {
+    INFO(c);
+    CHECK(j["unavailable"].contains(c));
+    for (const auto& r : read_csv(b / "runs.csv")) CHECK(r.at(c).empty());
+  }
   REQUIRE(j["unavailable"].contains("dphi_2_paper"));
   CHECK(j["unavailable"]["dphi_2_paper"].get<std::string>().find("steps.csv") != std::string::npos);
   CHECK(j["unavailable"].contains("dos.csv"));

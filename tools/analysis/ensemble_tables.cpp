@@ -2,6 +2,7 @@
 
 #include "analysis/jamming_states.hpp"
 #include "budjam/scene.hpp"
+#include "io/json.hpp"
 #include "io/run_data.hpp"
 
 #include <cmath>
@@ -181,12 +182,24 @@ void read_survival(const CsvTable& S, Ensemble& e) {
   }
 }
 
+// Format 1 of the tables (analysis.json "version": 1) holds χ̄ and λ̄_c as trapezoids in φ, which weight
+// the long steps, and the φ_2 predictions built on that χ̄: not today's plain means over the accepted
+// states (docs/analysis.md, "Definitions"). They are left out rather than reported under a definition
+// they do not have.
+void drop_format1_averages(Ensemble& e) {
+  for (auto& r : e.rows) r.chi_bar = r.lambda_bar = r.pred_area = r.pred_d2 = kNaN;
+  for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area", "dphi_2_pred_diameter_sq"})
+    e.unavailable[c] = std::string("runs.csv of format 1 holds it with χ̄ a trapezoid in φ (it needs steps.csv of each run ") +
+                       "for the plain mean over the accepted states)";
+}
+
 }  // namespace
 
 Ensemble read_ensemble_tables(const fs::path& dir) {
   Ensemble e;
   std::map<std::string, std::size_t> index;  // run → row
   read_runs(read_csv(dir / "runs.csv"), e, index);
+  if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1) drop_format1_averages(e);
   e.runs = e.rows.size();
   read_targets(read_csv(dir / "targets.csv"), e, index);
   if (fs::exists(dir / "dos.csv")) read_spectra(read_csv(dir / "dos.csv"), e, index);
