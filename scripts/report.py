@@ -197,7 +197,7 @@ def main():
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {fmt(M['P_max_formula_measured_phiJ'])} with the measured φ_J",
           "same", "confirmed" if round(M["P_max_formula_measured_phiJ"], 1) == 0.1 else "not confirmed", "—")
     dzj = groups.get("none", {}).get("dZ_J")
-    claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eq. 3)", "marginal",
+    claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
           pm(dzj) + " (no feedback)", "same",
           "confirmed" if dzj and dzj.get("mean") is not None and abs(dzj["mean"]) < 1e-9 else "not confirmed", "—")
     ident = M["dZ_identity"]
