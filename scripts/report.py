@@ -362,7 +362,8 @@ def main():
                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for sz in A.get("sizes", []):
         fed_res = sz["dZ_identity"].get("feedback_targets")
-        allfed = pm(fed_res) if fed_res else "— (analysis.json older than this column)"
+        allfed = pm(fed_res) if fed_res else "per P0 (an analysis.json without the pooled value): " + "; ".join(
+            f"{label(x['P0'])} {fmt(x['mean'])} (n={x['n']})" for x in sz["dZ_identity"]["per_P0_feedback"])
         size_rows.append(f"| {sz['L']:g} | {sz['runs']} | {sz['jamming_states']} | {pm(sz['u_J'])} | {pm(sz['u_J_lobes'])} | "
                          f"{pm(sz['n_J'])} | {pm(sz['phi_J'])} | {allfed} | {pm(sz['B_grow_over_lambda_B_log10'])} |")
     for Lp in (8, 15, 20):
