@@ -168,13 +168,11 @@ TEST_CASE("Π(g): the δ peak at g = 1, densities on the paper's bins and quarti
 }
 
 TEST_CASE("survival.csv read back gives the Kaplan-Meier steps: events from the drop of S, censored from the risk set") {
-  // The 6-MP remission times (Klein & Moeschberger, Table 4.1A): ties of events and censorings at 6
-  // and 10, censoring-only steps, and a last step that is censored.
-  const std::vector<SurvivalRecord> sixmp{{6, true},   {6, true},   {6, true},   {6, false},  {7, true},   {9, false},
-                                          {10, true},  {10, false}, {11, false}, {13, true},  {16, true},  {17, false},
-                                          {19, false}, {20, false}, {22, true},  {23, true},  {25, false}, {32, false},
-                                          {32, false}, {34, false}, {35, false}};
-  const auto km = kaplan_meier(sixmp);
+  // Ties of events with a censoring (a = 2, 4), censoring-only steps (a = 3, 5, 6; the last one
+  // censored), and Ŝ falling by a third at a = 4 (2 events among 6 at risk): Ŝ = 10/11, 8/11, 16/33.
+  const std::vector<SurvivalRecord> records{{1, true},  {2, true},  {2, false}, {2, true},  {3, false},
+                                            {4, true},  {4, true},  {4, false}, {5, false}, {6, false}, {6, false}};
+  const auto km = kaplan_meier(records);
   const auto dir = budjam::testing::work_dir() / "km_tables";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "runs.csv") << "run,L,P0,seed,status\nr1,8,0.001,1,finished\n";
