@@ -16,14 +16,18 @@ import math
 import os
 import sys
 
-import matplotlib
+try:
+    import matplotlib
+except ImportError:
+    print(f"figures.py: {sys.executable} has no matplotlib (Debian: apt-get install python3-matplotlib)", file=sys.stderr)
+    sys.exit(2)
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 from matplotlib import cm, colors  # noqa: E402
 
-PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D22), also in analysis.json
+PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D25), also in analysis.json
 
 
 class Missing(Exception):

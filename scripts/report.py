@@ -2,7 +2,9 @@
 """Writes REPRODUCTION.md: each quantitative claim of the paper beside the value budjam measured.
 
 Formatting only: every measured number is read from `budjam analyse` output (analysis.json and
-runs.csv); nothing is computed here beyond choosing which group a claim refers to.
+runs.csv); nothing is computed here beyond choosing which group a claim refers to. The output of
+`budjam analyse --tables` (the estimators re-applied to stored tables when the run directories are
+gone) is reported the same way; a cell whose inputs those tables lack says what it needs.
 
     /usr/bin/python3 scripts/report.py --tables analysis/quick/tables --figures analysis/quick/figures \
         --preset quick --moduli 1 --dos 1 --out analysis/quick/REPRODUCTION.md
@@ -13,10 +15,6 @@ import datetime
 import json
 import math
 import os
-
-
-TABLE_FILES = ", ".join(f"`{n}`" for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv", "remaining.csv",
-                                           "division_curve.csv", "growth_rates.csv", "trajectory.csv", "dos.csv"))
 
 
 def write_lines(path, lines):
@@ -114,12 +112,29 @@ def main():
     ap.add_argument("--preset", required=True)
     ap.add_argument("--moduli", default="1")
     ap.add_argument("--dos", default="1")
+    ap.add_argument("--survival", help="`budjam survival` JSON of the main L (default: TABLES/survival_main_L.json)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     with open(os.path.join(a.tables, "analysis.json")) as f:
         A = json.load(f)
-    with open(os.path.join(a.tables, "survival_main_L.json")) as f:
+    with open(a.survival or os.path.join(a.tables, "survival_main_L.json")) as f:
         surv = json.load(f)
+    U = A.get("unavailable", {})
+
+    def lacking(*keys):
+        """What the inputs of a cell need that the stored tables lack (analysis.json "unavailable"), or None."""
+        for k in keys:
+            if k in U:
+                why = U[k]
+                return "needs " + why.split("(it needs ")[1].rstrip(")") if "(it needs " in why else why
+        return None
+
+    def avail(text, *keys):
+        need = lacking(*keys)
+        return text if need is None else f"unavailable from the stored tables: {need}"
+
+    def rerun(verdict, *keys):
+        return verdict if lacking(*keys) is None else "awaits a re-run"
     L = A["main_L"]
     M = A["main"]
     C = A["constants"]
@@ -173,16 +188,16 @@ def main():
           states(M["u_J"]) + "; contact-free buds / N_nr, every run",
           states(M.get("u_J_paper")) + f"; contact-free lobes (mothers included) / N_nr, {strong}",
           near(M.get("u_J_paper"), 0.23, 0.005), "—")
-    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A9)", "≈ 0.20", fmt(C["u_J_lambert_w"], 4) + " (computed)", "same",
+    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(C["u_J_lambert_w"], 4) + " (computed)", "same",
           "confirmed" if round(C["u_J_lambert_w"], 2) == 0.20 else "not confirmed", "—")
     claim("Nonrattler density at jamming n_J", "≃ 0.775", states(M["n_J"]) + "; every run",
           states(M.get("n_J_paper")) + f"; {strong}", near(M.get("n_J_paper"), 0.775, 0.0005), "—")
     claim("Jamming packing fraction φ_J", "—", states(M["phi_J"]), "same", "—", "—")
-    claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D22, φ_J = 0.84)", "≈ 0.1",
+    claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D25, φ_J = 0.84)", "≈ 0.1",
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {fmt(M['P_max_formula_measured_phiJ'])} with the measured φ_J",
           "same", "confirmed" if round(M["P_max_formula_measured_phiJ"], 1) == 0.1 else "not confirmed", "—")
     dzj = groups.get("none", {}).get("dZ_J")
-    claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eq. 3)", "marginal",
+    claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
           pm(dzj) + " (no feedback)", "same",
           "confirmed" if dzj and dzj.get("mean") is not None and abs(dzj["mean"]) < 1e-9 else "not confirmed", "—")
     ident = M["dZ_identity"]
@@ -205,13 +220,13 @@ def main():
             ratio = pred["mean"] / sim["mean"]
             verdict = ("confirmed" if 1.0 <= ratio <= 1.5 else "not confirmed") + f" (theory/simulation = {fmt(ratio)})"
         claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14 (a as true area)", "theory slightly overestimates",
-              f"{pm(x['dphi_2'])} vs {pm(pred)}; φ_2 at ≤ 1 tagged bud left, every run",
-              f"{sel(sim)} vs {pm(pred)}; φ_2 at no tagged bud left, paper's selection",
-              verdict, fig("fig2"))
+              f"{pm(x['dphi_2'])} vs {avail(pm(pred), 'dphi_2_pred_area')}; φ_2 at ≤ 1 tagged bud left, every run",
+              avail(f"{sel(sim)} vs {pm(pred)}; φ_2 at no tagged bud left, paper's selection", "dphi_2_paper", "N_div_end"),
+              rerun(verdict, "dphi_2_paper", "N_div_end"), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
-          ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order),
-          monotone([groups[l]["dphi_2_paper"]["mean"] for l in fed]), fig("fig2"))
+          avail(", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order), "dphi_2_paper", "N_div_end"),
+          rerun(monotone([groups[l]["dphi_2_paper"]["mean"] for l in fed]), "dphi_2_paper", "N_div_end"), fig("fig2"))
     claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da (pooled, diameter²)", "—",
           f"a_ε = {fmt(surv.get('a_eps'))}, ∫S = {fmt(surv.get('integral_S'))}, ε = {fmt(surv.get('epsilon'))} "
           f"({surv.get('events')} completions, {surv.get('censored')} censored)", "same", "—", fig("figS"))
@@ -224,17 +239,21 @@ def main():
     for lab in order:
         x = groups[lab]
         claim(f"P_2/P_max and λ̄_c, {p0_name(lab)}", "decrease strongly with feedback, together",
-              f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {pm(x['lambda_bar'])} (plain mean over [φ_J, φ_2]); every run",
-              f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])}", "see trend row", fig("fig3"))
+              f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']) + ' (plain mean over [φ_J, φ_2])', 'lambda_bar')}; "
+              "every run",
+              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])}", "P_2_paper", "lambda_bar_paper",
+                    "N_div_end"), "see trend row", fig("fig3"))
     p2 = [groups[l]["P_2_over_Pmax_paper"]["mean"] for l in fed]
     lb = [groups[l]["lambda_bar_paper"]["mean"] for l in fed]
     v2, vl = monotone(p2), monotone(lb)
     claim("P_2 and λ̄_c fall together with feedback (trend over P0)", "mirrored",
-          "—", "P_2: " + v2 + "; λ̄_c: " + vl + " (monotone over the feedback groups)",
-          "confirmed" if v2 == vl == "confirmed" else ("awaits data" if "awaits data" in (v2, vl) else "not confirmed"),
+          "—", avail("P_2: " + v2 + "; λ̄_c: " + vl + " (monotone over the feedback groups)", "P_2_paper",
+                     "lambda_bar_paper", "N_div_end"),
+          rerun("confirmed" if v2 == vl == "confirmed" else ("awaits data" if "awaits data" in (v2, vl) else "not confirmed"),
+                "P_2_paper", "lambda_bar_paper", "N_div_end"),
           fig("fig3"))
     if "P_dagger" in M:
-        claim("P_2 ∝ exp(−P†/P0) (Eq. D11)", "P† = typical bud pressure",
+        claim("P_2 ∝ exp(−P†/P0) (Eq. D19)", "P† = typical bud pressure",
               f"P† = {fmt(M['P_dagger'])} ± {fmt(M['P_dagger_se'], 2)} (fit over {M['P_dagger_points']} P0 ≤ 1e-2)",
               "same", "—", fig("fig3"))
     for lab in order:
@@ -245,7 +264,7 @@ def main():
             verdict = "confirmed" if 0.2 <= s_["median"] <= 1.0 else "not confirmed"
         claim(f"G_2/P_max, {p0_name(lab)} (median ± bootstrap SE)", "≈ 0.2 – 1",
               needs(have_moduli, pm(x["G_2_over_Pmax"], "median") + ", every run", "moduli"),
-              needs(have_moduli, sel(s_, "median"), "moduli"), verdict, fig("fig3"))
+              avail(needs(have_moduli, sel(s_, "median"), "moduli"), "N_div_end"), rerun(verdict, "N_div_end"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
           f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={M.get('plateau_P0')}, ℓ_c² = {fmt(M.get('lc2_J'))})",
           "same", "—", fig("fig4"))
@@ -254,8 +273,9 @@ def main():
         x = groups[lab]
         claim(f"G_2/P_2, {p0_name(lab)} (median ± bootstrap SE)", "diverges as P0 → 0",
               needs(have_moduli, pm(x["G_2_over_P_2"], "median") + ", every run", "moduli"),
-              needs(have_moduli, sel(x["G_2_over_P_2_paper"], "median"), "moduli"),
-              "see trend: " + (monotone(gp, increasing=True) if have_moduli else "awaits data"), fig("figD2"))
+              avail(needs(have_moduli, sel(x["G_2_over_P_2_paper"], "median"), "moduli"), "N_div_end"),
+              rerun("see trend: " + (monotone(gp, increasing=True) if have_moduli else "awaits data"), "N_div_end"),
+              fig("figD2"))
     # ---- divisions: the paper's medians are from L = 20 ----
     paper_div = {"none": 0.081, "0.1": 0.071, "0.01": 0.053, "0.001": 0.013, "0.0001": 3e-3, "1e-05": 3e-3}
     for lab in order:
@@ -268,8 +288,8 @@ def main():
             verdict += f" (at L = {L:g} the paper's value is {'inside' if inside else 'outside'} the 95 % CI)"
         claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", ("≲ 3e-3" if pv == 3e-3 else fmt(pv)) + " (L = 20)",
               g(lab, "N_div_2_over_N_J", "ci") + "; φ_2 at ≤ 1 tagged bud left",
-              g(lab, "N_div_2_over_N_J_paper", "ci") + "; every division after φ_J up to no tagged bud left",
-              verdict, fig("figD1"))
+              avail(g(lab, "N_div_2_over_N_J_paper", "ci") + "; every division after φ_J up to no tagged bud left",
+                    "N_div_2_paper"), verdict, fig("figD1"))
     # ---- growth rates ----
     paper_h = {"none": (0.0, 0.0), "0.1": (1.4e-4, 0.05e-4)}
     hs = [groups[l]["h_gamma"]["median"] for l in fed]
@@ -298,13 +318,15 @@ def main():
         claim(f"Π(g) at Δφ = 3e-3, {p0_name(lab)}: weight at g = 1; compressed sector",
               f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
               f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}",
-              f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)",
-              f"{pm(w)} (u at Δφ = 3e-3); g < 1: median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
+              avail(f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)", "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
+              f"{pm(w)} (u at Δφ = 3e-3); g < 1: " +
+              avail(f"median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
+                    "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
               verdict, fig("figE1"))
     if "P_star_range_paper" in M:
         lo, hi = M["P_star_range_paper"]
         overlap = lo <= 4.3e-3 and hi >= 1.3e-3
-        claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E13)", "1.3e-3 – 4.3e-3",
+        claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
               f"{fmt(M['P_star_range'][0])} – {fmt(M['P_star_range'][1])} (a_c = mean completion size "
               f"{fmt(M['a_c_range_area'][0])} – {fmt(M['a_c_range_area'][1])}, true area)",
               f"{fmt(lo)} – {fmt(hi)} (a_c = median of S, {fmt(M['a_c_median_range_area'][0])} – "
@@ -313,7 +335,7 @@ def main():
     # ---- spectrum ----
     D = M.get("dos") or {}
     Dp = D.get("paper") or {}
-    claim("N_zero ≃ N_u (Eq. F3)", "tracks",
+    claim("N_zero ≃ N_u (Eq. F4)", "tracks",
           needs(have_dos and D, f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
                                 f"mean abs(N_zero − N_u) = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), "same",
           "awaits data" if not (have_dos and D) else
@@ -327,7 +349,7 @@ def main():
         verdict = "confirmed" if ok else "not confirmed"
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", "awaits data"
-    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F4)", "collapse; > half of Z − 6 < 0",
+    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5)", "collapse; > half of Z − 6 < 0",
           needs(have_dos and D, f"free linear fits over every packing: R² {fmt(D.get('r2_dZ'))} for ΔZ, "
                                 f"{fmt(D.get('r2_Z_minus_6'))} for Z − 6 (cannot tell a shift apart)", "dos"),
           theirs, verdict, fig("figF1"))
@@ -339,9 +361,9 @@ def main():
                  "| ⟨log₁₀ B_grow/(λ_c B)⟩ |",
                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for sz in A.get("sizes", []):
-        fedres = sz["dZ_identity"]["per_P0_feedback"]
-        allfed = (f"{fmt(sum(x['mean'] * x['n'] for x in fedres) / sum(x['n'] for x in fedres))} "
-                  f"(n={sum(x['n'] for x in fedres)})") if fedres else "—"
+        fed_res = sz["dZ_identity"].get("feedback_targets")
+        allfed = pm(fed_res) if fed_res else "per P0 (an analysis.json without the pooled value): " + "; ".join(
+            f"{label(x['P0'])} {fmt(x['mean'])} (n={x['n']})" for x in sz["dZ_identity"]["per_P0_feedback"])
         size_rows.append(f"| {sz['L']:g} | {sz['runs']} | {sz['jamming_states']} | {pm(sz['u_J'])} | {pm(sz['u_J_lobes'])} | "
                          f"{pm(sz['n_J'])} | {pm(sz['phi_J'])} | {allfed} | {pm(sz['B_grow_over_lambda_B_log10'])} |")
     for Lp in (8, 15, 20):
@@ -355,11 +377,20 @@ def main():
              if a.preset == "quick" else
              f"Preset {a.preset}: the paper's grid for the sizes and targets listed in docs/analysis.md.")
     inp = A["inputs"]
+    if "tables" in inp:
+        source = (f"written by `make -f Makefile.analysis PRESET={a.preset} stored-report` on "
+                  f"{datetime.date.today().isoformat()}: the run directories are not stored, so `budjam analyse --tables "
+                  f"{inp['tables']}` re-applied the estimators to the per-run tables their analysis wrote ({a.tables}). "
+                  "A cell whose inputs those tables do not hold (steps.csv, per-cell growth factors) says what it needs")
+    else:
+        source = (f"written by `make -f Makefile.analysis PRESET={a.preset} report` on {datetime.date.today().isoformat()} "
+                  f"from `budjam analyse` output ({a.tables})")
+    tables = [n for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv", "remaining.csv", "division_curve.csv",
+                          "growth_rates.csv", "trajectory.csv", "dos.csv") if os.path.exists(os.path.join(a.tables, n))]
     lines = [
         "# Reproduction report",
         "",
-        f"Preset **{a.preset}** (main system size L = {L:g}); written by `make -f Makefile.analysis PRESET={a.preset} report` "
-        f"on {datetime.date.today().isoformat()} from `budjam analyse` output ({a.tables}).",
+        f"Preset **{a.preset}** (main system size L = {L:g}); {source}.",
         "",
         f"Runs: {inp['used']} of {inp['runs']} reached jamming and are used; "
         + (f"{sum(len(d) - 1 for d in inp.get('duplicates', []))} duplicate copies of a run left out "
@@ -386,7 +417,7 @@ def main():
         "| --- | --- | --- | --- | --- | --- |",
     ] + rows + size_rows + shear + [
         "",
-        "Per-group tables: " + TABLE_FILES,
+        "Per-group tables: " + ", ".join(f"`{n}`" for n in tables),
         "",
     ]
     write_lines(a.out, lines)

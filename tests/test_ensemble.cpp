@@ -1,13 +1,20 @@
 // The ensemble estimators of budjam_analysis against hand-worked answers: independent samples
 // (jamming states, seeds, duplicate runs), the depletion point and interval averages under both
-// definitions, the paper's run selection, P*, the ΔZ identity, the ω* collapse and Π(g).
+// definitions, the paper's run selection, P*, the ΔZ identity, the ω* collapse and Π(g); and the
+// tables reader's reconstruction of a Kaplan–Meier curve from its printed steps.
 #include "analysis/depletion_estimators.hpp"
+#include "analysis/ensemble_tables.hpp"
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "budjam/depletion.hpp"
+#include "budjam/survival.hpp"
+#include "io/text.hpp"
 
 #include <catch2/catch.hpp>
+#include "scratch.hpp"
+
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -158,4 +165,41 @@ TEST_CASE("Π(g): the δ peak at g = 1, densities on the paper's bins and quarti
   CHECK(d.q25 == Approx(0.5));
   CHECK(d.q75 == Approx(0.98));
   CHECK_THROWS_AS(growth_rate_distribution(std::vector<double>{}, edges), std::invalid_argument);
+}
+
+TEST_CASE("survival.csv read back gives the Kaplan-Meier steps: events from the drop of S, censored from the risk set") {
+  // Ties of events with a censoring (a = 2, 4), censoring-only steps (a = 3, 5, 6; the last one
+  // censored), and Ŝ falling by a third at a = 4 (2 events among 6 at risk): Ŝ = 10/11, 8/11, 16/33.
+  const std::vector<SurvivalRecord> records{{1, true},  {2, true},  {2, false}, {2, true},  {3, false},
+                                            {4, true},  {4, true},  {4, false}, {5, false}, {6, false}, {6, false}};
+  const auto km = kaplan_meier(records);
+  const auto dir = budjam::testing::work_dir() / "km_tables";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "runs.csv") << "run,L,P0,seed,status\nr1,8,0.001,1,finished\n";
+  std::ofstream(dir / "targets.csv") << "run,L,P0,seed,dphi,below_phi2\n";
+  {  // as `budjam analyse` writes it: a first row with the records, then one row per step
+    std::ofstream f(dir / "survival.csv");
+    f << "L,P0,a,S,se,lo,hi,at_risk\n8,0.001,0,1,0,1,1," << km.records() << "\n";
+    for (const auto& st : km.steps())
+      f << "8,0.001," << io::format_double(st.a) << "," << io::format_double(st.S) << ","
+        << io::format_double(std::sqrt(st.greenwood_var)) << ",0,1," << st.at_risk << "\n";
+  }
+  const Ensemble e = read_ensemble_tables(dir);
+  const auto& back = e.survival.at(GroupKey{8, 1e-3});
+  CHECK(back.records() == km.records());
+  CHECK(back.events() == km.events());
+  REQUIRE(back.steps().size() == km.steps().size());
+  for (std::size_t k = 0; k < km.steps().size(); ++k) {
+    const auto &x = back.steps()[k], &y = km.steps()[k];
+    INFO("a = " << y.a);
+    CHECK(x.a == y.a);
+    CHECK(x.S == y.S);
+    CHECK(x.at_risk == y.at_risk);
+    CHECK(x.events == y.events);
+    CHECK(x.censored == y.censored);
+    CHECK(x.greenwood_var == Approx(y.greenwood_var).epsilon(1e-14));
+  }
+  CHECK(median_completion_size(back) == median_completion_size(km));
+  CHECK(back.integral(30) == km.integral(30));
+  CHECK(e.unavailable.count("remaining.csv") == 1);
 }

@@ -31,7 +31,7 @@ std::vector<bool> paper_admitted(std::span<const double> divisions_at_end, std::
 std::vector<double> tukey_inliers(std::span<const double> values, const std::vector<bool>& admitted, double k = 1.5);
 
 // Crossover pressure of the growth-rate distribution P* = n_J (6 + 2u_J) a_c / (8 ln 10)
-// (Eq. E13), with a_c the typical completion size as a true area.
+// (Eq. E12), with a_c the typical completion size as a true area.
 double crossover_pressure(double n_J, double u_J, double a_c_area);
 
 }  // namespace budjam::tools

@@ -1,5 +1,7 @@
 // Ensemble analysis of finished growth runs. A run argument may also be a folder that holds run
-// directories (searched recursively for summary.json). Runs are grouped by (L, P0).
+// directories (searched recursively for summary.json). Runs are grouped by (L, P0). With --tables the
+// records come from the tables of an earlier analysis instead (ensemble_tables.hpp) and the same
+// estimators run on them; what those tables cannot give is listed in analysis.json "unavailable".
 //
 // Outputs (docs/analysis.md, "analyse outputs"):
 //   analysis.json     per-group statistics and the headline numbers, under budjam's definitions
@@ -17,6 +19,8 @@
 #include "analysis/ensemble_analysis.hpp"
 
 #include "analysis/depletion_estimators.hpp"
+#include "analysis/ensemble_records.hpp"
+#include "analysis/ensemble_tables.hpp"
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "io/run_data.hpp"
@@ -51,8 +55,7 @@ namespace {
 namespace fs = std::filesystem;
 using io::Json;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kPmax = 0.1;      // confluence pressure scale (paper Eq. D22)
+constexpr double kPmax = 0.1;      // confluence pressure scale (paper Eq. D25)
 constexpr double kM4 = 0.125;      // ⟨n_x² n_y²⟩ of an isotropic network
 constexpr double kDphiGrowth = 3e-3;  // Δφ of the growth-rate crossover (appendix E)
 
@@ -60,54 +63,8 @@ std::string num(double v) { return io::format_double(v); }
 
 // ---- per-run extraction ------------------------------------------------------------------------
 
-struct TargetRow {
-  double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
-  double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
-  double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
-  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
-  double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
-  bool below_phi2 = false;
-};
 
-struct RunRow {
-  fs::path dir;
-  double L = kNaN;
-  std::optional<double> P0;
-  std::string P0_label;
-  std::uint64_t seed = 0;
-  std::string status;
-  std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
-  bool depleted = false;
-  double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN, P_J = kNaN;
-  double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (the paper's u_J ≃ 0.23)
-  double tagged = kNaN, lc2_J = kNaN;
-  double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
-  // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
-  double chi_bar = kNaN, lambda_bar = kNaN;
-  // the paper's φ_2: first state with no tagged bud left; its P, divisions and interval averages
-  double phi_2_paper = kNaN, dphi_2_paper = kNaN, P_2_paper = kNaN, N_div_2_paper = kNaN;
-  double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
-  double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
-  double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;
-  double h_gamma = kNaN;
-  std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
-  std::vector<SurvivalRecord> survival;
-  std::vector<TargetRow> targets;
-  // curves on the Δφ grid
-  std::vector<double> remaining;  // tagged_active / tagged (NaN beyond the run)
-  std::vector<double> divisions;  // cumulative divisions after φ_J
-};
 
-struct DosRow {
-  std::string run, packing;
-  double L = kNaN;
-  std::string P0_label;
-  double dphi = kNaN, omega_star = kNaN, dZ = kNaN, Z = kNaN, N_zero = kNaN, N_u = kNaN, N_u_buds = kNaN;
-  long N_c = 0, N_nr = 0;  // integer counts: the sign of ΔZ without rounding
-  std::size_t state = 0;   // the run's jamming state (a jammed packing is shared by its runs)
-  bool target = false;     // a Δφ-target packing (the paper's ω* figure uses only these)
-};
 
 Json fraction_json(std::size_t k, std::size_t n) {
   return Json{{"fraction", n ? Json(static_cast<double>(k) / static_cast<double>(n)) : Json(nullptr)}, {"packings", n}};
@@ -134,10 +91,6 @@ struct SidecarModuli {
   double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN, G_min = kNaN;
 };
 
-struct ModuliFiles {
-  std::size_t found = 0;
-  std::size_t saddles = 0;  // "energy_minimum": false — no relaxed B, G (NaN here, left out of every statistic)
-};
 
 SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& files) {
   SidecarModuli m;
@@ -163,6 +116,10 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& file
   return m;
 }
 
+// The numbers summary.json records at jamming and at budjam's φ_2, under their runs.csv names.
+constexpr std::string_view kSummaryKeys[] = {"phi_J",    "u_J",  "n_J",    "N_J",       "N_nr_J", "Z_J", "dZ_J", "P_J",
+                                             "tagged_J", "step_J", "u_J_lobes", "phi_2", "P_2",    "Z_2", "dZ_2", "N_div_2"};
+
 // One jammed run's row (the caller skips runs that never jammed).
 RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_found) {
   RunRow x;
@@ -172,27 +129,12 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   x.P0_label = r.P0_label();
   x.seed = r.seed();
   x.status = r.status();
-  x.phi_J = r.get("phi_J");
-  x.u_J = r.get("u_J");
-  x.n_J = r.get("n_J");
-  x.N_J = r.get("N_J");
-  x.N_nr_J = r.get("N_nr_J");
-  x.Z_J = r.get("Z_J");
-  x.dZ_J = r.get("dZ_J");
-  x.P_J = r.get("P_J");
-  x.tagged = r.get("tagged_J");
-  x.step_J = r.get("step_J");
-  x.u_J_lobes = r.get("u_J_lobes");
-  x.phi_2 = r.get("phi_2");
+  for (const auto& c : kRunColumns)
+    if (std::find(std::begin(kSummaryKeys), std::end(kSummaryKeys), std::string_view(c.name)) != std::end(kSummaryKeys))
+      x.*c.field = r.get(c.name);
   x.depleted = std::isfinite(x.phi_2);
   const double step_2 = r.get("step_2");
-  if (x.depleted) {
-    x.dphi_2 = x.phi_2 - x.phi_J;
-    x.P_2 = r.get("P_2");
-    x.Z_2 = r.get("Z_2");
-    x.dZ_2 = r.get("dZ_2");
-    x.N_div_2 = r.get("N_div_2");
-  }
+  if (x.depleted) x.dphi_2 = x.phi_2 - x.phi_J;
 
   // steps.csv from jamming on (the current episode starts at step_J)
   const auto& S = r.steps;
@@ -334,16 +276,6 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
 
 // ---- grouping and statistics ---------------------------------------------------------------------
 
-struct GroupKey {
-  double L;
-  std::optional<double> P0;
-  bool operator<(const GroupKey& o) const {
-    if (L != o.L) return L < o.L;
-    // none first, then decreasing P0 (weak → strong feedback), as in the paper's figures
-    if (P0.has_value() != o.P0.has_value()) return !P0.has_value();
-    return P0 && *P0 > *o.P0;
-  }
-};
 
 std::vector<double> finite(std::vector<double> v) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
@@ -421,15 +353,6 @@ std::string cell(double v) { return std::isfinite(v) ? num(v) : std::string(); }
 
 // ---- reading ---------------------------------------------------------------------------------------
 
-struct Ensemble {
-  std::vector<RunRow> rows;
-  std::vector<DosRow> dos_rows;
-  std::vector<std::string> failed;                    // runs that stopped early, with their status
-  std::vector<std::vector<std::string>> duplicates;   // copies of one run: the used one first
-  ModuliFiles moduli;
-  std::size_t dos_found = 0;
-  std::size_t runs = 0;
-};
 
 DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& run) {
   DosRow q;
@@ -506,6 +429,12 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
     }
   }
   if (e.rows.empty()) throw InputError("analyse: no run among the inputs reached jamming");
+  std::map<GroupKey, std::vector<SurvivalRecord>> pools;
+  for (const auto& r : e.rows) {
+    auto& pool = pools[{r.L, r.P0}];
+    pool.insert(pool.end(), r.survival.begin(), r.survival.end());
+  }
+  for (const auto& [key, pool] : pools) e.survival.emplace(key, kaplan_meier(pool));
   return e;
 }
 
@@ -524,6 +453,8 @@ std::map<double, PiecewiseLinear> no_feedback_branch(const std::map<GroupKey, st
         by_dphi[t.dphi].second.push_back(t.dZ);
       }
     }
+    // Tables without P_J (an earlier format) give no branch: their stored ΔZ_0(P) + 2(u_J − u) stands.
+    if (std::any_of(PJ.begin(), PJ.end(), [](double p) { return !std::isfinite(p); })) continue;
     std::vector<std::pair<double, double>> pts;
     if (!PJ.empty()) pts.emplace_back(mean(PJ), mean(dZJ));
     for (auto& [d, v] : by_dphi) pts.emplace_back(mean(v.first), mean(v.second));
@@ -575,7 +506,8 @@ struct Tables {
   std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
 };
 
-Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const BootstrapOptions& bo, Tables& t) {
+Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km, const BootstrapOptions& bo,
+                Tables& t) {
   const std::string P0s = key.P0 ? num(*key.P0) : "none";
   std::vector<const RunRow*> dep;
   for (const auto* r : rs)
@@ -647,9 +579,6 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
 
   // pooled Kaplan–Meier and the pooled prediction
-  std::vector<SurvivalRecord> pool;
-  for (const auto* r : rs) pool.insert(pool.end(), r->survival.begin(), r->survival.end());
-  const auto km = kaplan_meier(pool);
   const double uJ = mean(finite(collect(rs, [](auto& r) { return r.u_J; })));
   const double nJ = mean(finite(collect(rs, [](auto& r) { return r.n_J; })));
   const double NnrJ = mean(finite(collect(rs, [](auto& r) { return r.N_nr_J; })));
@@ -684,8 +613,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   for (std::size_t k = 0; k < grid.size(); ++k) {
     std::vector<double> rem, dv;
     for (const auto* r : rs) {
-      if (std::isfinite(r->remaining[k])) rem.push_back(r->remaining[k]);
-      if (std::isfinite(r->divisions[k])) dv.push_back(r->divisions[k] / NJ);
+      if (k < r->remaining.size() && std::isfinite(r->remaining[k])) rem.push_back(r->remaining[k]);
+      if (k < r->divisions.size() && std::isfinite(r->divisions[k])) dv.push_back(r->divisions[k] / NJ);
     }
     if (!rem.empty())
       t.remaining.push_back({num(key.L), P0s, num(grid[k]), num(mean(rem)), cell(rem.size() >= 2 ? standard_error(rem) : kNaN),
@@ -696,19 +625,20 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   }
   g["dphi_2_median"] = median_json(collect(dep, [](auto& r) { return r.dphi_2; }), bo);
 
-  // Fig. E1: Π(g) pooled over the group's runs, on the paper's bins
+  // Fig. E1: Π(g) pooled over the group's runs, on the paper's bins; the paper's weight at g = 1 is
+  // u (buds) at Δφ = 3·10⁻³, which needs no per-cell g
+  std::vector<double> u_at;
+  for (const auto* r : rs)
+    for (const auto& x : r->targets)
+      if (std::abs(x.dphi - kDphiGrowth) < 1e-12) u_at.push_back(x.u);
+  if (!u_at.empty()) g["g_peak_weight_at_1_paper"] = mean_se_json(u_at);
   std::vector<double> gall;
   for (const auto* r : rs) gall.insert(gall.end(), r->g.begin(), r->g.end());
   if (!gall.empty()) {
     const auto edges = paper_growth_rate_edges();
     const auto d = growth_rate_distribution(gall, edges);
-    std::vector<double> u_at;  // the paper's weight at g = 1: u (buds) at Δφ = 3·10⁻³
-    for (const auto* r : rs)
-      for (const auto& x : r->targets)
-        if (std::abs(x.dphi - kDphiGrowth) < 1e-12) u_at.push_back(x.u);
     g["g_cells"] = d.cells;
     g["g_peak_weight_at_1"] = d.weight_at_one;
-    g["g_peak_weight_at_1_paper"] = mean_se_json(u_at);
     g["g_compressed_median"] = io::number_or_null(d.median);
     g["g_compressed_q25"] = io::number_or_null(d.q25);
     g["g_compressed_q75"] = io::number_or_null(d.q75);
@@ -768,13 +698,15 @@ Json shear_instability_by_PN2(const std::vector<const RunRow*>& m) {
 // ΔZ = ΔZ_0(P) + 2(u_J − u) (Eq. 6): budjam's residual over every target of the main L, and the
 // paper's test per P0 over the feedback runs only (the no-feedback runs define ΔZ_0(P)).
 Json dz_identity_json(const std::vector<const RunRow*>& m) {
-  std::vector<double> res;
+  std::vector<double> res, res_fed;
   std::vector<IdentityPoint> fed;
   for (const auto* r : m)
     for (const auto& t : r->targets) {
       if (!std::isfinite(t.dZ_pred)) continue;
       res.push_back(t.dZ - t.dZ_pred);
-      if (r->P0) fed.push_back({*r->P0, t.dZ - t.dZ_pred});
+      if (!r->P0) continue;
+      fed.push_back({*r->P0, t.dZ - t.dZ_pred});
+      res_fed.push_back(t.dZ - t.dZ_pred);
     }
   double sq = 0;
   for (double v : res) sq += v * v;
@@ -788,6 +720,7 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
     per.push_back(p);
   }
   j["per_P0_feedback"] = per;
+  j["feedback_targets"] = mean_se_json(res_fed);
   return j;
 }
 
@@ -833,25 +766,23 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
   return j;
 }
 
-// P_2 ∝ exp(−P†/P0) (Eq. 22, D11): slope of ln P_2 against 1/P0 over the feedback groups with
-// P0 ≤ 10⁻², and the crossover P* (Eq. E13) over the a_c of those groups: budjam's mean completion
+// P_2 ∝ exp(−P†/P0) (Eq. D19): slope of ln P_2 against 1/P0 over the feedback groups with
+// P0 ≤ 10⁻², and the crossover P* (Eq. E12) over the a_c of those groups: budjam's mean completion
 // size, the paper's median (both as true areas).
-void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*>>& groups, double main_L, double nJ, double uJ) {
+void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
+                     const std::map<GroupKey, KaplanMeierCurve>& survival, double main_L, double nJ, double uJ) {
   std::vector<double> x, y, ac_mean, ac_median;
   for (const auto& [key, rs] : groups) {
     if (key.L != main_L || !key.P0 || *key.P0 > 1e-2 + 1e-15) continue;
     std::vector<double> p2;
-    std::vector<SurvivalRecord> pool;
-    for (const auto* r : rs) {
+    for (const auto* r : rs)
       if (r->depleted) p2.push_back(r->P_2);
-      pool.insert(pool.end(), r->survival.begin(), r->survival.end());
-    }
     p2 = finite(p2);
     if (!p2.empty() && mean(p2) > 0) {
       x.push_back(1.0 / *key.P0);
       y.push_back(std::log(mean(p2)));
     }
-    const auto km = kaplan_meier(pool);
+    const auto& km = survival.at(key);
     if (km.events() > 0) ac_mean.push_back(kDiameterSquaredToArea * mean_completion_size(km));
     if (const auto a = median_completion_size(km)) ac_median.push_back(kDiameterSquaredToArea * *a);
   }
@@ -892,10 +823,10 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
   return h;
 }
 
-Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
-                   const std::vector<DosRow>& dos_rows, const BootstrapOptions& bo) {
+Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
+                   const BootstrapOptions& bo) {
   std::vector<const RunRow*> m;
-  for (const auto& r : rows)
+  for (const auto& r : e.rows)
     if (r.L == main_L) m.push_back(&r);
   // Quantities fixed at jamming over every run of the main L (feedback acts only above jamming), one
   // sample per distinct jamming state; the paper's u_J counts contact-free lobes on the
@@ -924,61 +855,62 @@ Json headline_json(double main_L, const std::vector<RunRow>& rows, const std::ma
     h["G2_plateau_over_Pmax"] = io::number_or_null(nJ * lc2 * kM4 * uJ / kPmax);
     h["lc2_J"] = io::number_or_null(lc2);
   }
-  feedback_scales(h, groups, main_L, h["n_J"]["mean"].get<double>(), h["u_J"]["mean"].get<double>());
+  feedback_scales(h, groups, e.survival, main_L, h["n_J"]["mean"].get<double>(), h["u_J"]["mean"].get<double>());
   std::vector<const DosRow*> dm;
-  for (const auto& q : dos_rows)
+  for (const auto& q : e.dos_rows)
     if (q.L == main_L) dm.push_back(&q);
   h["dos"] = spectrum_json(dm);
   return h;
 }
 
+// A table the inputs could not give (Ensemble::unavailable names it) is not written: an empty file
+// would read as "measured, nothing there".
 void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
+  std::vector<std::string> run_header{"run", "L", "P0", "seed", "status", "jamming_state"};
+  std::vector<std::string> tgt_header{"run", "L", "P0", "seed", "dphi"};
+  for (const auto& c : kRunColumns) run_header.push_back(c.name);
+  for (const auto& c : kTargetColumns) tgt_header.push_back(c.name);
+  tgt_header.push_back("below_phi2");
   std::vector<std::vector<std::string>> run_rows, tgt_rows, dos_out;
   for (const auto& r : e.rows) {
-    run_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), r.status, std::to_string(r.state),
-                        cell(r.phi_J), cell(r.u_J), cell(r.u_J_lobes), cell(r.n_J), cell(r.N_J), cell(r.N_nr_J), cell(r.Z_J),
-                        cell(r.dZ_J), cell(r.phi_2), cell(r.dphi_2), cell(r.P_2), cell(r.Z_2), cell(r.dZ_2), cell(r.u_2),
-                        cell(r.N_div_2), cell(r.chi_bar), cell(r.lambda_bar), cell(r.phi_2_paper), cell(r.dphi_2_paper),
-                        cell(r.P_2_paper), cell(r.N_div_2_paper), cell(r.chi_bar_paper), cell(r.lambda_bar_paper),
-                        cell(r.N_div_end), cell(r.a_eps), cell(r.int_S), cell(r.pred_area), cell(r.pred_d2), cell(r.B_2),
-                        cell(r.G_2), cell(r.G_2_energy), cell(r.G_min_2), cell(r.h_gamma), cell(r.lc2_J)});
-    for (const auto& x : r.targets)
-      tgt_rows.push_back({r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(x.dphi), cell(x.phi), cell(x.P),
-                          cell(x.Z), cell(x.Z_iso), cell(x.dZ), cell(x.dZ_pred), cell(x.u), cell(x.u_lobes), cell(x.chi_c),
-                          cell(x.lambda), cell(x.B_grow), cell(x.B_grow_se), cell(x.B), cell(x.G), cell(x.G_energy), cell(x.G_min), cell(x.B_ext_mf),
-                          cell(x.N_div), x.below_phi2 ? "true" : "false"});
+    std::vector<std::string> row{r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), r.status, std::to_string(r.state)};
+    for (const auto& c : kRunColumns) row.push_back(cell(r.*c.field));
+    run_rows.push_back(row);
+    for (const auto& x : r.targets) {
+      std::vector<std::string> trow{r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(x.dphi)};
+      for (const auto& c : kTargetColumns) trow.push_back(cell(x.*c.field));
+      trow.push_back(x.below_phi2 ? "true" : "false");
+      tgt_rows.push_back(trow);
+    }
   }
   for (const auto& q : e.dos_rows)
     dos_out.push_back({q.run, q.packing, num(q.L), q.P0_label, std::to_string(q.state), cell(q.dphi), cell(q.omega_star),
                        cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr), cell(q.N_zero), cell(q.N_u),
                        cell(q.N_u_buds)});
-  write_csv(out / "runs.csv",
-            {"run", "L", "P0", "seed", "status", "jamming_state", "phi_J", "u_J", "u_J_lobes", "n_J", "N_J", "N_nr_J", "Z_J",
-             "dZ_J", "phi_2", "dphi_2", "P_2", "Z_2", "dZ_2", "u_2", "N_div_2", "chi_bar", "lambda_bar", "phi_2_paper",
-             "dphi_2_paper", "P_2_paper", "N_div_2_paper", "chi_bar_paper", "lambda_bar_paper", "N_div_end", "a_eps",
-             "integral_S", "dphi_2_pred_area", "dphi_2_pred_diameter_sq", "B_2", "G_2", "G_2_energy", "G_min_2", "h_gamma",
-             "lc2_J"},
-            run_rows);
-  write_csv(out / "targets.csv",
-            {"run", "L", "P0", "seed", "dphi", "phi", "P", "Z", "Z_iso", "dZ", "dZ_pred", "u", "u_lobes", "chi_c",
-             "lambda_c", "B_grow", "B_grow_se", "B", "G", "G_energy", "G_min", "B_ext_mean_field", "N_div", "below_phi2"},
-            tgt_rows);
-  write_csv(out / "survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, t.survival);
-  write_csv(out / "remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
-  write_csv(out / "division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, t.divisions);
-  write_csv(out / "growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
-  write_csv(out / "trajectory.csv", {"L", "P0", "dphi", "P", "G", "P_median", "G_median", "runs", "endpoint"}, t.trajectory);
-  write_csv(out / "dos.csv",
-            {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero",
-             "N_u", "N_u_buds"},
-            dos_out);
+  auto write = [&](const char* name, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+    if (!e.unavailable.count(name)) write_csv(out / name, header, rows);
+  };
+  write("runs.csv", run_header, run_rows);
+  write("targets.csv", tgt_header, tgt_rows);
+  write("survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, t.survival);
+  write("remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
+  write("division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, t.divisions);
+  write("growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
+  write("trajectory.csv", {"L", "P0", "dphi", "P", "G", "P_median", "G_median", "runs", "endpoint"}, t.trajectory);
+  write("dos.csv",
+        {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero", "N_u",
+         "N_u_buds"},
+        dos_out);
 }
 
 }  // namespace
 
 std::string analyse_ensemble(const EnsembleOptions& o) {
   if (o.out.empty()) throw InputError("--out: an output directory is required");
-  Ensemble e = read_ensemble(o);
+  if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
+  if (!o.tables.empty() && fs::exists(o.out) && fs::equivalent(o.tables, o.out))
+    throw InputError("--out: " + o.out + " is the --tables directory; its tables would be overwritten");
+  Ensemble e = o.tables.empty() ? read_ensemble(o) : read_ensemble_tables(o.tables);
 
   std::map<GroupKey, std::vector<const RunRow*>> groups;
   std::set<double> lengths;
@@ -1000,7 +932,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   fs::create_directories(out);
   Tables tables;
   Json jgroups = Json::array();
-  for (const auto& [key, rs] : groups) jgroups.push_back(group_json(key, rs, o.bootstrap, tables));
+  for (const auto& [key, rs] : groups) jgroups.push_back(group_json(key, rs, e.survival.at(key), o.bootstrap, tables));
 
   Json J;
   J["format"] = "budjam-analysis";
@@ -1012,6 +944,8 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
                      {"moduli_files", e.moduli.found},
                      {"moduli_saddles", e.moduli.saddles},
                      {"dos_files", e.dos_found}};
+  if (!o.tables.empty()) J["inputs"]["tables"] = o.tables;
+  J["unavailable"] = e.unavailable;
   J["main_L"] = main_L;
   J["bootstrap"] = Json{{"resamples", o.bootstrap.resamples}, {"seed", o.bootstrap.seed}};
   J["constants"] = Json{{"P_max", kPmax},
@@ -1019,7 +953,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
                         {"M4", kM4},
                         {"u_J_lambert_w", u_J_mean_field()},
                         {"lambert_w0_of_minus_2_e_minus_2", lambert_w0(-2.0 * std::exp(-2.0))}};
-  J["main"] = headline_json(main_L, e.rows, groups, e.dos_rows, o.bootstrap);
+  J["main"] = headline_json(main_L, e, groups, o.bootstrap);
   J["groups"] = jgroups;
   {
     Json sizes = Json::array();

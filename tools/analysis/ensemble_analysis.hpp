@@ -13,13 +13,14 @@ namespace budjam::tools {
 
 struct EnsembleOptions {
   std::vector<std::string> inputs;  // run directories, or folders holding them (searched recursively)
+  std::string tables;               // or: the tables of an earlier analysis (ensemble_tables.hpp)
   std::string out;                  // output directory
   double main_L = 0;                // 0: 15 if present, else the largest L
   BootstrapOptions bootstrap;
   bool require_moduli = false, require_dos = false;  // their absence is an error, not empty columns
 };
 
-// Reads the runs, writes the tables listed in docs/analysis.md ("analyse outputs") into
+// Reads the runs (or the tables), writes the tables listed in docs/analysis.md ("analyse outputs") into
 // options.out, and returns a one-line account of what was used. InputError for bad input.
 std::string analyse_ensemble(const EnsembleOptions& options);
 

@@ -1,6 +1,6 @@
 #pragma once
 // Estimators of the contact structure and the growth-rate field above jamming: the ΔZ identity
-// (Eq. 6), the collapse of ω* on ΔZ (Eq. F4) and the growth-rate distribution Π(g) (appendix E).
+// (Eq. 6), the collapse of ω* on ΔZ (Eq. F5) and the growth-rate distribution Π(g) (appendix E).
 #include "budjam/statistics.hpp"
 
 #include <cstddef>

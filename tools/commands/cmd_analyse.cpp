@@ -1,4 +1,5 @@
 // `budjam analyse RUNDIR... --out DIR [--main-L L] [--resamples N] [--seed S] [--require WHAT]`
+// `budjam analyse --tables DIR --out DIR2 [...]`: the same estimators on the tables of an earlier analysis
 // Ensemble analysis of finished growth runs; the work is analysis/ensemble_analysis.
 #include "analysis/ensemble_analysis.hpp"
 #include "budjam/scene.hpp"
@@ -31,7 +32,9 @@ const bool registered = budjam::cli::register_command(
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        auto& e = o->ensemble;
-       sub.add_option("RUNDIR", e.inputs, "run directories, or folders holding them")->required();
+       sub.add_option("RUNDIR", e.inputs, "run directories, or folders holding them");
+       sub.add_option("--tables", e.tables,
+                      "instead of runs: the runs.csv, targets.csv, dos.csv, survival.csv of an earlier analysis");
        sub.add_option("--out", e.out, "output directory")->required();
        sub.add_option("--main-L", e.main_L, "system size of the main figures (default 15 if present, else the largest)");
        sub.add_option("--resamples", e.bootstrap.resamples, "bootstrap resamples (default 2000)");

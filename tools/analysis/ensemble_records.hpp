@@ -1,0 +1,135 @@
+#pragma once
+// The in-memory records of an ensemble analysis: one row per jammed run with its Δφ targets, one per
+// spectrum, and the pooled survival of each (L, P0) group. Two readers fill them, from finished run
+// directories (ensemble_analysis.cpp) and from the tables an earlier analysis wrote
+// (ensemble_tables.hpp); the estimators see no difference. The column lists name each record field
+// in runs.csv and targets.csv, for the writer and the tables reader alike.
+#include "budjam/survival.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct TargetRow {
+  double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
+  double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
+  double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
+  double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
+  double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
+  bool below_phi2 = false;
+};
+
+struct RunRow {
+  std::filesystem::path dir;
+  double L = kNaN;
+  std::optional<double> P0;
+  std::string P0_label;
+  std::uint64_t seed = 0;
+  std::string status;
+  std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
+  bool depleted = false;
+  double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN, P_J = kNaN;
+  double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (the paper's u_J ≃ 0.23)
+  double tagged = kNaN, lc2_J = kNaN;
+  double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
+  // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
+  double chi_bar = kNaN, lambda_bar = kNaN;
+  // the paper's φ_2: first state with no tagged bud left; its P, divisions and interval averages
+  double phi_2_paper = kNaN, dphi_2_paper = kNaN, P_2_paper = kNaN, N_div_2_paper = kNaN;
+  double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
+  double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
+  double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;
+  double h_gamma = kNaN;
+  std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
+  std::vector<SurvivalRecord> survival;
+  std::vector<TargetRow> targets;
+  // curves on the Δφ grid
+  std::vector<double> remaining;  // tagged_active / tagged (NaN beyond the run)
+  std::vector<double> divisions;  // cumulative divisions after φ_J
+};
+
+struct DosRow {
+  std::string run, packing;
+  double L = kNaN;
+  std::string P0_label;
+  double dphi = kNaN, omega_star = kNaN, dZ = kNaN, Z = kNaN, N_zero = kNaN, N_u = kNaN, N_u_buds = kNaN;
+  long N_c = 0, N_nr = 0;  // integer counts: the sign of ΔZ without rounding
+  std::size_t state = 0;   // the run's jamming state (a jammed packing is shared by its runs)
+  bool target = false;     // a Δφ-target packing (the paper's ω* figure uses only these)
+};
+
+struct GroupKey {
+  double L;
+  std::optional<double> P0;
+  bool operator<(const GroupKey& o) const {
+    if (L != o.L) return L < o.L;
+    // none first, then decreasing P0 (weak → strong feedback), as in the paper's figures
+    if (P0.has_value() != o.P0.has_value()) return !P0.has_value();
+    return P0 && *P0 > *o.P0;
+  }
+};
+
+struct ModuliFiles {
+  std::size_t found = 0;
+  std::size_t saddles = 0;  // "energy_minimum": false — no relaxed B, G (NaN here, left out of every statistic)
+};
+
+struct Ensemble {
+  std::vector<RunRow> rows;
+  std::vector<DosRow> dos_rows;
+  std::vector<std::string> failed;                    // runs that stopped early, with their status
+  std::vector<std::vector<std::string>> duplicates;   // copies of one run: the used one first
+  ModuliFiles moduli;
+  std::size_t dos_found = 0;
+  std::size_t runs = 0;
+  std::map<GroupKey, KaplanMeierCurve> survival;  // pooled over the runs of each group
+  // What the inputs could not give, with the reason: quantity → "needs …" (the tables hold less
+  // than the run directories). Empty for run directories.
+  std::map<std::string, std::string> unavailable;
+};
+
+// A number of a record under its column name in runs.csv / targets.csv.
+struct RunColumn {
+  const char* name;
+  double RunRow::*field;
+};
+struct TargetColumn {
+  const char* name;
+  double TargetRow::*field;
+};
+
+// runs.csv after its leading columns run, L, P0, seed, status, jamming_state.
+inline constexpr RunColumn kRunColumns[] = {
+    {"phi_J", &RunRow::phi_J}, {"u_J", &RunRow::u_J}, {"u_J_lobes", &RunRow::u_J_lobes}, {"n_J", &RunRow::n_J},
+    {"N_J", &RunRow::N_J}, {"N_nr_J", &RunRow::N_nr_J}, {"Z_J", &RunRow::Z_J}, {"dZ_J", &RunRow::dZ_J},
+    {"phi_2", &RunRow::phi_2}, {"dphi_2", &RunRow::dphi_2}, {"P_2", &RunRow::P_2}, {"Z_2", &RunRow::Z_2},
+    {"dZ_2", &RunRow::dZ_2}, {"u_2", &RunRow::u_2}, {"N_div_2", &RunRow::N_div_2}, {"chi_bar", &RunRow::chi_bar},
+    {"lambda_bar", &RunRow::lambda_bar}, {"phi_2_paper", &RunRow::phi_2_paper}, {"dphi_2_paper", &RunRow::dphi_2_paper},
+    {"P_2_paper", &RunRow::P_2_paper}, {"N_div_2_paper", &RunRow::N_div_2_paper},
+    {"chi_bar_paper", &RunRow::chi_bar_paper}, {"lambda_bar_paper", &RunRow::lambda_bar_paper},
+    {"N_div_end", &RunRow::N_div_end}, {"a_eps", &RunRow::a_eps}, {"integral_S", &RunRow::int_S},
+    {"dphi_2_pred_area", &RunRow::pred_area}, {"dphi_2_pred_diameter_sq", &RunRow::pred_d2}, {"B_2", &RunRow::B_2},
+    {"G_2", &RunRow::G_2}, {"G_2_energy", &RunRow::G_2_energy}, {"G_min_2", &RunRow::G_min_2},
+    {"h_gamma", &RunRow::h_gamma}, {"lc2_J", &RunRow::lc2_J}, {"P_J", &RunRow::P_J}, {"step_J", &RunRow::step_J},
+    {"tagged_J", &RunRow::tagged}};
+
+// targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
+inline constexpr TargetColumn kTargetColumns[] = {
+    {"phi", &TargetRow::phi}, {"P", &TargetRow::P}, {"Z", &TargetRow::Z}, {"Z_iso", &TargetRow::Z_iso},
+    {"dZ", &TargetRow::dZ}, {"dZ_pred", &TargetRow::dZ_pred}, {"u", &TargetRow::u}, {"u_lobes", &TargetRow::u_lobes},
+    {"chi_c", &TargetRow::chi_c}, {"lambda_c", &TargetRow::lambda}, {"B_grow", &TargetRow::B_grow},
+    {"B_grow_se", &TargetRow::B_grow_se}, {"B", &TargetRow::B}, {"G", &TargetRow::G}, {"G_energy", &TargetRow::G_energy},
+    {"G_min", &TargetRow::G_min}, {"B_ext_mean_field", &TargetRow::B_ext_mf}, {"N_div", &TargetRow::N_div},
+    {"N_nr", &TargetRow::N_nr}};
+
+}  // namespace budjam::tools

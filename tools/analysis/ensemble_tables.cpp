@@ -1,0 +1,225 @@
+#include "analysis/ensemble_tables.hpp"
+
+#include "analysis/jamming_states.hpp"
+#include "budjam/scene.hpp"
+#include "io/json.hpp"
+#include "io/run_data.hpp"
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// What a runs.csv column is computed from, for the account of a column the tables lack.
+std::string needs(const std::string& column) {
+  static const std::map<std::string, std::string> from{
+      {"u_2", "steps.csv"},           {"chi_bar", "steps.csv"},          {"lambda_bar", "steps.csv"},
+      {"phi_2_paper", "steps.csv"},   {"dphi_2_paper", "steps.csv"},     {"P_2_paper", "steps.csv"},
+      {"N_div_2_paper", "steps.csv"}, {"chi_bar_paper", "steps.csv"},    {"lambda_bar_paper", "steps.csv"},
+      {"N_div_end", "steps.csv"},     {"a_eps", "bud_events.csv"},       {"integral_S", "bud_events.csv"},
+      {"B_2", "the moduli at φ_2"},   {"G_2", "the moduli at φ_2"},      {"G_2_energy", "the moduli at φ_2"},
+      {"G_min_2", "the moduli at φ_2"}, {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
+      {"lc2_J", "the jammed packing"}};
+  const auto it = from.find(column);
+  return it != from.end() ? it->second : "summary.json";
+}
+
+double number_or_nan(const CsvTable& t, const char* name, std::size_t row) {
+  return t.has_column(name) ? t.number(row, t.column(name)) : kNaN;
+}
+
+void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t>& index) {
+  for (const auto& c : kRunColumns)
+    if (!R.has_column(c.name))
+      e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + needs(c.name) + " of each run)";
+  const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
+                    c_status = R.column("status");
+  for (std::size_t k = 0; k < R.size(); ++k) {
+    RunRow x;
+    x.dir = R.text(k, c_run);
+    x.L = R.number(k, c_L);
+    x.P0_label = R.text(k, c_P0);
+    if (x.P0_label != "none") x.P0 = R.number(k, c_P0);
+    x.seed = static_cast<std::uint64_t>(R.integer(k, c_seed, 0, std::numeric_limits<long long>::max()));
+    x.status = R.text(k, c_status);
+    for (const auto& c : kRunColumns) x.*c.field = number_or_nan(R, c.name, k);
+    x.depleted = std::isfinite(x.phi_2);
+    if (!index.emplace(x.dir.string(), e.rows.size()).second)
+      throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " listed twice");
+    if (x.status != "finished") e.failed.push_back(x.dir.string() + " (" + x.status + ")");
+    e.rows.push_back(std::move(x));
+  }
+  if (e.rows.empty()) throw InputError(R.source + ": no runs");
+  if (e.unavailable.count("P_J"))
+    e.unavailable["P_J"] += "; ΔZ_0(P) + 2(u_J − u) is taken from targets.csv (dZ_pred) as the earlier analysis computed it";
+  // The state a run jammed into: as the earlier analysis numbered it, else from its key (an earlier
+  // format has no step_J: runs of one seed that jam with the same N_J at bit-identical φ_J are one state).
+  if (R.has_column("jamming_state")) {
+    const std::size_t c = R.column("jamming_state");
+    for (std::size_t k = 0; k < R.size(); ++k)
+      e.rows[k].state = static_cast<std::size_t>(R.integer(k, c, 0, std::numeric_limits<long long>::max()));
+    return;
+  }
+  std::vector<JammingKey> keys;
+  for (const auto& r : e.rows) keys.push_back({r.L, r.seed, std::isfinite(r.step_J) ? r.step_J : 0.0, r.N_J, r.phi_J});
+  const auto states = jamming_state_ids(keys);
+  for (std::size_t k = 0; k < e.rows.size(); ++k) e.rows[k].state = states[k];
+}
+
+RunRow& run_of(const CsvTable& t, std::size_t row, std::vector<RunRow>& rows, const std::map<std::string, std::size_t>& index) {
+  const auto it = index.find(t.text(row, t.column("run")));
+  if (it == index.end())
+    throw InputError(t.source + ":" + std::to_string(row + 2) + ": run " + t.text(row, t.column("run")) + " is not in runs.csv");
+  return rows[it->second];
+}
+
+// N_nr of a packing from its Z_iso = 6 − 2u − 2/N_nr (paper Eq. 4), for tables that do not store it.
+double nonrattlers_from_Z_iso(double u_lobes, double Z_iso) { return std::round(2.0 / (6.0 - 2.0 * u_lobes - Z_iso)); }
+
+void read_targets(const CsvTable& T, Ensemble& e, const std::map<std::string, std::size_t>& index) {
+  const std::size_t c_dphi = T.column("dphi"), c_below = T.column("below_phi2");
+  for (std::size_t k = 0; k < T.size(); ++k) {
+    TargetRow y;
+    y.dphi = T.number(k, c_dphi);
+    for (const auto& c : kTargetColumns) y.*c.field = number_or_nan(T, c.name, k);
+    if (!T.has_column("N_nr")) y.N_nr = nonrattlers_from_Z_iso(y.u_lobes, y.Z_iso);
+    y.below_phi2 = T.text(k, c_below) == "true";
+    run_of(T, k, e.rows, index).targets.push_back(y);
+  }
+  for (const auto& c : kTargetColumns)
+    if (!T.has_column(c.name) && std::string(c.name) != "N_nr")
+      e.unavailable[std::string("targets.csv:") + c.name] = T.source + " has no column " + c.name;
+}
+
+// Integer contact counts of a spectrum row of a table that does not store them: N_nr from the
+// target's Z_iso or the run's N_nr,J, N_c = Z N_nr. 0 where neither is known (the φ_2 packing).
+void contact_counts(DosRow& q, const RunRow& run) {
+  double N_nr = 0;
+  if (q.packing == "jammed") N_nr = run.N_nr_J;
+  for (const auto& t : run.targets)
+    if (q.target && t.dphi == q.dphi) N_nr = t.N_nr;
+  if (!(N_nr > 0)) return;
+  q.N_nr = std::lround(N_nr);
+  q.N_c = std::lround(q.Z * N_nr);
+}
+
+void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, std::size_t>& index) {
+  const bool counts = D.has_column("N_c") && D.has_column("N_nr");
+  if (!counts)
+    e.unavailable["dos.csv:N_c,N_nr"] = D.source + " has no integer contact counts: taken from targets.csv (Z_iso) for "
+                                       "the Δφ-target packings and from runs.csv (N_nr_J) for the jammed ones; 0 for others";
+  const std::size_t c_pack = D.column("packing");
+  for (std::size_t k = 0; k < D.size(); ++k) {
+    RunRow& run = run_of(D, k, e.rows, index);
+    DosRow q;
+    q.run = run.dir.string();
+    q.packing = D.text(k, c_pack);
+    q.L = run.L;
+    q.P0_label = run.P0_label;
+    q.state = run.state;
+    q.target = q.packing.rfind("target_", 0) == 0;
+    q.dphi = number_or_nan(D, "dphi", k);
+    q.omega_star = D.number(k, D.column("omega_star"));
+    q.dZ = D.number(k, D.column("dZ"));
+    q.Z = D.number(k, D.column("Z_minus_6")) + 6.0;
+    q.N_zero = D.number(k, D.column("N_zero"));
+    q.N_u = D.number(k, D.column("N_u"));
+    q.N_u_buds = number_or_nan(D, "N_u_buds", k);
+    if (counts) {
+      q.N_c = static_cast<long>(D.integer(k, D.column("N_c"), 0, std::numeric_limits<long>::max()));
+      q.N_nr = static_cast<long>(D.integer(k, D.column("N_nr"), 0, std::numeric_limits<long>::max()));
+    } else {
+      contact_counts(q, run);
+    }
+    // the contact-free lobes at jamming of a table without u_J_lobes: the jammed packing's N_u / N_nr,J
+    if (q.packing == "jammed" && !std::isfinite(run.u_J_lobes)) run.u_J_lobes = q.N_u / run.N_nr_J;
+    e.dos_rows.push_back(q);
+  }
+  e.dos_found = e.dos_rows.size();
+  if (e.unavailable.erase("u_J_lobes"))
+    e.unavailable["runs.csv:u_J_lobes"] = "taken from dos.csv: N_u of the jammed packing / N_nr_J";
+}
+
+// The pooled Kaplan–Meier curve of each group from survival.csv: per group a first row at a = 0 with
+// the number of records at risk, then one row per step (a, Ŝ, Greenwood SE, at risk). The events at
+// a step follow from Ŝ_k = Ŝ_{k−1} (1 − d_k / n_k), the censored from the drop of the risk set.
+void read_survival(const CsvTable& S, Ensemble& e) {
+  std::map<std::pair<double, std::string>, GroupKey> groups;
+  for (const auto& r : e.rows) groups.emplace(std::pair{r.L, r.P0_label}, GroupKey{r.L, r.P0});
+  const std::size_t c_L = S.column("L"), c_P0 = S.column("P0"), c_a = S.column("a"), c_S = S.column("S"),
+                    c_se = S.column("se"), c_risk = S.column("at_risk");
+  std::size_t k = 0;
+  while (k < S.size()) {
+    const auto g = groups.find({S.number(k, c_L), S.text(k, c_P0)});
+    if (g == groups.end())
+      throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) + ", P0 = " + S.text(k, c_P0) +
+                       " has no run in runs.csv");
+    const auto records = static_cast<std::size_t>(S.integer(k, c_risk, 0, std::numeric_limits<long long>::max()));
+    std::vector<KaplanMeierStep> steps;
+    std::size_t events = 0;
+    double S_prev = 1;
+    for (++k; k < S.size() && S.number(k, c_L) == g->first.first && S.text(k, c_P0) == g->first.second; ++k) {
+      KaplanMeierStep st;
+      st.a = S.number(k, c_a);
+      st.S = S.number(k, c_S);
+      st.greenwood_var = std::pow(S.number(k, c_se), 2);
+      st.at_risk = static_cast<std::size_t>(S.integer(k, c_risk, 1, std::numeric_limits<long long>::max()));
+      st.events = static_cast<std::size_t>(std::lround(static_cast<double>(st.at_risk) * (1.0 - st.S / S_prev)));
+      if (!steps.empty()) steps.back().censored = steps.back().at_risk - steps.back().events - st.at_risk;
+      events += st.events;
+      S_prev = st.S;
+      steps.push_back(st);
+    }
+    if (!steps.empty()) steps.back().censored = steps.back().at_risk - steps.back().events;
+    e.survival[g->second] = KaplanMeierCurve(std::move(steps), records, events);
+  }
+}
+
+// Format 1 of the tables (analysis.json "version": 1) holds χ̄ and λ̄_c as trapezoids in φ, which weight
+// the long steps, and the φ_2 predictions built on that χ̄: not today's plain means over the accepted
+// states (docs/analysis.md, "Definitions"). They are left out rather than reported under a definition
+// they do not have.
+void drop_format1_averages(Ensemble& e) {
+  for (auto& r : e.rows) r.chi_bar = r.lambda_bar = r.pred_area = r.pred_d2 = kNaN;
+  for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area", "dphi_2_pred_diameter_sq"})
+    e.unavailable[c] = std::string("runs.csv of format 1 holds it with χ̄ a trapezoid in φ (it needs steps.csv of each run ") +
+                       "for the plain mean over the accepted states)";
+}
+
+}  // namespace
+
+Ensemble read_ensemble_tables(const fs::path& dir) {
+  Ensemble e;
+  std::map<std::string, std::size_t> index;  // run → row
+  read_runs(read_csv(dir / "runs.csv"), e, index);
+  if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1) drop_format1_averages(e);
+  e.runs = e.rows.size();
+  read_targets(read_csv(dir / "targets.csv"), e, index);
+  if (fs::exists(dir / "dos.csv")) read_spectra(read_csv(dir / "dos.csv"), e, index);
+  else e.unavailable["dos.csv"] = (dir / "dos.csv").string() + " absent: no spectra";
+  for (const auto& r : e.rows) e.survival.emplace(GroupKey{r.L, r.P0}, KaplanMeierCurve{});
+  if (fs::exists(dir / "survival.csv")) read_survival(read_csv(dir / "survival.csv"), e);
+  else e.unavailable["survival.csv"] = (dir / "survival.csv").string() + " absent: no pooled survival (needs bud_events.csv)";
+  const std::string steps = "needs steps.csv and divisions.csv of each run";
+  const std::string cells = "needs the growth factor of each cell (the packing at Δφ = 3·10⁻³)";
+  e.unavailable["remaining.csv"] = steps;
+  e.unavailable["division_curve.csv"] = steps;
+  e.unavailable["growth_rates.csv"] = cells;
+  e.unavailable["g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"] = cells;
+  e.unavailable["moduli_saddles"] = "the tables do not say which packings were saddles";
+  e.unavailable["duplicates"] = "the tables do not hold summary.json to compare copies by";
+  for (const auto& r : e.rows) {
+    e.moduli.found += std::isfinite(r.G_2);
+    for (const auto& t : r.targets) e.moduli.found += std::isfinite(t.G);
+  }
+  return e;
+}
+
+}  // namespace budjam::tools
