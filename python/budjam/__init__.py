@@ -13,16 +13,18 @@ time in the units of the growth rates (docs/files.md lists every file's columns 
     budjam.export(p, "jammed.gsd", "gsd")  # for OVITO / HOOMD-blue
     run = budjam.load_run("run")           # pandas DataFrames of every table of a growth run
     run.steps["phi"]
+    for event in budjam.grow("scene.toml", seed=3):   # jamming, targets, phi_2, divisions, buds
+        print(event["kind"], event["phi"])
 
 The functions are the ones `budjam` (the command line) runs, so their results are the same.
 """
 import json
 import pathlib
 
-from ._budjam import (InputError, OutputError, Packing, contacts, export, moduli, particle_frame,
+from ._budjam import (Growth, InputError, OutputError, Packing, contacts, export, moduli, particle_frame,
                       read_packing, rigidity, spectrum)
 
-__all__ = ["InputError", "OutputError", "Packing", "Run", "contacts", "export", "load_run", "moduli",
+__all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "contacts", "export", "load_run", "moduli",
            "particle_frame", "read_packing", "rigidity", "spectrum"]
 
 
@@ -58,3 +60,18 @@ class Run:
 def load_run(directory):
     """Read a finished run directory: a Run with .summary (dict) and one DataFrame per CSV table."""
     return Run(directory)
+
+
+def grow(scene, seed=None, set=(), callback=None):
+    """Grow the scene (a .toml path) with the same driver as `budjam grow`, without writing files.
+
+    seed overrides run.seed; set is a list of "section.key=value" overrides. Without callback,
+    returns the Growth iterator of events (see Growth); with one, calls callback(event) for every
+    event and returns the final status ('finished', or an expected early stop such as
+    'step_limit')."""
+    growth = Growth(str(scene), seed, list(set))
+    if callback is None:
+        return growth
+    for event in growth:
+        callback(event)
+    return growth.status

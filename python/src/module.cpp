@@ -4,6 +4,7 @@
 // (per unit area in 2D), eigenvalues λ in k/m (m = mother mass), angles in radians.
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
+#include "budjam/growth_driver.hpp"
 #include "budjam/moduli.hpp"
 #include "budjam/rigidity.hpp"
 #include "budjam/spectrum.hpp"
@@ -11,6 +12,7 @@
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
 #include "io/run_data.hpp"
+#include "io/scene_file.hpp"
 #include "io/text.hpp"
 
 #include <pybind11/eigen.h>
@@ -20,6 +22,8 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <cmath>
+#include <deque>
+#include <memory>
 #include <map>
 #include <optional>
 #include <string>
@@ -173,6 +177,83 @@ py::dict frame_dict(const io::ParticleFrame& f) {
                   "bond_force"_a = array(force), "bond_crosses_boundary"_a = array(crosses));
 }
 
+
+// The events of a growth run as Python dicts, in the order the driver emits them. Each carries the
+// state it happened in (step, phi, P, N, phase) and a copy of the packing.
+class EventQueue : public Observer {
+ public:
+  std::string name() const override { return "python"; }
+  void on_jammed(const Jammed& e) override {
+    const JammingRecord& j = e.jamming;
+    push("jammed", e.state, py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.Z, "Z_iso"_a = j.Z_iso,
+                                     "dZ"_a = j.dZ, "N_nr"_a = j.N_nr, "u_J"_a = j.u_buds, "tagged"_a = j.tagged));
+  }
+  void on_unjammed(const Unjammed& e) override {
+    push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
+  }
+  void on_target_reached(const TargetReached& e) override {
+    const TargetRecord& t = e.target;
+    push("target", e.state, py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.Z, "dZ"_a = t.dZ,
+                                     "N_nr"_a = t.N_nr, "chi_c"_a = t.chi_c));
+  }
+  void on_depleted(const Depleted& e) override {
+    push("phi2", e.state, py::dict("phi_2"_a = e.depletion.phi, "Z"_a = e.depletion.Z, "dZ"_a = e.depletion.dZ));
+  }
+  void on_divided(const Divided& e) override {
+    const Division& d = e.division;
+    push("division", e.state, py::dict("mother_id"_a = d.mother_id, "daughter_id"_a = d.daughter_id, "b"_a = d.b));
+  }
+  void on_bud_event(const BudEventHappened& e) override {
+    push(std::string("bud_") + to_string(e.event.kind), e.state,
+         py::dict("cell_id"_a = e.event.cell_id, "episode"_a = e.event.episode, "a"_a = e.event.a));
+  }
+  void on_finished(const Finished& e) override { push("finished", e.state, py::dict("status"_a = "finished")); }
+  void on_failed(const Failed& e) override {
+    // An expected early stop (step limit, ...) is an outcome of the run, not an exception.
+    push("stopped", e.state, py::dict("status"_a = to_string(e.result.status), "message"_a = e.result.message));
+  }
+
+  std::deque<py::dict> events;
+
+ private:
+  void push(const std::string& kind, const StateView& s, py::dict fields) {
+    io::PackingFile f;
+    f.packing = *s.packing;
+    fields["kind"] = kind;
+    fields["step"] = s.step;
+    fields["phi"] = s.phi;
+    fields["P"] = s.P;
+    fields["N"] = s.packing->size();
+    fields["phase"] = to_string(s.phase);
+    fields["packing"] = std::move(f);
+    events.push_back(std::move(fields));
+  }
+};
+
+// `for event in budjam.grow(...)`: advances the driver until it has something to report.
+class Growth {
+ public:
+  Growth(const std::filesystem::path& scene, std::optional<std::uint64_t> seed, const std::vector<std::string>& set)
+      : scene_(io::load_scene(scene, set)), driver_(scene_, DriverOptions{seed}) {
+    driver_.add_observer(queue_);
+  }
+  py::dict next() {
+    while (queue_.events.empty()) {
+      if (driver_.result().status != RunStatus::running) throw py::stop_iteration();
+      driver_.advance();
+    }
+    py::dict e = std::move(queue_.events.front());
+    queue_.events.pop_front();
+    return e;
+  }
+  const GrowthDriver& driver() const { return driver_; }
+
+ private:
+  Scene scene_;
+  EventQueue queue_;
+  GrowthDriver driver_;
+};
+
 }  // namespace
 
 PYBIND11_MODULE(_budjam, m) {
@@ -297,4 +378,19 @@ ARPACK modes (0: as many as omega_star needs).)");
         "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
         "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
         "GSD (HOOMD schema) or legacy VTK.");
+
+  py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
+
+Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
+'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the status of an
+expected early stop such as 'step_limit'), the state it happened in (step = accepted steps, phi,
+P in k, N, phase) with a copy of the packing, and the fields of that event.)")
+      .def(py::init<const std::filesystem::path&, std::optional<std::uint64_t>, const std::vector<std::string>&>(),
+           "scene"_a, "seed"_a = py::none(), "set"_a = std::vector<std::string>{})
+      .def("__iter__", [](Growth& g) -> Growth& { return g; })
+      .def("__next__", &Growth::next)
+      .def_property_readonly("packing", [](const Growth& g) { return io::PackingFile{g.driver().packing(), {}}; },
+                             "the current (last accepted) packing")
+      .def_property_readonly("status", [](const Growth& g) { return std::string(to_string(g.driver().result().status)); },
+                             "'running', 'finished' or the reason of an early stop");
 }

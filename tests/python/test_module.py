@@ -155,3 +155,30 @@ def test_load_run_gives_every_table_as_a_dataframe(run_dir):
 def test_load_run_refuses_an_unfinished_run(tmp_path):
     with pytest.raises(budjam.InputError, match="no summary.json"):
         budjam.load_run(tmp_path)
+
+
+def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
+    events = list(budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml"))
+    run = budjam.load_run(run_dir)
+    kinds = [e["kind"] for e in events]
+    assert kinds[-1] == "finished" == run.summary["status"]
+    (jammed,) = [e for e in events if e["kind"] == "jammed"]
+    assert jammed["phi_J"] == jammed["phi"] == run.summary["phi_J"]
+    (phi2,) = [e for e in events if e["kind"] == "phi2"]
+    assert phi2["phi_2"] == run.summary["phi_2"]
+    assert kinds.count("division") == len(run.divisions)
+    assert sum(k.startswith("bud_") for k in kinds) == len(run.bud_events)
+    targets = [e for e in events if e["kind"] == "target"]
+    assert len(targets) == 2
+    for t in targets:
+        saved = budjam.read_packing(run_dir / "packings" / f"target_{t['index']}.pack")
+        for name in ("x", "y", "theta", "b", "gamma0", "id", "parent"):
+            np.testing.assert_array_equal(getattr(t["packing"], name), getattr(saved, name))
+
+
+def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
+    events = []
+    status = budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", set=["growth.max_steps=50"],
+                         callback=events.append)
+    assert status == "step_limit"
+    assert events[-1]["kind"] == "stopped" and events[-1]["status"] == "step_limit"
