@@ -85,7 +85,7 @@ void run(const Options& o) {
 }
 
 const bool registered = budjam::cli::register_command(
-    {"render", "Draw a packing file as SVG (and PNG): cells, contacts by force, rattlers, free buds",
+    {"render", "Draw a packing file as SVG, PNG or PDF: cells, contacts by force, rattlers, free buds",
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
