@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
           catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev python3-matplotlib librsvg2-bin
           pybind11-dev python3-dev python3-numpy python3-pandas python3-gsd python3-pytest python3-ase
-          python3-meshio help2man)
+          python3-meshio help2man slurm-wlm munge)
 
 install_missing() {
   local missing=()
