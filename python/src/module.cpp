@@ -60,11 +60,7 @@ py::array_t<double> coordinate(const Packing& p, int k) {
   return a;
 }
 
-RigidityNetwork network_of(const std::string& name) {
-  if (name == "load-bearing") return RigidityNetwork::load_bearing;
-  if (name == "raw") return RigidityNetwork::raw;
-  throw py::value_error("network: must be 'load-bearing' or 'raw' (got '" + name + "')");
-}
+RigidityNetwork network_of(const std::string& name) { return parse_rigidity_network(name, "network"); }
 
 // Every contact and the network, from the packing as it is (nothing relaxed).
 struct Analysed {

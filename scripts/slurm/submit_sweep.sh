@@ -20,7 +20,7 @@ read -r -a extra <<<"${SLURM_SBATCH_OPTIONS:-}"
 limit=${SLURM_MAX_PARALLEL:+%$SLURM_MAX_PARALLEL}
 
 array=$(sbatch --parsable --job-name=budjam-runs --array="0-$((n - 1))$limit" --requeue \
-  --signal="B:USR1@${SLURM_GRACE:-120}" --output="$state/run-%A_%a.log" "${extra[@]}" \
+  --signal="B:USR1@${SLURM_GRACE:-120}" --output="$state/run-%A_%a.log" --open-mode=append "${extra[@]}" \
   "$here/run_task.sh" "$state/runs.txt" "$makecmd" "$per_run")
 wait_flag=()
 [[ ${SLURM_WAIT:-0} == 1 ]] && wait_flag=(--wait)
