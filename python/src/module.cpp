@@ -284,7 +284,8 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
            }),
            "L"_a, "x"_a, "y"_a, "theta"_a, "b"_a, "gamma0"_a = py::none(), "shear"_a = 0.0,
            "meta"_a = std::map<std::string, std::string>{},
-           "A packing of founder cells (ids 0..N-1, parent -1) from arrays; L and lengths in D0.")
+           "A packing of founder cells (ids 0..N-1, parent -1) from arrays; L and lengths in D0, theta in "
+           "radians; gamma0 (innate growth rates) defaults to 0; meta: text key/value metadata.")
       .def_property_readonly("N", [](const io::PackingFile& f) { return f.packing.size(); }, "number of cells")
       .def_property_readonly("L", [](const io::PackingFile& f) { return f.packing.box.L; }, "box side, D0")
       .def_property_readonly("shear", [](const io::PackingFile& f) { return f.packing.box.shear; },

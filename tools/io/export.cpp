@@ -102,7 +102,7 @@ ParticleFrame particle_frame(const Packing& p, RigidityNetwork which) {
 
 std::string format_extxyz(const ParticleFrame& f) {
   std::ostringstream out;
-  const std::string L = format_double(f.L), zero = "0";
+  const std::string L = format_double(f.L);
   out << f.size() << '\n';
   out << "Lattice=\"" << L << " 0 0 " << format_double(f.shear * f.L) << ' ' << L << " 0 0 0 1\" "
       << "Properties=type:S:1:pos:R:3:radius:R:1:cell:I:1:id:I:1:cluster:I:1:rattler:L:1 "
