@@ -10,6 +10,10 @@ SOURCE_DIR = pathlib.Path(os.environ.get("BUDJAM_SOURCE_DIR", pathlib.Path(__fil
 PACKING = SOURCE_DIR / "tests" / "data" / "saddle_jamming_L15_seed3.pack"
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: grows a run first (ctest label slow)")
+
+
 @pytest.fixture(scope="session")
 def budjam_exe():
     exe = os.environ.get("BUDJAM_EXE")

@@ -91,6 +91,7 @@ def test_rigidity_and_contacts_equal_budjam_rigidity(run_budjam, network):
     np.testing.assert_array_equal(r["lobe_cluster"], np.repeat(r["cell_cluster"], 2))
 
 
+@pytest.mark.slow
 def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
     cli = json.loads(run_budjam("moduli", relaxed).stdout)
     m = budjam.moduli(budjam.read_packing(relaxed))
@@ -106,6 +107,7 @@ def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
     assert m["shear_stability"]["G_min"] <= m["E"][1, 1] <= m["shear_stability"]["G_max"]
 
 
+@pytest.mark.slow
 def test_spectrum_equals_budjam_dos_and_modes_are_orthonormal_and_free_of_translations(run_budjam, relaxed):
     run_budjam("dos", relaxed, "--quiet")
     cli = json.loads(relaxed.with_suffix(".dos.json").read_text())
@@ -137,6 +139,7 @@ def test_particle_frame_is_what_export_writes(run_budjam, tmp_path):
     assert (tmp_path / "q.xyz").read_bytes() == (tmp_path / "p.xyz").read_bytes()
 
 
+@pytest.mark.slow
 def test_load_run_gives_every_table_as_a_dataframe(run_dir):
     run = budjam.load_run(run_dir)
     assert run.summary == json.loads((run_dir / "summary.json").read_text())
@@ -157,6 +160,7 @@ def test_load_run_refuses_an_unfinished_run(tmp_path):
         budjam.load_run(tmp_path)
 
 
+@pytest.mark.slow
 def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
     events = list(budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml"))
     run = budjam.load_run(run_dir)
@@ -176,6 +180,7 @@ def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
             np.testing.assert_array_equal(getattr(t["packing"], name), getattr(saved, name))
 
 
+@pytest.mark.slow
 def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
     events = []
     status = budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", set=["growth.max_steps=50"],
