@@ -21,6 +21,11 @@ for p in slurmctld slurmd munged sbatch; do
   command -v "$p" >/dev/null || { echo "start_local_slurm: $p missing (apt-get install slurm-wlm munge)" >&2; exit 2; }
 done
 if sinfo -h -o %T 2>/dev/null | grep -qE '^(idle|mixed|allocated)'; then exit 0; fi
+marker="# Written by scripts/slurm/start_local_slurm.sh"
+if [[ -s $conf ]] && [[ $(head -n 1 "$conf") != "$marker"* ]]; then
+  echo "start_local_slurm: $conf is another Slurm configuration: not replacing it" >&2
+  exit 2
+fi
 
 mkdir -p "$state" /etc/munge /var/log/munge /run/munge /var/spool/slurmctld /var/spool/slurmd /etc/slurm
 chown munge:munge /etc/munge /var/log/munge /run/munge 2>/dev/null || true
@@ -37,7 +42,7 @@ fi
 cpus=$(nproc)
 mem=$(($(awk '/MemTotal/ { print int($2 / 1024) }' /proc/meminfo) * 8 / 10))
 cat > "$conf" <<CONF
-# Written by scripts/slurm/start_local_slurm.sh: one node, this machine.
+$marker: one node, this machine.
 ClusterName=budjam-local
 SlurmctldHost=localhost
 SlurmUser=root

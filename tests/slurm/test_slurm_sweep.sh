@@ -9,10 +9,17 @@ if [[ $(id -u) != 0 ]] || ! command -v sbatch >/dev/null || ! command -v munged 
   echo "test_slurm_sweep: needs root, slurm-wlm and munge: skipped" >&2
   exit 77
 fi
+started=0
+sinfo -h -o %T 2>/dev/null | grep -qE '^(idle|mixed|allocated)' || started=1
 bash "$source/scripts/slurm/start_local_slurm.sh"
 
 work=$(mktemp -d /tmp/budjam-slurm-test.XXXXXX)  # /tmp: visible to the jobs on this node
-trap 'rm -rf "$work"' EXIT
+cleanup() {
+  rm -rf "$work"
+  ((started)) && bash "$source/scripts/slurm/start_local_slurm.sh" stop  # leave the machine as found
+  return 0
+}
+trap cleanup EXIT
 # Two: 2 seeds x 2 P0 at L = 8, to two targets, with moduli and spectra; the analysis tables.
 sweep=(PRESET=quick "BUDJAM=$budjam" LS=8 "P0S=none 1e-3" "SEEDS=1 2" "TARGETS=[1e-3,1e-2]" MAX_STEPS=20000)
 for where in local slurm; do
