@@ -11,6 +11,7 @@ time in the units of the growth rates (docs/files.md lists every file's columns 
     budjam.rigidity(p)["lobe_cluster"]     # rigid cluster of every lobe
     budjam.moduli(p)["G"]                  # shear modulus (contact-virial convention)
     budjam.export(p, "jammed.gsd", "gsd")  # for OVITO / HOOMD-blue
+    budjam.survival(["run"])["S"]          # Kaplan-Meier S(a) of the buds free at jamming
     run = budjam.load_run("run")           # pandas DataFrames of every table of a growth run
     run.steps["phi"]
     for event in budjam.grow("scene.toml", seed=3):   # jamming, targets, phi_2, divisions, buds
@@ -22,10 +23,10 @@ import json
 import pathlib
 
 from ._budjam import (Growth, InputError, OutputError, Packing, contacts, export, moduli, particle_frame,
-                      read_packing, rigidity, spectrum)
+                      read_packing, rigidity, spectrum, survival)
 
 __all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "contacts", "export", "load_run", "moduli",
-           "particle_frame", "read_packing", "rigidity", "spectrum"]
+           "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
 
 
 class Run:

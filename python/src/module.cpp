@@ -8,6 +8,7 @@
 #include "budjam/moduli.hpp"
 #include "budjam/rigidity.hpp"
 #include "budjam/spectrum.hpp"
+#include "budjam/survival.hpp"
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
@@ -154,6 +155,28 @@ py::dict spectrum_dict(const Packing& p, const std::string& method, int modes) {
                   "N_zero"_a = ps.summary.N_zero, "lambda_tol"_a = ps.summary.lambda_tol,
                   "omega_star"_a = ps.summary.band.available ? py::object(py::float_(ps.summary.band.omega_star))
                                                              : py::object(py::none()));
+}
+
+// Kaplan–Meier curve of the buds free at jamming, pooled over runs, as `budjam survival` computes it.
+py::dict survival_dict(const std::vector<std::filesystem::path>& runs) {
+  std::vector<SurvivalRecord> records;
+  for (const auto& dir : runs) {
+    const tools::RunData r = tools::load_run(dir);
+    if (!r.bud_events) throw InputError(dir.string() + ": no bud_events.csv (the scene turned observe.bud_events off)");
+    const auto rec = tools::survival_records(*r.bud_events);
+    records.insert(records.end(), rec.begin(), rec.end());
+  }
+  const KaplanMeierCurve km = kaplan_meier(records);
+  // The curve starts at a = 0 with S = 1 and every record at risk, like the CSV of `budjam survival`.
+  std::vector<double> a{0.0}, S{1.0}, var{0.0};
+  std::vector<std::size_t> at_risk{km.records()}, events{0}, censored{0};
+  for (const auto& st : km.steps()) {
+    a.push_back(st.a), S.push_back(st.S), var.push_back(st.greenwood_var);
+    at_risk.push_back(st.at_risk), events.push_back(st.events), censored.push_back(st.censored);
+  }
+  return py::dict("a"_a = array(a), "S"_a = array(S), "greenwood_var"_a = array(var), "at_risk"_a = array(at_risk),
+                  "events"_a = array(events), "censored"_a = array(censored), "records"_a = km.records(),
+                  "completed"_a = km.events());
 }
 
 py::dict frame_dict(const io::ParticleFrame& f) {
@@ -359,6 +382,11 @@ u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two 
 translations are removed); participation ratios, N_zero below lambda_tol,
 the band edge omega_star (None if not available). method: auto | dense | arpack; modes:
 ARPACK modes (0: as many as omega_star needs).)");
+  m.def("survival", &survival_dict, "runs"_a,
+        R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories, as
+`budjam survival` (each run's last jamming episode; completion is the event, division and the
+end of the run censor). a = b^2 - b_J^2 in D0^2 (diameter squared; times pi/4 for the area), S,
+its Greenwood variance, and at_risk / events / censored at each a; records and completed in all.)");
   m.def("particle_frame", [](const io::PackingFile& f, const std::string& network) {
           return frame_dict(io::particle_frame(f.packing, network_of(network)));
         },

@@ -187,3 +187,17 @@ def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
                          callback=events.append)
     assert status == "step_limit"
     assert events[-1]["kind"] == "stopped" and events[-1]["status"] == "step_limit"
+
+
+@pytest.mark.slow
+def test_survival_equals_budjam_survival(run_dir, run_budjam, tmp_path):
+    summary = json.loads(run_budjam("survival", run_dir, "-o", tmp_path / "s.csv").stdout)
+    table = pandas.read_csv(tmp_path / "s.csv", float_precision="round_trip")
+    s = budjam.survival([run_dir])
+    assert s["records"] == summary["records"] and s["completed"] == summary["events"]
+    np.testing.assert_array_equal(s["a"], table["a"])
+    np.testing.assert_array_equal(s["S"], table["S"])
+    np.testing.assert_array_equal(np.sqrt(s["greenwood_var"]), table["se"])
+    for column in ("at_risk", "events", "censored"):
+        np.testing.assert_array_equal(s[column], table[column])
+    assert np.all(np.diff(s["S"]) <= 0)  # a survival curve never rises
