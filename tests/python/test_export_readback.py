@@ -59,6 +59,9 @@ def test_one_particle_per_lobe_in_every_format(exported):
     g = exported["gsd"].particles
     assert [g.types[t] for t in g.typeid] == list(kinds)
     assert list(vtk_points(exported, "bud")) == list(np.arange(2 * n) % 2)
+    cell = np.arange(2 * n) // 2
+    for column in (exported["xyz"].arrays["cell"], exported["gsd"].log["particles/cell"], vtk_points(exported, "cell")):
+        np.testing.assert_array_equal(column, cell)
 
 
 def test_box_is_the_packing_box(exported):

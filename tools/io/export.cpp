@@ -182,11 +182,12 @@ with gsd.hoomd.open(sys.argv[2], mode) as out:
         image = np.zeros((n, 3), dtype=np.int32)
         image[:, 0], image[:, 1] = j['image_x'], j['image_y']
         s.particles.image = image
-        s.particles.body = np.arange(n, dtype=np.int32) // 2
         s.bonds.N = len(j['bond_kind'])
         s.bonds.types = ['link', 'contact']
         s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
         s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
+        # Not particles/body: HOOMD reads body >= 0 as constituents of its rigid bodies.
+        s.log['particles/cell'] = np.arange(n, dtype=np.int64) // 2
         s.log['particles/id'] = np.array(j['id'], dtype=np.int64)
         s.log['particles/rigid_cluster'] = np.array(j['cluster'], dtype=np.int32)
         s.log['particles/rattler'] = np.array(j['rattler'], dtype=np.uint8)
