@@ -7,7 +7,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
-          catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev python3-matplotlib librsvg2-bin)
+          catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev python3-matplotlib librsvg2-bin
+          pybind11-dev python3-dev python3-numpy python3-pandas python3-gsd python3-pytest python3-ase
+          python3-meshio help2man slurm-wlm munge)
 
 install_missing() {
   local missing=()
@@ -28,10 +30,14 @@ build() {  # build DIR [cmake options...]
   cmake --build "$dir" -j"$(nproc)"
 }
 
+# budjam, its man page and completion, the libraries and `import budjam` under /usr/local.
+install_build() { cmake --install build >/dev/null; }
+
 case "${1:-}" in
   demo)
     install_missing
     build build
+    install_build
     rm -rf runs/demo
     ./build/budjam grow data/scenes/demo.toml --out runs/demo
     ./build/budjam render runs/demo/packings/jammed.pack -o runs/demo/jammed.svg --png
@@ -40,6 +46,7 @@ case "${1:-}" in
   test)
     install_missing
     build build
+    install_build
     (cd build && ctest --output-on-failure -j"$(nproc)")
     # Hard cases again under AddressSanitizer + UndefinedBehaviorSanitizer.
     build build-sanitize -DBUDJAM_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo

@@ -1,5 +1,7 @@
 #include "budjam/rigidity.hpp"
 
+#include "budjam/scene.hpp"  // InputError
+
 #include <boost/graph/breadth_first_search.hpp>
 #include <boost/graph/filtered_graph.hpp>
 #include <boost/property_map/property_map.hpp>
@@ -224,6 +226,12 @@ RigidityState analyse_rigidity(const Packing& p, const Lobes& lobes, const std::
     shift.push_back(fw.shift[k]);
   }
   return summarise_rigidity(game, shift, fw.cell_included, which);
+}
+
+RigidityNetwork parse_rigidity_network(const std::string& text, const std::string& key) {
+  if (text == "load-bearing") return RigidityNetwork::load_bearing;
+  if (text == "raw") return RigidityNetwork::raw;
+  throw InputError(key + ": must be load-bearing or raw (got " + text + ")");
 }
 
 const char* to_string(RigidityEventKind kind) {

@@ -168,6 +168,7 @@ void validate(const Scene& s) {
   validate_schedule("observe.moduli", s.moduli);
   validate_schedule("observe.dos", s.dos);
   non_negative("observe.checkpoint_every", s.checkpoint_every);
+  non_negative("observe.trajectory_every", s.trajectory_every);
 }
 
 }  // namespace budjam

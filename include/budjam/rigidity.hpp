@@ -21,6 +21,7 @@
 #include "budjam/packing.hpp"
 #include "budjam/pebble_game.hpp"
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace budjam {
@@ -28,6 +29,8 @@ namespace budjam {
 // Load-bearing: non-rattler cells and the contacts among them (rattlers removed by the iterative
 // rule of ContactNetwork). Raw: every cell and every contact.
 enum class RigidityNetwork { load_bearing, raw };
+// "load-bearing" | "raw"; throws InputError naming `key` otherwise.
+RigidityNetwork parse_rigidity_network(const std::string& text, const std::string& key = "--network");
 
 // Which periodic image of joint b a bar reaches from joint a, in box lengths: with a, b wrapped
 // into the box, the bar vector is w_b + (x L + γ L y, y L) − w_a (γ = Lees–Edwards shear).

@@ -78,6 +78,7 @@ struct Scene {
   Schedule moduli;
   Schedule dos;
   long checkpoint_every = 0;   // accepted steps between checkpoints; 0 = none
+  long trajectory_every = 0;   // accepted steps between trajectory frames (and at events); 0 = none
   bool progress = true;
 };
 

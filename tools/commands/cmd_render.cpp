@@ -1,7 +1,8 @@
-// `budjam render PACKING -o FILE.svg [--png] [--scale PX] [--no-images] [--no-contacts]`
+// `budjam render PACKING -o FILE.svg|FILE.png|FILE.pdf [--png] [--scale PX] [--no-images] [--no-contacts]`
 // Draws a packing file as SVG (budjam/render.hpp): lobes with their periodic images, contacts
-// coloured by force, rattlers greyed, unconstrained buds marked. --png also converts it with
-// Debian's rsvg-convert (package librsvg2-bin) to FILE.png.
+// coloured by force, rattlers greyed, unconstrained buds marked. A .png or .pdf output is
+// converted from the SVG by Debian's rsvg-convert (package librsvg2-bin); --png also writes
+// FILE.png beside FILE.svg.
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
 
@@ -10,18 +11,13 @@
 #include "io/atomic_file.hpp"
 #include "io/packing_file.hpp"
 
-#include <spawn.h>
-#include <sys/wait.h>
+#include "io/run_program.hpp"
 
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
-
-extern char** environ;
 
 namespace {
 
@@ -37,27 +33,25 @@ struct Options {
   bool no_contacts = false;
 };
 
-// Runs a program with arguments (no shell); returns its exit status, or throws IoError if it
-// cannot be started.
-int run_program(const std::vector<std::string>& argv) {
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, args[0], nullptr, nullptr, args.data(), environ);
-  if (rc != 0)
-    throw io::IoError("render --png: cannot run " + argv[0] + ": " + std::strerror(rc) +
-                      " (install Debian's librsvg2-bin)");
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) throw io::IoError("render --png: waitpid failed");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+// rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` is complete or untouched.
+void convert_svg(const fs::path& svg, const fs::path& to, const std::string& format) {
+  fs::path tmp = to;
+  tmp += ".tmp";
+  const int rc = io::run_program({"rsvg-convert", "-f", format, "-o", tmp.string(), svg.string()}, "render",
+                                 "install Debian's librsvg2-bin");
+  if (rc != 0) {
+    fs::remove(tmp);
+    throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
+  }
+  fs::rename(tmp, to);
 }
 
 void run(const Options& o) {
   if (!(o.scale > 0)) throw InputError("--scale: must be positive (got " + std::to_string(o.scale) + ")");
-  fs::path out = o.out;
-  if (out.extension() != ".svg") throw InputError("-o: the output must end in .svg (got " + o.out + ")");
+  const fs::path out = o.out;
+  const std::string ext = out.extension().string();
+  if (ext != ".svg" && ext != ".png" && ext != ".pdf")
+    throw InputError("-o: the output must end in .svg, .png or .pdf (got " + o.out + ")");
   const io::PackingFile f = io::read_packing(o.packing);
   const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
 
@@ -71,29 +65,34 @@ void run(const Options& o) {
                 m.get("kind").value_or(fs::path(o.packing).stem().string()).c_str(), f.packing.size(), f.packing.box.L,
                 f.packing.packing_fraction(), pc.P, pc.network.Z, pc.network.N_f, pc.network.N_u_buds);
   ro.caption = buf;
-  io::write_atomically(out, render_svg(f.packing, pc.contacts, pc.network, ro));
+  fs::path svg = out;
+  svg.replace_extension(".svg");
+  if (ext != ".svg") svg += ".tmp";  // only the converted file is an output
+  io::write_atomically(svg, render_svg(f.packing, pc.contacts, pc.network, ro));
 
-  if (o.png) {
-    fs::path png = out;
-    png.replace_extension(".png");
-    fs::path tmp = png;
-    tmp += ".tmp";
-    const int rc = run_program({"rsvg-convert", "-o", tmp.string(), out.string()});
-    if (rc != 0) {
-      fs::remove(tmp);
-      throw io::IoError("render --png: rsvg-convert failed with status " + std::to_string(rc));
+  if (ext != ".svg") {
+    try {
+      convert_svg(svg, out, ext.substr(1));
+    } catch (...) {
+      fs::remove(svg);
+      throw;
     }
-    fs::rename(tmp, png);
+    fs::remove(svg);
+  } else if (o.png) {
+    fs::path png = out;
+    convert_svg(svg, png.replace_extension(".png"), "png");
   }
 }
 
 const bool registered = budjam::cli::register_command(
-    {"render", "Draw a packing file as SVG (and PNG): cells, contacts by force, rattlers, free buds",
+    {"render", "Draw a packing file as SVG, PNG or PDF: cells, contacts by force, rattlers, free buds",
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
-       sub.add_option("-o,--out", o->out, "output SVG file")->required()->type_name("FILE.svg");
-       sub.add_flag("--png", o->png, "also write FILE.png (rsvg-convert)");
+       sub.add_option("-o,--out", o->out, "output file: SVG, or PNG/PDF converted by rsvg-convert")
+           ->required()
+           ->type_name("FILE.svg|.png|.pdf");
+       sub.add_flag("--png", o->png, "with an SVG output, also write FILE.png beside it (rsvg-convert)");
        sub.add_option("--scale", o->scale, "pixels per mother diameter (default 48)");
        sub.add_flag("--no-images", o->no_images, "do not draw periodic images across the boundary");
        sub.add_flag("--no-contacts", o->no_contacts, "do not draw contacts");

@@ -28,11 +28,7 @@ struct Options {
 };
 
 void run(const Options& o) {
-  RigidityNetwork which;
-  if (o.network == "load-bearing") which = RigidityNetwork::load_bearing;
-  else if (o.network == "raw") which = RigidityNetwork::raw;
-  else throw InputError("--network: must be load-bearing or raw (got " + o.network + ")");
-
+  const RigidityNetwork which = parse_rigidity_network(o.network);
   const io::PackingFile file = io::read_packing(o.packing);
   const Packing& p = file.packing;
   ForceField field;

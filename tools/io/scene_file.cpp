@@ -255,6 +255,9 @@ std::vector<Entry> make_entries() {
                       BUDJAM_FIELD(rigidity_events)));
   e.push_back(integer("observe", "checkpoint_every", "accepted steps between checkpoints; 0 = none",
                       BUDJAM_FIELD(checkpoint_every)));
+  e.push_back(integer("observe", "trajectory_every",
+                      "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",
+                      BUDJAM_FIELD(trajectory_every)));
   e.push_back(boolean("observe", "progress", "progress line on stderr", BUDJAM_FIELD(progress)));
   for (const char* which : {"moduli", "dos"}) {
     const std::string sec = std::string("observe.") + which;

@@ -1,0 +1,421 @@
+// The `budjam` Python module (pybind11): packings as numpy arrays and the library's analyses of
+// them, the same functions the command line calls (python/budjam/__init__.py adds load_run).
+// Units everywhere: lengths in mother diameters D0, forces in k·D0, stresses and moduli in k
+// (per unit area in 2D), eigenvalues λ in k/m (m = mother mass), angles in radians.
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/growth_driver.hpp"
+#include "budjam/moduli.hpp"
+#include "budjam/rigidity.hpp"
+#include "budjam/spectrum.hpp"
+#include "budjam/survival.hpp"
+#include "io/atomic_file.hpp"
+#include "io/export.hpp"
+#include "io/packing_file.hpp"
+#include "io/run_data.hpp"
+#include "io/scene_file.hpp"
+#include "io/text.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+using namespace budjam;
+using namespace py::literals;
+
+namespace {
+
+template <class T>
+py::array_t<T> array(const std::vector<T>& v) {
+  return py::array_t<T>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+py::array_t<bool> array(const std::vector<bool>& v) {
+  py::array_t<bool> a(static_cast<py::ssize_t>(v.size()));
+  auto m = a.mutable_unchecked<1>();
+  for (std::size_t k = 0; k < v.size(); ++k) m(static_cast<py::ssize_t>(k)) = v[k];
+  return a;
+}
+template <class T>
+std::vector<T> vector_of(const py::array_t<T, py::array::c_style | py::array::forcecast>& a, std::size_t n,
+                         const char* name) {
+  if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n)
+    throw py::value_error(std::string(name) + ": expected a 1-d array of length " + std::to_string(n));
+  return std::vector<T>(a.data(), a.data() + n);
+}
+
+py::array_t<double> coordinate(const Packing& p, int k) {
+  py::array_t<double> a(static_cast<py::ssize_t>(p.size()));
+  auto m = a.mutable_unchecked<1>();
+  for (std::size_t i = 0; i < p.size(); ++i) m(static_cast<py::ssize_t>(i)) = p.q[3 * i + k];
+  return a;
+}
+
+RigidityNetwork network_of(const std::string& name) { return parse_rigidity_network(name, "network"); }
+
+// Every contact and the network, from the packing as it is (nothing relaxed).
+struct Analysed {
+  tools::PackingContacts pc;
+  Lobes lobes;
+  explicit Analysed(const Packing& p) : pc(tools::analyse_contacts(p)) { place_lobes(p, lobes); }
+};
+
+py::dict contacts_dict(const Packing& p) {
+  const tools::PackingContacts pc = tools::analyse_contacts(p);
+  const std::size_t n = pc.contacts.size();
+  std::vector<std::uint32_t> i(n), j(n);
+  std::vector<double> nx(n), ny(n), r(n), sigma(n), force(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Contact& c = pc.contacts[k];
+    i[k] = c.i, j[k] = c.j, nx[k] = c.nx, ny[k] = c.ny, r[k] = c.r, sigma[k] = c.sigma, force[k] = c.force();
+  }
+  const ContactNetwork& net = pc.network;
+  return py::dict("i"_a = array(i), "j"_a = array(j), "nx"_a = array(nx), "ny"_a = array(ny), "r"_a = array(r),
+                  "sigma"_a = array(sigma), "force"_a = array(force), "rattler"_a = array(net.rattler),
+                  "lobe_contacts"_a = array(net.lobe_contacts), "bud_pressure"_a = array(pc.bud_pressures),
+                  "P"_a = pc.P, "N"_a = net.N, "N_nr"_a = net.N_nr, "N_f"_a = net.N_f, "N_c"_a = net.N_c,
+                  "N_u"_a = net.N_u, "N_u_buds"_a = net.N_u_buds, "Z"_a = net.Z, "Z_iso"_a = net.Z_iso,
+                  "dZ"_a = net.dZ, "u"_a = net.u, "u_buds"_a = net.u_buds);
+}
+
+py::dict rigidity_dict(const Packing& p, const std::string& network) {
+  const RigidityNetwork which = network_of(network);
+  const Analysed a(p);
+  const RigidityState s = analyse_rigidity(p, a.lobes, a.pc.contacts, a.pc.network, which);
+  const Framework fw = build_framework(p, a.lobes, a.pc.contacts, a.pc.network, which);
+  py::array_t<std::uint32_t> bars({static_cast<py::ssize_t>(fw.bars.size()), py::ssize_t{2}});
+  auto b = bars.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < fw.bars.size(); ++k) {
+    b(static_cast<py::ssize_t>(k), 0) = static_cast<std::uint32_t>(fw.bars[k].a);
+    b(static_cast<py::ssize_t>(k), 1) = static_cast<std::uint32_t>(fw.bars[k].b);
+  }
+  std::vector<int> lobe_cluster(2 * p.size());
+  for (std::size_t lobe = 0; lobe < lobe_cluster.size(); ++lobe) lobe_cluster[lobe] = s.cell_cluster[cell_of(lobe)];
+  std::vector<std::size_t> cluster_cells, cluster_joints;
+  for (const auto& c : s.clusters) {
+    cluster_cells.push_back(c.cells);
+    cluster_joints.push_back(c.joints);
+  }
+  std::size_t buds_rigid = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) buds_rigid += s.bud_rigid(i);
+  return py::dict("network"_a = network, "cells"_a = s.cells, "joints"_a = s.joints, "bars"_a = bars,
+                  "contact_bars"_a = s.contact_bars, "independent_bars"_a = s.independent_bars,
+                  "redundant_bars"_a = s.redundant_bars, "free_pebbles"_a = s.free_pebbles,
+                  "floppy_plane"_a = s.floppy_plane, "floppy_periodic"_a = s.floppy_periodic,
+                  "cell_cluster"_a = array(s.cell_cluster), "lobe_cluster"_a = array(lobe_cluster),
+                  "cluster_cells"_a = array(cluster_cells), "cluster_joints"_a = array(cluster_joints),
+                  "largest"_a = s.largest, "largest_cells"_a = s.largest_cells(), "spans_x"_a = s.spans_x,
+                  "spans_y"_a = s.spans_y, "buds_rigid"_a = buds_rigid);
+}
+
+py::dict moduli_of(const Moduli& m) {
+  return py::dict("B"_a = m.B, "G_simple"_a = m.G_simple, "G_pure"_a = m.G_pure, "G_mean"_a = m.G_mean);
+}
+
+py::dict moduli_dict(const Packing& p, const std::string& solver) {
+  const Analysed a(p);
+  ModuliOptions options;
+  options.solver = parse_moduli_solver(solver);
+  const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
+  return py::dict("B"_a = e.moduli.B, "G"_a = e.moduli.G_simple, "moduli"_a = moduli_of(e.moduli),
+                  "moduli_affine"_a = moduli_of(e.moduli_affine), "moduli_energy"_a = moduli_of(e.moduli_energy),
+                  "moduli_energy_affine"_a = moduli_of(e.moduli_energy_affine), "P"_a = e.P, "P_energy"_a = e.P_energy,
+                  "stress"_a = e.stress, "stress_energy"_a = e.stress_energy, "R"_a = e.R, "R_affine"_a = e.R_affine,
+                  "E"_a = e.E, "E_affine"_a = e.E_affine, "C"_a = e.C, "C_affine"_a = e.C_affine,
+                  "shear_stability"_a = py::dict("G_min"_a = e.shear.G_min, "phi_min"_a = e.shear.phi_min,
+                                                 "G_max"_a = e.shear.G_max, "phi_max"_a = e.shear.phi_max,
+                                                 "stable"_a = e.shear.stable),
+                  "energy_minimum"_a = e.energy_minimum(), "well_posed"_a = e.kernel.well_posed,
+                  "residual"_a = e.kernel.residual, "N_nr"_a = e.N_nr, "Z"_a = e.Z, "dZ"_a = e.dZ);
+}
+
+py::dict spectrum_dict(const Packing& p, const std::string& method, int modes) {
+  const Analysed a(p);
+  SpectrumOptions options;
+  options.method = parse_spectrum_method(method);
+  options.modes = modes;
+  const PackingSpectrum ps = packing_spectrum(p, a.pc.contacts, a.pc.network, options);
+  const Spectrum& s = ps.spectrum;
+  Eigen::MatrixXd vectors(3 * ps.cells.size(), s.lambda.size());
+  for (Eigen::Index k = 0; k < s.lambda.size(); ++k) vectors.col(k) = s.mode(k);
+  Eigen::VectorXd omega = s.lambda.unaryExpr([](double l) { return signed_omega(l); });
+  return py::dict("method"_a = to_string(s.method), "cells"_a = array(ps.cells), "n_dof"_a = s.n_dof,
+                  "complete"_a = s.complete(), "eigenvalues"_a = s.lambda, "omega"_a = omega,
+                  "eigenvectors"_a = vectors, "mass"_a = mass_diagonal(p), "participation"_a = ps.participation,
+                  "N_zero"_a = ps.summary.N_zero, "lambda_tol"_a = ps.summary.lambda_tol,
+                  "omega_star"_a = ps.summary.band.available ? py::object(py::float_(ps.summary.band.omega_star))
+                                                             : py::object(py::none()));
+}
+
+// Kaplan–Meier curve of the buds free at jamming, pooled over runs, as `budjam survival` computes it.
+py::dict survival_dict(const std::vector<std::filesystem::path>& runs) {
+  std::vector<SurvivalRecord> records;
+  for (const auto& dir : runs) {
+    const tools::RunData r = tools::load_run(dir);
+    if (!r.bud_events) throw InputError(dir.string() + ": no bud_events.csv (the scene turned observe.bud_events off)");
+    const auto rec = tools::survival_records(*r.bud_events);
+    records.insert(records.end(), rec.begin(), rec.end());
+  }
+  const KaplanMeierCurve km = kaplan_meier(records);
+  // The curve starts at a = 0 with S = 1 and every record at risk, like the CSV of `budjam survival`.
+  std::vector<double> a{0.0}, S{1.0}, var{0.0};
+  std::vector<std::size_t> at_risk{km.records()}, events{0}, censored{0};
+  for (const auto& st : km.steps()) {
+    a.push_back(st.a), S.push_back(st.S), var.push_back(st.greenwood_var);
+    at_risk.push_back(st.at_risk), events.push_back(st.events), censored.push_back(st.censored);
+  }
+  return py::dict("a"_a = array(a), "S"_a = array(S), "greenwood_var"_a = array(var), "at_risk"_a = array(at_risk),
+                  "events"_a = array(events), "censored"_a = array(censored), "records"_a = km.records(),
+                  "completed"_a = km.events());
+}
+
+py::dict frame_dict(const io::ParticleFrame& f) {
+  std::vector<std::uint32_t> a, b;
+  std::vector<int> kind;
+  std::vector<double> force;
+  std::vector<bool> crosses;
+  for (const auto& bond : f.bonds) {
+    a.push_back(bond.a), b.push_back(bond.b), kind.push_back(static_cast<int>(bond.kind));
+    force.push_back(bond.force), crosses.push_back(bond.crosses_boundary);
+  }
+  return py::dict("L"_a = f.L, "shear"_a = f.shear, "x"_a = array(f.x), "y"_a = array(f.y),
+                  "wrapped_x"_a = array(f.wrapped_x), "wrapped_y"_a = array(f.wrapped_y),
+                  "image_x"_a = array(f.image_x), "image_y"_a = array(f.image_y), "radius"_a = array(f.radius),
+                  "id"_a = array(f.id), "cluster"_a = array(f.cluster), "rattler"_a = array(f.rattler),
+                  "bond_a"_a = array(a), "bond_b"_a = array(b), "bond_kind"_a = array(kind),
+                  "bond_force"_a = array(force), "bond_crosses_boundary"_a = array(crosses));
+}
+
+
+// The events of a growth run as Python dicts, in the order the driver emits them. Each carries the
+// state it happened in (step, phi, P, N, phase) and a copy of the packing.
+class EventQueue : public Observer {
+ public:
+  std::string name() const override { return "python"; }
+  void on_jammed(const Jammed& e) override {
+    const JammingRecord& j = e.jamming;
+    push("jammed", e.state, py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.Z, "Z_iso"_a = j.Z_iso,
+                                     "dZ"_a = j.dZ, "N_nr"_a = j.N_nr, "u_J"_a = j.u_buds, "tagged"_a = j.tagged));
+  }
+  void on_unjammed(const Unjammed& e) override {
+    push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
+  }
+  void on_target_reached(const TargetReached& e) override {
+    const TargetRecord& t = e.target;
+    push("target", e.state, py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.Z, "dZ"_a = t.dZ,
+                                     "N_nr"_a = t.N_nr, "chi_c"_a = t.chi_c));
+  }
+  void on_depleted(const Depleted& e) override {
+    push("phi2", e.state, py::dict("phi_2"_a = e.depletion.phi, "Z"_a = e.depletion.Z, "dZ"_a = e.depletion.dZ));
+  }
+  void on_divided(const Divided& e) override {
+    const Division& d = e.division;
+    push("division", e.state, py::dict("mother_id"_a = d.mother_id, "daughter_id"_a = d.daughter_id, "b"_a = d.b));
+  }
+  void on_bud_event(const BudEventHappened& e) override {
+    push(std::string("bud_") + to_string(e.event.kind), e.state,
+         py::dict("cell_id"_a = e.event.cell_id, "episode"_a = e.event.episode, "a"_a = e.event.a));
+  }
+  void on_finished(const Finished& e) override { push("finished", e.state, py::dict("status"_a = "finished")); }
+  void on_failed(const Failed& e) override {
+    // An expected early stop (step limit, ...) is an outcome of the run, not an exception.
+    push("stopped", e.state, py::dict("status"_a = to_string(e.result.status), "message"_a = e.result.message));
+  }
+
+  std::deque<py::dict> events;
+
+ private:
+  void push(const std::string& kind, const StateView& s, py::dict fields) {
+    io::PackingFile f;
+    f.packing = *s.packing;
+    fields["kind"] = kind;
+    fields["step"] = s.step;
+    fields["phi"] = s.phi;
+    fields["P"] = s.P;
+    fields["N"] = s.packing->size();
+    fields["phase"] = to_string(s.phase);
+    fields["packing"] = std::move(f);
+    events.push_back(std::move(fields));
+  }
+};
+
+// `for event in budjam.grow(...)`: advances the driver until it has something to report.
+class Growth {
+ public:
+  Growth(const std::filesystem::path& scene, std::optional<std::uint64_t> seed, const std::vector<std::string>& set)
+      : scene_(io::load_scene(scene, set)), driver_(scene_, DriverOptions{seed}) {
+    driver_.add_observer(queue_);
+  }
+  py::dict next() {
+    while (queue_.events.empty()) {
+      if (driver_.result().status != RunStatus::running) throw py::stop_iteration();
+      driver_.advance();
+    }
+    py::dict e = std::move(queue_.events.front());
+    queue_.events.pop_front();
+    return e;
+  }
+  const GrowthDriver& driver() const { return driver_; }
+
+ private:
+  Scene scene_;
+  EventQueue queue_;
+  GrowthDriver driver_;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_budjam, m) {
+  m.doc() = "budjam: growing budding-cell packings, jamming and rigidity (compiled core).";
+  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+  py::register_exception<io::IoError>(m, "OutputError", PyExc_OSError);
+
+  py::class_<io::PackingFile>(m, "Packing", R"(A packing of rigid mother–bud dumbbells in a periodic square box.
+
+Units: lengths in mother diameters D0 = 1, angles in radians, growth rates per unit time.
+Arrays are copies (numpy); build a modified packing with Packing(...).
+Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orientation theta[i]
+(mother → bud), bud diameter b[i], innate growth rate gamma0[i], lineage id[i] and parent[i]
+(-1 for founders). Lobe 2i is the mother of cell i, lobe 2i+1 its bud.)")
+      .def(py::init([](double L, const py::array_t<double, py::array::c_style | py::array::forcecast>& x,
+                       const py::array_t<double, py::array::c_style | py::array::forcecast>& y,
+                       const py::array_t<double, py::array::c_style | py::array::forcecast>& theta,
+                       const py::array_t<double, py::array::c_style | py::array::forcecast>& b,
+                       std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>> gamma0,
+                       double shear, std::map<std::string, std::string> meta) {
+             const std::size_t n = static_cast<std::size_t>(b.size());
+             const auto xs = vector_of<double>(x, n, "x"), ys = vector_of<double>(y, n, "y"),
+                        ts = vector_of<double>(theta, n, "theta"), bs = vector_of<double>(b, n, "b");
+             const auto gs = gamma0 ? vector_of<double>(*gamma0, n, "gamma0") : std::vector<double>(n, 0.0);
+             io::PackingFile f;
+             f.packing.box.L = L;
+             f.packing.box.shear = shear;
+             for (std::size_t i = 0; i < n; ++i) f.packing.add_cell(xs[i], ys[i], ts[i], bs[i], gs[i], -1);
+             for (auto& [k, v] : meta) f.meta.set(k, v);
+             // The file format's checks (positive L, b in range, ...) apply to packings built here too.
+             return io::parse_packing(io::format_packing(f.packing, f.meta), "Packing(...)");
+           }),
+           "L"_a, "x"_a, "y"_a, "theta"_a, "b"_a, "gamma0"_a = py::none(), "shear"_a = 0.0,
+           "meta"_a = std::map<std::string, std::string>{},
+           "A packing of founder cells (ids 0..N-1, parent -1) from arrays; L and lengths in D0, theta in "
+           "radians; gamma0 (innate growth rates) defaults to 0; meta: text key/value metadata.")
+      .def_property_readonly("N", [](const io::PackingFile& f) { return f.packing.size(); }, "number of cells")
+      .def_property_readonly("L", [](const io::PackingFile& f) { return f.packing.box.L; }, "box side, D0")
+      .def_property_readonly("shear", [](const io::PackingFile& f) { return f.packing.box.shear; },
+                             "Lees–Edwards shear strain γ (an image one box up is shifted by γL in x)")
+      .def_property_readonly("phi", [](const io::PackingFile& f) { return f.packing.packing_fraction(); },
+                             "packing fraction Σ cell areas / L² (overlaps not subtracted)")
+      .def_property_readonly("x", [](const io::PackingFile& f) { return coordinate(f.packing, 0); },
+                             "centroid x of every cell, D0 (not wrapped)")
+      .def_property_readonly("y", [](const io::PackingFile& f) { return coordinate(f.packing, 1); },
+                             "centroid y of every cell, D0 (not wrapped)")
+      .def_property_readonly("theta", [](const io::PackingFile& f) { return coordinate(f.packing, 2); },
+                             "orientation of every cell (mother → bud), radians")
+      .def_property_readonly("b", [](const io::PackingFile& f) { return array(f.packing.b); }, "bud diameters, D0")
+      .def_property_readonly("gamma0", [](const io::PackingFile& f) { return array(f.packing.gamma0); },
+                             "innate growth rates γ0 (area growth per unit time)")
+      .def_property_readonly("id", [](const io::PackingFile& f) { return array(f.packing.id); }, "lineage ids")
+      .def_property_readonly("parent", [](const io::PackingFile& f) { return array(f.packing.parent); },
+                             "id of each cell's mother cell, -1 for founders")
+      .def_property_readonly("meta", [](const io::PackingFile& f) { return f.meta.values; },
+                             "the file's metadata (phase, phi, P, step, seed, ...) as text")
+      .def("lobes", [](const io::PackingFile& f) {
+             Lobes l;
+             place_lobes(f.packing, l);
+             return py::dict("x"_a = array(l.x), "y"_a = array(l.y), "radius"_a = array(l.R));
+           },
+           "Lobe centres and radii (D0): dict of arrays x, y, radius of length 2N; lobe 2i is the mother "
+           "of cell i, 2i+1 its bud.")
+      .def("write", [](const io::PackingFile& f, const std::filesystem::path& path) {
+             io::write_packing(path, f.packing, f.meta);
+           },
+           "path"_a, "Write the packing file (.pack), atomically; reads back bit-identically.")
+      .def("__repr__", [](const io::PackingFile& f) {
+        return "<budjam.Packing N=" + std::to_string(f.packing.size()) + " L=" + io::format_double(f.packing.box.L) + ">";
+      });
+
+  m.def("read_packing", &io::read_packing, "path"_a, "Read a packing file (.pack). InputError names the file and line.");
+  m.def("contacts", [](const io::PackingFile& f) { return contacts_dict(f.packing); }, "packing"_a,
+        R"(Contacts of the packing as it is (nothing relaxed) and its contact network.
+
+Per contact (arrays): lobes i < j, unit normal (nx, ny) from j to i, centre distance r and
+sigma = R_i + R_j (D0), force = k (sigma - r) (k D0). Per cell: rattler (iterative rule); per
+lobe: lobe_contacts (with non-rattlers); bud_pressure (force per unit bud perimeter, k).
+Scalars: P (contact virial pressure, k), N, N_nr, N_f, N_c (counted twice), N_u, N_u_buds,
+Z, Z_iso, dZ, u, u_buds (paper Eqs. 1-5; docs/rigidity.md).)");
+  m.def("rigidity", [](const io::PackingFile& f, const std::string& network) { return rigidity_dict(f.packing, network); },
+        "packing"_a, "network"_a = "load-bearing",
+        R"(Rigidity by the (2,3) pebble game, as `budjam rigidity` (docs/rigidity.md).
+
+network: 'load-bearing' (rattlers removed) or 'raw'. Returns counts (joints, bars as an (n, 2)
+array of lobe pairs, independent/redundant bars, free pebbles, floppy modes in the plane and
+periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's mother-bud bar,
+-1 if not analysed), cluster_cells / cluster_joints per cluster, the largest cluster, spanning.)");
+  m.def("moduli", [](const io::PackingFile& f, const std::string& solver) { return moduli_dict(f.packing, solver); },
+        "packing"_a, "solver"_a = "ldlt",
+        R"(Linear elastic response of a relaxed packing, as `budjam moduli` (docs/moduli.md).
+
+B and G (units k, 2D) from the contact-virial stress S (MODEL's convention, the headline values)
+(moduli) and from the energy stress tau (moduli_energy), relaxed and affine (*_affine); the response matrices R = dS/de,
+E = (1/A) d2U/de de (4x4, order xx, xy, yx, yy), the Voigt stiffness C (3x3), the shear
+stability of the box (G_min, G_max over simple-shear directions phi, radians).)");
+  m.def("spectrum", [](const io::PackingFile& f, const std::string& method, int modes) {
+          return spectrum_dict(f.packing, method, modes);
+        },
+        "packing"_a, "method"_a = "auto", "modes"_a = 0,
+        R"(Vibrational spectrum of the non-rattlers, as `budjam dos` (docs/spectrum.md).
+
+eigenvalues lambda (k/m, ascending) and omega = sign(lambda) sqrt|lambda|; eigenvectors as the
+orthonormal columns of a (3n, k) array: the mass-weighted modes e = M^(1/2) u of the dynamical
+matrix M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the displacement is
+u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
+translations are removed); participation ratios, N_zero below lambda_tol,
+the band edge omega_star (None if not available). method: auto | dense | arpack; modes:
+ARPACK modes (0: as many as omega_star needs).)");
+  m.def("survival", &survival_dict, "runs"_a,
+        R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories, as
+`budjam survival` (each run's last jamming episode; completion is the event, division and the
+end of the run censor). a = b^2 - b_J^2 in D0^2 (diameter squared; times pi/4 for the area), S,
+its Greenwood variance, and at_risk / events / censored at each a; records and completed in all.)");
+  m.def("particle_frame", [](const io::PackingFile& f, const std::string& network) {
+          return frame_dict(io::particle_frame(f.packing, network_of(network)));
+        },
+        "packing"_a, "network"_a = "load-bearing",
+        "The packing as particles (one per lobe) and bonds (links, then contacts), as `budjam export` "
+        "writes it (docs/files.md, 'Export'): positions unwrapped (x, y) and wrapped with images, radius, "
+        "lineage id, rigid cluster, rattler; bonds a, b, kind (0 link, 1 contact), force (k D0, compressive).");
+  m.def("export", [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
+                     const std::string& network) {
+          if (format != "xyz" && format != "gsd" && format != "vtk")
+            throw py::value_error("format: must be 'xyz', 'gsd' or 'vtk' (got '" + format + "')");
+          io::write_particles(path, io::particle_frame(f.packing, network_of(network)), format);
+        },
+        "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
+        "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
+        "GSD (HOOMD schema) or legacy VTK.");
+
+  py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
+
+Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
+'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the status of an
+expected early stop such as 'step_limit'), the state it happened in (step = accepted steps, phi,
+P in k, N, phase) with a copy of the packing, and the fields of that event.)")
+      .def(py::init<const std::filesystem::path&, std::optional<std::uint64_t>, const std::vector<std::string>&>(),
+           "scene"_a, "seed"_a = py::none(), "set"_a = std::vector<std::string>{})
+      .def("__iter__", [](Growth& g) -> Growth& { return g; })
+      .def("__next__", &Growth::next)
+      .def_property_readonly("packing", [](const Growth& g) { return io::PackingFile{g.driver().packing(), {}}; },
+                             "the current (last accepted) packing")
+      .def_property_readonly("status", [](const Growth& g) { return std::string(to_string(g.driver().result().status)); },
+                             "'running', 'finished' or the reason of an early stop");
+}

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# budjam.1 from the help text (help2man): `budjam --help` as the synopsis and options, and a
+# SUBCOMMANDS section with every subcommand's own --help.
+#   bash scripts/man_page.sh BUDJAM_EXE OUT.1
+set -euo pipefail
+exe=$1 out=$2
+include=$(mktemp)
+trap 'rm -f "$include"' EXIT
+{
+  echo "[SUBCOMMANDS]"
+  for sub in $("$exe" --help | awk '/^Subcommands:/ { s = 1; next } s && /^  [a-z]/ { print $1 }'); do
+    echo ".SS budjam $sub"
+    echo ".nf"
+    "$exe" "$sub" --help | sed -e 's/\\/\\e/g' -e 's/^\./\\\&./'
+    echo ".fi"
+  done
+  echo "[FILES]"
+  echo "Scene, packing, run-directory and export formats, exit codes: docs/files.md in the source tree."
+} > "$include"
+help2man --locale=C.UTF-8 --no-info --no-discard-stderr --name "growing budding-cell packings, jamming and rigidity" \
+  --section 1 --include "$include" --output "$out.tmp" "$exe"
+mv "$out.tmp" "$out"

@@ -1,0 +1,49 @@
+"""Shared by the pytest suites that ctest runs: the `budjam` executable and the test packings."""
+import json
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+SOURCE_DIR = pathlib.Path(os.environ.get("BUDJAM_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+PACKING = SOURCE_DIR / "tests" / "data" / "saddle_jamming_L15_seed3.pack"
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: grows a run first (ctest label slow)")
+
+
+@pytest.fixture(scope="session")
+def budjam_exe():
+    exe = os.environ.get("BUDJAM_EXE")
+    if not exe:
+        pytest.fail("BUDJAM_EXE is not set: run these tests through ctest")
+    return exe
+
+
+@pytest.fixture(scope="session")
+def run_budjam(budjam_exe):
+    """Runs `budjam ARGS...`; returns the CompletedProcess (stdout/stderr as text)."""
+
+    def run(*args, check=True):
+        r = subprocess.run([budjam_exe, *map(str, args)], capture_output=True, text=True)
+        if check and r.returncode != 0:
+            pytest.fail(f"budjam {' '.join(map(str, args))} exited {r.returncode}: {r.stderr}")
+        return r
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def sheared_packing(tmp_path_factory):
+    """The jammed test packing under a Lees–Edwards shear γ = 0.1 (a valid packing file)."""
+    text = PACKING.read_text().replace("\nshear 0\n", "\nshear 0.1\n", 1)
+    assert "\nshear 0.1\n" in text
+    path = tmp_path_factory.mktemp("sheared") / "sheared.pack"
+    path.write_text(text)
+    return path
+
+
+def rigidity_json(run_budjam, packing):
+    return json.loads(run_budjam("rigidity", packing).stdout)

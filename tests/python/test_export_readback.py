@@ -1,0 +1,145 @@
+"""`budjam export` read back by independent readers: ASE (extended XYZ), gsd (HOOMD schema) and
+meshio (legacy VTK). The three files of one packing must describe the same particles and bonds,
+and agree with `budjam rigidity` on the same packing."""
+import collections
+import subprocess
+
+import ase.io
+import gsd.hoomd
+import meshio
+import numpy as np
+import pytest
+
+from conftest import PACKING, rigidity_json
+
+
+@pytest.fixture(scope="module", params=["unsheared", "sheared"])
+def exported(request, run_budjam, sheared_packing, tmp_path_factory):
+    packing = PACKING if request.param == "unsheared" else sheared_packing
+    base = tmp_path_factory.mktemp("export") / "p"
+    for fmt in ("xyz", "gsd", "vtk"):
+        run_budjam("export", packing, "--format", fmt, "--out", base)
+    frame = gsd.hoomd.open(str(base) + ".gsd", "rb")[0]
+    return {
+        "packing": packing,
+        "xyz": ase.io.read(str(base) + ".xyz", format="extxyz"),
+        "gsd": frame,
+        "vtk": meshio.read(str(base) + ".vtk"),
+    }
+
+
+def header(packing):
+    fields = dict(line.split(" ", 1) for line in packing.read_text().splitlines()[1:5])
+    return int(fields["N"]), float(fields["L"]), float(fields["shear"])
+
+
+def bud_diameters(packing):
+    lines = packing.read_text().splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith("cells "))
+    columns = lines[start].split()[1:]
+    rows = [line.split() for line in lines[start + 1 : lines.index("end")]]
+    return np.array([float(row[columns.index("b")]) for row in rows])
+
+
+def vtk_points(exported, name):
+    return exported["vtk"].point_data[name].ravel()
+
+
+def vtk_bonds(exported, name):
+    return exported["vtk"].cell_data[name][0].ravel()
+
+
+def test_one_particle_per_lobe_in_every_format(exported):
+    n, _, _ = header(exported["packing"])
+    assert len(exported["xyz"]) == 2 * n
+    assert exported["gsd"].particles.N == 2 * n
+    assert exported["vtk"].points.shape == (2 * n, 3)
+    kinds = np.where(np.arange(2 * n) % 2 == 0, "mother", "bud")
+    assert list(exported["xyz"].arrays["type"]) == list(kinds)
+    g = exported["gsd"].particles
+    assert [g.types[t] for t in g.typeid] == list(kinds)
+    assert list(vtk_points(exported, "bud")) == list(np.arange(2 * n) % 2)
+    cell = np.arange(2 * n) // 2
+    for column in (exported["xyz"].arrays["cell"], exported["gsd"].log["particles/cell"], vtk_points(exported, "cell")):
+        np.testing.assert_array_equal(column, cell)
+
+
+def test_box_is_the_packing_box(exported):
+    _, L, shear = header(exported["packing"])
+    np.testing.assert_allclose(exported["xyz"].cell[:], [[L, 0, 0], [shear * L, L, 0], [0, 0, 1]])
+    assert list(exported["xyz"].pbc) == [True, True, False]
+    assert exported["gsd"].configuration.dimensions == 2
+    np.testing.assert_allclose(exported["gsd"].configuration.box, [L, L, 1, shear, 0, 0])
+
+
+def test_positions_agree_modulo_the_box(exported):
+    _, L, shear = header(exported["packing"])
+    a1, a2 = np.array([L, 0.0]), np.array([shear * L, L])
+    wrapped = exported["xyz"].positions[:, :2]
+    # GSD: HOOMD centres the box on the origin; float32 positions.
+    g = exported["gsd"].particles
+    np.testing.assert_allclose(g.position[:, :2] + 0.5 * (a1 + a2), wrapped, atol=1e-5)
+    # VTK: unwrapped (cells whole) = wrapped + image in box vectors, the image from GSD.
+    unwrapped = wrapped + g.image[:, :1] * a1 + g.image[:, 1:2] * a2
+    np.testing.assert_allclose(exported["vtk"].points[:, :2], unwrapped, atol=1e-9)
+    # Wrapped positions lie in the (sheared) box.
+    frac = np.linalg.solve(np.array([a1, a2]).T, wrapped.T).T
+    assert frac.min() > -1e-9 and frac.max() < 1 + 1e-9
+
+
+def test_radii_are_the_lobe_radii(exported):
+    r = exported["xyz"].arrays["radius"]
+    assert np.all(r[0::2] == 0.5)  # mothers: D0 = 1
+    np.testing.assert_array_equal(r[1::2], 0.5 * bud_diameters(exported["packing"]))
+    np.testing.assert_allclose(exported["gsd"].particles.diameter, 2 * r, rtol=1e-6)
+    np.testing.assert_array_equal(vtk_points(exported, "radius"), r)
+
+
+def test_bonds_are_links_then_contacts_with_the_same_forces(exported):
+    n, _, _ = header(exported["packing"])
+    g = exported["gsd"]
+    lines = exported["vtk"].cells_dict["line"]
+    assert g.bonds.N == len(lines) > n
+    np.testing.assert_array_equal(g.bonds.group, lines)
+    np.testing.assert_array_equal(g.bonds.group[:n], np.column_stack([2 * np.arange(n), 2 * np.arange(n) + 1]))
+    kind = np.asarray(g.bonds.typeid)
+    assert [g.bonds.types[k] for k in kind[:n]] == ["link"] * n
+    assert set(kind[n:]) == {1}
+    np.testing.assert_array_equal(vtk_bonds(exported, "contact"), kind)
+    force = g.log["bonds/force"]
+    np.testing.assert_array_equal(vtk_bonds(exported, "force"), force)
+    assert np.all(force[n:] > 0)  # contacts are repulsive overlaps
+
+
+def test_contacts_and_clusters_agree_with_budjam_rigidity(exported, run_budjam):
+    n, _, _ = header(exported["packing"])
+    rigidity = rigidity_json(run_budjam, exported["packing"])
+    kind = np.asarray(exported["gsd"].bonds.typeid)
+    assert int(np.sum(kind == 1)) == rigidity["contacts"]
+    cluster = exported["xyz"].arrays["cluster"]
+    np.testing.assert_array_equal(exported["gsd"].log["particles/rigid_cluster"], cluster)
+    np.testing.assert_array_equal(vtk_points(exported, "cluster"), cluster)
+    assert np.all(cluster[0::2] == cluster[1::2])  # a cell's lobes share its bar's cluster
+    cells_per_cluster = collections.Counter(cluster[0::2][cluster[0::2] >= 0])
+    assert max(cells_per_cluster.values()) == rigidity["rigid_clusters"]["largest_cells"]
+    rattler = exported["xyz"].arrays["rattler"]
+    assert int(np.sum(rattler[0::2])) == rigidity["N_f"]
+    assert np.all((cluster < 0) == rattler)  # the load-bearing network: rattlers are not analysed
+
+
+def test_bad_format_and_missing_packing_are_input_errors(run_budjam, tmp_path):
+    r = run_budjam("export", PACKING, "--format", "pdb", "--out", tmp_path / "x", check=False)
+    assert r.returncode == 2
+    r = run_budjam("export", tmp_path / "none.pack", "--format", "xyz", check=False)
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and "none.pack" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_gsd_without_its_writer_is_an_output_error_leaving_nothing(budjam_exe, tmp_path):
+    env = {"BUDJAM_PYTHON": str(tmp_path / "no-python")}
+    r = subprocess.run([budjam_exe, "export", PACKING, "--format", "gsd", "--out", tmp_path / "p"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 3
+    assert r.stderr.count("\n") == 1 and "python3-gsd" in r.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,203 @@
+"""The Python module `budjam` against the command line on the same packings: the same library
+functions must give the same numbers, and the arrays must describe the same physics."""
+import json
+import math
+import shutil
+
+import numpy as np
+import pandas
+import pytest
+
+import budjam
+from conftest import PACKING, SOURCE_DIR, rigidity_json
+
+
+@pytest.fixture(scope="session")
+def run_dir(run_budjam, tmp_path_factory):
+    """A small growth run (L = 8, to the Δφ targets and φ_2) with moduli and rigidity events."""
+    out = tmp_path_factory.mktemp("run") / "demo"
+    run_budjam("grow", SOURCE_DIR / "data" / "scenes" / "demo.toml", "--out", out, "--quiet",
+               "--set", "observe.moduli.at_targets=true", "--set", "observe.rigidity_events=true")
+    return out
+
+
+@pytest.fixture(scope="session")
+def relaxed(run_dir, tmp_path_factory):
+    """A relaxed packing above jamming, alone in a directory (dos writes beside it)."""
+    path = tmp_path_factory.mktemp("relaxed") / "target.pack"
+    shutil.copy(run_dir / "packings" / "target_1.pack", path)
+    return path
+
+
+def test_write_reproduces_the_file_byte_for_byte(tmp_path):
+    p = budjam.read_packing(PACKING)
+    p.write(tmp_path / "copy.pack")
+    assert (tmp_path / "copy.pack").read_bytes() == PACKING.read_bytes()
+
+
+def test_packing_from_arrays_is_the_same_packing():
+    p = budjam.read_packing(PACKING)
+    q = budjam.Packing(L=p.L, x=p.x, y=p.y, theta=p.theta, b=p.b, gamma0=p.gamma0)
+    for name in ("x", "y", "theta", "b", "gamma0"):
+        np.testing.assert_array_equal(getattr(q, name), getattr(p, name))
+    assert q.phi == p.phi and q.N == p.N
+    np.testing.assert_array_equal(q.id, np.arange(p.N))
+    np.testing.assert_array_equal(budjam.contacts(q)["force"], budjam.contacts(p)["force"])
+
+
+def test_packing_from_arrays_is_checked_like_a_file():
+    with pytest.raises(ValueError, match="box"):
+        budjam.Packing(L=-1.0, x=[1.0], y=[1.0], theta=[0.0], b=[0.5], gamma0=[0.002])
+    with pytest.raises(ValueError, match="length 1"):
+        budjam.Packing(L=5.0, x=[1.0, 2.0], y=[1.0], theta=[0.0], b=[0.5])
+
+
+def test_unreadable_packing_raises_input_error_naming_the_file(tmp_path):
+    with pytest.raises(budjam.InputError, match="missing.pack"):
+        budjam.read_packing(tmp_path / "missing.pack")
+
+
+def test_lobes_are_tangent_dumbbells():
+    p = budjam.read_packing(PACKING)
+    lobes = p.lobes()
+    np.testing.assert_array_equal(lobes["radius"][0::2], 0.5)
+    np.testing.assert_array_equal(lobes["radius"][1::2], p.b / 2)
+    d = np.hypot(lobes["x"][1::2] - lobes["x"][0::2], lobes["y"][1::2] - lobes["y"][0::2])
+    np.testing.assert_allclose(d, (1 + p.b) / 2, rtol=1e-12)
+    # The centroid is the area-weighted mean of the lobe centres.
+    w_m, w_b = 1.0, p.b**2
+    np.testing.assert_allclose((w_m * lobes["x"][0::2] + w_b * lobes["x"][1::2]) / (w_m + w_b), p.x, atol=1e-12)
+
+
+@pytest.mark.parametrize("network", ["load-bearing", "raw"])
+def test_rigidity_and_contacts_equal_budjam_rigidity(run_budjam, network):
+    p = budjam.read_packing(PACKING)
+    cli = json.loads(run_budjam("rigidity", PACKING, "--network", network).stdout)
+    r, c = budjam.rigidity(p, network), budjam.contacts(p)
+    assert len(c["force"]) == cli["contacts"]
+    assert c["N_c"] // 2 == cli["contacts_load_bearing"]
+    for key in ("N_nr", "N_f", "N_u", "N_u_buds"):
+        assert c[key] == cli[key], key
+    for key in ("cells", "joints", "independent_bars", "redundant_bars", "free_pebbles", "spans_x", "spans_y",
+                "buds_rigid"):
+        assert r[key] == cli[key], key
+    assert len(r["bars"]) == cli["bars"]
+    assert r["floppy_plane"] == cli["floppy_modes"]["plane"]
+    assert r["floppy_periodic"] == cli["floppy_modes"]["periodic"]
+    assert len(r["cluster_cells"]) == cli["rigid_clusters"]["count"]
+    assert r["largest_cells"] == cli["rigid_clusters"]["largest_cells"]
+    # Labels: the cells of the largest cluster are those labelled with it.
+    assert int(np.sum(r["cell_cluster"] == r["largest"])) == r["largest_cells"]
+    np.testing.assert_array_equal(r["lobe_cluster"], np.repeat(r["cell_cluster"], 2))
+
+
+@pytest.mark.slow
+def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
+    cli = json.loads(run_budjam("moduli", relaxed).stdout)
+    m = budjam.moduli(budjam.read_packing(relaxed))
+    assert m["energy_minimum"] and cli["energy_minimum"]
+    assert m["B"] == cli["B"] and m["G"] == cli["G"]
+    for convention in ("moduli", "moduli_affine", "moduli_energy", "moduli_energy_affine"):
+        assert m[convention] == cli[convention], convention
+    s = cli["shear_stability"]
+    assert m["shear_stability"]["G_min"] == s["G_min"] and m["shear_stability"]["G_max"] == s["G_max"]
+    assert math.degrees(m["shear_stability"]["phi_min"]) == pytest.approx(s["phi_min_deg"], rel=1e-12)
+    # G(0) of the shear-stability scan is Lees–Edwards shear: E_xyxy of the energy stiffness.
+    assert m["E"].shape == (4, 4) and m["C"].shape == (3, 3)
+    assert m["shear_stability"]["G_min"] <= m["E"][1, 1] <= m["shear_stability"]["G_max"]
+
+
+@pytest.mark.slow
+def test_spectrum_equals_budjam_dos_and_modes_are_orthonormal_and_free_of_translations(run_budjam, relaxed):
+    run_budjam("dos", relaxed, "--quiet")
+    cli = json.loads(relaxed.with_suffix(".dos.json").read_text())
+    table = pandas.read_csv(relaxed.with_suffix(".dos.csv"), float_precision="round_trip")
+    s = budjam.spectrum(budjam.read_packing(relaxed))
+    assert s["N_zero"] == cli["N_zero"] and s["omega_star"] == cli["omega_star"]
+    np.testing.assert_array_equal(s["eigenvalues"], table["lambda"])
+    np.testing.assert_array_equal(s["participation"], table["participation"])
+    m = np.concatenate([s["mass"][3 * int(c) : 3 * int(c) + 3] for c in s["cells"]])
+    v = s["eigenvectors"]
+    assert v.shape == (3 * len(s["cells"]), len(s["eigenvalues"]))
+    np.testing.assert_allclose(v.T @ v, np.eye(v.shape[1]), atol=1e-10)
+    # Mass-weighted modes e = M^(1/2) u are orthogonal to M^(1/2) t of the uniform translations t.
+    for axis in (0, 1):
+        t = np.zeros(len(m))
+        t[axis::3] = 1.0
+        np.testing.assert_allclose(v.T @ (np.sqrt(m) * t), 0.0, atol=1e-9)
+
+
+def test_particle_frame_is_what_export_writes(run_budjam, tmp_path):
+    import ase.io
+
+    run_budjam("export", PACKING, "--format", "xyz", "--out", tmp_path / "p")
+    atoms = ase.io.read(tmp_path / "p.xyz", format="extxyz")
+    f = budjam.particle_frame(budjam.read_packing(PACKING))
+    np.testing.assert_array_equal(atoms.positions[:, 0], f["wrapped_x"])
+    np.testing.assert_array_equal(atoms.arrays["cluster"], f["cluster"])
+    budjam.export(budjam.read_packing(PACKING), tmp_path / "q.xyz", "xyz")
+    assert (tmp_path / "q.xyz").read_bytes() == (tmp_path / "p.xyz").read_bytes()
+
+
+@pytest.mark.slow
+def test_load_run_gives_every_table_as_a_dataframe(run_dir):
+    run = budjam.load_run(run_dir)
+    assert run.summary == json.loads((run_dir / "summary.json").read_text())
+    stems = sorted(csv.stem for csv in run_dir.glob("*.csv"))
+    assert sorted(run.tables) == stems and {"steps", "divisions", "bud_events", "moduli"} <= set(stems)
+    for stem in stems:
+        lines = (run_dir / f"{stem}.csv").read_text().splitlines()
+        assert list(run.tables[stem].columns) == lines[0].split(",")
+        assert len(run.tables[stem]) == len(lines) - 1
+    assert run.steps is run.tables["steps"]
+    assert [p.name for p in run.packings] == sorted(p.name for p in (run_dir / "packings").glob("*.pack"))
+    with pytest.raises(AttributeError, match="no table"):
+        run.nonexistent
+
+
+def test_load_run_refuses_an_unfinished_run(tmp_path):
+    with pytest.raises(budjam.InputError, match="no summary.json"):
+        budjam.load_run(tmp_path)
+
+
+@pytest.mark.slow
+def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
+    events = list(budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml"))
+    run = budjam.load_run(run_dir)
+    kinds = [e["kind"] for e in events]
+    assert kinds[-1] == "finished" == run.summary["status"]
+    (jammed,) = [e for e in events if e["kind"] == "jammed"]
+    assert jammed["phi_J"] == jammed["phi"] == run.summary["phi_J"]
+    (phi2,) = [e for e in events if e["kind"] == "phi2"]
+    assert phi2["phi_2"] == run.summary["phi_2"]
+    assert kinds.count("division") == len(run.divisions)
+    assert sum(k.startswith("bud_") for k in kinds) == len(run.bud_events)
+    targets = [e for e in events if e["kind"] == "target"]
+    assert len(targets) == 2
+    for t in targets:
+        saved = budjam.read_packing(run_dir / "packings" / f"target_{t['index']}.pack")
+        for name in ("x", "y", "theta", "b", "gamma0", "id", "parent"):
+            np.testing.assert_array_equal(getattr(t["packing"], name), getattr(saved, name))
+
+
+@pytest.mark.slow
+def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
+    events = []
+    status = budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", set=["growth.max_steps=50"],
+                         callback=events.append)
+    assert status == "step_limit"
+    assert events[-1]["kind"] == "stopped" and events[-1]["status"] == "step_limit"
+
+
+@pytest.mark.slow
+def test_survival_equals_budjam_survival(run_dir, run_budjam, tmp_path):
+    summary = json.loads(run_budjam("survival", run_dir, "-o", tmp_path / "s.csv").stdout)
+    table = pandas.read_csv(tmp_path / "s.csv", float_precision="round_trip")
+    s = budjam.survival([run_dir])
+    assert s["records"] == summary["records"] and s["completed"] == summary["events"]
+    np.testing.assert_array_equal(s["a"], table["a"])
+    np.testing.assert_array_equal(s["S"], table["S"])
+    np.testing.assert_array_equal(np.sqrt(s["greenwood_var"]), table["se"])
+    for column in ("at_risk", "events", "censored"):
+        np.testing.assert_array_equal(s[column], table[column])
+    assert np.all(np.diff(s["S"]) <= 0)  # a survival curve never rises

@@ -1,0 +1,61 @@
+"""The trajectory observer ([observe] trajectory_every): trajectory.xyz read back by ASE, frames
+at the sampled steps and at every event state, identical to `budjam export` of the event packings,
+and byte-identical after a kill and --resume."""
+import json
+import signal
+import subprocess
+import time
+
+import ase.io
+import numpy as np
+import pytest
+
+from conftest import SOURCE_DIR
+
+SCENE = SOURCE_DIR / "data" / "scenes" / "demo.toml"
+SETTINGS = ["--set", "observe.trajectory_every=100", "--set", "observe.checkpoint_every=50"]
+
+
+@pytest.fixture(scope="module")
+def reference(run_budjam, tmp_path_factory):
+    out = tmp_path_factory.mktemp("trajectory") / "ref"
+    run_budjam("grow", SCENE, "--out", out, "--quiet", *SETTINGS)
+    return out
+
+
+def test_frames_at_sampled_steps_and_events(reference):
+    frames = ase.io.read(reference / "trajectory.xyz", index=":", format="extxyz")
+    steps = [f.info["step"] for f in frames]
+    assert steps == sorted(set(steps))  # one frame per state, in order
+    summary = json.loads((reference / "summary.json").read_text())
+    assert {0, 100, 200} <= set(steps)
+    assert summary["step_J"] in steps and summary["step_2"] in steps
+    assert steps[-1] == summary["accepted_steps"]  # the last state
+    assert not (reference / "trajectory.xyz.partial").exists()
+
+
+def test_event_frame_is_the_export_of_the_event_packing(reference, run_budjam, tmp_path):
+    summary = json.loads((reference / "summary.json").read_text())
+    frames = {f.info["step"]: f for f in ase.io.read(reference / "trajectory.xyz", index=":", format="extxyz")}
+    run_budjam("export", reference / "packings" / "jammed.pack", "--format", "xyz", "--out", tmp_path / "j")
+    exported = ase.io.read(tmp_path / "j.xyz", format="extxyz")
+    at_jamming = frames[summary["step_J"]]
+    np.testing.assert_array_equal(at_jamming.positions, exported.positions)
+    for name in ("radius", "cell", "id", "cluster", "rattler", "type"):
+        np.testing.assert_array_equal(at_jamming.arrays[name], exported.arrays[name])
+
+
+def test_killed_and_resumed_run_writes_the_same_trajectory(reference, budjam_exe, run_budjam, tmp_path):
+    out = tmp_path / "killed"
+    proc = subprocess.Popen([budjam_exe, "grow", SCENE, "--out", out, "--quiet", *SETTINGS])
+    deadline = time.monotonic() + 120
+    while not (out / "checkpoint.txt").exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.001)
+    time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    if proc.returncode != -signal.SIGKILL:
+        pytest.skip("the run finished before it could be killed")
+    assert not (out / "trajectory.xyz").exists()
+    run_budjam("grow", "--resume", out, "--quiet")
+    assert (out / "trajectory.xyz").read_bytes() == (reference / "trajectory.xyz").read_bytes()

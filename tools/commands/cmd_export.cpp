@@ -1,0 +1,48 @@
+// `budjam export PACKING --format xyz|gsd|vtk [--out BASE] [--network load-bearing|raw]`
+// Writes a packing as particles and bonds for OVITO, ASE, ParaView and HOOMD-blue
+// (io/export.hpp, docs/files.md "Export"): BASE.xyz, BASE.gsd or BASE.vtk, BASE defaulting to the
+// packing's path without its extension. Nothing is printed.
+#include "commands/command.hpp"
+
+#include "io/export.hpp"
+#include "io/packing_file.hpp"
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace {
+
+using namespace budjam;
+
+struct Options {
+  std::string packing;
+  std::string format;
+  std::string out;
+  std::string network = "load-bearing";
+};
+
+void run(const Options& o) {
+  const RigidityNetwork which = parse_rigidity_network(o.network);
+  const io::PackingFile file = io::read_packing(o.packing);
+  std::filesystem::path out = o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
+  out += "." + o.format;
+  io::write_particles(out, io::particle_frame(file.packing, which), o.format);
+}
+
+const bool registered = budjam::cli::register_command(
+    {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (XYZ, GSD, VTK)",
+     [](CLI::App& sub) {
+       auto o = std::make_shared<Options>();
+       sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
+       sub.add_option("--format", o->format, "xyz (extended XYZ), gsd (HOOMD schema) or vtk (legacy VTK)")
+           ->required()
+           ->check(CLI::IsMember({"xyz", "gsd", "vtk"}));
+       sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
+           ->type_name("BASE");
+       sub.add_option("--network", o->network,
+                      "network whose rigid clusters label the lobes: load-bearing (default) or raw");
+       sub.callback([o] { run(*o); });
+     }});
+
+}  // namespace

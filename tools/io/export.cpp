@@ -1,0 +1,264 @@
+#include "io/export.hpp"
+
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json.hpp"
+#include "io/run_data.hpp"
+#include "io/run_program.hpp"
+#include "io/text.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+#ifndef BUDJAM_PYTHON_EXECUTABLE
+#define BUDJAM_PYTHON_EXECUTABLE "python3"
+#endif
+
+namespace budjam::io {
+
+namespace {
+
+// Lattice coordinates of (x, y) in the box vectors a1 = (L, 0), a2 = (γL, L), rounded down:
+// (x, y) − n·a1 − m·a2 lies in the box.
+struct Image {
+  int n, m;
+};
+Image image_of(double x, double y, const Box& box) {
+  const double m = std::floor(y / box.L);
+  const double n = std::floor((x - box.shear * y) / box.L);
+  return {static_cast<int>(n), static_cast<int>(m)};
+}
+
+}  // namespace
+
+ParticleFrame particle_frame(const Packing& p, RigidityNetwork which) {
+  const tools::PackingContacts pc = tools::analyse_contacts(p);
+  Lobes lobes;
+  place_lobes(p, lobes);
+  const RigidityState rigidity = analyse_rigidity(p, lobes, pc.contacts, pc.network, which);
+  const Box& box = p.box;
+  const double L = box.L, shift = box.shear * box.L;
+
+  ParticleFrame f;
+  f.L = L;
+  f.shear = box.shear;
+  const std::size_t n = 2 * p.size();
+  f.x.resize(n);
+  f.y.resize(n);
+  f.wrapped_x.resize(n);
+  f.wrapped_y.resize(n);
+  f.image_x.resize(n);
+  f.image_y.resize(n);
+  f.radius = lobes.R;
+  f.id.resize(n);
+  f.cluster.resize(n);
+  f.rattler.resize(n);
+  for (std::size_t lobe = 0; lobe < n; ++lobe) {
+    const std::size_t cell = cell_of(lobe);
+    const Image c = image_of(p.x(cell), p.y(cell), box);
+    f.x[lobe] = lobes.x[lobe] - c.n * L - c.m * shift;
+    f.y[lobe] = lobes.y[lobe] - c.m * L;
+    const Image l = image_of(f.x[lobe], f.y[lobe], box);
+    f.image_x[lobe] = l.n;
+    f.image_y[lobe] = l.m;
+    f.wrapped_x[lobe] = f.x[lobe] - l.n * L - l.m * shift;
+    f.wrapped_y[lobe] = f.y[lobe] - l.m * L;
+    f.id[lobe] = p.id[cell];
+    f.cluster[lobe] = rigidity.cell_cluster[cell];
+    f.rattler[lobe] = pc.network.rattler[cell];
+  }
+
+  // The force on a bud from its contacts, then the bar force that balances it.
+  std::vector<double> bud_fx(p.size(), 0.0), bud_fy(p.size(), 0.0);
+  for (const Contact& c : pc.contacts) {
+    if (is_bud(c.i)) {
+      bud_fx[cell_of(c.i)] += c.force() * c.nx;
+      bud_fy[cell_of(c.i)] += c.force() * c.ny;
+    }
+    if (is_bud(c.j)) {
+      bud_fx[cell_of(c.j)] -= c.force() * c.nx;
+      bud_fy[cell_of(c.j)] -= c.force() * c.ny;
+    }
+  }
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double link = -(bud_fx[i] * std::cos(p.theta(i)) + bud_fy[i] * std::sin(p.theta(i)));
+    f.bonds.push_back({static_cast<std::uint32_t>(mother_lobe(i)), static_cast<std::uint32_t>(bud_lobe(i)),
+                       BondKind::link, link, false});
+  }
+  for (const Contact& c : pc.contacts) {
+    // The contact joins the minimum images: it crosses the boundary when the unwrapped ends are
+    // not those images of each other.
+    double dx = f.x[c.i] - f.x[c.j], dy = f.y[c.i] - f.y[c.j];
+    const double direct = dx * dx + dy * dy;
+    box.minimum_image(dx, dy);
+    const bool crosses = std::abs(direct - (dx * dx + dy * dy)) > 1e-9 * L * L;
+    f.bonds.push_back({c.i, c.j, BondKind::contact, c.force(), crosses});
+  }
+  return f;
+}
+
+std::string format_extxyz(const ParticleFrame& f) {
+  std::ostringstream out;
+  const std::string L = format_double(f.L);
+  out << f.size() << '\n';
+  out << "Lattice=\"" << L << " 0 0 " << format_double(f.shear * f.L) << ' ' << L << " 0 0 0 1\" "
+      << "Properties=type:S:1:pos:R:3:radius:R:1:cell:I:1:id:I:1:cluster:I:1:rattler:L:1 "
+      << "pbc=\"T T F\" step=" << f.step << '\n';
+  for (std::size_t k = 0; k < f.size(); ++k)
+    out << (is_bud(k) ? "bud" : "mother") << ' ' << format_double(f.wrapped_x[k]) << ' '
+        << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]) << ' ' << cell_of(k) << ' '
+        << f.id[k] << ' ' << f.cluster[k] << ' ' << (f.rattler[k] ? 'T' : 'F') << '\n';
+  return out.str();
+}
+
+std::string format_vtk(const ParticleFrame& f) {
+  constexpr int kVtkLine = 3;
+  std::ostringstream out;
+  const std::size_t n = f.size(), nb = f.bonds.size();
+  out << "# vtk DataFile Version 3.0\n"
+      << "budjam packing: points = lobes, lines = bonds; L " << format_double(f.L) << " shear "
+      << format_double(f.shear) << " step " << f.step << '\n'
+      << "ASCII\nDATASET UNSTRUCTURED_GRID\n";
+  out << "POINTS " << n << " double\n";
+  for (std::size_t k = 0; k < n; ++k) out << format_double(f.x[k]) << ' ' << format_double(f.y[k]) << " 0\n";
+  out << "CELLS " << nb << ' ' << 3 * nb << '\n';
+  for (const Bond& b : f.bonds) out << "2 " << b.a << ' ' << b.b << '\n';
+  out << "CELL_TYPES " << nb << '\n';
+  for (std::size_t k = 0; k < nb; ++k) out << kVtkLine << '\n';
+
+  const auto scalars = [&out](const char* name, const char* type, std::size_t count, auto value) {
+    out << "SCALARS " << name << ' ' << type << " 1\nLOOKUP_TABLE default\n";
+    for (std::size_t k = 0; k < count; ++k) out << value(k) << '\n';
+  };
+  out << "POINT_DATA " << n << '\n';
+  scalars("radius", "double", n, [&](std::size_t k) { return format_double(f.radius[k]); });
+  scalars("bud", "int", n, [](std::size_t k) { return static_cast<int>(is_bud(k)); });
+  scalars("cell", "int", n, [](std::size_t k) { return cell_of(k); });
+  scalars("id", "long", n, [&](std::size_t k) { return f.id[k]; });
+  scalars("cluster", "int", n, [&](std::size_t k) { return f.cluster[k]; });
+  scalars("rattler", "int", n, [&](std::size_t k) { return static_cast<int>(f.rattler[k]); });
+  out << "CELL_DATA " << nb << '\n';
+  scalars("contact", "int", nb, [&](std::size_t k) { return static_cast<int>(f.bonds[k].kind); });
+  scalars("force", "double", nb, [&](std::size_t k) { return format_double(f.bonds[k].force); });
+  scalars("crosses_boundary", "int", nb, [&](std::size_t k) { return static_cast<int>(f.bonds[k].crosses_boundary); });
+  return out.str();
+}
+
+namespace {
+
+// Reads the frames (JSON, argv[1]) and writes them as GSD (argv[2]). HOOMD conventions: positions
+// centred on the box, box = [Lx, Ly, Lz, xy, xz, yz], dimensions 2; quantities without a HOOMD
+// field go under log/.
+constexpr int kNoGsdPackage = 4;
+constexpr const char* kGsdWriter = R"(import json, sys
+try:
+    import numpy as np
+    import gsd, gsd.hoomd
+except ImportError:
+    sys.exit(4)
+Frame = getattr(gsd.hoomd, 'Frame', None) or gsd.hoomd.Snapshot
+mode = 'w' if int(gsd.__version__.split('.')[0]) >= 3 else 'wb'
+with open(sys.argv[1]) as f:
+    frames = json.load(f)
+with gsd.hoomd.open(sys.argv[2], mode) as out:
+    for j in frames:
+        s = Frame()
+        s.configuration.step = j['step']
+        s.configuration.dimensions = 2
+        L, xy = j['L'], j['shear']
+        s.configuration.box = [L, L, 1, xy, 0, 0]
+        n = len(j['radius'])
+        s.particles.N = n
+        s.particles.types = ['mother', 'bud']
+        s.particles.typeid = np.arange(n, dtype=np.uint32) % 2
+        pos = np.zeros((n, 3))
+        pos[:, 0] = np.array(j['x']) - 0.5 * L * (1 + xy)
+        pos[:, 1] = np.array(j['y']) - 0.5 * L
+        s.particles.position = pos
+        s.particles.diameter = 2 * np.array(j['radius'])
+        image = np.zeros((n, 3), dtype=np.int32)
+        image[:, 0], image[:, 1] = j['image_x'], j['image_y']
+        s.particles.image = image
+        s.bonds.N = len(j['bond_kind'])
+        s.bonds.types = ['link', 'contact']
+        s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
+        s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
+        # Not particles/body: HOOMD reads body >= 0 as constituents of its rigid bodies.
+        s.log['particles/cell'] = np.arange(n, dtype=np.int64) // 2
+        s.log['particles/id'] = np.array(j['id'], dtype=np.int64)
+        s.log['particles/rigid_cluster'] = np.array(j['cluster'], dtype=np.int32)
+        s.log['particles/rattler'] = np.array(j['rattler'], dtype=np.uint8)
+        s.log['bonds/force'] = np.array(j['bond_force'], dtype=np.float64)
+        s.log['bonds/crosses_boundary'] = np.array(j['bond_crosses'], dtype=np.uint8)
+        out.append(s)
+)";
+
+Json frame_json(const ParticleFrame& f) {
+  Json j;
+  j["step"] = f.step;
+  j["L"] = f.L;
+  j["shear"] = f.shear;
+  j["x"] = f.wrapped_x;
+  j["y"] = f.wrapped_y;
+  j["image_x"] = f.image_x;
+  j["image_y"] = f.image_y;
+  j["radius"] = f.radius;
+  j["id"] = f.id;
+  j["cluster"] = f.cluster;
+  j["rattler"] = f.rattler;
+  Json kind = Json::array(), group = Json::array(), force = Json::array(), crosses = Json::array();
+  for (const Bond& b : f.bonds) {
+    kind.push_back(static_cast<int>(b.kind));
+    group.push_back(b.a);
+    group.push_back(b.b);
+    force.push_back(b.force);
+    crosses.push_back(b.crosses_boundary);
+  }
+  j["bond_kind"] = kind;
+  j["bond_group"] = group;
+  j["bond_force"] = force;
+  j["bond_crosses"] = crosses;
+  return j;
+}
+
+}  // namespace
+
+void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
+  Json all = Json::array();
+  for (const auto& f : frames) all.push_back(frame_json(f));
+  std::filesystem::path input = path, tmp = path;
+  input += ".frames.json";
+  tmp += ".tmp";
+  write_atomically(input, all.dump());
+  const char* env = std::getenv("BUDJAM_PYTHON");
+  const std::string python = env && *env ? env : BUDJAM_PYTHON_EXECUTABLE;
+  int rc = 0;
+  try {
+    rc = run_program({python, "-c", kGsdWriter, input.string(), tmp.string()}, "export --format gsd",
+                     "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
+  } catch (...) {
+    std::filesystem::remove(input);
+    throw;
+  }
+  std::filesystem::remove(input);
+  if (rc == kNoGsdPackage)
+    throw IoError(path.string() + ": " + python + " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
+  if (rc != 0) {
+    std::filesystem::remove(tmp);
+    throw IoError(path.string() + ": the GSD writer (" + python + ", package gsd) failed with status " +
+                  std::to_string(rc));
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format) {
+  if (format == "xyz") write_atomically(path, format_extxyz(frame));
+  else if (format == "vtk") write_atomically(path, format_vtk(frame));
+  else if (format == "gsd") write_gsd(path, {frame});
+  else throw std::invalid_argument("write_particles: unknown format " + format);
+}
+
+}  // namespace budjam::io

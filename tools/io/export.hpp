@@ -1,0 +1,71 @@
+#pragma once
+// A packing as particles and bonds, for the tools of molecular simulation (OVITO, ASE, ParaView,
+// HOOMD-blue): one particle per lobe, one bond per mother–bud link and per contact
+// (docs/files.md, "Export"). Lengths in mother diameters D0, forces in k·D0.
+//
+// Positions: every cell is kept whole (its centroid wrapped into the box, its lobes placed from
+// it); each lobe is then also given wrapped into the box with its image, so that
+// unwrapped = wrapped + image_x·a1 + image_y·a2 with the box vectors a1 = (L, 0), a2 = (γL, L)
+// (γ = Lees–Edwards shear, the HOOMD tilt factor xy).
+#include "budjam/packing.hpp"
+#include "budjam/rigidity.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace budjam::io {
+
+enum class BondKind : int { link = 0, contact = 1 };  // mother–bud bar / lobe–lobe overlap
+
+struct Bond {
+  std::uint32_t a, b;  // lobes, a < b
+  BondKind kind;
+  // Compressive force carried, in k·D0. Contact: k(σ − r). Link: −F_bud·n̂, the force the rigid
+  // mother–bud bar exerts to hold the bud against its contacts (F_bud = their sum on the bud,
+  // parallel to n̂ in a force- and torque-balanced packing); negative = tension.
+  double force;
+  bool crosses_boundary;  // the bond joins periodic images: the wrapped ends are not its ends
+};
+
+struct ParticleFrame {
+  std::int64_t step = 0;  // growth step, for trajectories
+  double L = 0, shear = 0;
+  // Per lobe: lobe 2i is the mother of cell i, lobe 2i+1 its bud (packing.hpp).
+  std::vector<double> x, y;  // unwrapped, cells whole
+  std::vector<double> wrapped_x, wrapped_y;
+  std::vector<int> image_x, image_y;
+  std::vector<double> radius;
+  std::vector<std::int64_t> id;  // lineage id of the lobe's cell
+  std::vector<int> cluster;      // rigid cluster of the cell's mother–bud bar, −1 if not analysed (rattler)
+  std::vector<bool> rattler;     // the lobe's cell is a rattler (iterative rule)
+  std::vector<Bond> bonds;       // the links of cells 0..N−1 in order, then the contacts by (a, b)
+
+  std::size_t size() const { return radius.size(); }
+};
+
+// Contacts, contact network and rigid clusters of the packing as it is (nothing is relaxed), as
+// `budjam rigidity` computes them; `which` chooses the network whose clusters label the lobes.
+ParticleFrame particle_frame(const Packing& p, RigidityNetwork which = RigidityNetwork::load_bearing);
+
+// Extended XYZ (ASE, OVITO): wrapped positions (z = 0), the cell as Lattice, pbc "T T F"; the
+// lobe kind in column `type` (mother/bud; not `species`, which ASE reads as chemical elements).
+// Bonds are not part of the format (use GSD or VTK). Frames concatenate into a trajectory.
+std::string format_extxyz(const ParticleFrame& frame);
+
+// Legacy VTK unstructured grid (ParaView, meshio, VisIt): unwrapped points, bonds as line cells,
+// per-lobe point data and per-bond cell data.
+std::string format_vtk(const ParticleFrame& frame);
+
+// GSD in the HOOMD schema, one frame per element, written by the `gsd` Python package (the HOOMD
+// project's reference implementation; Debian ships GSD only as python3-gsd) run by the Python 3
+// interpreter found at build time, or $BUDJAM_PYTHON. Atomic: `path` is complete or untouched.
+// IoError if the interpreter or its gsd package is missing or the write fails.
+void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames);
+
+// write_atomically of format_extxyz / format_vtk, or write_gsd, chosen by `format`
+// ("xyz", "gsd", "vtk"); std::invalid_argument for another format.
+void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format);
+
+}  // namespace budjam::io
