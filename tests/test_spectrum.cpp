@@ -4,7 +4,7 @@
 
 #include "budjam/hessian.hpp"
 #include "budjam/rigidity.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "compressed_packing.hpp"
 
 #include "io/json.hpp"

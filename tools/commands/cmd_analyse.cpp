@@ -21,7 +21,7 @@
 
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 #include "io/atomic_file.hpp"
