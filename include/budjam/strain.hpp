@@ -1,7 +1,7 @@
 #pragma once
 // Finite affine strains of a packing, relaxed with FIRE: the independent check of the linear
 // response (issue 3.5) and the finite-strain definitions of MODEL.md ("Linear-response
-// conventions"), plus the compression protocol used to make test and benchmark packings.
+// conventions").
 //
 // The strain maps box and centroids affinely and leaves orientations alone (cells are rigid):
 //  - Lees–Edwards simple shear by δγ: box.shear += δγ, x_i += δγ y_i (unwrapped coordinates, so
@@ -54,30 +54,6 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
 
 // Symmetric strains ±h, ±2h, …, ±count·h.
 std::vector<double> symmetric_strains(double h, int count);
-
-// ---- packings for tests and benchmarks (no growth driver needed) --------------------------
-
-// n cells at uniformly random centroids and orientations, without overlaps (random sequential
-// addition), in a square box sized for packing fraction phi < 0.6 (loose: compress it with
-// compress_to_pressure); bud diameters uniform in [b_min, b_max]. Throws std::invalid_argument if
-// a cell cannot be placed.
-Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, std::uint64_t seed);
-
-struct CompressionResult {
-  Packing packing;     // relaxed, P within [P_target/ratio, P_target·ratio]
-  double P = 0;
-  double phi = 0;
-  int rescalings = 0;  // isotropic rescalings tried
-  long fire_iterations = 0;
-  bool converged = false;
-};
-
-// Isotropic compression/decompression (box + centroids) with FIRE after each rescaling until the
-// relaxed pressure lies within a factor `ratio` of P_target: first expands or compresses by
-// factors until the target is bracketed, then bisects in ln φ. Works from any start (overlapping
-// or loose).
-CompressionResult compress_to_pressure(Packing start, double P_target, const FireParams& fire, double ratio = 1.5,
-                                       int max_rescalings = 200);
 
 // The sorted list of contacting lobe pairs (i < j) of a contact list.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> contact_pairs(const std::vector<Contact>& contacts);
