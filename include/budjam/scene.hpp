@@ -1,6 +1,8 @@
 #pragma once
 // A run's description, validated: what to grow, how precisely, and what to observe.
-// Plain data; the TOML reader lives in tools/io (the library knows nothing of files).
+// Plain data; the member initialisers are the defaults. Every field a scene file sets has a row in
+// the knob table (scene_keys.hpp); the TOML reader lives in tools/io (the library knows nothing of
+// files).
 #include "budjam/errors.hpp"
 #include "budjam/fire.hpp"
 #include <cstdint>
