@@ -1,6 +1,8 @@
 // The knob table. To add a knob: give Scene (or a struct inside it) the field with its default,
-// then add one row below, in its section — the builder names the type (text, choice, flag,
-// integer, real, real_or_none, reals), then section, name, help, the accepted range and the field.
+// then add one row to make_keys(), in its section. The builder names the type (real, integer,
+// flag, choice; row() with its own get/set for the rest), then come section, name, help, the
+// accepted range (above, at_least, at_most, between) and the field, e.g.
+//   e.push_back(real("jamming", "newton_threshold", "...", above(0), BUDJAM_FIELD(newton_threshold)));
 // Reader, --set, writers, validate() and the docs table follow; a rule that ties the knob to other
 // keys goes into validate() (src/scene.cpp), and docs/files.md's table is regenerated with
 // `budjam validate --keys-markdown` (test_scene checks that it is).
@@ -44,8 +46,11 @@ std::string value_text(const SceneValue& value) {
 
 namespace {
 
+[[noreturn]] void fail_key(const std::string& key, const std::string& problem, const SceneValue& got) {
+  throw InputError(key + ": " + problem + " (got " + value_text(got) + ")");
+}
 [[noreturn]] void fail(const SceneKey& k, const std::string& problem, const SceneValue& got) {
-  throw InputError(k.key() + ": " + problem + " (got " + value_text(got) + ")");
+  fail_key(k.key(), problem, got);
 }
 
 // ---- ranges ------------------------------------------------------------------------------
@@ -120,13 +125,13 @@ SceneKey choice(std::string sec, std::string name, std::string help, std::vector
   SceneKey k = row(std::move(sec), std::move(name), KeyType::choice, std::move(help));
   k.choices = names;
   k.get = [ref, names](const Scene& s) -> SceneValue { return names.at(static_cast<std::size_t>(ref(s))); };
-  k.set = [ref, names](Scene& s, const SceneValue& v) {
+  k.set = [ref, names, key = k.key()](Scene& s, const SceneValue& v) {
     const auto at = std::find(names.begin(), names.end(), std::get<std::string>(v));
+    if (at == names.end()) fail_key(key, "is not one of the choices", v);
     ref(s) = static_cast<E>(at - names.begin());
   };
   return k;
 }
-
 
 const Range kPositive = above(0);
 const Range kZeroOrPositive = at_least(0);

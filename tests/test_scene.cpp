@@ -484,3 +484,14 @@ TEST_CASE("an empty scene file is refused naming the file; a file of comments is
   }
   CHECK(scene_to_toml(parse_scene("# all defaults\n")) == scene_to_toml(Scene{}));
 }
+
+TEST_CASE("a choice is set by one of its names only", "[scene]") {
+  const SceneKey* division = find_scene_key("cells.division");
+  REQUIRE(division != nullptr);
+  Scene s;
+  division->set(s, std::string("opposite"));
+  CHECK(s.division == DivisionRule::opposite);
+  CHECK_THROWS_WITH(division->set(s, std::string("sideways")),
+                    "cells.division: is not one of the choices (got \"sideways\")");
+  CHECK(s.division == DivisionRule::opposite);
+}
