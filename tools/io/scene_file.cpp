@@ -7,10 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <limits>
-#include <map>
-#include <sstream>
+#include <cstdio>
+#include <stdexcept>
 
 namespace budjam::io {
 namespace {
