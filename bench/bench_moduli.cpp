@@ -8,13 +8,14 @@
 //
 // Packings: random dumbbells (buds uniform in [0.01, 1.02], the range a growing population spans)
 // placed without overlap at φ = 0.4 and compressed isotropically with FIRE to P ≈ 1e-3 by
-// compress_to_pressure (budjam/strain.hpp). N = 200 is an L ≈ 15 packing. Reported: the best of
+// compress_to_pressure (tests/support/compressed_packing.hpp). N = 200 is an L ≈ 15 packing. Reported: the best of
 // `repeats` timings, and the split between the contact analysis and the response itself.
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/moduli.hpp"
-#include "budjam/strain.hpp"
+#include "compressed_packing.hpp"
+#include "random_packing.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -25,6 +26,9 @@
 #include <vector>
 
 using namespace budjam;
+using budjam::testing::compress_to_pressure;
+using budjam::testing::CompressionResult;
+using budjam::testing::random_dumbbells;
 using Clock = std::chrono::steady_clock;
 
 static double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }

@@ -13,7 +13,7 @@
 //  2. scaling: time of the lowest K (default 100) modes against N; the error is measured against
 //     the dense spectrum where N ≤ 1500, else against a second ARPACK run with twice the Lanczos
 //     vectors and machine-precision tolerance. N_zero is cross-checked by Sylvester inertia.
-#include "../tests/support/compressed_packing.hpp"
+#include "compressed_packing.hpp"
 
 #include "budjam/spectrum.hpp"
 #include "io/packing_file.hpp"

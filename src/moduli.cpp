@@ -2,7 +2,7 @@
 
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/hessian.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>

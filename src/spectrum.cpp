@@ -3,7 +3,7 @@
 #include "budjam/arpack.hpp"
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/hessian.hpp"
-#include "budjam/scene.hpp"  // InputError
+#include "budjam/errors.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Householder>

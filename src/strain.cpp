@@ -1,18 +1,12 @@
 #include "budjam/strain.hpp"
 
 #include "budjam/energy.hpp"
-#include "budjam/contact_network.hpp"
 #include "budjam/moduli.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <numbers>
-#include <optional>
-#include <random>
 #include <stdexcept>
-#include <string>
 
 namespace budjam {
 
@@ -152,136 +146,6 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
     sweep.central_curvatures.emplace_back(h, (plus.U - 2 * zero->U + minus->U) / (A * h * h));
   }
   return sweep;
-}
-
-Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, std::uint64_t seed) {
-  if (n == 0 || !(phi > 0 && phi < 0.6) || !(b_min >= 0) || !(b_max >= b_min) || b_max > 1.2 * kMotherDiameter)
-    throw std::invalid_argument("random_dumbbells: need n > 0, 0 < phi < 0.6, 0 ≤ b_min ≤ b_max ≤ 1.2");
-  std::mt19937_64 rng(seed);
-  auto uni = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
-  std::vector<double> b(n);
-  double area = 0;
-  for (auto& bi : b) {
-    bi = b_min + (b_max - b_min) * uni();
-    area += 0.25 * std::numbers::pi * (kMotherDiameter * kMotherDiameter + bi * bi);
-  }
-  Packing p;
-  p.box.L = std::sqrt(area / phi);
-  const double L = p.box.L;
-  // Random sequential addition: no overlaps, so FIRE never starts from interpenetrated cells
-  // (a lobe trapped between the two lobes of another cell is a self-stressed local minimum).
-  // Grid of centroids with cells of side ≥ 2 × the largest centroid-to-lobe-edge distance.
-  const double reach = 0.5 * (kMotherDiameter + 1.2) + 0.6;
-  const int g = std::max(1, static_cast<int>(L / (2 * reach)));
-  const double cell = L / g;
-  std::vector<std::vector<std::size_t>> grid(static_cast<std::size_t>(g * g));
-  auto lobes_of = [&](double x, double y, double th, double bi, double out[2][3]) {
-    const Dumbbell d = Dumbbell::of(bi);
-    out[0][0] = x - d.mother_offset * std::cos(th), out[0][1] = y - d.mother_offset * std::sin(th), out[0][2] = 0.5 * d.D;
-    out[1][0] = x + d.bud_offset * std::cos(th), out[1][1] = y + d.bud_offset * std::sin(th), out[1][2] = 0.5 * d.b;
-  };
-  std::vector<std::array<double, 6>> placed;  // lobe centres and radii of placed cells
-  for (std::size_t i = 0; i < n; ++i) {
-    bool ok = false;
-    for (int attempt = 0; attempt < 100000 && !ok; ++attempt) {
-      const double x = L * uni(), y = L * uni(), th = 2 * std::numbers::pi * (uni() - 0.5);
-      double lo[2][3];
-      lobes_of(x, y, th, b[i], lo);
-      const int gx = std::min(g - 1, static_cast<int>(x / cell)), gy = std::min(g - 1, static_cast<int>(y / cell));
-      ok = true;
-      for (int dx = -1; dx <= 1 && ok; ++dx)
-        for (int dy = -1; dy <= 1 && ok; ++dy) {
-          if (g < 3 && (dx != 0 || dy != 0)) continue;  // tiny box: one cell holds everything
-          const auto& bucket = grid[static_cast<std::size_t>(((gx + dx + g) % g) * g + (gy + dy + g) % g)];
-          for (std::size_t k : bucket) {
-            const auto& o = placed[k];
-            for (int a = 0; a < 2 && ok; ++a)
-              for (int c = 0; c < 2 && ok; ++c) {
-                double ddx = lo[a][0] - o[3 * c], ddy = lo[a][1] - o[3 * c + 1];
-                p.box.minimum_image(ddx, ddy);
-                if (std::hypot(ddx, ddy) < lo[a][2] + o[3 * c + 2]) ok = false;
-              }
-            if (!ok) break;
-          }
-        }
-      if (ok) {
-        p.add_cell(x, y, th, b[i], 0.002, -1);
-        placed.push_back({lo[0][0], lo[0][1], lo[0][2], lo[1][0], lo[1][1], lo[1][2]});
-        grid[static_cast<std::size_t>(gx * g + gy)].push_back(i);
-      }
-    }
-    if (!ok) throw std::invalid_argument("random_dumbbells: cannot place cell " + std::to_string(i) + " at phi = " + std::to_string(phi));
-  }
-  return p;
-}
-
-CompressionResult compress_to_pressure(Packing start, double P_target, const FireParams& fire, double ratio,
-                                       int max_rescalings) {
-  if (!(P_target > 0) || !(ratio > 1)) throw std::invalid_argument("compress_to_pressure: need P_target > 0, ratio > 1");
-  CompressionResult res;
-  ForceField field;
-  struct State {
-    Packing p;
-    double lphi = 0, P = 0, B = 0;  // ln φ, pressure, dP/d ln φ (linear response; 0 if unjammed)
-  };
-  auto relax = [&](Packing q) {
-    State s;
-    const FireResult fr = minimise(q, field, fire);
-    res.fire_iterations += fr.iterations;
-    Eigen::VectorXd F;
-    field.evaluate(q, F);
-    const auto contacts = find_contacts(q, field.lobes(), field.neighbours());
-    s.P = pressure(contacts, q.box);
-    s.lphi = std::log(q.packing_fraction());
-    if (s.P > 0) {
-      const ContactNetwork net = analyse_network(q.size(), contacts);
-      try {
-        const ElasticResponse r = elastic_response(q, contacts, net);
-        if (r.kernel.well_posed && r.moduli.B > 0) s.B = r.moduli.B;
-      } catch (const std::runtime_error&) {
-        // not at a minimum yet (FIRE stopped early): no slope, bisect instead
-      }
-    }
-    s.p = std::move(q);
-    return s;
-  };
-  auto rescaled = [](const Packing& from, double lphi) {
-    Packing q = from;
-    apply_isotropic_scaling(q, std::exp(0.5 * (std::log(q.packing_fraction()) - lphi)));
-    return q;
-  };
-  State cur = relax(std::move(start));
-  std::optional<State> lo, hi;  // below / above the window
-  double step = 0.02;
-  for (res.rescalings = 0; res.rescalings < max_rescalings; ++res.rescalings) {
-    if (cur.P >= P_target / ratio && cur.P <= P_target * ratio) {
-      res.converged = true;
-      break;
-    }
-    if (cur.P < P_target / ratio) lo = cur;
-    else hi = cur;
-    double next;
-    const Packing* from;
-    if (!hi) {  // still below: compress by growing steps
-      next = lo->lphi + step;
-      step *= 1.5;
-      from = &lo->p;
-    } else {
-      // Decompress from the jammed end (its network survives small steps, FIRE is fast there):
-      // Newton with the linear-response slope B = dP/d ln φ, kept inside the bracket.
-      next = hi->B > 0 ? hi->lphi - std::min((hi->P - P_target) / hi->B, 0.05) : hi->lphi - step;
-      if (lo) {
-        const double w = hi->lphi - lo->lphi;
-        if (!(next > lo->lphi + 0.05 * w && next < hi->lphi - 0.05 * w)) next = 0.5 * (lo->lphi + hi->lphi);
-      }
-      from = &hi->p;
-    }
-    cur = relax(rescaled(*from, next));
-  }
-  res.packing = std::move(cur.p);
-  res.P = cur.P;
-  res.phi = res.packing.packing_fraction();
-  return res;
 }
 
 }  // namespace budjam

@@ -1,12 +1,14 @@
 // `budjam accuracy --packings`: the post-processing knobs (moduli linear solver, ARPACK tol and ncv)
 // measured against dense references on the same packings, and the front verdict (issue 6).
 #include "budjam/fire.hpp"
-#include "budjam/strain.hpp"
+#include "compressed_packing.hpp"
+#include "random_packing.hpp"
 
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 #include <sys/wait.h>
 
@@ -17,19 +19,14 @@
 #include <string>
 
 using namespace budjam;
+using budjam::testing::compress_to_pressure;
+using budjam::testing::CompressionResult;
+using budjam::testing::random_dumbbells;
 namespace fs = std::filesystem;
+using budjam::testing::run_budjam;
 using budjam::testing::work_dir;
 
 namespace {
-
-int run_budjam(const std::string& args) {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const std::string cmd = "'" + std::string(exe) + "' " + args + " >/dev/null 2>&1";
-  const int status = std::system(cmd.c_str());
-  REQUIRE(WIFEXITED(status));
-  return WEXITSTATUS(status);
-}
 
 // Two small compressed packings in <dir>/<k>/packings/, as a growth run stores them.
 fs::path packing_set() {
@@ -58,7 +55,7 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
           "[fast]") {
   const fs::path set = packing_set();
   const fs::path out = work_dir() / "acc";
-  REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'") == 0);
+  REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'").code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
 
   // Direct solvers agree with the dense reference at rounding level; CG to its tolerance (relative to
@@ -107,11 +104,11 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
 
 TEST_CASE("budjam accuracy refuses incomplete or malformed requests with exit code 2", "[fast]") {
   const fs::path out = work_dir() / "bad";
-  CHECK(run_budjam("accuracy --out '" + out.string() + "'") == 2);  // nothing to measure
-  CHECK(run_budjam("accuracy --packings 'x=" + (work_dir() / "missing").string() + "' --out '" + out.string() + "'") == 2);
-  CHECK(run_budjam("accuracy --packings nodir --out '" + out.string() + "'") == 2);
-  CHECK(run_budjam("accuracy --reference '" + work_dir().string() + "' --out '" + out.string() + "'") == 2);
-  CHECK(run_budjam("accuracy --packings 'a,b=" + work_dir().string() + "' --out '" + out.string() + "'") == 2);
+  CHECK(run_budjam("accuracy --out '" + out.string() + "'").code == 2);  // nothing to measure
+  CHECK(run_budjam("accuracy --packings 'x=" + (work_dir() / "missing").string() + "' --out '" + out.string() + "'").code == 2);
+  CHECK(run_budjam("accuracy --packings nodir --out '" + out.string() + "'").code == 2);
+  CHECK(run_budjam("accuracy --reference '" + work_dir().string() + "' --out '" + out.string() + "'").code == 2);
+  CHECK(run_budjam("accuracy --packings 'a,b=" + work_dir().string() + "' --out '" + out.string() + "'").code == 2);
 }
 
 TEST_CASE("a knob measured on two packing sets is judged on its joint front: geometric-mean relative cost, worst error",
@@ -119,7 +116,7 @@ TEST_CASE("a knob measured on two packing sets is judged on its joint front: geo
   const fs::path set = packing_set();
   const fs::path out = work_dir() / "acc_joint";
   REQUIRE(run_budjam("accuracy --packings 'a=" + (set / "1").string() + "' --packings 'b=" + (set / "2").string() +
-                     "' --min-seconds 0 --out '" + out.string() + "'") == 0);
+                     "' --min-seconds 0 --out '" + out.string() + "'").code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
   auto cost = [&](const std::string& set_name, const std::string& family, const std::string& variant) {
     for (const auto& r : acc["rows"])

@@ -5,6 +5,7 @@
 #include "io/json.hpp"
 
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 
 #include <algorithm>
@@ -22,18 +23,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using budjam::testing::run_budjam;
+using budjam::testing::run_budjam_redirected;
 using budjam::testing::slurp;
 using budjam::testing::work_dir;
 
-int run_budjam(const std::string& args, const fs::path& err = "/dev/null", const fs::path& out = "/dev/null") {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
 
 // Rows of a CSV file as column → text.
 std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
@@ -69,10 +64,10 @@ const std::vector<fs::path>& runs() {
     for (const auto& [P0, seed] : std::vector<std::pair<std::string, int>>{{"none", 3}, {"1e-3", 3}, {"1e-3", 4}}) {
       const fs::path dir = work_dir() / "runs" / ("P0_" + P0) / ("seed" + std::to_string(seed));
       REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir) + " --seed " + std::to_string(seed) +
-                     " --set growth.P0=" + P0) == 0);
+                     " --set growth.P0=" + P0).code == 0);
       for (const auto& e : fs::directory_iterator(dir / "packings"))
         if (e.path().extension() == ".pack")
-          REQUIRE(run_budjam("moduli " + q(e.path()), "/dev/null", fs::path(e.path()).replace_extension(".moduli.json")) == 0);
+          REQUIRE(run_budjam_redirected("moduli " + q(e.path()), fs::path(e.path()).replace_extension(".moduli.json")) == 0);
       d.push_back(dir);
     }
     return d;
@@ -92,7 +87,7 @@ double number(const std::string& s) { return s.empty() ? NAN : std::stod(s); }
 
 TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its moduli files", "[analyse]") {
   const fs::path out = work_dir() / "tables";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6 --require moduli") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6 --require moduli").code == 0);
   const auto run_rows = read_csv(out / "runs.csv");
   const auto tgt_rows = read_csv(out / "targets.csv");
   REQUIRE(run_rows.size() == runs().size());
@@ -134,8 +129,8 @@ TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its 
 
 TEST_CASE("analyse is deterministic: the same runs give byte-identical tables", "[analyse]") {
   const fs::path a = work_dir() / "det_a", b = work_dir() / "det_b";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6") == 0);
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(b) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(b) + " --main-L 6").code == 0);
   for (const char* f : {"analysis.json", "runs.csv", "targets.csv", "survival.csv", "trajectory.csv"}) {
     INFO(f);
     CHECK(slurp(a / f) == slurp(b / f));
@@ -148,13 +143,13 @@ TEST_CASE("analyse --require moduli refuses a packing without its moduli file: e
   fs::copy(runs().front(), copy, fs::copy_options::recursive);
   fs::remove(copy / "packings" / "target_0.moduli.json");
   const fs::path err = work_dir() / "analyse.err";
-  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_incomplete") + " --main-L 6 --require moduli", err) == 2);
+  CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_incomplete") + " --main-L 6 --require moduli", "/dev/null", err) == 2);
   const std::string e = slurp(err);
   CHECK(e.find("target_0.pack") != std::string::npos);
   CHECK(e.find("no moduli") != std::string::npos);
   CHECK(std::count(e.begin(), e.end(), '\n') == 1);
   // without --require the same run is analysed, its moduli left empty
-  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6") == 0);
+  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6").code == 0);
 }
 
 TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of the moduli and counts it", "[analyse]") {
@@ -163,10 +158,10 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
   const fs::path copy = work_dir() / "with_saddle";
   fs::copy(runs().front(), copy, fs::copy_options::recursive);
   // a real saddle's JSON (budjam moduli exits 1 on it) in place of target_0's
-  REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack"), "/dev/null",
-                     copy / "packings" / "target_0.moduli.json") == 1);
+  REQUIRE(run_budjam_redirected("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack"),
+                                copy / "packings" / "target_0.moduli.json") == 1);
   const fs::path out = work_dir() / "t_saddle";
-  REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli") == 0);
+  REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli").code == 0);
   CHECK(budjam::io::read_json(out / "analysis.json").at("inputs").at("moduli_saddles").get<long>() == 1);
   const auto s = budjam::io::read_json(copy / "summary.json");
   const double dphi0 = s.at("targets").at(0).at("dphi").get<double>();
@@ -183,7 +178,7 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
 TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] and the paper's φ_2 at no tagged bud left",
           "[analyse]") {
   const fs::path out = work_dir() / "t_definitions";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6").code == 0);
   const auto run_rows = read_csv(out / "runs.csv");
   for (const auto& dir : runs()) {
     const auto s = budjam::io::read_json(dir / "summary.json");
@@ -214,7 +209,7 @@ TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[
   fs::copy(runs()[1], pool / "copy_a", fs::copy_options::recursive);
   fs::copy(runs()[1], pool / "copy_b", fs::copy_options::recursive);
   const fs::path out = work_dir() / "t_copies", err = work_dir() / "copies.err";
-  REQUIRE(run_budjam("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", err) == 0);
+  REQUIRE(run_budjam_redirected("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", "/dev/null", err) == 0);
   const auto A = budjam::io::read_json(out / "analysis.json");
   CHECK(A.at("inputs").at("runs").get<long>() == 5);
   CHECK(A.at("inputs").at("used").get<long>() == 3);
@@ -239,7 +234,7 @@ TEST_CASE("analyse refuses an episode number no integer holds: exit 2, one line 
   text.replace(header_end + 1, field_end - header_end - 1, "1e300");
   std::ofstream(ev) << text;
   const fs::path err = work_dir() / "huge_episode.err";
-  CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", err) == 2);
+  CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", "/dev/null", err) == 2);
   const std::string e = slurp(err);
   CHECK(e.find("bud_events.csv:2: episode") != std::string::npos);
   CHECK(std::count(e.begin(), e.end(), '\n') == 1);
@@ -264,7 +259,7 @@ fs::path runs_with_spectra() {
   if (!fs::exists(dir)) {
     fs::copy(work_dir() / "runs", dir, fs::copy_options::recursive);
     for (const auto& e : fs::recursive_directory_iterator(dir))
-      if (e.path().extension() == ".pack") REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet") == 0);
+      if (e.path().extension() == ".pack") REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet").code == 0);
   }
   return dir;
 }
@@ -275,8 +270,8 @@ TEST_CASE("analyse --tables recomputes from an analysis' own tables exactly what
           "[analyse]") {
   runs();
   const fs::path runs_dir = runs_with_spectra(), a = work_dir() / "rt_runs", b = work_dir() / "rt_tables";
-  REQUIRE(run_budjam("analyse " + q(runs_dir) + " --out " + q(a) + " --main-L 6 --require moduli,dos") == 0);
-  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + q(runs_dir) + " --out " + q(a) + " --main-L 6 --require moduli,dos").code == 0);
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6").code == 0);
   // the per-run records, the pooled survival curves and the spectra come back bit for bit
   for (const char* f : {"runs.csv", "targets.csv", "survival.csv", "trajectory.csv", "dos.csv"}) {
     INFO(f);
@@ -300,7 +295,7 @@ TEST_CASE("analyse --tables on tables of an earlier format names what they lack 
           "[analyse]") {
   runs();
   const fs::path a = work_dir() / "old_runs", old = work_dir() / "old_tables", b = work_dir() / "old_out";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
   fs::create_directories(old);
   fs::copy(a / "targets.csv", old / "targets.csv");
   fs::copy(a / "survival.csv", old / "survival.csv");
@@ -321,7 +316,7 @@ TEST_CASE("analyse --tables on tables of an earlier format names what they lack 
     }
   }
   std::ofstream(old / "analysis.json") << "{\"format\": \"budjam-analysis\", \"version\": 1}\n";
-  REQUIRE(run_budjam("analyse --tables " + q(old) + " --out " + q(b) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse --tables " + q(old) + " --out " + q(b) + " --main-L 6").code == 0);
   const auto j = budjam::io::read_json(b / "analysis.json");
   // format 1 held χ̄ and λ̄_c as trapezoids in φ: not reported as today's plain means
   for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area"}) {
@@ -340,12 +335,12 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
           "[analyse]") {
   runs();
   const fs::path a = work_dir() / "orphan_runs", err = work_dir() / "orphan.err";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6") == 0);
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
   std::string t = slurp(a / "targets.csv");
   const auto row = t.find('\n') + 1;  // the first target's run
   t.replace(row, t.find(',', row) - row, "elsewhere/seed9");
   std::ofstream(a / "targets.csv") << t;
-  CHECK(run_budjam("analyse --tables " + q(a) + " --out " + q(work_dir() / "orphan_out") + " --main-L 6", err) == 2);
+  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "orphan_out") + " --main-L 6", "/dev/null", err) == 2);
   const std::string msg = slurp(err);
   CHECK(msg.find((a / "targets.csv").string() + ":2: run elsewhere/seed9 is not in runs.csv") != std::string::npos);
   CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
@@ -354,6 +349,6 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
 
 TEST_CASE("analyse takes run directories or --tables, not both and not neither: exit 2", "[analyse]") {
   runs();
-  CHECK(run_budjam("analyse --out " + q(work_dir() / "none_out")) == 2);
-  CHECK(run_budjam("analyse " + all_runs() + "--tables " + q(work_dir()) + " --out " + q(work_dir() / "both_out")) == 2);
+  CHECK(run_budjam("analyse --out " + q(work_dir() / "none_out")).code == 2);
+  CHECK(run_budjam("analyse " + all_runs() + "--tables " + q(work_dir()) + " --out " + q(work_dir() / "both_out")).code == 2);
 }

@@ -4,7 +4,7 @@
 #include "io/json.hpp"
 #include "io/text.hpp"
 
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -3,12 +3,14 @@
 #include "io/scene_file.hpp"
 
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,11 +20,8 @@ using Catch::Matchers::StartsWith;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
+using Result = budjam::testing::BudjamRun;
+using budjam::testing::run_budjam;
 using budjam::testing::work_dir;
 using budjam::testing::slurp;
 
@@ -30,21 +29,6 @@ fs::path write(const std::string& name, const std::string& text) {
   const fs::path p = work_dir() / name;
   std::ofstream(p, std::ios::binary) << text;
   return p;
-}
-
-// Runs `budjam <args>` through the shell; arguments are passed as written (quote them yourself).
-Result run_budjam(const std::string& args) {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
-  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  REQUIRE(WIFEXITED(status));
-  r.code = WEXITSTATUS(status);
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
 }
 
 std::size_t lines_in(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
@@ -127,6 +111,32 @@ TEST_CASE("command-line mistakes exit 2 with one stderr line", "[cli]") {
     CHECK(r.code == 2);
     require_one_error_line(r);
   }
+}
+
+TEST_CASE("budjam validate refuses an empty scene file and text that is not UTF-8: exit 2, one line naming the file",
+          "[cli]") {
+  for (const auto& [name, text, message] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"empty.toml", "", "empty.toml: empty scene file"},
+           {"latin1.toml", "[run]\nname = \"caf\xe9\"\n", "latin1.toml:2:12: not valid UTF-8"}}) {
+    INFO(name);
+    const Result r = run_budjam("validate '" + write(name, text).string() + "'");
+    CHECK(r.code == 2);
+    require_one_error_line(r);
+    CHECK_THAT(r.err, Contains(message));
+    CHECK(r.out.empty());
+  }
+}
+
+TEST_CASE("budjam validate --keys-markdown prints the knob table and needs no file", "[cli]") {
+  const Result r = run_budjam("validate --keys-markdown");
+  CHECK(r.code == 0);
+  CHECK(r.err.empty());
+  CHECK(r.out == budjam::io::scene_keys_markdown());
+  CHECK_THAT(r.out, Contains("| `box.L` | number | `8.0` | ≤ 10000 so that"));
+  const Result both = run_budjam("validate --keys-markdown x.toml");
+  CHECK(both.code == 2);
+  require_one_error_line(both);
 }
 
 TEST_CASE("--version and --help succeed on stdout", "[cli]") {

@@ -3,6 +3,7 @@
 #include "io/packing_file.hpp"
 
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 
 #include <algorithm>
@@ -29,20 +30,9 @@ std::string exe() {
   return e;
 }
 
-struct Result {
-  int code = -1;
-  std::string err;
-};
+using Result = budjam::testing::BudjamRun;
 
-Result grow(const std::string& args) {
-  const fs::path err = work_dir() / "stderr";
-  const std::string cmd = "'" + exe() + "' grow " + args + " 2>'" + err.string() + "' >/dev/null";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp(err);
-  return r;
-}
+Result grow(const std::string& args) { return budjam::testing::run_budjam("grow " + args); }
 
 // A small scene: L = 6, two targets, bud events, quick.
 fs::path small_scene(const std::string& name, const std::string& extra = "") {
@@ -52,7 +42,7 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
   return p;
 }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
 
 }  // namespace
 

@@ -6,12 +6,15 @@
 #include "budjam/hessian.hpp"
 #include "budjam/moduli.hpp"
 #include "budjam/strain.hpp"
+#include "compressed_packing.hpp"
+#include "random_packing.hpp"
 
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
@@ -27,6 +30,9 @@
 #include <string>
 
 using namespace budjam;
+using budjam::testing::compress_to_pressure;
+using budjam::testing::CompressionResult;
+using budjam::testing::random_dumbbells;
 
 namespace {
 
@@ -77,21 +83,8 @@ Relaxed jammed(std::size_t n, double P, double b_min, double b_max, std::uint64_
 
 namespace fs = std::filesystem;
 
+using budjam::testing::run_budjam;
 using budjam::testing::work_dir;
-
-// Runs `budjam <args>`; returns the exit code and stdout.
-std::pair<int, std::string> run_budjam(const std::string& args) {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const fs::path out = work_dir() / "stdout";
-  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>/dev/null";
-  const int status = std::system(cmd.c_str());
-  REQUIRE(WIFEXITED(status));
-  std::ifstream in(out);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return {WEXITSTATUS(status), text.str()};
-}
 
 double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
@@ -451,7 +444,7 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   const fs::path pack = work_dir() / "p.pack";
   io::write_packing(pack, r.p);
-  const auto [code, out] = run_budjam("moduli '" + pack.string() + "' --check");
+  const auto [code, out, err] = run_budjam("moduli '" + pack.string() + "' --check");
   REQUIRE(code == 0);
   const io::Json j = io::Json::parse(out);
   CHECK(j["B"].get<double>() == Approx(e.moduli.B).epsilon(1e-9));
@@ -471,14 +464,14 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   CHECK(j["check"]["simple_shear_G"]["relative_difference"].get<double>() < 0.01);
   CHECK(j["check"]["isotropic_B"]["relative_difference"].get<double>() < 0.01);
   // Deterministic output: the same file gives the same bytes.
-  CHECK(run_budjam("moduli '" + pack.string() + "'").second == run_budjam("moduli '" + pack.string() + "'").second);
+  CHECK(run_budjam("moduli '" + pack.string() + "'").out == run_budjam("moduli '" + pack.string() + "'").out);
 }
 
 TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal to budjam moduli on the saved packings", "[.slow]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const fs::path run = work_dir() / "demo";
-  const auto [code, out] = run_budjam("grow '" + std::string(src) + "/data/scenes/demo.toml' --quiet --out '" + run.string() +
+  const auto [code, out, err] = run_budjam("grow '" + std::string(src) + "/data/scenes/demo.toml' --quiet --out '" + run.string() +
                                       "' --set observe.moduli.at_jamming=true --set observe.moduli.at_targets=true");
   REQUIRE(code == 0);
   std::ifstream csv(run / "moduli.csv");
@@ -501,7 +494,7 @@ TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal t
   const std::vector<std::string> packs{"jammed", "target_0", "target_1"};
   for (std::size_t k = 0; k < 3; ++k) {
     CHECK(rows[k][col("well_posed")] == "true");
-    const io::Json j = io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").second);
+    const io::Json j = io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").out);
     CHECK(std::stod(rows[k][col("B")]) == Approx(j["B"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_simple")]) == Approx(j["G"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_energy")]) == Approx(j["G_energy"].get<double>()).epsilon(1e-9));
@@ -633,7 +626,7 @@ TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by L
 TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, and exits 1", "[fast]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const auto [code, out] = run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
+  const auto [code, out, err] = run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
   CHECK(code == 1);
   const io::Json j = io::Json::parse(out);
   CHECK(j["energy_minimum"] == false);
@@ -735,7 +728,7 @@ TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine se
   io::write_packing(pack, r.p);
   const std::string p = "moduli '" + pack.string() + "'";
   {
-    const auto [code, out] = run_budjam(p + " --solver ldlt --refine 1");
+    const auto [code, out, err] = run_budjam(p + " --solver ldlt --refine 1");
     REQUIRE(code == 0);
     const io::Json j = io::Json::parse(out);
     CHECK(j["kernel"]["method"] == "ldlt");
@@ -743,7 +736,7 @@ TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine se
     CHECK(j["B"].get<double>() == Approx(ref.moduli.B).epsilon(1e-9));
   }
   {
-    const auto [code, out] = run_budjam(p + " --solver cg --cg-tol 1e-9 --cg-preconditioner diagonal --timing");
+    const auto [code, out, err] = run_budjam(p + " --solver cg --cg-tol 1e-9 --cg-preconditioner diagonal --timing");
     REQUIRE(code == 0);
     const io::Json j = io::Json::parse(out);
     CHECK(j["kernel"]["method"] == "cg-diagonal");
@@ -753,21 +746,18 @@ TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine se
     CHECK(j["solve_seconds"].get<double>() > 0);
     CHECK(std::abs(j["G"].get<double>() - ref.moduli.G_simple) <= 1e-8 * ref.moduli.B);
   }
-  CHECK(run_budjam(p + " --solver dense").first == 0);
+  CHECK(run_budjam(p + " --solver dense").code == 0);
   {  // no refinement while the residual is below 1e-12 (at rounding level it always is)
-    const auto [code, out] = run_budjam(p + " --refine-above 1e-12");
+    const auto [code, out, err] = run_budjam(p + " --refine-above 1e-12");
     REQUIRE(code == 0);
     CHECK(io::Json::parse(out)["kernel"]["refinement_steps"].get<int>() == 0);
   }
   for (const std::string bad : {" --solver lu", " --solver cg --cg-tol 0", " --solver cg --cg-tol 1.5",
                                 " --cg-tol nan", " --cg-preconditioner ilu", " --refine -1", " --refine-above 2"}) {
     INFO(bad);
-    const fs::path err = work_dir() / "stderr";
-    const std::string cmd = "'" + std::string(std::getenv("BUDJAM_EXE")) + "' " + p + bad + " >/dev/null 2>'" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    REQUIRE(WIFEXITED(status));
-    CHECK(WEXITSTATUS(status) == 2);
-    std::ifstream in(err);
+    const auto r = run_budjam(p + bad);
+    CHECK(r.code == 2);
+    std::istringstream in(r.err);
     std::string first, second;
     std::getline(in, first);
     CHECK(!first.empty());

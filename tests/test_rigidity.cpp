@@ -5,6 +5,8 @@
 #include "budjam/rigidity.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
+#include "run_budjam.hpp"
+#include "scratch.hpp"
 
 #include <sys/wait.h>
 
@@ -639,27 +641,17 @@ TEST_CASE("a tracker restored from another's memory reports the same events for 
 }
 
 TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing as JSON", "[fast]") {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("budjam-test-rigidity-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = testing::work_dir();
   const Packing p = random_packing(120, 1.6, 4);
   io::write_packing(dir / "p.pack", p);
   const Analysed a = analyse(p);  // brute-force contacts: the command finds them by neighbour list
   const auto run = [&](const std::string& args) {
-    const std::string cmd = "'" + std::string(exe) + "' rigidity '" + (dir / "p.pack").string() + "' " + args +
-                            " >'" + (dir / "out.json").string() + "' 2>/dev/null";
-    const int status = std::system(cmd.c_str());
-    REQUIRE(WIFEXITED(status));
-    std::ifstream in(dir / "out.json");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return std::make_pair(WEXITSTATUS(status), text.str());
+    return testing::run_budjam("rigidity '" + (dir / "p.pack").string() + "' " + args);
   };
   for (RigidityNetwork which : {RigidityNetwork::load_bearing, RigidityNetwork::raw}) {
     const bool lb = which == RigidityNetwork::load_bearing;
-    const auto [code, text] = run(lb ? "" : "--network raw");
+    const auto [code, text, err] = run(lb ? "" : "--network raw");
     REQUIRE(code == 0);
     const io::Json j = io::Json::parse(text);
     const RigidityState s = analyse_rigidity(p, a.lobes, a.contacts, a.net, which);
@@ -675,8 +667,7 @@ TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing 
     CHECK(j["spans_x"] == s.spans_x);
     CHECK(j["spans_y"] == s.spans_y);
   }
-  CHECK(run("--network nonsense").first == 2);  // bad input
-  fs::remove_all(dir);
+  CHECK(run("--network nonsense").code == 2);  // bad input
 }
 
 TEST_CASE("along a real growth run above jamming: tracker = scratch at every state, floppy modes = N_u at jamming",

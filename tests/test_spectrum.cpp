@@ -4,8 +4,10 @@
 
 #include "budjam/hessian.hpp"
 #include "budjam/rigidity.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "compressed_packing.hpp"
+#include "run_budjam.hpp"
+#include "scratch.hpp"
 
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
@@ -572,57 +574,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A scratch directory for this process, removed at exit.
-struct ScratchDir {
-  fs::path path;
-  ScratchDir() : path(fs::temp_directory_path() / ("budjam-spectrum-" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using testing::run_budjam;
+using testing::slurp;
+using testing::work_dir;
 
-const fs::path& work_dir() {
-  static const ScratchDir dir;
-  return dir.path;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-struct Exit {
-  int code = -1;
-  std::string out, err;
-};
-
-Exit run_budjam(const std::string& args) {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const fs::path out = work_dir() / "stdout", err = work_dir() / "stderr";
-  const std::string cmd = "'" + std::string(exe) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  REQUIRE(WIFEXITED(status));
-  return {WEXITSTATUS(status), slurp(out), slurp(err)};
-}
-
-fs::path scene(const std::string& name) {
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
-  return fs::path(src) / "data" / "scenes" / name;
-}
+fs::path scene(const std::string& name) { return testing::source_file("data/scenes/" + name); }
 
 // The demo scene grown with the DOS observer at jamming, the targets and φ_2.
 fs::path grown_demo(std::uint64_t seed) {
   const fs::path dir = work_dir() / ("demo-" + std::to_string(seed));
   if (!fs::exists(dir / "summary.json")) {
-    const Exit r = run_budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
+    const auto r = run_budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
                           " --out '" + dir.string() +
                           "' --set observe.dos.at_jamming=true --set observe.dos.at_targets=true"
                           " --set observe.dos.at_phi2=true --set jamming.continue_to_phi2=true");
@@ -684,7 +646,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   const fs::path dir = grown_demo(1);
   const fs::path pack = dir / "packings" / "target_1.pack";
   const fs::path base = work_dir() / "t1";
-  Exit r = run_budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
+  auto r = run_budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.out.find("dos: dense") != std::string::npos);
@@ -709,7 +671,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
 
 TEST_CASE("budjam dos refuses bad options with one line naming the option", "[spectrum][cli]") {
   const fs::path pack = grown_demo(1) / "packings" / "jammed.pack";
-  Exit r = run_budjam("dos '" + pack.string() + "' --method lanczos");
+  auto r = run_budjam("dos '" + pack.string() + "' --method lanczos");
   CHECK(r.code == 2);
   CHECK(r.err.find("--method") != std::string::npos);
   r = run_budjam("dos '" + pack.string() + "' --method arpack --modes 100000");

@@ -6,7 +6,8 @@
 #include "budjam/fire.hpp"
 #include "budjam/hessian.hpp"
 #include "budjam/stability.hpp"
-#include "budjam/strain.hpp"
+#include "compressed_packing.hpp"
+#include "random_packing.hpp"
 
 #include "io/packing_file.hpp"
 
@@ -17,6 +18,9 @@
 #include <filesystem>
 
 using namespace budjam;
+using budjam::testing::compress_to_pressure;
+using budjam::testing::CompressionResult;
+using budjam::testing::random_dumbbells;
 
 namespace {
 

@@ -103,14 +103,12 @@ TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "run_budjam.hpp"
+#include "scratch.hpp"
+
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using budjam::testing::slurp;
 
 // The eight buds of the hand-worked example, logged as the growth driver logs them: a tag, then one
 // terminal row each (completed = event; divided / censored_end = censored). Episode 0 is an earlier
@@ -136,15 +134,11 @@ void write_run(const std::filesystem::path& d) {
 }  // namespace
 
 TEST_CASE("budjam survival pools the censored bud events of a run into the hand-worked curve") {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const auto dir = std::filesystem::temp_directory_path() / "budjam_test_survival";
-  std::filesystem::remove_all(dir);
+  const auto dir = budjam::testing::work_dir();
   write_run(dir / "run");
-  const std::string cmd = std::string(exe) + " survival " + (dir / "run").string() + " -o " + (dir / "km.csv").string() +
-                          " > " + (dir / "out.json").string();
-  REQUIRE(std::system(cmd.c_str()) == 0);
-  const auto j = nlohmann::json::parse(slurp(dir / "out.json"));
+  const auto r = budjam::testing::run_budjam("survival '" + (dir / "run").string() + "' -o '" + (dir / "km.csv").string() + "'");
+  REQUIRE(r.code == 0);
+  const auto j = nlohmann::json::parse(r.out);
   CHECK(j["records"] == 8);
   CHECK(j["events"] == 5);
   // ε = 1/N_nr = 1/32, u_J = 1/4 → level 1/8: Ŝ first ≤ 1/8 at a = 7 (Ŝ = 0); ∫_0^7 S = 169/36
@@ -154,7 +148,6 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   const std::string csv = slurp(dir / "km.csv");
   CHECK(csv.find("\n3,") != std::string::npos);
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
-  std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia table") {

@@ -1,20 +1,16 @@
 #pragma once
 // A run's description, validated: what to grow, how precisely, and what to observe.
-// Plain data; the TOML reader lives in tools/io (the library knows nothing of files).
+// Plain data; the member initialisers are the defaults. Every field a scene file sets has a row in
+// the knob table (scene_keys.hpp); the TOML reader lives in tools/io (the library knows nothing of
+// files).
+#include "budjam/errors.hpp"
 #include "budjam/fire.hpp"
 #include <cstdint>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace budjam {
-
-// Thrown for invalid input; what() is one line that names the key and the problem,
-// e.g. "growth.P0: must be positive (got -0.001)".
-struct InputError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 enum class DivisionRule { random, aligned, opposite };
 enum class InitialState { two_cells, random_seeds };

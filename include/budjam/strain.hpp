@@ -1,7 +1,6 @@
 #pragma once
 // Finite affine strains of a packing, relaxed with FIRE: the independent check of the linear
-// response and the paper's finite-strain definitions of B and G (docs/moduli.md), plus the
-// compression protocol used to make test and benchmark packings.
+// response and the paper's finite-strain definitions of B and G (docs/moduli.md).
 //
 // The strain maps box and centroids affinely and leaves orientations alone (cells are rigid):
 //  - Lees–Edwards simple shear by δγ: box.shear += δγ, x_i += δγ y_i (unwrapped coordinates, so
@@ -69,30 +68,6 @@ std::vector<double> symmetric_strains(double h, int count);
 // rounding noise (that of the overlaps in U) falls as 1/h², the largest pair that keeps the contacts
 // matters most.
 std::vector<double> doubling_strains(double h, int count);
-
-// ---- packings for tests and benchmarks (no growth driver needed) --------------------------
-
-// n cells at uniformly random centroids and orientations, without overlaps (random sequential
-// addition), in a square box sized for packing fraction phi < 0.6 (loose: compress it with
-// compress_to_pressure); bud diameters uniform in [b_min, b_max]. Throws std::invalid_argument if
-// a cell cannot be placed.
-Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, std::uint64_t seed);
-
-struct CompressionResult {
-  Packing packing;     // relaxed, P within [P_target/ratio, P_target·ratio]
-  double P = 0;
-  double phi = 0;
-  int rescalings = 0;  // isotropic rescalings tried
-  long fire_iterations = 0;
-  bool converged = false;
-};
-
-// Isotropic compression/decompression (box + centroids) with FIRE after each rescaling until the
-// relaxed pressure lies within a factor `ratio` of P_target: first expands or compresses by
-// factors until the target is bracketed, then bisects in ln φ. Works from any start (overlapping
-// or loose).
-CompressionResult compress_to_pressure(Packing start, double P_target, const FireParams& fire, double ratio = 1.5,
-                                       int max_rescalings = 200);
 
 // The sorted list of contacting lobe pairs (i < j) of a contact list.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> contact_pairs(const std::vector<Contact>& contacts);

@@ -1,38 +1,14 @@
 #pragma once
-// Shared by the tests that run the `budjam` executable: a scratch directory per test process and
-// whole-file reads.
+// Scratch files for the tests: one directory per test process, and whole-file reads.
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
-#include <system_error>
-#include <unistd.h>
 
 namespace budjam::testing {
 
 // A scratch directory for this process (tests run in parallel under ctest), removed at exit.
-inline const std::filesystem::path& work_dir() {
-  struct WorkDir {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("budjam-test-" + std::to_string(::getpid()));
-    WorkDir() {
-      std::filesystem::remove_all(path);
-      std::filesystem::create_directories(path);
-    }
-    ~WorkDir() {
-      std::error_code ec;
-      std::filesystem::remove_all(path, ec);
-    }
-  };
-  static const WorkDir dir;
-  return dir.path;
-}
+const std::filesystem::path& work_dir();
 
-inline std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+// The whole file as a string (empty if it cannot be read).
+std::string slurp(const std::filesystem::path& p);
 
 }  // namespace budjam::testing

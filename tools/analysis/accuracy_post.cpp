@@ -3,7 +3,7 @@
 #include "io/run_data.hpp"
 
 #include "budjam/moduli.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/spectrum.hpp"
 #include "budjam/statistics.hpp"
 #include "io/packing_file.hpp"

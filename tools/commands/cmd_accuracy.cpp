@@ -27,7 +27,7 @@
 #include "io/run_data.hpp"
 
 #include "budjam/pareto.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/statistics.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"

@@ -2,7 +2,7 @@
 // `budjam analyse --tables DIR --out DIR2 [...]`: the same estimators on the tables of an earlier analysis
 // Ensemble analysis of finished growth runs; the work is analysis/ensemble_analysis.
 #include "analysis/ensemble_analysis.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "commands/command.hpp"
 
 #include <iostream>

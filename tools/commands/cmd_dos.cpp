@@ -8,7 +8,7 @@
 #include "analysis/dos_report.hpp"
 #include "io/run_data.hpp"
 
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "io/packing_file.hpp"
 
 #include <filesystem>

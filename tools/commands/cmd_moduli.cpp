@@ -10,7 +10,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/moduli.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/strain.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"

@@ -7,7 +7,7 @@
 #include "io/run_data.hpp"
 
 #include "budjam/render.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/packing_file.hpp"
 

@@ -8,7 +8,7 @@
 #include "io/run_data.hpp"
 
 #include "budjam/depletion.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 #include "io/atomic_file.hpp"

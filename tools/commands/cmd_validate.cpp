@@ -1,6 +1,7 @@
 // `budjam validate FILE`: checks a scene (or a packing file) and prints what budjam would use.
 // For a scene: the effective scene, every key, as TOML (or JSON), after any --set overrides.
-// For a packing: its header, metadata and packing fraction.
+// For a packing: its header, metadata and packing fraction. --keys-markdown prints the table of
+// scene keys (the one in docs/files.md) instead.
 #include "commands/command.hpp"
 
 #include "io/atomic_file.hpp"
@@ -18,6 +19,7 @@ struct Options {
   std::vector<std::string> overrides;
   bool json = false;
   bool comments = false;
+  bool keys_markdown = false;
 };
 
 void show_packing(const Options& o, const std::string& text) {
@@ -48,6 +50,11 @@ void show_packing(const Options& o, const std::string& text) {
 }
 
 void run(const Options& o) {
+  if (o.keys_markdown) {
+    std::cout << budjam::io::scene_keys_markdown();
+    return;
+  }
+  if (o.file.empty()) throw budjam::InputError("FILE: a scene or packing file is required");
   const std::string text = budjam::io::read_text_file(o.file);
   if (budjam::io::looks_like_packing(text)) return show_packing(o, text);
   const budjam::Scene scene = budjam::io::parse_scene(text, o.file, o.overrides);
@@ -60,11 +67,13 @@ void run(const Options& o) {
 const bool registered = budjam::cli::register_command(
     {"validate", "Check a scene or packing file and print the effective values", [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
-       sub.add_option("FILE", o->file, "scene (.toml) or packing (.pack) file")->required();
+       auto* file = sub.add_option("FILE", o->file, "scene (.toml) or packing (.pack) file");
        sub.add_option("--set", o->overrides, "override a scene key, e.g. --set growth.P0=1e-4 (repeatable)")
            ->type_name("KEY=VALUE");
        sub.add_flag("--json", o->json, "print JSON instead of TOML");
        sub.add_flag("--comments", o->comments, "explain every key in the printed TOML");
+       sub.add_flag("--keys-markdown", o->keys_markdown, "print every scene key (type, default, range, meaning) as a Markdown table")
+           ->excludes(file);
        sub.callback([o] { run(*o); });
      }});
 

@@ -2,7 +2,7 @@
 // chosen one, and turns every failure into one line on stderr and an exit code.
 #include "commands/command.hpp"
 
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 #include "io/atomic_file.hpp"
 
-#include "budjam/scene.hpp"  // InputError
+#include "budjam/errors.hpp"
 #include "io/text.hpp"
 
 #include <fcntl.h>

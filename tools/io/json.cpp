@@ -1,6 +1,6 @@
 #include "io/json.hpp"
 
-#include "budjam/scene.hpp"  // InputError
+#include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
 
 namespace budjam::io {

@@ -17,7 +17,7 @@
 // survives any number of write/read cycles unchanged. Lines starting with '#' are allowed
 // before the "cells" line. The "end" line makes any truncation detectable.
 #include "budjam/packing.hpp"
-#include "budjam/scene.hpp"  // InputError, thrown for unreadable files
+#include "budjam/errors.hpp"
 
 #include <cstdint>
 #include <filesystem>

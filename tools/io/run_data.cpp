@@ -1,7 +1,7 @@
 #include "io/run_data.hpp"
 
 #include "budjam/cell_list.hpp"
-#include "budjam/scene.hpp"
+#include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/text.hpp"
 

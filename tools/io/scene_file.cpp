@@ -7,10 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <limits>
-#include <map>
-#include <sstream>
+#include <cstdio>
+#include <stdexcept>
 
 namespace budjam::io {
 namespace {
@@ -102,197 +100,48 @@ std::string read_string(const toml::node& n, const std::string& key) {
   type_error(key, "a string", n);
 }
 
-template <class E>
-E read_choice(const toml::node& n, const std::string& key, const std::vector<std::pair<std::string, E>>& choices) {
+std::string read_choice(const toml::node& n, const std::string& key, const std::vector<std::string>& choices) {
   std::string names;
-  for (const auto& [name, value] : choices) names += (names.empty() ? "\"" : ", \"") + name + "\"";
+  for (const auto& name : choices) names += (names.empty() ? "\"" : ", \"") + name + "\"";
   const auto* s = n.as_string();
-  if (!s) type_error(key, "one of " + names, n);
-  for (const auto& [name, value] : choices)
-    if (s->get() == name) return value;
-  type_error(key, "one of " + names, n);
+  if (!s || std::find(choices.begin(), choices.end(), s->get()) == choices.end()) type_error(key, "one of " + names, n);
+  return s->get();
 }
 
-const std::vector<std::pair<std::string, DivisionRule>> kDivision = {
-    {"random", DivisionRule::random}, {"aligned", DivisionRule::aligned}, {"opposite", DivisionRule::opposite}};
-const std::vector<std::pair<std::string, InitialState>> kInit = {{"two_cells", InitialState::two_cells},
-                                                                 {"random_seeds", InitialState::random_seeds}};
-
-template <class E>
-std::string choice_name(E value, const std::vector<std::pair<std::string, E>>& choices) {
-  for (const auto& [name, v] : choices)
-    if (v == value) return name;
-  return "?";
-}
-
-// ---- the key table: the one place every scene key is spelled ----------------------------------
-
-struct Entry {
-  SceneKeyInfo info;
-  std::function<void(Scene&, const toml::node&, const std::string&)> set;
-  std::function<SceneValue(const Scene&)> get;
-};
-
-// `ref` is a generic lambda returning a reference to the field in a Scene or const Scene.
-template <class Ref>
-Entry real(std::string sec, std::string name, std::string help, Ref ref) {
-  return {{std::move(sec), std::move(name), std::move(help)},
-          [ref](Scene& s, const toml::node& n, const std::string& key) { ref(s) = read_double(n, key); },
-          [ref](const Scene& s) -> SceneValue { return static_cast<double>(ref(s)); }};
-}
-
-template <class Ref>
-Entry integer(std::string sec, std::string name, std::string help, Ref ref) {
-  using T = std::remove_cvref_t<decltype(ref(std::declval<Scene&>()))>;
-  constexpr std::int64_t lo = std::is_signed_v<T> ? static_cast<std::int64_t>(std::numeric_limits<T>::min()) : 0;
-  constexpr std::int64_t hi =
-      static_cast<std::uint64_t>(std::numeric_limits<T>::max()) > static_cast<std::uint64_t>(INT64_MAX)
-          ? INT64_MAX
-          : static_cast<std::int64_t>(std::numeric_limits<T>::max());
-  return {{std::move(sec), std::move(name), std::move(help)},
-          [ref](Scene& s, const toml::node& n, const std::string& key) {
-            ref(s) = static_cast<T>(read_integer(n, key, lo, hi));
-          },
-          [ref](const Scene& s) -> SceneValue { return static_cast<std::int64_t>(ref(s)); }};
-}
-
-template <class Ref>
-Entry boolean(std::string sec, std::string name, std::string help, Ref ref) {
-  return {{std::move(sec), std::move(name), std::move(help)},
-          [ref](Scene& s, const toml::node& n, const std::string& key) { ref(s) = read_bool(n, key); },
-          [ref](const Scene& s) -> SceneValue { return static_cast<bool>(ref(s)); }};
-}
-
-#define BUDJAM_FIELD(member) [](auto& s) -> auto& { return s.member; }
-
-std::vector<Entry> make_entries() {
-  std::vector<Entry> e;
-  e.push_back({{"run", "name", "label stored with the results"},
-               [](Scene& s, const toml::node& n, const std::string& key) { s.name = read_string(n, key); },
-               [](const Scene& s) -> SceneValue { return s.name; }});
-  e.push_back(integer("run", "seed", "random seed; same scene + same seed = same run", BUDJAM_FIELD(seed)));
-
-  e.push_back(real("box", "L", "side of the periodic square box, in mother diameters", BUDJAM_FIELD(L)));
-
-  e.push_back(real("cells", "r0", "mean innate growth rate r0 (per unit step)", BUDJAM_FIELD(r0)));
-  e.push_back(real("cells", "delta", "spread of innate rates: γ0 = r0 (1 + δ (U − 1/2))", BUDJAM_FIELD(delta)));
-  e.push_back(real("cells", "alpha0", "aspect ratio of a newborn cell; division at 2 α0", BUDJAM_FIELD(alpha0)));
-  e.push_back({{"cells", "division", "orientation of newborn cells: \"random\", \"aligned\" or \"opposite\""},
-               [](Scene& s, const toml::node& n, const std::string& key) { s.division = read_choice(n, key, kDivision); },
-               [](const Scene& s) -> SceneValue { return choice_name(s.division, kDivision); }});
-
-  e.push_back({{"init", "kind", "initial state: \"two_cells\" (the paper's) or \"random_seeds\""},
-               [](Scene& s, const toml::node& n, const std::string& key) { s.init = read_choice(n, key, kInit); },
-               [](const Scene& s) -> SceneValue { return choice_name(s.init, kInit); }});
-  e.push_back(integer("init", "cells", "number of newborn cells placed at random (random_seeds only)",
-                      BUDJAM_FIELD(n_seeds)));
-
-  e.push_back({{"growth", "P0", "feedback pressure scale of γ = γ0 exp(−p/P0), or \"none\" for no feedback"},
-               [](Scene& s, const toml::node& n, const std::string& key) {
-                 if (const auto* str = n.as_string()) {
-                   if (str->get() != "none") type_error(key, "a number or \"none\"", n);
-                   s.P0.reset();
-                 } else if (n.is_number()) {
-                   s.P0 = read_double(n, key);
-                 } else {
-                   type_error(key, "a number or \"none\"", n);
-                 }
-               },
-               [](const Scene& s) -> SceneValue {
-                 if (s.P0) return *s.P0;
-                 return std::string("none");
-               }});
-  e.push_back(real("growth", "dt", "nominal growth step Δt", BUDJAM_FIELD(dt)));
-  e.push_back(real("growth", "dt_min", "a bisected step below this is a failure", BUDJAM_FIELD(dt_min)));
-  e.push_back(integer("growth", "max_steps", "growth steps (accepted + rejected) before the run fails",
-                      BUDJAM_FIELD(max_steps)));
-  e.push_back(boolean("growth", "adaptive_dt",
-                      "above jamming with feedback, start each step from dt / max(max_i exp(-p_i/P0), adaptive_floor)",
-                      BUDJAM_FIELD(adaptive_dt)));
-  e.push_back(real("growth", "adaptive_floor", "smallest growth factor used by adaptive_dt, in (0, 1]",
-                   BUDJAM_FIELD(adaptive_floor)));
-
-  e.push_back(real("jamming", "epsilon_U", "energy per cell below which a packing is unjammed", BUDJAM_FIELD(epsilon_U)));
-  e.push_back(real("jamming", "target_tolerance", "landing tolerance |φ − (φ_J + Δφ)|", BUDJAM_FIELD(target_tolerance)));
-  e.push_back({{"jamming", "targets", "Δφ above jamming to visit, strictly increasing, e.g. [1e-3, 1e-2]"},
-               [](Scene& s, const toml::node& n, const std::string& key) {
-                 const auto* a = n.as_array();
-                 if (!a) type_error(key, "an array of numbers", n);
-                 std::vector<double> v;
-                 for (const auto& item : *a) {
-                   if (!item.is_number()) type_error(key, "an array of numbers", n);
-                   v.push_back(read_double(item, key));
-                 }
-                 s.targets = std::move(v);
-               },
-               [](const Scene& s) -> SceneValue { return s.targets; }});
-  e.push_back(boolean("jamming", "continue_to_phi2", "keep growing past the last target until φ_2 is found",
-                      BUDJAM_FIELD(continue_to_phi2)));
-  e.push_back(real("jamming", "max_dphi", "never grow beyond φ_J + max_dphi", BUDJAM_FIELD(max_dphi)));
-  e.push_back(boolean("jamming", "check_minimum",
-                      "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
-                      BUDJAM_FIELD(check_minimum)));
-
-  e.push_back(real("minimiser", "dt_start", "FIRE initial time step", BUDJAM_FIELD(fire.dt_start)));
-  e.push_back(real("minimiser", "dt_max", "FIRE largest time step", BUDJAM_FIELD(fire.dt_max)));
-  e.push_back(real("minimiser", "dt_min", "FIRE smallest time step", BUDJAM_FIELD(fire.dt_min)));
-  e.push_back(integer("minimiser", "n_delay", "FIRE steps before the time step may grow", BUDJAM_FIELD(fire.n_delay)));
-  e.push_back(real("minimiser", "f_inc", "FIRE time step growth factor", BUDJAM_FIELD(fire.f_inc)));
-  e.push_back(real("minimiser", "f_dec", "FIRE time step shrink factor", BUDJAM_FIELD(fire.f_dec)));
-  e.push_back(real("minimiser", "alpha_start", "FIRE initial mixing α", BUDJAM_FIELD(fire.alpha_start)));
-  e.push_back(real("minimiser", "f_alpha", "FIRE mixing decay factor", BUDJAM_FIELD(fire.f_alpha)));
-  e.push_back(real("minimiser", "force_tol", "relaxed when the largest generalised force is below this",
-                   BUDJAM_FIELD(fire.force_tol)));
-  e.push_back(real("minimiser", "energy_floor", "relaxed (certainly unjammed) when E/N is below this",
-                   BUDJAM_FIELD(fire.energy_floor)));
-  e.push_back(integer("minimiser", "max_iterations", "FIRE iterations before a minimisation fails",
-                      BUDJAM_FIELD(fire.max_iterations)));
-  e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", BUDJAM_FIELD(skin)));
-
-  e.push_back(boolean("observe", "bud_events", "track unconstrained buds from jamming on (bud_events.csv)",
-                      BUDJAM_FIELD(bud_events)));
-  e.push_back(boolean("observe", "rigidity_events", "log rigidity (pebble game) along the run",
-                      BUDJAM_FIELD(rigidity_events)));
-  e.push_back(integer("observe", "checkpoint_every", "accepted steps between checkpoints; 0 = none",
-                      BUDJAM_FIELD(checkpoint_every)));
-  e.push_back(integer("observe", "trajectory_every",
-                      "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",
-                      BUDJAM_FIELD(trajectory_every)));
-  e.push_back(boolean("observe", "progress", "progress line on stderr", BUDJAM_FIELD(progress)));
-  for (const char* which : {"moduli", "dos"}) {
-    const std::string sec = std::string("observe.") + which;
-    const std::string what = std::string(which) == "moduli" ? "elastic moduli" : "density of states";
-    const bool m = std::string(which) == "moduli";
-    auto at = [m](auto& s) -> auto& { return m ? s.moduli : s.dos; };
-    e.push_back(boolean(sec, "at_jamming", "compute the " + what + " at jamming",
-                        [at](auto& s) -> auto& { return at(s).at_jamming; }));
-    e.push_back(boolean(sec, "at_phi2", "compute the " + what + " at φ_2", [at](auto& s) -> auto& { return at(s).at_phi2; }));
-    e.push_back(boolean(sec, "at_targets", "compute the " + what + " at each target",
-                        [at](auto& s) -> auto& { return at(s).at_targets; }));
-    e.push_back(integer(sec, "every", "compute the " + what + " every k accepted steps above jamming; 0 = never",
-                        [at](auto& s) -> auto& { return at(s).every; }));
+std::vector<double> read_reals(const toml::node& n, const std::string& key) {
+  const auto* a = n.as_array();
+  if (!a) type_error(key, "an array of numbers", n);
+  std::vector<double> v;
+  for (const auto& item : *a) {
+    if (!item.is_number()) type_error(key, "an array of numbers", n);
+    v.push_back(read_double(item, key));
   }
-  return e;
+  return v;
 }
 
-#undef BUDJAM_FIELD
-
-const std::vector<Entry>& entries() {
-  static const std::vector<Entry> e = make_entries();
-  return e;
-}
-
-const Entry* find_entry(std::string_view key) {
-  for (const auto& e : entries())
-    if (e.info.key() == key) return &e;
-  return nullptr;
+// A TOML value as the value of the row's type; InputError "<key>: expected ... (got ...)".
+SceneValue read_value(const SceneKey& k, const toml::node& n) {
+  const std::string key = k.key();
+  switch (k.type) {
+    case KeyType::text: return read_string(n, key);
+    case KeyType::choice: return read_choice(n, key, k.choices);
+    case KeyType::flag: return read_bool(n, key);
+    case KeyType::integer: return read_integer(n, key, k.min_integer, k.max_integer);
+    case KeyType::real: return read_double(n, key);
+    case KeyType::real_or_none:
+      if (n.is_number()) return read_double(n, key);
+      if (const auto* str = n.as_string(); str && str->get() == "none") return str->get();
+      type_error(key, "a number or \"none\"", n);
+    case KeyType::reals: return read_reals(n, key);
+  }
+  throw std::logic_error("read_value: unhandled key type");
 }
 
 // Sections in file order, with their parents ("observe" for "observe.moduli").
 std::vector<std::string> sections() {
   std::vector<std::string> out;
-  for (const auto& e : entries())
-    if (std::find(out.begin(), out.end(), e.info.section) == out.end()) out.push_back(e.info.section);
+  for (const auto& k : scene_keys())
+    if (std::find(out.begin(), out.end(), k.section) == out.end()) out.push_back(k.section);
   return out;
 }
 
@@ -303,8 +152,8 @@ bool is_section(const std::string& key) {
 
 std::string known_keys_of(const std::string& section) {
   std::string out;
-  for (const auto& e : entries())
-    if (e.info.section == section) out += (out.empty() ? "" : ", ") + e.info.name;
+  for (const auto& k : scene_keys())
+    if (k.section == section) out += (out.empty() ? "" : ", ") + k.name;
   for (const auto& s : sections())  // sub-tables such as [observe.moduli]
     if (s.size() > section.size() && s.compare(0, section.size() + 1, section + ".") == 0)
       out += ", [" + s + "]";
@@ -332,8 +181,8 @@ void read_table(const toml::table& table, const std::string& prefix, Scene& scen
       read_table(*sub, key, scene, source);
       continue;
     }
-    const Entry* e = find_entry(key);
-    if (!e) {
+    const SceneKey* row = find_scene_key(key);
+    if (!row) {
       if (!prefix.empty())
         throw InputError(where + ": " + key + ": unknown key (known in [" + prefix + "]: " + known_keys_of(prefix) + ")");
       if (node.is_table())
@@ -341,14 +190,53 @@ void read_table(const toml::table& table, const std::string& prefix, Scene& scen
       throw InputError(where + ": " + key + ": unknown key; keys belong in sections (" + top_sections() + ")");
     }
     try {
-      e->set(scene, node, key);
+      row->set(scene, read_value(*row, node));
     } catch (const InputError& err) {
       throw InputError(location(source, node.source()) + ": " + err.what());
     }
   }
 }
 
+// Where the first byte that is not well-formed UTF-8 (Unicode 15, Table 3-7: no overlong forms,
+// no surrogates, nothing above U+10FFFF) sits, as "<line>:<column>" (column in bytes), or "".
+// toml++ 3.3 must not see such text: on some of it, it reaches TOML_UNREACHABLE.
+std::string first_invalid_utf8(std::string_view text) {
+  std::size_t line = 1, line_start = 0;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    std::size_t len = 0;
+    unsigned char lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+    if (c < 0x80) len = 1;
+    else if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) {
+      len = 3;
+      if (c == 0xE0) lo = 0xA0;  // overlong
+      if (c == 0xED) hi = 0x9F;  // surrogates
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      len = 4;
+      if (c == 0xF0) lo = 0x90;  // overlong
+      if (c == 0xF4) hi = 0x8F;  // above U+10FFFF
+    }
+    bool ok = len > 0 && i + len <= text.size();
+    for (std::size_t k = 1; ok && k < len; ++k) {
+      const auto b = static_cast<unsigned char>(text[i + k]);
+      ok = k == 1 ? (b >= lo && b <= hi) : (b >= 0x80 && b <= 0xBF);
+    }
+    if (!ok) return std::to_string(line) + ":" + std::to_string(i - line_start + 1);
+    if (c == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+    i += len;
+  }
+  return "";
+}
+
 toml::table parse_toml(std::string_view text, const std::string& source) {
+  if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
+    throw InputError(source + ": empty scene file (a scene names at least one section; [run] alone gives the defaults)");
+  if (const std::string at = first_invalid_utf8(text); !at.empty())
+    throw InputError(source + ":" + at + ": not valid UTF-8 (scene files are UTF-8 text)");
   try {
     return toml::parse(text, source);
   } catch (const toml::parse_error& err) {
@@ -363,21 +251,6 @@ toml::table parse_toml(std::string_view text, const std::string& source) {
 
 // ---- public API ------------------------------------------------------------------------------
 
-const std::vector<SceneKeyInfo>& scene_keys() {
-  static const std::vector<SceneKeyInfo> keys = [] {
-    std::vector<SceneKeyInfo> k;
-    for (const auto& e : entries()) k.push_back(e.info);
-    return k;
-  }();
-  return keys;
-}
-
-SceneValue scene_value(const Scene& scene, std::string_view key) {
-  const Entry* e = find_entry(key);
-  if (!e) throw InputError(std::string(key) + ": unknown key");
-  return e->get(scene);
-}
-
 void apply_override(Scene& scene, std::string_view assignment) {
   const std::string prefix = "--set " + std::string(assignment) + ": ";
   const auto eq = assignment.find('=');
@@ -389,8 +262,8 @@ void apply_override(Scene& scene, std::string_view assignment) {
   };
   const std::string key(trim(assignment.substr(0, eq)));
   const std::string value(trim(assignment.substr(eq + 1)));
-  const Entry* e = find_entry(key);
-  if (!e) {
+  const SceneKey* k = find_scene_key(key);
+  if (!k) {
     const auto dot = key.rfind('.');
     const std::string sec = dot == std::string::npos ? "" : key.substr(0, dot);
     if (is_section(sec))
@@ -406,10 +279,10 @@ void apply_override(Scene& scene, std::string_view assignment) {
   }
   try {
     if (parsed && parsed->size() == 1 && parsed->contains("v")) {
-      e->set(scene, *parsed->get("v"), key);
+      k->set(scene, read_value(*k, *parsed->get("v")));
     } else {
       const toml::value<std::string> text(value);
-      e->set(scene, text, key);
+      k->set(scene, read_value(*k, text));
     }
   } catch (const InputError& err) {
     throw InputError(prefix + err.what());
@@ -456,15 +329,15 @@ std::string toml_literal(const SceneValue& value) {
 std::string scene_to_toml(const Scene& scene, bool comments) {
   std::string out = "# budjam scene: every key with its effective value\n";
   std::string section;
-  for (const auto& e : entries()) {
-    if (e.info.section != section) {
-      section = e.info.section;
+  for (const auto& k : scene_keys()) {
+    if (k.section != section) {
+      section = k.section;
       out += "\n[" + section + "]\n";
     }
-    std::string line = e.info.name + " = " + toml_literal(e.get(scene));
+    std::string line = k.name + " = " + toml_literal(k.get(scene));
     if (comments) {
       line.resize(std::max<std::size_t>(line.size() + 2, 34), ' ');
-      line += "# " + e.info.help;
+      line += "# " + k.help;
     }
     out += line + "\n";
   }
@@ -473,16 +346,52 @@ std::string scene_to_toml(const Scene& scene, bool comments) {
 
 Json scene_to_json(const Scene& scene) {
   Json out = Json::object();
-  for (const auto& e : entries()) {
+  for (const auto& k : scene_keys()) {
     Json* at = &out;
-    std::string sec = e.info.section;
+    std::string sec = k.section;
     for (std::size_t start = 0;;) {
       const auto dot = sec.find('.', start);
       at = &(*at)[sec.substr(start, dot - start)];
       if (dot == std::string::npos) break;
       start = dot + 1;
     }
-    (*at)[e.info.name] = std::visit([](const auto& v) { return Json(v); }, e.get(scene));
+    (*at)[k.name] = std::visit([](const auto& v) { return Json(v); }, k.get(scene));
+  }
+  return out;
+}
+
+std::string scene_keys_markdown() {
+  auto cell = [](const std::string& text) {  // a '|' would end the cell
+    std::string escaped;
+    for (const char c : text) {
+      if (c == '|') escaped += '\\';
+      escaped += c;
+    }
+    return escaped;
+  };
+  const Scene defaults;
+  std::string out = "| key | type | default | accepted | meaning |\n|-----|------|---------|----------|---------|\n";
+  for (const auto& k : scene_keys()) {
+    std::string type, accepted;
+    const std::string range = k.range.interval() + k.range.why;
+    switch (k.type) {
+      case KeyType::text: type = "string", accepted = "non-empty, one line"; break;
+      case KeyType::choice:
+        type = "choice";
+        for (const auto& c : k.choices) {
+          accepted += accepted.empty() ? "`\"" : "`, `\"";
+          accepted += c + "\"";
+        }
+        accepted += "`";
+        break;
+      case KeyType::flag: type = "bool"; break;
+      case KeyType::integer: type = "integer", accepted = range.empty() ? std::string("≥ ") + std::to_string(k.min_integer) : range; break;
+      case KeyType::real: type = "number", accepted = range; break;
+      case KeyType::real_or_none: type = "number or `\"none\"`", accepted = range; break;
+      case KeyType::reals: type = "list of numbers", accepted = std::string("each ") + range + ", strictly increasing"; break;
+    }
+    out += "| `" + k.key() + "` | " + type + " | `" + toml_literal(k.get(defaults)) + "` | " + cell(accepted) + " | " +
+           cell(k.help) + " |\n";
   }
   return out;
 }

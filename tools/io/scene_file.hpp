@@ -1,38 +1,22 @@
 #pragma once
-// TOML scene files <-> budjam::Scene. One key table (scene_keys()) drives the parser, the
-// `--set section.key=value` overrides and the writers, so every key is spelled in one place.
+// TOML scene files <-> budjam::Scene. The knob table (budjam/scene_keys.hpp) drives the parser, the
+// `--set section.key=value` overrides, the writers and the docs table, so every key is spelled in
+// one place.
 #include "budjam/scene.hpp"
+#include "budjam/scene_keys.hpp"
 #include "io/json.hpp"
 
-#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
-#include <variant>
 #include <vector>
 
 namespace budjam::io {
 
-// A scene value as a file shows it. growth.P0 = none is the string "none".
-using SceneValue = std::variant<bool, std::int64_t, double, std::string, std::vector<double>>;
-
-// One key of the scene file, e.g. section "growth", name "P0", key() "growth.P0".
-struct SceneKeyInfo {
-  std::string section;  // "run", "box", ..., "observe.moduli"
-  std::string name;
-  std::string help;     // one line: meaning and unit
-  std::string key() const { return section + "." + name; }
-};
-
-// Every key, grouped by section in file order: run, box, cells, init, growth, jamming,
-// minimiser, observe, observe.moduli, observe.dos.
-const std::vector<SceneKeyInfo>& scene_keys();
-
-// The value of one key ("growth.P0") in a scene; InputError "<key>: unknown key".
-SceneValue scene_value(const Scene& scene, std::string_view key);
-
 // Parses TOML text (defaults for absent keys), applies `overrides` ("section.key=value", see
 // apply_override), then validate(). Errors are InputError, one line:
+//   "<source>: empty scene file (...)"                     (nothing but white space)
+//   "<source>:<line>:<col>: not valid UTF-8 (...)"         (checked before the TOML parser)
 //   "<source>:<line>:<col>: <TOML syntax problem>"
 //   "<source>:<line>:<col>: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps)"
 //   "<source>:<line>:<col>: growth.dt: expected a number (got \"fast\")"
@@ -56,5 +40,9 @@ Json scene_to_json(const Scene& scene);
 
 // Text of a value as it appears in TOML (doubles round-trip exactly; 1.0 is "1.0").
 std::string toml_literal(const SceneValue& value);
+
+// The knob table as a Markdown table (key, type, default, accepted values, meaning): the one in
+// docs/files.md (`budjam validate --keys-markdown`).
+std::string scene_keys_markdown();
 
 }  // namespace budjam::io
