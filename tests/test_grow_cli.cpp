@@ -110,9 +110,13 @@ TEST_CASE("the same scene and seed give a byte-identical summary.json; another s
   CHECK(slurp(a / "packings/target_1.pack") == slurp(b / "packings/target_1.pack"));
   CHECK(slurp(a / "summary.json") != slurp(c / "summary.json"));
   CHECK(budjam::io::read_json(c / "summary.json")["seed"] == 4);
-  // Re-running into a finished run directory replaces it.
-  REQUIRE(grow(q(scene) + " --quiet --out " + q(a)).code == 0);
+  // Re-running into a finished run directory is refused, and replaces it with --overwrite.
+  const Result again = grow(q(scene) + " --quiet --seed 4 --out " + q(a));
+  CHECK(again.code == 2);
+  CHECK(again.err.find("--overwrite") != std::string::npos);
   CHECK(slurp(a / "summary.json") == slurp(b / "summary.json"));
+  REQUIRE(grow(q(scene) + " --quiet --seed 4 --overwrite --out " + q(a)).code == 0);
+  CHECK(slurp(a / "summary.json") == slurp(c / "summary.json"));
 }
 
 TEST_CASE("a step-limit failure exits 1 with status step_limit in summary.json", "[grow_cli]") {
@@ -146,11 +150,12 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   CHECK(r.err.find("growth.P0") != std::string::npos);
   r = grow("--resume " + q(work_dir() / "no-such-run") + " --quiet");
   CHECK(r.code == 2);
-  CHECK(r.err.find("checkpoint") != std::string::npos);
+  CHECK(r.err.find("no-such-run") != std::string::npos);
   // a checkpoint of format 1 (written before jamming candidates were checked for saddles) is refused
   const fs::path old = work_dir() / "old-checkpoint";
   fs::create_directories(old);
   fs::copy_file(small_scene("old"), old / "scene.toml");
+  std::ofstream(old / ".budjam-run") << "budjam-run 1\n";
   std::ofstream(old / "checkpoint.txt") << "budjam-checkpoint 1\nseed 3\n";
   r = grow("--resume " + q(old) + " --quiet");
   CHECK(r.code == 2);
@@ -163,6 +168,53 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   r = grow(q(small_scene("bad2")) + " --quiet --out " + q(foreign));
   CHECK(r.code == 2);
   CHECK(slurp(foreign / "precious.txt") == "keep");
+}
+
+TEST_CASE("a directory that merely holds a scene.toml is never emptied", "[grow_cli]") {
+  const fs::path d = work_dir() / "thesis";
+  fs::create_directories(d);
+  std::ofstream(d / "scene.toml") << "x\n";
+  std::ofstream(d / "thesis.tex") << "precious\n";
+  const std::string demo = std::string(std::getenv("BUDJAM_SOURCE_DIR")) + "/data/scenes/demo.toml";
+  for (const char* flag : {"", " --overwrite"}) {
+    const Result r = grow(q(demo) + " --quiet --out " + q(d) + flag);
+    CHECK(r.code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find("not a budjam run directory") != std::string::npos);
+    CHECK(slurp(d / "thesis.tex") == "precious\n");
+    CHECK(slurp(d / "scene.toml") == "x\n");
+  }
+}
+
+TEST_CASE("a second writer of the same run directory is refused with the holder's pid", "[grow_cli]") {
+  const fs::path scene = small_scene("writers");
+  const fs::path dir = work_dir() / "writers";
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    const std::string e = exe(), sc = scene.string(), out = dir.string();
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  while (slurp(dir / ".budjam-lock").empty() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const Result second = grow(q(scene) + " --quiet --seed 9 --overwrite --out " + q(dir));
+  const Result resumer = grow("--resume " + q(dir) + " --quiet");
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  for (const Result& r : {second, resumer}) {
+    // (if the first run already finished, the second is refused anyway: a finished run)
+    CHECK(r.code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  CHECK(second.err.find("pid " + std::to_string(pid)) != std::string::npos);
+  // The directory is the first writer's alone.
+  CHECK(budjam::io::read_json(dir / "summary.json")["seed"] == 3);
+  CHECK(budjam::io::read_packing(dir / "packings/jammed.pack").meta.integer("seed") == 3);
 }
 
 TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrupted run", "[grow_cli][.slow]") {

@@ -9,6 +9,7 @@
 #include "observers/observers.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -26,7 +27,7 @@ const std::vector<std::string> kColumns{"episode",  "step",      "kind",    "dph
 class DosObserver : public Observer {
  public:
   DosObserver(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.dos), dir_(std::move(dir)) {
-    if (!resuming) log_.emplace(dir_ / "dos.csv", kColumns);
+    if (!resuming) log_.emplace(dir_ / io::run_files::dos, kColumns);
   }
   std::string name() const override { return "dos"; }
   Needs needs() const override {
@@ -36,21 +37,21 @@ class DosObserver : public Observer {
   }
 
   void on_jammed(const Jammed& e) override {
-    if (schedule_.at_jamming) record(e.state, "jammed", "packings/jammed", std::nullopt);
+    if (schedule_.at_jamming) record(e.state, "jammed", packing_base(io::run_files::jammed), std::nullopt);
   }
   void on_depleted(const Depleted& e) override {
-    if (schedule_.at_phi2) record(e.state, "phi2", "packings/phi2", std::nullopt);
+    if (schedule_.at_phi2) record(e.state, "phi2", packing_base(io::run_files::phi2), std::nullopt);
   }
   void on_target_reached(const TargetReached& e) override {
     if (schedule_.at_targets)
-      record(e.state, "target", "packings/target_" + std::to_string(e.target.index), e.target.dphi);
+      record(e.state, "target", packing_base(io::run_files::target_stem(e.target.index)), e.target.dphi);
   }
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
     if (schedule_.every <= 0 || s.phase != Phase::jammed || s.jamming == nullptr) return;
     const long since = s.step - s.jamming->step;
     if (since <= 0 || since % schedule_.every != 0) return;
-    record(s, "step", "spectra/step_" + std::to_string(s.step), std::nullopt);
+    record(s, "step", fs::path(io::run_files::spectra) / ("step_" + std::to_string(s.step)), std::nullopt);
   }
   void on_finished(const Finished&) override { log_->finish(); }
   void on_failed(const Failed&) override { log_->finish(); }
@@ -61,11 +62,13 @@ class DosObserver : public Observer {
   void load_state(std::istream& is) override {
     std::uint64_t bytes = 0;
     if (!(is >> bytes)) throw InputError("checkpoint: bad dos state");
-    log_.emplace(io::CsvLog::resume(dir_ / "dos.csv", kColumns, bytes));
+    log_.emplace(io::CsvLog::resume(dir_ / io::run_files::dos, kColumns, bytes));
   }
 
  private:
-  void record(const StateView& s, const std::string& kind, const std::string& base, std::optional<double> dphi) {
+  // packings/<stem>: the sidecar base beside a run packing
+  static fs::path packing_base(std::string_view stem) { return fs::path(io::run_files::packings) / stem; }
+  void record(const StateView& s, const std::string& kind, const fs::path& base, std::optional<double> dphi) {
     if (s.contacts == nullptr || s.network == nullptr)
       throw std::logic_error("dos observer: the driver gave no contact network at a " + kind + " state");
     if (s.network->N_nr == 0) return;  // no non-rattler: nothing vibrates

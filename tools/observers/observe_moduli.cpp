@@ -7,6 +7,7 @@
 
 #include "budjam/moduli.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <cmath>
 #include <istream>
@@ -30,7 +31,7 @@ const std::vector<std::string> kColumns{
 
 class ModuliLog : public Observer {
  public:
-  ModuliLog(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.moduli), path_(std::move(dir) / "moduli.csv") {
+  ModuliLog(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.moduli), path_(std::move(dir) / io::run_files::moduli) {
     if (!resuming) log_.emplace(path_, kColumns);
   }
   std::string name() const override { return "moduli"; }

@@ -12,6 +12,7 @@
 
 #include "budjam/rigidity.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <istream>
 #include <optional>
@@ -30,7 +31,7 @@ const std::vector<std::string> kColumns{"step",          "phi",    "episode",   
 
 class RigidityLog : public Observer {
  public:
-  RigidityLog(fs::path dir, bool resuming) : path_(std::move(dir) / "rigidity_events.csv") {
+  RigidityLog(fs::path dir, bool resuming) : path_(std::move(dir) / io::run_files::rigidity) {
     if (!resuming) log_.emplace(path_, kColumns);
   }
   std::string name() const override { return "rigidity"; }

@@ -16,6 +16,7 @@ namespace budjam::tools {
 namespace fs = std::filesystem;
 using io::CsvField;
 using io::Json;
+namespace run_files = io::run_files;
 
 // ---- RunLog -------------------------------------------------------------------------------------
 
@@ -35,10 +36,10 @@ const std::vector<std::string>& RunLog::division_columns() {
 }
 
 RunLog::RunLog(fs::path run_dir, std::uint64_t seed, bool resuming) : dir_(std::move(run_dir)), seed_(seed) {
-  fs::create_directories(dir_ / "packings");
+  fs::create_directories(dir_ / run_files::packings);
   if (!resuming) {
-    steps_.emplace(dir_ / "steps.csv", step_columns());
-    divisions_.emplace(dir_ / "divisions.csv", division_columns());
+    steps_.emplace(dir_ / run_files::steps, step_columns());
+    divisions_.emplace(dir_ / run_files::divisions, division_columns());
   }
 }
 
@@ -64,7 +65,7 @@ void RunLog::on_divided(const Divided& e) {
                    d.daughter_id, d.mother_index, d.daughter_index, d.x, d.y, d.theta, d.b});
 }
 
-void RunLog::write_pack(const std::string& file, const StateView& s, const std::string& kind,
+void RunLog::write_pack(const std::string& stem, const StateView& s, const std::string& kind,
                         std::optional<double> dphi) {
   io::PackingMeta meta;
   meta.set("kind", kind);
@@ -82,24 +83,22 @@ void RunLog::write_pack(const std::string& file, const StateView& s, const std::
     meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
     meta.set_number("Z", s.network->Z);
   }
-  io::write_packing(dir_ / "packings" / file, *s.packing, meta);
+  io::write_packing(dir_ / run_files::packing(stem), *s.packing, meta);
 }
 
 void RunLog::on_unjammed(const Unjammed&) {
   // The jamming point, the targets and φ_2 of the lost episode are void (summary.json drops
   // them too); they are written again when reached in the next episode.
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir_ / "packings", ec)) {
-    const std::string f = entry.path().filename().string();
-    if (f == "jammed.pack" || f == "phi2.pack" || (f.rfind("target_", 0) == 0 && entry.path().extension() == ".pack"))
+  for (const auto& entry : fs::directory_iterator(dir_ / run_files::packings, ec))
+    if (entry.path().extension() == ".pack" && run_files::is_run_packing_stem(entry.path().stem().string()))
       fs::remove(entry.path(), ec);
-  }
 }
 
-void RunLog::on_jammed(const Jammed& e) { write_pack("jammed.pack", e.state, "jammed", std::nullopt); }
-void RunLog::on_depleted(const Depleted& e) { write_pack("phi2.pack", e.state, "phi2", std::nullopt); }
+void RunLog::on_jammed(const Jammed& e) { write_pack(std::string(run_files::jammed), e.state, "jammed", std::nullopt); }
+void RunLog::on_depleted(const Depleted& e) { write_pack(std::string(run_files::phi2), e.state, "phi2", std::nullopt); }
 void RunLog::on_target_reached(const TargetReached& e) {
-  write_pack("target_" + std::to_string(e.target.index) + ".pack", e.state, "target", e.target.dphi);
+  write_pack(run_files::target_stem(e.target.index), e.state, "target", e.target.dphi);
 }
 
 void RunLog::on_finished(const Finished&) {
@@ -122,8 +121,8 @@ void RunLog::save_state(std::ostream& os) {
 void RunLog::load_state(std::istream& is) {
   std::uint64_t a = 0, b = 0;
   if (!(is >> a >> b)) throw InputError("checkpoint: bad run_log state");
-  steps_.emplace(io::CsvLog::resume(dir_ / "steps.csv", step_columns(), a));
-  divisions_.emplace(io::CsvLog::resume(dir_ / "divisions.csv", division_columns(), b));
+  steps_.emplace(io::CsvLog::resume(dir_ / run_files::steps, step_columns(), a));
+  divisions_.emplace(io::CsvLog::resume(dir_ / run_files::divisions, division_columns(), b));
 }
 
 // ---- bud_events.csv -------------------------------------------------------------------------------
@@ -134,7 +133,7 @@ const std::vector<std::string> kBudColumns{"episode", "cell_id", "event", "step"
 
 class BudEventLog : public Observer {
  public:
-  BudEventLog(fs::path dir, bool resuming) : path_(std::move(dir) / "bud_events.csv") {
+  BudEventLog(fs::path dir, bool resuming) : path_(std::move(dir) / io::run_files::bud_events) {
     if (!resuming) log_.emplace(path_, kBudColumns);
   }
   std::string name() const override { return "bud_events"; }
@@ -303,8 +302,8 @@ void write_summary(const fs::path& run_dir, const GrowthDriver& driver, const Se
   t["force_evaluations"] = evals;
   t["force_evaluations_per_second"] = timing.wall_seconds > 0 ? evals / timing.wall_seconds : 0.0;
   t["final_N"] = driver.packing().size();
-  io::write_json(run_dir / kTimingFile, t);
-  io::write_json(run_dir / kSummaryFile, summary_json(driver));  // last: marks the run complete
+  io::write_json(run_dir / run_files::timing, t);
+  io::write_json(run_dir / run_files::summary, summary_json(driver));  // last: marks the run complete
 }
 
 }  // namespace budjam::tools

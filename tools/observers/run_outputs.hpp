@@ -7,6 +7,7 @@
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
+#include "io/run_directory.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -35,7 +36,7 @@ class RunLog : public Observer {
   static const std::vector<std::string>& division_columns();
 
  private:
-  void write_pack(const std::string& file, const StateView& s, const std::string& kind, std::optional<double> dphi);
+  void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
   std::filesystem::path dir_;
   std::uint64_t seed_;
   std::optional<io::CsvLog> steps_, divisions_;
@@ -50,11 +51,5 @@ struct SessionTiming {
   long force_evaluations_at_start = 0;
 };
 void write_summary(const std::filesystem::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
-
-// Run-directory file names.
-inline constexpr const char* kSummaryFile = "summary.json";
-inline constexpr const char* kTimingFile = "timing.json";
-inline constexpr const char* kCheckpointFile = "checkpoint.txt";
-inline constexpr const char* kSceneFile = "scene.toml";
 
 }  // namespace budjam::tools
