@@ -198,6 +198,10 @@ TEST_CASE("resuming a log at a checkpointed size gives the same file as an unint
   }
   CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", {"step", "P"}, 10), Contains("header"));
   CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 1000), Contains("checkpoint expects 1000"));
+  // A cut point inside a row (here: after "step,phi\n1,") would leave half a row to append to.
+  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 11), Contains("not the end of a line"));
+  CHECK(slurp(dir.path / "short.csv.partial") == "step,phi\n1,2\n");  // refused: untouched
+  CHECK_NOTHROW(CsvLog::resume(dir.path / "short.csv", cols, 9));
 }
 
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {

@@ -4,11 +4,13 @@
 // directory: scene.toml (the effective scene, seed included), steps.csv, divisions.csv,
 // bud_events.csv, packings/*.pack, checkpoint.txt while running, summary.json last.
 #include "commands/command.hpp"
+#include "commands/stop_signals.hpp"
 #include "observers/observers.hpp"
 #include "observers/run_outputs.hpp"
 
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"
+#include "io/checkpoint.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 
@@ -70,15 +72,26 @@ void run(const Options& o) {
 
   GrowthDriver driver(scene);
   tools::RunLog log(dir, scene.seed, resuming);
-  driver.add_observer(log);
   const tools::ObserverContext ctx{scene, scene.seed, dir, resuming, o.quiet};
-  auto observers = tools::make_observers(ctx);
-  for (auto& obs : observers) driver.add_observer(*obs);
-  if (scene.checkpoint_every > 0)
-    driver.set_checkpoint_writer(scene.checkpoint_every, [&dir](const std::string& text) {
-      io::write_atomically(dir / run_files::checkpoint, text);
-    });
-  if (resuming) driver.restore(io::read_text_file(dir / run_files::checkpoint));
+  auto owned = tools::make_observers(ctx);
+  std::vector<Observer*> observers{&log};
+  for (auto& obs : owned) observers.push_back(obs.get());
+  for (Observer* obs : observers) driver.add_observer(*obs);
+  if (resuming) driver.restore(io::read_checkpoint(dir / run_files::checkpoint, scene, scene.seed, observers));
+
+  // Checkpoints every observe.checkpoint_every accepted steps, and at the first accepted state
+  // after SIGTERM or SIGINT, which then ends the run (resumable).
+  const cli::StopSignals stop;
+  driver.set_checkpoint_hook([&] {
+    const long step = driver.view().step;
+    const int signal = cli::StopSignals::received();
+    if (signal || (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0))
+      io::write_checkpoint(dir / run_files::checkpoint, scene, driver.state(), observers);
+    if (signal)
+      throw cli::Interrupted(signal, "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                                         " at step " + std::to_string(step) + ", checkpoint written; resume with: " +
+                                         "budjam grow --resume " + dir.string());
+  });
 
   tools::SessionTiming timing;
   timing.attempts_at_start = driver.view().attempts;

@@ -4,6 +4,7 @@
 
 #include "budjam/scene.hpp"
 #include "io/atomic_file.hpp"
+#include "io/text.hpp"
 
 #include <algorithm>
 #include <exception>
@@ -18,9 +19,8 @@
 namespace {
 
 int error(const std::string& message, int code) {
-  std::string line = message;
-  std::replace(line.begin(), line.end(), '\n', ' ');  // one line, always
-  std::cerr << "budjam: error: " << line << std::endl;
+  // One line, always, and no control bytes from a file reaching the terminal.
+  std::cerr << "budjam: error: " << budjam::io::escape_control(message) << std::endl;
   return code;
 }
 
@@ -48,6 +48,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
     return error(std::string(e.what()) + " (see budjam --help)", kExitBadInput);
+  } catch (const Interrupted& e) {
+    return error(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
   } catch (const budjam::InputError& e) {

@@ -184,6 +184,11 @@ CsvLog CsvLog::resume(fs::path path, std::vector<std::string> columns, std::uint
   if (bytes < header.size() || static_cast<std::uint64_t>(st.st_size) < bytes)
     throw InputError(partial.string() + ": cannot resume the log: it holds " + std::to_string(st.st_size) +
                      " bytes, the checkpoint expects " + std::to_string(bytes));
+  // A cut point is a line end: the byte before it is the newline of a whole row.
+  char before = 0;
+  if (::pread(log.fd_, &before, 1, static_cast<off_t>(bytes - 1)) != 1 || before != '\n')
+    throw InputError(partial.string() + ": cannot resume the log: byte " + std::to_string(bytes) +
+                     " recorded in the checkpoint is not the end of a line");
   if (::ftruncate(log.fd_, static_cast<off_t>(bytes)) != 0) io_fail(partial, "cannot truncate", errno);
   if (::lseek(log.fd_, 0, SEEK_END) < 0) io_fail(partial, "cannot seek", errno);
   log.bytes_ = bytes;

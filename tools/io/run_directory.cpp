@@ -96,6 +96,18 @@ int take_lock(const fs::path& dir) {
   return fd;
 }
 
+// Written in place, not through a temporary: a concurrent claim must only ever see the lock and
+// the marker, and the marker's existence is all that counts.
+void write_marker(const fs::path& dir) {
+  const fs::path path = dir / run_files::marker;
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  const bool ok = fd >= 0 && ::write(fd, kMarkerText.data(), kMarkerText.size()) ==
+                                 static_cast<ssize_t>(kMarkerText.size());
+  const int err = errno;
+  if (fd >= 0) ::close(fd);
+  if (!ok) throw IoError(path.string() + ": cannot write: " + std::strerror(err));
+}
+
 bool empty_but_lock(const fs::path& dir) {
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().filename() != run_files::lock) return false;
@@ -158,7 +170,7 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite) {
                        "continue it with budjam grow --resume " + dir.string());
     remove_run_outputs(dir);
   }
-  write_atomically(dir / run_files::marker, kMarkerText);
+  write_marker(dir);
   return run;
 }
 

@@ -30,6 +30,7 @@ class DosObserver : public Observer {
     if (!resuming) log_.emplace(dir_ / io::run_files::dos, kColumns);
   }
   std::string name() const override { return "dos"; }
+  bool stateful() const override { return true; }
   Needs needs() const override {
     Needs n;
     n.contacts = n.network = schedule_.every > 0;

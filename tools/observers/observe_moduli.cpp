@@ -35,6 +35,7 @@ class ModuliLog : public Observer {
     if (!resuming) log_.emplace(path_, kColumns);
   }
   std::string name() const override { return "moduli"; }
+  bool stateful() const override { return true; }
   Needs needs() const override {
     Needs n;
     n.contacts = true;

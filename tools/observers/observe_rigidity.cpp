@@ -35,6 +35,7 @@ class RigidityLog : public Observer {
     if (!resuming) log_.emplace(path_, kColumns);
   }
   std::string name() const override { return "rigidity"; }
+  bool stateful() const override { return true; }
   Needs needs() const override {
     Needs n;
     n.contacts = true;

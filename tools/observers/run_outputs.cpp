@@ -137,6 +137,7 @@ class BudEventLog : public Observer {
     if (!resuming) log_.emplace(path_, kBudColumns);
   }
   std::string name() const override { return "bud_events"; }
+  bool stateful() const override { return true; }
   void on_bud_event(const BudEventHappened& e) override {
     const BudEvent& b = e.event;
     log_->row({b.episode, b.cell_id, to_string(b.kind), b.step, b.phi, b.a});

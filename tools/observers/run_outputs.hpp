@@ -21,6 +21,7 @@ class RunLog : public Observer {
   // resuming: the logs are reopened by load_state (cut back to the checkpoint) instead of created.
   RunLog(std::filesystem::path run_dir, std::uint64_t seed, bool resuming);
   std::string name() const override { return "run_log"; }
+  bool stateful() const override { return true; }
   void on_step_accepted(const StepAccepted& e) override;
   void on_divided(const Divided& e) override;
   void on_jammed(const Jammed& e) override;
