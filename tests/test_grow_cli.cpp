@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 #include "scratch.hpp"
+#include "small_disk.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -362,4 +363,24 @@ TEST_CASE("resume refuses every damaged checkpoint line and an edited scene, cha
   REQUIRE(grow("--resume " + q(copy) + " --quiet").code == 0);
   CHECK(slurp(copy / "summary.json") == slurp(ref / "summary.json"));
   CHECK(slurp(copy / "steps.csv") == slurp(ref / "steps.csv"));
+}
+
+TEST_CASE("a run that fills its disk exits 3 with one line and leaves whole rows", "[grow_cli]") {
+  for (std::size_t kib : {24, 40, 56}) {
+    budjam::testing::SmallDisk disk(work_dir() / ("disk" + std::to_string(kib)), kib * 1024);
+    if (!disk.mounted) {
+      WARN(disk.why_not);
+      return;
+    }
+    const Result r = grow(q(small_scene("full")) + " --quiet --out " + q(disk.path / "run"));
+    INFO(kib << " KiB: " << r.err);
+    CHECK(r.code == 3);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find(disk.path.string()) != std::string::npos);
+    for (const auto& e : fs::recursive_directory_iterator(disk.path))
+      if (e.path().extension() == ".partial") {
+        const std::string text = slurp(e.path());
+        CHECK((text.empty() || text.back() == '\n'));
+      }
+  }
 }

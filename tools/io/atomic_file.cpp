@@ -220,7 +220,14 @@ CsvLog::~CsvLog() {
 
 void CsvLog::write_line(const std::string& line) {
   if (fd_ < 0) throw std::logic_error("CsvLog: " + path_.string() + " is closed");
-  write_all(fd_, line, partial_path());
+  try {
+    write_all(fd_, line, partial_path());
+  } catch (const IoError&) {
+    // Disk full mid-line: take back the part that was written, so the log still ends with a
+    // whole row (best effort: if even that fails, resume() cuts it at the checkpoint).
+    if (::ftruncate(fd_, static_cast<off_t>(bytes_)) == 0) ::lseek(fd_, 0, SEEK_END);
+    throw;
+  }
   bytes_ += line.size();
 }
 
