@@ -1,6 +1,7 @@
 #include "io/packing_file.hpp"
 
-#include "budjam/scene.hpp"  // InputError
+#include "budjam/packing_rules.hpp"
+#include "budjam/scene.hpp"  // InputError, the default skin
 #include "io/atomic_file.hpp"
 #include "io/text.hpp"
 
@@ -70,8 +71,12 @@ class Reader {
     PackingFile out;
     read_magic();
     const std::size_t cells_line = read_header(out);
+    // The box rule with the default skin of the neighbour list every command builds: first for
+    // mother lobes (before any position is judged against L), then for the largest bud.
+    if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
     read_rows(out.packing, cells_line);
     read_end();
+    if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
     return out;
   }
 
@@ -129,6 +134,7 @@ class Reader {
       if (key == "L") {
         once(L.has_value());
         L = header_number(n, key, t);
+        L_line_ = n;
         if (!(*L > 0)) fail(n, "L: must be positive (got " + std::string(t[1]) + ")");
       } else if (key == "shear") {
         once(shear.has_value());
@@ -220,6 +226,7 @@ class Reader {
       p.gamma0.push_back(val[4]);
       p.id.push_back(id);
       p.parent.push_back(parent);
+      if (const auto problem = cell_problem(p, k, kMaxBudDiameter)) fail(n, *problem);
     }
     p.q.conservativeResize(static_cast<Eigen::Index>(3 * n_cells_));
   }
@@ -242,6 +249,7 @@ class Reader {
   const std::string& source_;
   std::size_t next_ = 0;  // index of the next line to read
   std::size_t n_cells_ = 0;
+  std::size_t L_line_ = 0;
 };
 
 }  // namespace

@@ -141,18 +141,29 @@ RunData load_run(const fs::path& dir) {
   return r;
 }
 
+namespace {
+// The episode of row r: a whole number that fits an int (no float→int overflow on bad input).
+int episode_of(const CsvTable& ev, std::size_t r, std::size_t c) {
+  const double v = ev.number(r, c);
+  if (!(v >= 0 && v <= std::numeric_limits<int>::max() && v == std::floor(v)))
+    throw InputError(ev.source + ": data row " + std::to_string(r + 1) + ": episode: not a whole number >= 0 (got " +
+                     ev.text(r, c) + ")");
+  return static_cast<int>(v);
+}
+}  // namespace
+
 std::vector<SurvivalRecord> survival_records(const CsvTable& ev, int episode) {
   const std::size_t c_ep = ev.column("episode"), c_id = ev.column("cell_id"), c_kind = ev.column("event"),
                     c_a = ev.column("a");
   if (episode < 0) {
-    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, static_cast<int>(ev.number(r, c_ep)));
+    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, episode_of(ev, r, c_ep));
     if (episode < 0) return {};
   }
   // Last row per tagged bud (rows are in time order), in order of first appearance.
   std::map<std::string, std::pair<std::string, double>> last;
   std::vector<std::string> order;
   for (std::size_t r = 0; r < ev.size(); ++r) {
-    if (static_cast<int>(ev.number(r, c_ep)) != episode) continue;
+    if (episode_of(ev, r, c_ep) != episode) continue;
     const std::string& id = ev.text(r, c_id);
     const std::string& kind = ev.text(r, c_kind);
     auto it = last.find(id);
