@@ -78,7 +78,8 @@ void run(const Options& o) {
     png.replace_extension(".png");
     fs::path tmp = png;
     tmp += ".tmp";
-    const int rc = run_program({"rsvg-convert", "-o", tmp.string(), out.string()});
+    // "--output=" and "--": a file name that starts with "-" is a file, not an option.
+    const int rc = run_program({"rsvg-convert", "--output=" + tmp.string(), "--", out.string()});
     if (rc != 0) {
       fs::remove(tmp);
       throw io::IoError("render --png: rsvg-convert failed with status " + std::to_string(rc));

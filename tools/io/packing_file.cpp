@@ -154,6 +154,8 @@ class Reader {
         const std::string mkey(rest.substr(0, sp));
         const std::string value(sp == std::string_view::npos ? std::string_view() : rest.substr(sp + 1));
         if (!valid_meta_key(mkey)) fail(n, "invalid meta key " + shown(mkey) + " (letters, digits, _ . -)");
+        // Only what can be written back is read: a value is one line, with no carriage return.
+        if (!valid_meta_value(value)) fail(n, "meta " + mkey + ": the value holds a carriage return");
         if (!out.meta.values.emplace(mkey, value).second) fail(n, "duplicate meta key \"" + mkey + "\"");
       } else if (key == "cells") {
         if (t.size() != kColumns.size() + 1 || !std::equal(kColumns.begin(), kColumns.end(), t.begin() + 1))
