@@ -6,6 +6,7 @@
 //   dos.csv  one row per spectrum (resumable log)
 // Defaults of `budjam dos`: automatic method, as many modes as ω* needs.
 #include "analysis/dos_report.hpp"
+#include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
 #include "io/atomic_file.hpp"
@@ -24,13 +25,11 @@ const std::vector<std::string> kColumns{"episode",  "step",      "kind",    "dph
                                         "N_nr",     "method",    "n_dof",   "computed", "N_zero",    "N_u",
                                         "N_u_buds", "floppy_modes", "omega_star", "Z",  "dZ"};
 
-class DosObserver : public Observer {
+class DosObserver : public tools::CsvLogObserver {
  public:
-  DosObserver(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.dos), dir_(std::move(dir)) {
-    if (!resuming) log_.emplace(dir_ / io::run_files::dos, kColumns);
-  }
+  DosObserver(const Scene& scene, fs::path dir, bool resuming)
+      : CsvLogObserver({{dir / io::run_files::dos, kColumns}}, resuming), schedule_(scene.dos), dir_(std::move(dir)) {}
   std::string name() const override { return "dos"; }
-  bool stateful() const override { return true; }
   Needs needs() const override {
     Needs n;
     n.contacts = n.network = schedule_.every > 0;
@@ -49,21 +48,8 @@ class DosObserver : public Observer {
   }
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
-    if (schedule_.every <= 0 || s.phase != Phase::jammed || s.jamming == nullptr) return;
-    const long since = s.step - s.jamming->step;
-    if (since <= 0 || since % schedule_.every != 0) return;
+    if (!tools::due_every(schedule_, s)) return;
     record(s, "step", fs::path(io::run_files::spectra) / ("step_" + std::to_string(s.step)), std::nullopt);
-  }
-  void on_finished(const Finished&) override { log_->finish(); }
-  void on_failed(const Failed&) override { log_->finish(); }
-  void save_state(std::ostream& os) override {
-    log_->sync();
-    os << log_->bytes() << '\n';
-  }
-  void load_state(std::istream& is) override {
-    std::uint64_t bytes = 0;
-    if (!(is >> bytes)) throw InputError("checkpoint: bad dos state");
-    log_.emplace(io::CsvLog::resume(dir_ / io::run_files::dos, kColumns, bytes));
   }
 
  private:
@@ -78,7 +64,7 @@ class DosObserver : public Observer {
     fs::create_directories(b.parent_path());
     tools::write_dos_files(b, r, request_);
     const auto& m = r.result.summary;
-    log_->row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
+    log().row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
                dphi ? io::CsvField(*dphi) : io::CsvField::missing(), s.phi, s.packing->size(), r.network.N_nr,
                to_string(m.method), m.n_dof, m.computed, m.N_zero, r.network.N_u, r.network.N_u_buds,
                r.has_rigidity ? io::CsvField(r.rigidity.floppy_plane) : io::CsvField::missing(),
@@ -89,7 +75,6 @@ class DosObserver : public Observer {
   Schedule schedule_;
   fs::path dir_;
   tools::DosRequest request_;
-  std::optional<io::CsvLog> log_;
 };
 
 const tools::ObserverRegistration registration{
