@@ -31,7 +31,8 @@ std::optional<std::string> cell_problem(const Packing& p, std::size_t i, double 
 
 std::optional<std::string> box_problem(const Packing& p, double skin) {
   if (!(std::isfinite(p.box.L) && p.box.L > 0)) return "box side L = " + show(p.box.L) + " must be finite and positive";
-  if (!std::isfinite(p.box.shear)) return "box shear must be finite";
+  if (!(std::abs(p.box.shear) <= kMaxBoxesAway))
+    return "box shear = " + show(p.box.shear) + " must be finite and at most " + show(kMaxBoxesAway) + " in size";
   double sigma_max = kMotherDiameter;
   for (double b : p.b) sigma_max = std::max(sigma_max, b);
   const double L_min = 2.0 * (sigma_max + skin);

@@ -42,6 +42,18 @@ struct Stateless : Observer {
   std::string name() const override { return "progress"; }
 };
 
+// A driver of the small scene with a Counter and a Stateless observer.
+struct Run {
+  Scene scene = small_scene();
+  GrowthDriver driver{scene};
+  Counter counter;
+  Stateless progress;
+  std::vector<Observer*> observers{&counter, &progress};
+  Run() {
+    for (Observer* o : observers) driver.add_observer(*o);
+  }
+};
+
 struct Snapshot {
   std::string text;     // a checkpoint taken after jamming
   long step = 0;
@@ -54,22 +66,18 @@ struct Snapshot {
 const Snapshot& snapshot() {
   static const Snapshot snap = [] {
     Snapshot s;
-    const Scene scene = small_scene();
-    GrowthDriver d(scene);
-    Counter c;
-    Stateless p;
-    std::vector<Observer*> obs{&c, &p};
-    for (Observer* o : obs) d.add_observer(*o);
+    Run run;
+    GrowthDriver& d = run.driver;
     d.set_checkpoint_hook([&] {
       if (d.result().targets.size() == 1 && s.text.empty()) {
-        s.text = format_checkpoint(scene, d.state(), obs);
+        s.text = format_checkpoint(run.scene, d.state(), run.observers);
         s.step = d.view().step;
       }
     });
     d.run();
     s.final = d.result();
     s.final_packing = d.packing();
-    s.final_count = c.steps;
+    s.final_count = run.counter.steps;
     return s;
   }();
   return snap;
@@ -102,17 +110,14 @@ std::string join_lines(const std::vector<std::string>& lines) {
 TEST_CASE("a run resumed from a checkpoint text ends identical to the uninterrupted run", "[checkpoint]") {
   const Snapshot& snap = snapshot();
   REQUIRE_FALSE(snap.text.empty());
-  const Scene scene = small_scene();
-  GrowthDriver d(scene);
-  Counter c;
-  Stateless p;
-  std::vector<Observer*> obs{&c, &p};
-  for (Observer* o : obs) d.add_observer(*o);
-  d.restore(parse_checkpoint(snap.text, "cp", scene, 3, obs));
+  Run run;
+  GrowthDriver& d = run.driver;
+  const Counter& c = run.counter;
+  d.restore(parse_checkpoint(snap.text, "cp", run.scene, 3, run.observers));
   CHECK(c.steps == snap.step + 1);  // the initial state counts too
   CHECK(d.view().step == snap.step);
   // The state reads back exactly: written again, the same bytes.
-  CHECK(format_checkpoint(scene, d.state(), obs) == snap.text);
+  CHECK(format_checkpoint(run.scene, d.state(), run.observers) == snap.text);
   d.run();
   CHECK(d.result().jamming->phi == snap.final.jamming->phi);
   REQUIRE(d.result().targets.size() == snap.final.targets.size());

@@ -55,6 +55,21 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
+// Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR` in the background, its stderr to
+// DIR.stderr; returns its pid.
+pid_t start_grow(const fs::path& scene, const fs::path& dir) {
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    const std::string e = exe(), sc = scene.string(), out = dir.string(), err = dir.string() + ".stderr";
+    if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(126);
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
 }  // namespace
 
 TEST_CASE("grow writes the documented run directory and lands the targets", "[grow_cli]") {
@@ -190,14 +205,7 @@ TEST_CASE("a directory that merely holds a scene.toml is never emptied", "[grow_
 TEST_CASE("a second writer of the same run directory is refused with the holder's pid", "[grow_cli]") {
   const fs::path scene = small_scene("writers");
   const fs::path dir = work_dir() / "writers";
-  const pid_t pid = ::fork();
-  REQUIRE(pid >= 0);
-  if (pid == 0) {
-    const std::string e = exe(), sc = scene.string(), out = dir.string();
-    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_grow(scene, dir);
   const auto t0 = std::chrono::steady_clock::now();
   while (slurp(dir / ".budjam-lock").empty() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -228,14 +236,7 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
   // Kill the same run some time after its first checkpoint.
   for (double delay : {0.0, 0.3}) {
     fs::remove_all(dir);
-    const pid_t pid = ::fork();
-    REQUIRE(pid >= 0);
-    if (pid == 0) {
-      const std::string e = exe(), sc = scene.string(), out = dir.string();
-      ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
-              static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
+    const pid_t pid = start_grow(scene, dir);
     const auto t0 = std::chrono::steady_clock::now();
     while (!fs::exists(dir / "checkpoint.txt") && !fs::exists(dir / "summary.json") &&
            std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
@@ -269,15 +270,7 @@ namespace {
 // Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR`, lets it run `delay` seconds after
 // its first row, sends `sig` and returns the exit status.
 int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig) {
-  const pid_t pid = ::fork();
-  REQUIRE(pid >= 0);
-  if (pid == 0) {
-    const std::string e = exe(), sc = scene.string(), out = dir.string(), err = (dir.string() + ".stderr");
-    std::freopen(err.c_str(), "w", stderr);
-    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_grow(scene, dir);
   const auto t0 = std::chrono::steady_clock::now();
   while (!fs::exists(dir / "steps.csv.partial") && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));

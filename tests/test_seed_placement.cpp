@@ -1,11 +1,10 @@
 // Random seed placement (init.kind = "random_seeds"): memory bounded by the number of seeds, not
-// by the box area, and the seeds do not overlap.
+// by the box area (that the seeds do not overlap is test_growth's).
 #include "budjam/growth.hpp"
 #include "budjam/scene.hpp"
 
 #include <catch2/catch.hpp>
 
-#include <cmath>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -44,21 +43,4 @@ TEST_CASE("placing a few seeds in a huge box needs little memory", "[seed_placem
   ::waitpid(pid, &status, 0);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 0);
-}
-
-TEST_CASE("random seeds do not overlap, whatever the binning", "[seed_placement]") {
-  for (const auto& [L, n] : {std::pair{8.0, 10ul}, std::pair{30.0, 200ul}, std::pair{400.0, 3ul}}) {
-    Rng rng(5);
-    const Packing p = random_seeds(seeds_scene(L, n), rng);
-    REQUIRE(p.size() == n);
-    Lobes lobes;
-    place_lobes(p, lobes);
-    for (std::size_t a = 0; a < lobes.size(); ++a)
-      for (std::size_t b = a + 1; b < lobes.size(); ++b) {
-        if (cell_of(a) == cell_of(b)) continue;
-        double dx = lobes.x[a] - lobes.x[b], dy = lobes.y[a] - lobes.y[b];
-        p.box.minimum_image(dx, dy);
-        CHECK(std::hypot(dx, dy) >= lobes.R[a] + lobes.R[b]);
-      }
-  }
 }

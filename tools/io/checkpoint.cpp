@@ -380,6 +380,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     p.box.L = in.positive(w[1], "L");
     if (p.box.L != scene.L) in.fail("L: does not match the scene's box.L");
     p.box.shear = in.real(w[2], "shear");
+    if (p.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
     const std::int64_t next_id =
         in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
     std::unordered_set<std::int64_t> ids;
