@@ -3,6 +3,7 @@
 #include "budjam/cell_list.hpp"
 #include "budjam/scene.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 #include "io/text.hpp"
 
 #include <cmath>
@@ -128,16 +129,17 @@ double RunData::get(const std::string& key) const {
 }
 
 RunData load_run(const fs::path& dir) {
+  namespace run_files = io::run_files;
   RunData r;
   r.dir = dir;
-  const fs::path s = dir / "summary.json";
+  const fs::path s = dir / run_files::summary;
   if (!fs::exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
   r.summary = io::read_json(s);
   if (r.summary.value("format", std::string()) != "budjam-summary")
     throw InputError(s.string() + ": not a budjam run summary (format)");
-  r.steps = read_csv(dir / "steps.csv");
-  r.divisions = read_csv(dir / "divisions.csv");
-  if (fs::exists(dir / "bud_events.csv")) r.bud_events = read_csv(dir / "bud_events.csv");
+  r.steps = read_csv(dir / run_files::steps);
+  r.divisions = read_csv(dir / run_files::divisions);
+  if (fs::exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);
   return r;
 }
 
