@@ -90,3 +90,18 @@ TEST_CASE("render --png passes a file name that starts with '-' as a file", "[ta
   CHECK(r.code == 0);
   CHECK(fs::file_size(work_dir() / "-x.png") > 0);
 }
+
+TEST_CASE("a JSON value of the wrong type in an input is exit 2, not internal", "[taxonomy]") {
+  const fs::path run = work_dir() / "json-run";
+  fs::create_directories(run / "packings");
+  write(run / ".budjam-run", "budjam-run 1\n");
+  write(run / "summary.json", R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1,
+    "L": 8, "P0": "strong", "targets": [], "unjammings": []})");
+  write(run / "steps.csv", "step,phi\n");
+  write(run / "divisions.csv", "step,phi\n");
+  const Result r = run_budjam("analyse json-run --out json-out");
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("internal") == std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}

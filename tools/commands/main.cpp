@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <exception>
+#include <filesystem>
+#include <nlohmann/json.hpp>
 #include <iostream>
 #include <set>
 #include <string>
@@ -56,6 +58,12 @@ int main(int argc, char** argv) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {
     return error(e.what(), kExitInternal);
+  } catch (const nlohmann::json::exception& e) {
+    // A JSON value of the wrong type or a missing key: always in a file the user gave.
+    return error(std::string("input JSON: ") + e.what(), kExitBadInput);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // Reading is checked where it happens (InputError); what is left is making outputs.
+    return error(e.path1().string() + ": " + e.code().message(), kExitInternal);
   } catch (const std::exception& e) {
     return error(std::string("internal: ") + e.what(), kExitInternal);
   }
