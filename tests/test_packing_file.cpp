@@ -245,7 +245,7 @@ TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[
   const std::vector<std::pair<std::string, std::string>> cases{
       {replace(kValid, "L 8\n", "L 1e-300\n"), "t.pack:2: box side L = 1e-300 must exceed"},
       {replace(kValid, "L 8\n", "L 2.5\n"), "t.pack:2: box side L = 2.5 must exceed 2 (largest lobe diameter + skin) = 2.6"},
-      {replace(kValid, "shear 0\n", "shear 1e308\n"), "box shear = 1e+308 must be finite and at most 1000000"},
+      {replace(kValid, "shear 0\n", "shear 1e308\n"), "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
       {replace(kValid, "0 -1 4 3.5", "0 -1 1e300 3.5"), "t.pack:8: cell 0: position more than"},
       {replace(kValid, "0.25 0.5 0.002", "0.25 1e300 0.002"), "t.pack:8: cell 0: bud diameter b = 1e+300 outside [0, 3]"},
       {replace(kValid, "0.25 0.5 0.002", "0.25 3.5 0.002"), "t.pack:8: cell 0: bud diameter b = 3.5 outside"},
