@@ -1,8 +1,9 @@
-// `budjam grow SCENE [--seed N] [--out DIR] [--quiet] [--set KEY=VALUE]...`
+// `budjam grow SCENE [--seed N] [--out DIR] [--overwrite] [--quiet] [--set KEY=VALUE]...`
 // `budjam grow --resume DIR [--quiet]`
-// Grows a packing as the scene says (MODEL.md protocol, docs/growth.md) and writes the run
-// directory: scene.toml (the effective scene, seed included), steps.csv, divisions.csv,
-// bud_events.csv, packings/*.pack, checkpoint.txt while running, summary.json last.
+// Grows a packing as the scene says (docs/growth.md) and writes the run directory
+// (io/run_directory.hpp: claimed with a marker and a lock): scene.toml (the effective scene, seed
+// included), steps.csv, divisions.csv, bud_events.csv, packings/*.pack, checkpoint.txt while
+// running (io/checkpoint.hpp), summary.json last. SIGTERM/SIGINT: checkpoint, exit 128 + signal.
 #include "commands/command.hpp"
 #include "commands/stop_signals.hpp"
 #include "observers/observers.hpp"
