@@ -87,8 +87,9 @@ void NeighbourList::build(const Lobes& lobes, const Box& box) {
     double yw = lobes.y[i] - ky * L;
     double xw = lobes.x[i] - ky * box.shear * L;
     xw -= std::floor(xw / L) * L;
-    const int cx = std::clamp(static_cast<int>(xw / w), 0, g - 1);
-    const int cy = std::clamp(static_cast<int>(yw / w), 0, g - 1);
+    // Clamped before the conversion: a far-away or rounding-off coordinate must not overflow int.
+    const int cx = static_cast<int>(std::clamp(xw / w, 0.0, g - 1.0));
+    const int cy = static_cast<int>(std::clamp(yw / w, 0.0, g - 1.0));
     const auto c = static_cast<std::uint32_t>(cy * g + cx);
     cell_of_lobe_[i] = c;
     ++cell_start_[c + 1];

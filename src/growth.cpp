@@ -135,13 +135,15 @@ Packing random_seeds(const Scene& scene, Rng& rng) {
   const Dumbbell db = Dumbbell::of(b0);
   // Every lobe of a newborn lies within `reach` of its centroid.
   const double reach = std::max(db.mother_offset + 0.5 * db.D, db.bud_offset + 0.5 * db.b);
-  const int nbin = std::max(1, static_cast<int>(std::floor(L / (2.0 * reach))));
+  // Bins at least 2·reach wide, and no more than about two per seed: a huge box with few seeds
+  // must not allocate (L / reach)² bins (the cell list caps its grid the same way). Counts are
+  // bounded in floating point before any conversion to int.
+  const double fit = std::floor(L / (2.0 * reach));
+  const double cap = std::floor(std::sqrt(2.0 * static_cast<double>(scene.n_seeds) + 9.0));
+  const int nbin = static_cast<int>(std::max(1.0, std::min(fit, cap)));
   const double bin = L / nbin;
   std::vector<std::vector<std::size_t>> bins(static_cast<std::size_t>(nbin) * nbin);
-  auto bin_of = [&](double v) {
-    int k = static_cast<int>(std::floor(v / bin));
-    return std::clamp(k, 0, nbin - 1);
-  };
+  auto bin_of = [&](double v) { return static_cast<int>(std::clamp(std::floor(v / bin), 0.0, nbin - 1.0)); };
   auto lobes_of = [&](double x, double y, double th, double out[2][3]) {
     const double c = std::cos(th), s = std::sin(th);
     out[0][0] = x - db.mother_offset * c, out[0][1] = y - db.mother_offset * s, out[0][2] = 0.5 * db.D;

@@ -8,8 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <map>
-#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -42,34 +40,6 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
 }
-
-struct Reader {
-  std::istream& is;
-  std::string word() {
-    std::string w;
-    if (!(is >> w)) throw InputError("checkpoint: truncated");
-    return w;
-  }
-  void expect(const std::string& key) {
-    const std::string w = word();
-    if (w != key) throw InputError("checkpoint: expected '" + key + "', found '" + w + "'");
-  }
-  double real() {
-    const std::string w = word();
-    char* end = nullptr;
-    const double v = std::strtod(w.c_str(), &end);
-    if (end == w.c_str() || *end) throw InputError("checkpoint: bad number '" + w + "'");
-    return v;
-  }
-  long integer() {
-    const std::string w = word();
-    char* end = nullptr;
-    const long v = std::strtol(w.c_str(), &end, 10);
-    if (end == w.c_str() || *end) throw InputError("checkpoint: bad integer '" + w + "'");
-    return v;
-  }
-  std::size_t size() { return static_cast<std::size_t>(integer()); }
-};
 
 }  // namespace
 
@@ -108,8 +78,7 @@ struct GrowthDriver::Impl {
   ForceField field;
   Eigen::VectorXd force;
   bool final_emitted = false;
-  long checkpoint_every = 0;
-  std::function<void(const std::string&)> checkpoint_writer;
+  std::function<void()> checkpoint_hook;
 
   Impl(const Scene& s, const DriverOptions& o) : scene(s), field(s.skin) {
     validate(scene);
@@ -447,180 +416,37 @@ struct GrowthDriver::Impl {
       finish_events();
       return result.status;
     }
-    if (checkpoint_every > 0 && checkpoint_writer && step % checkpoint_every == 0) checkpoint_writer(save());
+    if (checkpoint_hook) checkpoint_hook();
     return result.status;
   }
 
   // ---- checkpoints ---------------------------------------------------------------------------
-  std::string save() {
-    std::ostringstream os;
-    os << "budjam-checkpoint 2\n";
-    os << "seed " << seed << '\n';
-    os << "rng " << rng << '\n';
-    os << "state " << to_string(phase) << ' ' << num(dt) << ' ' << num(last_dt) << ' ' << step << ' ' << attempts
-       << ' ' << next_target << ' ' << divisions_since_jamming << ' ' << episodes << '\n';
-    os << "counters " << result.accepted << ' ' << result.rejected << ' ' << result.force_evaluations << ' '
-       << result.fire_iterations << ' ' << result.divisions << ' ' << result.saddles_relaxed << '\n';
-    os << "jamming " << (result.jamming ? 1 : 0);
-    if (const auto& j = result.jamming)
-      os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
-         << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c
-         << ' ' << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds)
-         << ' ' << num(j->n_J) << ' ' << j->tagged;
-    os << '\n';
-    os << "targets " << result.targets.size() << '\n';
-    for (const TargetRecord& t : result.targets)
-      os << t.index << ' ' << num(t.dphi) << ' ' << num(t.phi_target) << ' ' << t.step << ' ' << num(t.phi) << ' '
-         << num(t.P) << ' ' << num(t.E_per_cell) << ' ' << t.N << ' ' << t.N_nr << ' ' << t.N_f << ' ' << t.N_f_single
-         << ' ' << t.N_c << ' ' << t.N_u << ' ' << t.N_u_buds << ' ' << num(t.Z) << ' ' << num(t.u) << ' '
-         << num(t.u_buds) << ' ' << num(t.Z_iso) << ' ' << num(t.dZ) << ' ' << num(t.chi_c) << ' '
-         << t.divisions_since_jamming << '\n';
-    os << "depletion " << (result.depletion ? 1 : 0);
-    if (const auto& d = result.depletion)
-      os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' '
-         << num(d->Z) << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
-         << d->still_unconstrained << ' ' << d->divisions_since_jamming;
-    os << '\n';
-    os << "unjammings " << result.unjammings.size() << '\n';
-    for (const UnjamRecord& u : result.unjammings)
-      os << u.episode << ' ' << u.step << ' ' << num(u.phi) << ' ' << num(u.phi_J) << ' ' << u.targets_lost << '\n';
-    buds.save(os);
-    os << "packing " << packing.size() << ' ' << num(packing.box.L) << ' ' << num(packing.box.shear) << ' '
-       << packing.next_id << '\n';
-    for (std::size_t i = 0; i < packing.size(); ++i)
-      os << num(packing.x(i)) << ' ' << num(packing.y(i)) << ' ' << num(packing.theta(i)) << ' ' << num(packing.b[i])
-         << ' ' << num(packing.gamma0[i]) << ' ' << packing.id[i] << ' ' << packing.parent[i] << '\n';
-    for (Observer* o : observers) {
-      os << "observer " << o->name() << '\n';
-      o->save_state(os);
-      os << "\nend-observer\n";
-    }
-    os << "end\n";
-    return os.str();
+  GrowthState state() const {
+    if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
+    return GrowthState{seed,  rng,         phase, dt,     last_dt, step, attempts, next_target, divisions_since_jamming,
+                       episodes, result, buds,  packing};
   }
 
-  void load(const std::string& text) {
-    std::istringstream is(text);
-    Reader r{is};
-    r.expect("budjam-checkpoint");
-    const long version = r.integer();
-    if (version == 1)
-      throw InputError("checkpoint: version 1 was written before jamming candidates were checked for saddles "
-                       "(jamming.check_minimum); start the run again");
-    if (version != 2) throw InputError("checkpoint: unknown version");
-    r.expect("seed");
-    const std::string s = r.word();
-    if (std::to_string(seed) != s)
-      throw InputError("checkpoint: seed " + s + " does not match the run's seed " + std::to_string(seed));
-    r.expect("rng");
-    if (!(is >> rng)) throw InputError("checkpoint: bad random-stream state");
-    r.expect("state");
-    const std::string ph = r.word();
-    if (ph == "jammed") phase = Phase::jammed;
-    else if (ph == "unjammed") phase = Phase::unjammed;
-    else throw InputError("checkpoint: unknown phase '" + ph + "'");
-    dt = r.real();
-    last_dt = r.real();
-    step = r.integer();
-    attempts = r.integer();
-    next_target = r.size();
-    divisions_since_jamming = r.integer();
-    episodes = static_cast<int>(r.integer());
-    r.expect("counters");
-    result = RunResult{};
-    result.accepted = r.integer();
-    result.rejected = r.integer();
-    result.force_evaluations = r.integer();
-    result.fire_iterations = r.integer();
-    result.divisions = r.integer();
-    result.saddles_relaxed = r.integer();
-    r.expect("jamming");
-    if (r.integer()) {
-      JammingRecord j;
-      j.episode = static_cast<int>(r.integer());
-      j.step = r.integer();
-      j.phi = r.real(), j.P = r.real(), j.E_per_cell = r.real();
-      j.N = r.size(), j.N_nr = r.size(), j.N_f = r.size(), j.N_u = r.size(), j.N_u_buds = r.size(), j.N_c = r.size();
-      j.Z = r.real(), j.Z_iso = r.real(), j.dZ = r.real(), j.u = r.real(), j.u_buds = r.real(), j.n_J = r.real();
-      j.tagged = r.size();
-      result.jamming = j;
-    }
-    r.expect("targets");
-    for (std::size_t k = 0, n = r.size(); k < n; ++k) {
-      TargetRecord t;
-      t.index = r.size();
-      t.dphi = r.real(), t.phi_target = r.real();
-      t.step = r.integer();
-      t.phi = r.real(), t.P = r.real(), t.E_per_cell = r.real();
-      t.N = r.size(), t.N_nr = r.size(), t.N_f = r.size(), t.N_f_single = r.size(), t.N_c = r.size();
-      t.N_u = r.size(), t.N_u_buds = r.size();
-      t.Z = r.real(), t.u = r.real(), t.u_buds = r.real(), t.Z_iso = r.real(), t.dZ = r.real(), t.chi_c = r.real();
-      t.divisions_since_jamming = r.integer();
-      result.targets.push_back(t);
-    }
-    r.expect("depletion");
-    if (r.integer()) {
-      DepletionRecord d;
-      d.step = r.integer();
-      d.phi = r.real(), d.P = r.real();
-      d.N = r.size(), d.N_nr = r.size();
-      d.Z = r.real(), d.u = r.real(), d.u_buds = r.real(), d.Z_iso = r.real(), d.dZ = r.real();
-      d.still_unconstrained = r.size();
-      d.divisions_since_jamming = r.integer();
-      result.depletion = d;
-    }
-    r.expect("unjammings");
-    for (std::size_t k = 0, n = r.size(); k < n; ++k) {
-      UnjamRecord u;
-      u.episode = static_cast<int>(r.integer());
-      u.step = r.integer();
-      u.phi = r.real(), u.phi_J = r.real();
-      u.targets_lost = r.size();
-      result.unjammings.push_back(u);
-    }
-    buds.load(is);
-    r.expect("packing");
-    const std::size_t n = r.size();
-    Packing p;
-    p.box.L = r.real();
-    p.box.shear = r.real();
-    const long next_id = r.integer();
-    for (std::size_t i = 0; i < n; ++i) {
-      const double x = r.real(), y = r.real(), th = r.real(), b = r.real(), g0 = r.real();
-      const long id = r.integer(), parent = r.integer();
-      p.add_cell(x, y, th, b, g0, parent);
-      p.id.back() = id;
-    }
-    p.next_id = next_id;
-    if (p.box.L != scene.L) throw InputError("checkpoint: box side does not match the scene");
-    packing = std::move(p);
-
-    // Observer sections, matched by name.
-    std::map<std::string, Observer*> by_name;
-    for (Observer* o : observers) by_name[o->name()] = o;
-    std::string line;
-    std::getline(is, line);  // end of the last packing line
-    while (std::getline(is, line)) {
-      if (line == "end") break;
-      if (line.rfind("observer ", 0) != 0) throw InputError("checkpoint: unexpected line '" + line + "'");
-      const std::string name = line.substr(9);
-      std::string body, l;
-      while (std::getline(is, l) && l != "end-observer") body += l + '\n';
-      auto it = by_name.find(name);
-      if (it == by_name.end()) {
-        if (body.find_first_not_of(" \n\t") != std::string::npos)
-          throw InputError("checkpoint: state saved for observer '" + name + "', which this run does not have");
-        continue;
-      }
-      std::istringstream os(body);
-      it->second->load_state(os);
-      by_name.erase(it);
-    }
-    if (line != "end") throw InputError("checkpoint: truncated (no 'end' line)");
-
+  void restore(GrowthState s) {
+    if (s.seed != seed)
+      throw InputError("checkpoint: seed " + std::to_string(s.seed) + " does not match the run's seed " +
+                       std::to_string(seed));
+    if (s.packing.box.L != scene.L) throw InputError("checkpoint: box side does not match the scene");
+    rng = s.rng;
+    phase = s.phase;
+    dt = s.dt;
+    last_dt = s.last_dt;
+    step = s.step;
+    attempts = s.attempts;
+    next_target = s.next_target;
+    divisions_since_jamming = s.divisions_since_jamming;
+    episodes = s.episodes;
+    result = std::move(s.result);
+    result.status = RunStatus::running;
+    buds = std::move(s.buds);
+    packing = std::move(s.packing);
     started = true;
     final_emitted = false;
-    result.status = RunStatus::running;
     E = fresh_energy_per_cell(packing);
     derive();
   }
@@ -645,13 +471,9 @@ RunStatus GrowthDriver::run() {
   return impl_->result.status;
 }
 
-void GrowthDriver::set_checkpoint_writer(long every, std::function<void(const std::string&)> writer) {
-  impl_->checkpoint_every = every;
-  impl_->checkpoint_writer = std::move(writer);
-}
-
-std::string GrowthDriver::checkpoint() { return impl_->save(); }
-void GrowthDriver::restore(const std::string& checkpoint) { impl_->load(checkpoint); }
+void GrowthDriver::set_checkpoint_hook(std::function<void()> hook) { impl_->checkpoint_hook = std::move(hook); }
+GrowthState GrowthDriver::state() const { return impl_->state(); }
+void GrowthDriver::restore(GrowthState state) { impl_->restore(std::move(state)); }
 
 const Scene& GrowthDriver::scene() const { return impl_->scene; }
 std::uint64_t GrowthDriver::seed() const { return impl_->seed; }

@@ -227,7 +227,7 @@ std::vector<SceneKey> make_keys() {
                    BUDJAM_FIELD(bud_events)));
   e.push_back(flag("observe", "rigidity_events", "log rigidity (pebble game) along the run",
                    BUDJAM_FIELD(rigidity_events)));
-  e.push_back(integer("observe", "checkpoint_every", "accepted steps between checkpoints; 0 = none", kZeroOrPositive,
+  e.push_back(integer("observe", "checkpoint_every", "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT still write one)", kZeroOrPositive,
                       BUDJAM_FIELD(checkpoint_every)));
   e.push_back(integer("observe", "trajectory_every",
                       "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",

@@ -7,6 +7,7 @@
 #include "budjam/errors.hpp"
 
 #include <catch2/catch.hpp>
+#include "small_disk.hpp"
 
 #include <bit>
 #include <csignal>
@@ -198,6 +199,10 @@ TEST_CASE("resuming a log at a checkpointed size gives the same file as an unint
   }
   CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", {"step", "P"}, 10), Contains("header"));
   CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 1000), Contains("checkpoint expects 1000"));
+  // A cut point inside a row (here: after "step,phi\n1,") would leave half a row to append to.
+  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 11), Contains("not the end of a line"));
+  CHECK(slurp(dir.path / "short.csv.partial") == "step,phi\n1,2\n");  // refused: untouched
+  CHECK_NOTHROW(CsvLog::resume(dir.path / "short.csv", cols, 9));
 }
 
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {
@@ -255,4 +260,32 @@ TEST_CASE("json_text is deterministic and writes null for missing values", "[jso
   CHECK(std::bit_cast<std::uint64_t>(back["phi_J"].get<double>()) == std::bit_cast<std::uint64_t>(0.1 + 0.2));
   write_atomically(dir.path / "bad.json", "{\"a\": 1,\n");
   CHECK_THROWS_WITH(read_json(dir.path / "bad.json"), Contains("bad.json: invalid JSON: parse error at line"));
+}
+
+TEST_CASE("a log that hits a full disk still ends with a whole row", "[csv]") {
+  // Sizes chosen so that the disk fills at different places within a row.
+  for (std::size_t kib : {8, 12, 16, 20, 28, 36}) {
+    TempDir dir("csv-full-" + std::to_string(kib));
+    budjam::testing::SmallDisk disk(dir.path / "disk", kib * 1024);
+    if (!disk.mounted) {
+      WARN(disk.why_not);
+      return;
+    }
+    const fs::path file = disk.path / "steps.csv";
+    CsvLog log(file, {"step", "phi", "note"});
+    bool full = false;
+    for (int i = 0; i < 100000 && !full; ++i) {
+      try {
+        log.row({i, 0.5 + i * 1e-7, std::string(static_cast<std::size_t>(i % 97), 'x')});
+      } catch (const IoError& e) {
+        full = true;
+        CHECK(std::string(e.what()).find("steps.csv.partial") != std::string::npos);
+      }
+    }
+    REQUIRE(full);
+    const std::string text = slurp(disk.path / "steps.csv.partial");
+    INFO(kib << " KiB");
+    CHECK(text.size() == log.bytes());
+    CHECK(text.back() == '\n');
+  }
 }

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"
 #include "scratch.hpp"
+#include "small_disk.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -43,6 +44,21 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
 }
 
 std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
+
+// Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR` in the background, its stderr to
+// DIR.stderr; returns its pid.
+pid_t start_grow(const fs::path& scene, const fs::path& dir) {
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    const std::string e = exe(), sc = scene.string(), out = dir.string(), err = dir.string() + ".stderr";
+    if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(126);
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
 
 }  // namespace
 
@@ -100,9 +116,13 @@ TEST_CASE("the same scene and seed give a byte-identical summary.json; another s
   CHECK(slurp(a / "packings/target_1.pack") == slurp(b / "packings/target_1.pack"));
   CHECK(slurp(a / "summary.json") != slurp(c / "summary.json"));
   CHECK(budjam::io::read_json(c / "summary.json")["seed"] == 4);
-  // Re-running into a finished run directory replaces it.
-  REQUIRE(grow(q(scene) + " --quiet --out " + q(a)).code == 0);
+  // Re-running into a finished run directory is refused, and replaces it with --overwrite.
+  const Result again = grow(q(scene) + " --quiet --seed 4 --out " + q(a));
+  CHECK(again.code == 2);
+  CHECK(again.err.find("--overwrite") != std::string::npos);
   CHECK(slurp(a / "summary.json") == slurp(b / "summary.json"));
+  REQUIRE(grow(q(scene) + " --quiet --seed 4 --overwrite --out " + q(a)).code == 0);
+  CHECK(slurp(a / "summary.json") == slurp(c / "summary.json"));
 }
 
 TEST_CASE("a step-limit failure exits 1 with status step_limit in summary.json", "[grow_cli]") {
@@ -136,15 +156,16 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   CHECK(r.err.find("growth.P0") != std::string::npos);
   r = grow("--resume " + q(work_dir() / "no-such-run") + " --quiet");
   CHECK(r.code == 2);
-  CHECK(r.err.find("checkpoint") != std::string::npos);
+  CHECK(r.err.find("no-such-run") != std::string::npos);
   // a checkpoint of format 1 (written before jamming candidates were checked for saddles) is refused
   const fs::path old = work_dir() / "old-checkpoint";
   fs::create_directories(old);
   fs::copy_file(small_scene("old"), old / "scene.toml");
+  std::ofstream(old / ".budjam-run") << "budjam-run 1\n";
   std::ofstream(old / "checkpoint.txt") << "budjam-checkpoint 1\nseed 3\n";
   r = grow("--resume " + q(old) + " --quiet");
   CHECK(r.code == 2);
-  CHECK(r.err.find("checkpoint: version 1") != std::string::npos);
+  CHECK(r.err.find("checkpoint.txt:1: checkpoint version 1") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   // an existing directory that is not a run directory is never overwritten
   const fs::path foreign = work_dir() / "foreign";
@@ -153,6 +174,47 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   r = grow(q(small_scene("bad2")) + " --quiet --out " + q(foreign));
   CHECK(r.code == 2);
   CHECK(slurp(foreign / "precious.txt") == "keep");
+}
+
+TEST_CASE("a directory that merely holds a scene.toml is never emptied", "[grow_cli]") {
+  const fs::path d = work_dir() / "thesis";
+  fs::create_directories(d);
+  std::ofstream(d / "scene.toml") << "x\n";
+  std::ofstream(d / "thesis.tex") << "precious\n";
+  const std::string demo = std::string(std::getenv("BUDJAM_SOURCE_DIR")) + "/data/scenes/demo.toml";
+  for (const char* flag : {"", " --overwrite"}) {
+    const Result r = grow(q(demo) + " --quiet --out " + q(d) + flag);
+    CHECK(r.code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find("not a budjam run directory") != std::string::npos);
+    CHECK(slurp(d / "thesis.tex") == "precious\n");
+    CHECK(slurp(d / "scene.toml") == "x\n");
+  }
+}
+
+TEST_CASE("a second writer of the same run directory is refused with the holder's pid", "[grow_cli]") {
+  const fs::path scene = small_scene("writers");
+  const fs::path dir = work_dir() / "writers";
+  const pid_t pid = start_grow(scene, dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (slurp(dir / ".budjam-lock").empty() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const Result second = grow(q(scene) + " --quiet --seed 9 --overwrite --out " + q(dir));
+  const Result resumer = grow("--resume " + q(dir) + " --quiet");
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  for (const Result& r : {second, resumer}) {
+    // (if the first run already finished, the second is refused anyway: a finished run)
+    CHECK(r.code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  INFO(second.err);
+  CHECK(second.err.find("pid " + std::to_string(pid)) != std::string::npos);
+  // The directory is the first writer's alone.
+  CHECK(budjam::io::read_json(dir / "summary.json")["seed"] == 3);
+  CHECK(budjam::io::read_packing(dir / "packings/jammed.pack").meta.integer("seed") == 3);
 }
 
 TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrupted run", "[grow_cli][.slow]") {
@@ -164,14 +226,7 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
   // Kill the same run some time after its first checkpoint.
   for (double delay : {0.0, 0.3}) {
     fs::remove_all(dir);
-    const pid_t pid = ::fork();
-    REQUIRE(pid >= 0);
-    if (pid == 0) {
-      const std::string e = exe(), sc = scene.string(), out = dir.string();
-      ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
-              static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
+    const pid_t pid = start_grow(scene, dir);
     const auto t0 = std::chrono::steady_clock::now();
     while (!fs::exists(dir / "checkpoint.txt") && !fs::exists(dir / "summary.json") &&
            std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
@@ -197,5 +252,118 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
     CHECK_FALSE(fs::exists(dir / "checkpoint.txt"));
     // A finished run is not resumed again.
     CHECK(grow("--resume " + q(dir) + " --quiet").code == 2);
+  }
+}
+
+namespace {
+
+// Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR`, lets it run `delay` seconds after
+// its first row, sends `sig` and returns the exit status.
+int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig) {
+  const pid_t pid = start_grow(scene, dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!fs::exists(dir / "steps.csv.partial") && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+  ::kill(pid, sig);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+}  // namespace
+
+TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identical", "[grow_cli][.slow]") {
+  // checkpoint_every = 0: no periodic checkpoints, so the one resumed from is the signal's.
+  const fs::path scene = small_scene("term", "[observe]\ncheckpoint_every = 0\n");
+  const fs::path ref = work_dir() / "term_ref";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+  for (const auto& [sig, code] : {std::pair{SIGTERM, 143}, std::pair{SIGINT, 130}}) {
+    const fs::path dir = work_dir() / ("term_" + std::to_string(sig));
+    const int status = grow_and_signal(scene, dir, 0.3, sig);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == code);
+    const std::string err = slurp(dir.string() + ".stderr");
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    CHECK(err.find("resume with: budjam grow --resume " + dir.string()) != std::string::npos);
+    REQUIRE(fs::exists(dir / "checkpoint.txt"));
+    CHECK_FALSE(fs::exists(dir / "summary.json"));
+    const Result r = grow("--resume " + q(dir) + " --quiet");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    for (const char* f : {"summary.json", "steps.csv", "divisions.csv", "bud_events.csv", "packings/jammed.pack",
+                          "packings/target_0.pack", "packings/target_1.pack", "scene.toml"})
+      CHECK(slurp(dir / f) == slurp(ref / f));
+  }
+}
+
+TEST_CASE("resume refuses every damaged checkpoint line and an edited scene, changing nothing", "[grow_cli][.slow]") {
+  const fs::path scene = small_scene("damaged", "[observe]\ncheckpoint_every = 0\n");
+  const fs::path ref = work_dir() / "damaged_ref", run = work_dir() / "damaged_run";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+  REQUIRE(WEXITSTATUS(grow_and_signal(scene, run, 0.5, SIGTERM)) == 143);
+  const std::string checkpoint = slurp(run / "checkpoint.txt");
+  std::vector<std::string> lines;
+  {
+    std::istringstream is(checkpoint);
+    for (std::string l; std::getline(is, l);) lines.push_back(l);
+  }
+  const fs::path copy = work_dir() / "damaged_copy";
+  auto fresh_copy = [&] {
+    fs::remove_all(copy);
+    fs::copy(run, copy, fs::copy_options::recursive);
+  };
+  auto refused = [&](const std::string& what) {
+    const std::string steps = slurp(copy / "steps.csv.partial");
+    const Result r = grow("--resume " + q(copy) + " --quiet");
+    INFO(what << ": " << r.err);
+    CHECK(r.code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(slurp(copy / "steps.csv.partial") == steps);  // refused before anything was cut
+    return r.err;
+  };
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    fresh_copy();
+    std::vector<std::string> v = lines;
+    v[k] += v[k].empty() ? "1" : (v[k].back() == '7' ? "" : "7");
+    if (v[k] == lines[k]) v[k].pop_back();
+    std::ofstream out(copy / "checkpoint.txt");
+    for (const auto& l : v) out << l << '\n';
+    out.close();
+    CHECK(refused("line " + std::to_string(k + 1)).find("checkpoint.txt:") != std::string::npos);
+  }
+  // The scene of the run edited: other physics, or an observer added.
+  for (const char* edit : {"growth.P0=2e-3", "observe.rigidity_events=true", "jamming.targets=[1e-3]"}) {
+    fresh_copy();
+    const fs::path edited = work_dir() / "edited.toml";
+    const std::string cmd = "'" + exe() + "' validate " + q(copy / "scene.toml") + " --set " + edit + " > " + q(edited);
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    fs::copy_file(edited, copy / "scene.toml", fs::copy_options::overwrite_existing);
+    CHECK(refused(edit).find("scene.toml has changed") != std::string::npos);
+  }
+  // The untouched copy resumes to the reference result.
+  fresh_copy();
+  REQUIRE(grow("--resume " + q(copy) + " --quiet").code == 0);
+  CHECK(slurp(copy / "summary.json") == slurp(ref / "summary.json"));
+  CHECK(slurp(copy / "steps.csv") == slurp(ref / "steps.csv"));
+}
+
+TEST_CASE("a run that fills its disk exits 3 with one line and leaves whole rows", "[grow_cli]") {
+  for (std::size_t kib : {24, 40, 56}) {
+    budjam::testing::SmallDisk disk(work_dir() / ("disk" + std::to_string(kib)), kib * 1024);
+    if (!disk.mounted) {
+      WARN(disk.why_not);
+      return;
+    }
+    const Result r = grow(q(small_scene("full")) + " --quiet --out " + q(disk.path / "run"));
+    INFO(kib << " KiB: " << r.err);
+    CHECK(r.code == 3);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find(disk.path.string()) != std::string::npos);
+    for (const auto& e : fs::recursive_directory_iterator(disk.path))
+      if (e.path().extension() == ".partial") {
+        const std::string text = slurp(e.path());
+        CHECK((text.empty() || text.back() == '\n'));
+      }
   }
 }

@@ -1,5 +1,6 @@
 // The packing file format (io/packing_file.hpp).
 #include "io/packing_file.hpp"
+#include "budjam/packing_rules.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -92,8 +93,12 @@ const std::string kValid =
 TEST_CASE("a packing file round-trips every double bit-exactly, including extreme values", "[packing_file]") {
   std::mt19937_64 rng(7);
   Packing p = random_packing(200, 11);
-  // Coordinates and angles with arbitrary bit patterns (the format must not care what they mean).
-  for (Eigen::Index k = 0; k < p.q.size(); ++k) p.q[k] = random_finite(rng);
+  // Coordinates and angles with arbitrary bit patterns (the format must not care what they mean),
+  // positions within the physical bound of kMaxBoxesAway boxes.
+  for (Eigen::Index k = 0; k < p.q.size(); ++k) {
+    do p.q[k] = random_finite(rng);
+    while (k % 3 != 2 && !(std::abs(p.q[k]) <= kMaxBoxesAway * p.box.L));
+  }
   p.q[0] = -0.0;
   p.q[1] = std::numeric_limits<double>::denorm_min();
   p.q[2] = std::numeric_limits<double>::max();
@@ -234,4 +239,16 @@ TEST_CASE("format_packing refuses packings that could not be read back", "[packi
   meta.set("phi", "not a number");
   CHECK_THROWS_WITH(meta.number("phi"), "meta.phi: not a number (got \"not a number\")");
   CHECK_THROWS_WITH(meta.number("P"), "meta.P: missing");
+}
+
+TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[packing_file]") {
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {replace(kValid, "L 8\n", "L 1e-300\n"), "t.pack:2: box side L = 1e-300 must exceed"},
+      {replace(kValid, "L 8\n", "L 2.5\n"), "t.pack:2: box side L = 2.5 must exceed 2 (largest lobe diameter + skin) = 2.6"},
+      {replace(kValid, "shear 0\n", "shear 1e308\n"), "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
+      {replace(kValid, "0 -1 4 3.5", "0 -1 1e300 3.5"), "t.pack:8: cell 0: position more than"},
+      {replace(kValid, "0.25 0.5 0.002", "0.25 1e300 0.002"), "t.pack:8: cell 0: bud diameter b = 1e+300 outside [0, 3]"},
+      {replace(kValid, "0.25 0.5 0.002", "0.25 3.5 0.002"), "t.pack:8: cell 0: bud diameter b = 3.5 outside"},
+  };
+  for (const auto& [text, message] : cases) CHECK_THROWS_WITH(parse_packing(text, "t.pack"), Contains(message));
 }

@@ -161,14 +161,34 @@ class Observer {
   virtual void on_failed(const Failed&) {}
   virtual void on_finished(const Finished&) {}
 
-  // Checkpoints: whatever the observer needs to continue after --resume (e.g. the byte length of
-  // the files it appends to, so that rows written after the checkpoint can be cut off; make them
-  // durable first, CsvLog::sync). Called after all events of a checkpointed step. Text; must not
-  // contain a line equal to "end-observer". On restore, load_state gets what save_state wrote; an
-  // observer with no section in the checkpoint is not called (fine for stateless ones such as a
-  // progress display); a section with content but no observer of that name is an error.
+  // Checkpoints (tools/io/checkpoint.hpp): whatever the observer needs to continue after --resume
+  // (e.g. the byte length of the files it appends to, so that rows written after the checkpoint
+  // can be cut off; make them durable first, CsvLog::sync). save_state is called after all events
+  // of a checkpointed step; load_state gets exactly what it wrote (any text) and throws
+  // InputError if it does not fit. A `stateful` observer must find its section in a checkpoint
+  // (else the resume is refused); a stateless one (a progress display) may come and go.
+  virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
   virtual void load_state(std::istream&) {}
+};
+
+// Everything that determines the rest of a run, besides the scene: a checkpoint
+// (tools/io/checkpoint.hpp) stores it, and the quantities derived from it (contacts, network,
+// pressures, rates) are recomputed identically after restore(), so that a resumed run repeats an
+// uninterrupted one bit for bit.
+struct GrowthState {
+  std::uint64_t seed = 0;
+  Rng rng;
+  Phase phase = Phase::unjammed;
+  double dt = 0;                     // Δt of the next attempt
+  double last_dt = 0;                // Δt of the step that produced the accepted state
+  long step = 0, attempts = 0;       // accepted steps; growth steps tried
+  std::size_t next_target = 0;       // index in scene.targets of the next target to land
+  long divisions_since_jamming = 0;
+  int episodes = 0;                  // jamming episodes begun
+  RunResult result;                  // status `running`
+  BudTracker buds;
+  Packing packing;                   // the last accepted state
 };
 
 // Extra knobs that are not part of a scene (tests use them).
@@ -192,12 +212,15 @@ class GrowthDriver {
   // Runs until the status is no longer `running`; emits Finished or Failed once.
   RunStatus run();
 
-  // Called with the full driver state after all events of every `every`-th accepted step.
-  void set_checkpoint_writer(long every, std::function<void(const std::string& checkpoint)> writer);
-  std::string checkpoint();
-  // Restores a state written by checkpoint() of a driver built from the same scene.
-  // Throws InputError if it does not fit.
-  void restore(const std::string& checkpoint);
+  // Called after all events of every accepted step that does not end the run: the moments at
+  // which state() (with the observers' save_state) is a complete checkpoint. The caller decides
+  // which of them to keep (every k steps, every s seconds, on a signal).
+  void set_checkpoint_hook(std::function<void()> hook);
+  // The state a checkpoint holds (after the first advance()).
+  GrowthState state() const;
+  // Continues from `state` (taken from a driver of the same scene and seed). Throws InputError
+  // if the seed or the box differs; everything else is the checkpoint reader's to check.
+  void restore(GrowthState state);
 
   const Scene& scene() const;
   std::uint64_t seed() const;

@@ -73,7 +73,7 @@ struct Scene {
   bool rigidity_events = false;
   Schedule moduli;
   Schedule dos;
-  long checkpoint_every = 0;   // accepted steps between checkpoints; 0 = none
+  long checkpoint_every = 100; // accepted steps between checkpoints; 0 = none (a signal still writes one)
   long trajectory_every = 0;   // accepted steps between trajectory frames (and at events); 0 = none
   bool progress = true;
 };

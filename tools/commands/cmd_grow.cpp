@@ -1,14 +1,18 @@
-// `budjam grow SCENE [--seed N] [--out DIR] [--quiet] [--set KEY=VALUE]...`
+// `budjam grow SCENE [--seed N] [--out DIR] [--overwrite] [--quiet] [--set KEY=VALUE]...`
 // `budjam grow --resume DIR [--quiet]`
-// Grows a packing as the scene says (MODEL.md protocol, docs/growth.md) and writes the run
-// directory: scene.toml (the effective scene, seed included), steps.csv, divisions.csv,
-// bud_events.csv, packings/*.pack, checkpoint.txt while running, summary.json last.
+// Grows a packing as the scene says (docs/growth.md) and writes the run directory
+// (io/run_directory.hpp: claimed with a marker and a lock): scene.toml (the effective scene, seed
+// included), steps.csv, divisions.csv, bud_events.csv, packings/*.pack, checkpoint.txt while
+// running (io/checkpoint.hpp), summary.json last. SIGTERM/SIGINT: checkpoint, exit 128 + signal.
 #include "commands/command.hpp"
+#include "commands/stop_signals.hpp"
 #include "observers/observers.hpp"
 #include "observers/run_outputs.hpp"
 
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"
+#include "io/checkpoint.hpp"
+#include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 
 #include <cctype>
@@ -22,6 +26,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace budjam;
+namespace run_files = io::run_files;
 
 struct Options {
   std::string scene;
@@ -29,6 +34,7 @@ struct Options {
   std::string out;
   std::string resume;
   bool quiet = false;
+  bool overwrite = false;
   std::vector<std::string> overrides;
 };
 
@@ -38,54 +44,55 @@ std::string safe_name(const std::string& s) {
   return out.empty() ? "run" : out;
 }
 
-// A fresh run starts in an empty directory. A directory that holds an earlier budjam run
-// (it has scene.toml) is emptied; anything else is refused rather than overwritten.
-void prepare_fresh_dir(const fs::path& dir) {
-  if (fs::exists(dir)) {
-    if (!fs::is_directory(dir)) throw InputError("--out: " + dir.string() + " exists and is not a directory");
-    if (!fs::is_empty(dir)) {
-      if (!fs::exists(dir / tools::kSceneFile))
-        throw InputError("--out: " + dir.string() + " is not empty and is not a budjam run directory");
-      for (const auto& entry : fs::directory_iterator(dir)) fs::remove_all(entry.path());
-    }
-  }
-  fs::create_directories(dir);
-}
-
 void run(const Options& o) {
   const bool resuming = !o.resume.empty();
   Scene scene;
-  fs::path dir;
+  std::optional<io::RunDirectory> run_dir;
   if (resuming) {
-    if (!o.scene.empty() || o.seed || !o.overrides.empty() || !o.out.empty())
-      throw InputError("--resume: takes no SCENE, --seed, --set or --out (the run directory has them)");
-    dir = o.resume;
-    if (fs::exists(dir / tools::kSummaryFile))
-      throw InputError("--resume: " + dir.string() + " holds a finished run (summary.json exists)");
-    if (!fs::exists(dir / tools::kCheckpointFile))
-      throw InputError("--resume: no " + std::string(tools::kCheckpointFile) + " in " + dir.string());
-    scene = io::load_scene(dir / tools::kSceneFile);
+    if (!o.scene.empty() || o.seed || !o.overrides.empty() || !o.out.empty() || o.overwrite)
+      throw InputError("--resume: takes no SCENE, --seed, --set, --out or --overwrite (the run directory has them)");
+    run_dir.emplace(io::RunDirectory::resume(o.resume));
+    const io::RunDirectory& d = *run_dir;
+    if (fs::exists(d / run_files::summary))
+      throw InputError("--resume: " + d.path().string() + " holds a finished run (" +
+                       std::string(run_files::summary) + " exists)");
+    if (!fs::exists(d / run_files::checkpoint))
+      throw InputError("--resume: no " + std::string(run_files::checkpoint) + " in " + d.path().string());
+    scene = io::load_scene(d / run_files::scene);
   } else {
     if (o.scene.empty()) throw InputError("SCENE: a scene file is required (or --resume DIR)");
     scene = io::load_scene(o.scene, o.overrides);
     if (o.seed) scene.seed = *o.seed;
-    dir = o.out.empty() ? fs::path("runs") / (safe_name(scene.name) + "-seed" + std::to_string(scene.seed))
-                        : fs::path(o.out);
-    prepare_fresh_dir(dir);
-    io::write_atomically(dir / tools::kSceneFile, io::scene_to_toml(scene));
+    const fs::path out = o.out.empty()
+                             ? fs::path("runs") / (safe_name(scene.name) + "-seed" + std::to_string(scene.seed))
+                             : fs::path(o.out);
+    run_dir.emplace(io::RunDirectory::create(out, o.overwrite));
+    io::write_atomically(*run_dir / run_files::scene, io::scene_to_toml(scene));
   }
+  const fs::path dir = run_dir->path();
 
   GrowthDriver driver(scene);
   tools::RunLog log(dir, scene.seed, resuming);
-  driver.add_observer(log);
   const tools::ObserverContext ctx{scene, scene.seed, dir, resuming, o.quiet};
-  auto observers = tools::make_observers(ctx);
-  for (auto& obs : observers) driver.add_observer(*obs);
-  if (scene.checkpoint_every > 0)
-    driver.set_checkpoint_writer(scene.checkpoint_every, [&dir](const std::string& text) {
-      io::write_atomically(dir / tools::kCheckpointFile, text);
-    });
-  if (resuming) driver.restore(io::read_text_file(dir / tools::kCheckpointFile));
+  auto owned = tools::make_observers(ctx);
+  std::vector<Observer*> observers{&log};
+  for (auto& obs : owned) observers.push_back(obs.get());
+  for (Observer* obs : observers) driver.add_observer(*obs);
+  if (resuming) driver.restore(io::read_checkpoint(dir / run_files::checkpoint, scene, scene.seed, observers));
+
+  // Checkpoints every observe.checkpoint_every accepted steps, and at the first accepted state
+  // after SIGTERM or SIGINT, which then ends the run (resumable).
+  const cli::StopSignals stop;
+  driver.set_checkpoint_hook([&] {
+    const long step = driver.view().step;
+    const int signal = cli::StopSignals::received();
+    if (signal || (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0))
+      io::write_checkpoint(dir / run_files::checkpoint, scene, driver.state(), observers);
+    if (signal)
+      throw cli::Interrupted(signal, "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                                         " at step " + std::to_string(step) + ", checkpoint written; resume with: " +
+                                         "budjam grow --resume " + dir.string());
+  });
 
   tools::SessionTiming timing;
   timing.attempts_at_start = driver.view().attempts;
@@ -95,10 +102,10 @@ void run(const Options& o) {
   timing.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   tools::write_summary(dir, driver, timing);
-  fs::remove(dir / tools::kCheckpointFile);  // a finished (or failed) run is not resumed
+  fs::remove(dir / run_files::checkpoint);  // a finished (or failed) run is not resumed
   if (status != RunStatus::finished)
     throw cli::RunFailure(std::string("grow: run failed (") + to_string(status) + "): " + driver.result().message +
-                          " [" + (dir / tools::kSummaryFile).string() + "]");
+                          " [" + (dir / run_files::summary).string() + "]");
 }
 
 const bool registered = budjam::cli::register_command(
@@ -111,6 +118,8 @@ const bool registered = budjam::cli::register_command(
            ->type_name("DIR");
        sub.add_option("--set", o->overrides, "override a scene key, e.g. --set growth.P0=1e-4 (repeatable)")
            ->type_name("KEY=VALUE");
+       sub.add_flag("--overwrite", o->overwrite,
+                    "replace the budjam run already in --out (only the files budjam wrote are removed)");
        sub.add_flag("--quiet", o->quiet, "no progress on stderr");
        sub.callback([o] { run(*o); });
      }});

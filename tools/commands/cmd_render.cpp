@@ -37,7 +37,8 @@ struct Options {
 void convert_svg(const fs::path& svg, const fs::path& to, const std::string& format) {
   fs::path tmp = to;
   tmp += ".tmp";
-  const int rc = io::run_program({"rsvg-convert", "-f", format, "-o", tmp.string(), svg.string()}, "render",
+  // "--output=" and "--": a file name that starts with "-" is a file, not an option.
+  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.string(), "--", svg.string()}, "render",
                                  "install Debian's librsvg2-bin");
   if (rc != 0) {
     fs::remove(tmp);

@@ -29,12 +29,20 @@ enum ExitCode : int {
   kExitRunFailed = 1,   // the run ran and failed (step limit, step underflow, ...): RunFailure
   kExitBadInput = 2,    // invalid command line, scene or input file: CLI11 errors, budjam::InputError
   kExitInternal = 3,    // an output could not be written, or any other error: io::IoError, std::exception
+  // 128 + N: stopped by signal N (SIGINT 130, SIGTERM 143) after writing a checkpoint: Interrupted
 };
 
 // Thrown by a subcommand after it has written its outputs (summary.json with the failure
 // status) to make `budjam` exit with kExitRunFailed. what() is the one-line reason.
 struct RunFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+// Thrown by a subcommand that stopped on a signal after saving what it needs to continue; `budjam`
+// exits with 128 + signal, the shell's code for a process ended by that signal.
+struct Interrupted : std::runtime_error {
+  Interrupted(int signal, const std::string& message) : std::runtime_error(message), signal(signal) {}
+  int signal;
 };
 
 struct Command {

@@ -4,9 +4,12 @@
 
 #include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/text.hpp"
 
 #include <algorithm>
 #include <exception>
+#include <filesystem>
+#include <nlohmann/json.hpp>
 #include <iostream>
 #include <set>
 #include <string>
@@ -18,9 +21,8 @@
 namespace {
 
 int error(const std::string& message, int code) {
-  std::string line = message;
-  std::replace(line.begin(), line.end(), '\n', ' ');  // one line, always
-  std::cerr << "budjam: error: " << line << std::endl;
+  // One line, always, and no control bytes from a file reaching the terminal.
+  std::cerr << "budjam: error: " << budjam::io::escape_control(message) << std::endl;
   return code;
 }
 
@@ -48,12 +50,20 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
     return error(std::string(e.what()) + " (see budjam --help)", kExitBadInput);
+  } catch (const Interrupted& e) {
+    return error(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {
     return error(e.what(), kExitInternal);
+  } catch (const nlohmann::json::exception& e) {
+    // A JSON value of the wrong type or a missing key: always in a file the user gave.
+    return error(std::string("input JSON: ") + e.what(), kExitBadInput);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // Reading is checked where it happens (InputError); what is left is making outputs.
+    return error(e.path1().string() + ": " + e.code().message(), kExitInternal);
   } catch (const std::exception& e) {
     return error(std::string("internal: ") + e.what(), kExitInternal);
   }

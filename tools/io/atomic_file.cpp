@@ -184,6 +184,11 @@ CsvLog CsvLog::resume(fs::path path, std::vector<std::string> columns, std::uint
   if (bytes < header.size() || static_cast<std::uint64_t>(st.st_size) < bytes)
     throw InputError(partial.string() + ": cannot resume the log: it holds " + std::to_string(st.st_size) +
                      " bytes, the checkpoint expects " + std::to_string(bytes));
+  // A cut point is a line end: the byte before it is the newline of a whole row.
+  char before = 0;
+  if (::pread(log.fd_, &before, 1, static_cast<off_t>(bytes - 1)) != 1 || before != '\n')
+    throw InputError(partial.string() + ": cannot resume the log: byte " + std::to_string(bytes) +
+                     " recorded in the checkpoint is not the end of a line");
   if (::ftruncate(log.fd_, static_cast<off_t>(bytes)) != 0) io_fail(partial, "cannot truncate", errno);
   if (::lseek(log.fd_, 0, SEEK_END) < 0) io_fail(partial, "cannot seek", errno);
   log.bytes_ = bytes;
@@ -215,7 +220,14 @@ CsvLog::~CsvLog() {
 
 void CsvLog::write_line(const std::string& line) {
   if (fd_ < 0) throw std::logic_error("CsvLog: " + path_.string() + " is closed");
-  write_all(fd_, line, partial_path());
+  try {
+    write_all(fd_, line, partial_path());
+  } catch (const IoError&) {
+    // Disk full mid-line: take back the part that was written, so the log still ends with a
+    // whole row (best effort: if even that fails, resume() cuts it at the checkpoint).
+    if (::ftruncate(fd_, static_cast<off_t>(bytes_)) == 0) ::lseek(fd_, 0, SEEK_END);
+    throw;
+  }
   bytes_ += line.size();
 }
 

@@ -64,7 +64,7 @@ class CsvLog {
   CsvLog(std::filesystem::path path, std::vector<std::string> columns);
   // Reopens `<path>.partial` of an interrupted run, checks its header, truncates it to `bytes`
   // (a value of bytes() recorded in a checkpoint) and appends from there. InputError if the file
-  // is missing, has another header or is shorter than `bytes`.
+  // is missing, has another header, is shorter than `bytes` or `bytes` is not a line end.
   static CsvLog resume(std::filesystem::path path, std::vector<std::string> columns, std::uint64_t bytes);
 
   CsvLog(CsvLog&& other) noexcept;

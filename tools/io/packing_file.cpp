@@ -1,6 +1,8 @@
 #include "io/packing_file.hpp"
 
 #include "budjam/errors.hpp"
+#include "budjam/packing_rules.hpp"
+#include "budjam/scene.hpp"  // the default skin
 #include "io/atomic_file.hpp"
 #include "io/text.hpp"
 
@@ -70,8 +72,12 @@ class Reader {
     PackingFile out;
     read_magic();
     const std::size_t cells_line = read_header(out);
+    // The box rule with the default skin of the neighbour list every command builds: first for
+    // mother lobes (before any position is judged against L), then for the largest bud.
+    if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
     read_rows(out.packing, cells_line);
     read_end();
+    if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
     return out;
   }
 
@@ -129,6 +135,7 @@ class Reader {
       if (key == "L") {
         once(L.has_value());
         L = header_number(n, key, t);
+        L_line_ = n;
         if (!(*L > 0)) fail(n, "L: must be positive (got " + std::string(t[1]) + ")");
       } else if (key == "shear") {
         once(shear.has_value());
@@ -148,6 +155,8 @@ class Reader {
         const std::string mkey(rest.substr(0, sp));
         const std::string value(sp == std::string_view::npos ? std::string_view() : rest.substr(sp + 1));
         if (!valid_meta_key(mkey)) fail(n, "invalid meta key " + shown(mkey) + " (letters, digits, _ . -)");
+        // Only what can be written back is read: a value is one line, with no carriage return.
+        if (!valid_meta_value(value)) fail(n, "meta " + mkey + ": the value holds a carriage return");
         if (!out.meta.values.emplace(mkey, value).second) fail(n, "duplicate meta key \"" + mkey + "\"");
       } else if (key == "cells") {
         if (t.size() != kColumns.size() + 1 || !std::equal(kColumns.begin(), kColumns.end(), t.begin() + 1))
@@ -220,6 +229,7 @@ class Reader {
       p.gamma0.push_back(val[4]);
       p.id.push_back(id);
       p.parent.push_back(parent);
+      if (const auto problem = cell_problem(p, k, kMaxBudDiameter)) fail(n, *problem);
     }
     p.q.conservativeResize(static_cast<Eigen::Index>(3 * n_cells_));
   }
@@ -242,6 +252,7 @@ class Reader {
   const std::string& source_;
   std::size_t next_ = 0;  // index of the next line to read
   std::size_t n_cells_ = 0;
+  std::size_t L_line_ = 0;
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include "budjam/cell_list.hpp"
 #include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 #include "io/text.hpp"
 
 #include <cmath>
@@ -149,33 +150,39 @@ double RunData::get(const std::string& key) const {
 }
 
 RunData load_run(const fs::path& dir) {
+  namespace run_files = io::run_files;
   RunData r;
   r.dir = dir;
-  const fs::path s = dir / "summary.json";
+  const fs::path s = dir / run_files::summary;
   if (!fs::exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
   r.summary = io::read_json(s);
   if (r.summary.value("format", std::string()) != "budjam-summary")
     throw InputError(s.string() + ": not a budjam run summary (format)");
-  r.steps = read_csv(dir / "steps.csv");
-  r.divisions = read_csv(dir / "divisions.csv");
-  if (fs::exists(dir / "bud_events.csv")) r.bud_events = read_csv(dir / "bud_events.csv");
+  r.steps = read_csv(dir / run_files::steps);
+  r.divisions = read_csv(dir / run_files::divisions);
+  if (fs::exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);
   return r;
 }
+
+namespace {
+// The episode of row r: a whole number that fits an int (no float→int overflow on bad input).
+int episode_of(const CsvTable& ev, std::size_t r, std::size_t c) {
+  return static_cast<int>(ev.integer(r, c, 0, std::numeric_limits<int>::max()));
+}
+}  // namespace
 
 std::vector<SurvivalRecord> survival_records(const CsvTable& ev, int episode) {
   const std::size_t c_ep = ev.column("episode"), c_id = ev.column("cell_id"), c_kind = ev.column("event"),
                     c_a = ev.column("a");
-  constexpr long long kMaxEpisode = std::numeric_limits<int>::max();
-  auto episode_of = [&](std::size_t r) { return static_cast<int>(ev.integer(r, c_ep, 0, kMaxEpisode)); };
   if (episode < 0) {
-    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, episode_of(r));
+    for (std::size_t r = 0; r < ev.size(); ++r) episode = std::max(episode, episode_of(ev, r, c_ep));
     if (episode < 0) return {};
   }
   // Last row per tagged bud (rows are in time order), in order of first appearance.
   std::map<std::string, std::pair<std::string, double>> last;
   std::vector<std::string> order;
   for (std::size_t r = 0; r < ev.size(); ++r) {
-    if (episode_of(r) != episode) continue;
+    if (episode_of(ev, r, c_ep) != episode) continue;
     const std::string& id = ev.text(r, c_id);
     const std::string& kind = ev.text(r, c_kind);
     auto it = last.find(id);

@@ -37,4 +37,23 @@ inline std::optional<std::int64_t> parse_int64(std::string_view s) {
   return v;
 }
 
+// `s` with every control byte (below 0x20, and 0x7f) written as \xNN, so that text taken from a
+// file or an exception cannot move the cursor, clear the terminal or break a one-line message.
+inline std::string escape_control(std::string_view s) {
+  static constexpr char hex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += hex[u >> 4];
+      out += hex[u & 15];
+    }
+  }
+  return out;
+}
+
 }  // namespace budjam::io

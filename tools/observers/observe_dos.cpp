@@ -6,9 +6,11 @@
 //   dos.csv  one row per spectrum (resumable log)
 // Defaults of `budjam dos`: automatic method, as many modes as ω* needs.
 #include "analysis/dos_report.hpp"
+#include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -23,11 +25,10 @@ const std::vector<std::string> kColumns{"episode",  "step",      "kind",    "dph
                                         "N_nr",     "method",    "n_dof",   "computed", "N_zero",    "N_u",
                                         "N_u_buds", "floppy_modes", "omega_star", "Z",  "dZ"};
 
-class DosObserver : public Observer {
+class DosObserver : public tools::CsvLogObserver {
  public:
-  DosObserver(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.dos), dir_(std::move(dir)) {
-    if (!resuming) log_.emplace(dir_ / "dos.csv", kColumns);
-  }
+  DosObserver(const Scene& scene, fs::path dir, bool resuming)
+      : CsvLogObserver({{dir / io::run_files::dos, kColumns}}, resuming), schedule_(scene.dos), dir_(std::move(dir)) {}
   std::string name() const override { return "dos"; }
   Needs needs() const override {
     Needs n;
@@ -36,36 +37,25 @@ class DosObserver : public Observer {
   }
 
   void on_jammed(const Jammed& e) override {
-    if (schedule_.at_jamming) record(e.state, "jammed", "packings/jammed", std::nullopt);
+    if (schedule_.at_jamming) record(e.state, "jammed", packing_base(io::run_files::jammed), std::nullopt);
   }
   void on_depleted(const Depleted& e) override {
-    if (schedule_.at_phi2) record(e.state, "phi2", "packings/phi2", std::nullopt);
+    if (schedule_.at_phi2) record(e.state, "phi2", packing_base(io::run_files::phi2), std::nullopt);
   }
   void on_target_reached(const TargetReached& e) override {
     if (schedule_.at_targets)
-      record(e.state, "target", "packings/target_" + std::to_string(e.target.index), e.target.dphi);
+      record(e.state, "target", packing_base(io::run_files::target_stem(e.target.index)), e.target.dphi);
   }
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
-    if (schedule_.every <= 0 || s.phase != Phase::jammed || s.jamming == nullptr) return;
-    const long since = s.step - s.jamming->step;
-    if (since <= 0 || since % schedule_.every != 0) return;
-    record(s, "step", "spectra/step_" + std::to_string(s.step), std::nullopt);
-  }
-  void on_finished(const Finished&) override { log_->finish(); }
-  void on_failed(const Failed&) override { log_->finish(); }
-  void save_state(std::ostream& os) override {
-    log_->sync();
-    os << log_->bytes() << '\n';
-  }
-  void load_state(std::istream& is) override {
-    std::uint64_t bytes = 0;
-    if (!(is >> bytes)) throw InputError("checkpoint: bad dos state");
-    log_.emplace(io::CsvLog::resume(dir_ / "dos.csv", kColumns, bytes));
+    if (!tools::due_every(schedule_, s)) return;
+    record(s, "step", fs::path(io::run_files::spectra) / ("step_" + std::to_string(s.step)), std::nullopt);
   }
 
  private:
-  void record(const StateView& s, const std::string& kind, const std::string& base, std::optional<double> dphi) {
+  // packings/<stem>: the sidecar base beside a run packing
+  static fs::path packing_base(std::string_view stem) { return fs::path(io::run_files::packings) / stem; }
+  void record(const StateView& s, const std::string& kind, const fs::path& base, std::optional<double> dphi) {
     if (s.contacts == nullptr || s.network == nullptr)
       throw std::logic_error("dos observer: the driver gave no contact network at a " + kind + " state");
     if (s.network->N_nr == 0) return;  // no non-rattler: nothing vibrates
@@ -74,7 +64,7 @@ class DosObserver : public Observer {
     fs::create_directories(b.parent_path());
     tools::write_dos_files(b, r, request_);
     const auto& m = r.result.summary;
-    log_->row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
+    log().row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
                dphi ? io::CsvField(*dphi) : io::CsvField::missing(), s.phi, s.packing->size(), r.network.N_nr,
                to_string(m.method), m.n_dof, m.computed, m.N_zero, r.network.N_u, r.network.N_u_buds,
                r.has_rigidity ? io::CsvField(r.rigidity.floppy_plane) : io::CsvField::missing(),
@@ -85,7 +75,6 @@ class DosObserver : public Observer {
   Schedule schedule_;
   fs::path dir_;
   tools::DosRequest request_;
-  std::optional<io::CsvLog> log_;
 };
 
 const tools::ObserverRegistration registration{

@@ -3,10 +3,12 @@
 // at_targets, every k accepted steps above jamming). One row per (state, reason); a state that is
 // several things at once (e.g. a target on an `every` step) is computed once. A saddle (kernel_method
 // "unstable") is logged with its unstable_modes and empty relaxed moduli. docs/moduli.md.
+#include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
 #include "budjam/moduli.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <cmath>
 #include <istream>
@@ -28,11 +30,10 @@ const std::vector<std::string> kColumns{
     "ell_c", "M4", "B_ext", "G_mf", "B_ext_nJ", "G_mf_nJ", "kernel_method", "pinned_translation",
     "pinned_lobe_rotation", "pinned_zero_rows", "residual", "kernel_component", "well_posed", "unstable_modes"};
 
-class ModuliLog : public Observer {
+class ModuliLog : public tools::CsvLogObserver {
  public:
-  ModuliLog(const Scene& scene, fs::path dir, bool resuming) : schedule_(scene.moduli), path_(std::move(dir) / "moduli.csv") {
-    if (!resuming) log_.emplace(path_, kColumns);
-  }
+  ModuliLog(const Scene& scene, const fs::path& dir, bool resuming)
+      : CsvLogObserver({{dir / io::run_files::moduli, kColumns}}, resuming), schedule_(scene.moduli) {}
   std::string name() const override { return "moduli"; }
   Needs needs() const override {
     Needs n;
@@ -42,10 +43,7 @@ class ModuliLog : public Observer {
   }
 
   void on_step_accepted(const StepAccepted& e) override {
-    const StateView& s = e.state;
-    if (schedule_.every <= 0 || s.phase != Phase::jammed || !s.jamming) return;
-    const long since = s.step - s.jamming->step;
-    if (since > 0 && since % schedule_.every == 0) write("every", s, std::nullopt);
+    if (tools::due_every(schedule_, e.state)) write("every", e.state, std::nullopt);
   }
   void on_jammed(const Jammed& e) override {
     if (schedule_.at_jamming) write("jamming", e.state, std::nullopt);
@@ -55,17 +53,6 @@ class ModuliLog : public Observer {
   }
   void on_depleted(const Depleted& e) override {
     if (schedule_.at_phi2) write("phi2", e.state, std::nullopt);
-  }
-  void on_finished(const Finished&) override { log_->finish(); }
-  void on_failed(const Failed&) override { log_->finish(); }
-  void save_state(std::ostream& os) override {
-    log_->sync();
-    os << log_->bytes() << '\n';
-  }
-  void load_state(std::istream& is) override {
-    std::uint64_t bytes = 0;
-    if (!(is >> bytes)) throw InputError("checkpoint: bad moduli state");
-    log_.emplace(io::CsvLog::resume(path_, kColumns, bytes));
   }
 
  private:
@@ -100,13 +87,13 @@ class ModuliLog : public Observer {
       while (row.size() < kColumns.size() - 8) row.push_back(io::CsvField::missing());
       row.insert(row.end(), {error, io::CsvField::missing(), io::CsvField::missing(), io::CsvField::missing(),
                              io::CsvField::missing(), io::CsvField::missing(), false, io::CsvField::missing()});
-      log_->row(row);
+      log().row(row);
       return;
     }
     const ElasticResponse& e = *r;
     const double l2 = e.ell_c * e.ell_c;
     const KernelTreatment& k = e.kernel;
-    log_->row({event, s.step, s.phi, dphi, e.N, e.N_nr, e.N_f, e.N_u, e.N_u_buds, e.contacts, e.Z, e.Z_iso, e.dZ,
+    log().row({event, s.step, s.phi, dphi, e.N, e.N_nr, e.N_f, e.N_u, e.N_u_buds, e.contacts, e.Z, e.Z_iso, e.dZ,
                e.P, e.P_energy, e.moduli.B, e.moduli.G_simple, e.moduli.G_pure, e.moduli.G_mean, e.moduli_affine.B,
                e.moduli_affine.G_simple, e.moduli_affine.G_pure, e.moduli_energy.B, e.moduli_energy.G_simple,
                e.moduli_energy.G_pure, e.G_energy(), e.shear.G_min, e.shear.stable, e.shear_stress.G_min, e.C(0, 0), e.C(1, 1), e.C(0, 1), e.C(2, 2), e.C(0, 2), e.C(1, 2), e.n, n_J,
@@ -116,8 +103,6 @@ class ModuliLog : public Observer {
   }
 
   Schedule schedule_;
-  fs::path path_;
-  std::optional<io::CsvLog> log_;
   long cached_step_ = -1;
   std::optional<ElasticResponse> cached_;
   std::string cached_error_;

@@ -8,10 +8,12 @@
 // of an episode is the baseline: it logs the floppy-mode count (before = -1) and, if a rigid
 // cluster already spans the box, first_spanning. An unjamming logs `unjammed` and ends the episode;
 // the next jamming starts a new baseline.
+#include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
 #include "budjam/rigidity.hpp"
 #include "io/atomic_file.hpp"
+#include "io/run_directory.hpp"
 
 #include <istream>
 #include <optional>
@@ -28,11 +30,9 @@ const std::vector<std::string> kColumns{"step",          "phi",    "episode",   
                                         "cell",          "before", "after",        "floppy_modes",
                                         "floppy_modes_periodic", "redundant_bars", "largest_cells", "N_nr"};
 
-class RigidityLog : public Observer {
+class RigidityLog : public tools::CsvLogObserver {
  public:
-  RigidityLog(fs::path dir, bool resuming) : path_(std::move(dir) / "rigidity_events.csv") {
-    if (!resuming) log_.emplace(path_, kColumns);
-  }
+  RigidityLog(const fs::path& dir, bool resuming) : CsvLogObserver({{dir / io::run_files::rigidity, kColumns}}, resuming) {}
   std::string name() const override { return "rigidity"; }
   Needs needs() const override {
     Needs n;
@@ -52,25 +52,21 @@ class RigidityLog : public Observer {
     const auto& events = tracker_->update(*s.packing, lobes_, *s.contacts, *s.network);
     const RigidityState& r = tracker_->state();
     for (const RigidityEvent& ev : events)
-      log_->row({s.step, s.phi, episode_, to_string(ev.kind), ev.cell, ev.before, ev.after, r.floppy_plane,
+      log().row({s.step, s.phi, episode_, to_string(ev.kind), ev.cell, ev.before, ev.after, r.floppy_plane,
                  r.floppy_periodic, r.redundant_bars, r.largest_cells(), r.cells});
   }
 
   void on_unjammed(const Unjammed& e) override {
     if (tracker_) {
       const RigidityState& r = tracker_->state();
-      log_->row({e.state.step, e.state.phi, e.record.episode, "unjammed", -1, r.floppy_plane, -1, r.floppy_plane,
+      log().row({e.state.step, e.state.phi, e.record.episode, "unjammed", -1, r.floppy_plane, -1, r.floppy_plane,
                  r.floppy_periodic, r.redundant_bars, r.largest_cells(), r.cells});
     }
     tracker_.reset();
   }
 
-  void on_finished(const Finished&) override { log_->finish(); }
-  void on_failed(const Failed&) override { log_->finish(); }
-
-  void save_state(std::ostream& os) override {
-    log_->sync();
-    os << log_->bytes() << '\n';
+  // After the log length: the tracker's memory (the pebble game is rebuilt from it).
+  void save_more(std::ostream& os) override {
     if (!tracker_) {
       os << "tracker none\n";
       return;
@@ -81,12 +77,10 @@ class RigidityLog : public Observer {
     for (const auto& [id, bits] : m.cells) os << id << ' ' << int{bits} << '\n';
   }
 
-  void load_state(std::istream& is) override {
+  void load_more(std::istream& is) override {
     const auto bad = [] { return InputError("checkpoint: bad rigidity state"); };
-    std::uint64_t bytes = 0;
     std::string word, kind;
-    if (!(is >> bytes >> word) || word != "tracker") throw bad();
-    log_.emplace(io::CsvLog::resume(path_, kColumns, bytes));
+    if (!(is >> word) || word != "tracker") throw bad();
     tracker_.reset();
     if (!(is >> kind)) throw bad();
     if (kind == "none") return;
@@ -113,8 +107,6 @@ class RigidityLog : public Observer {
   }
 
  private:
-  fs::path path_;
-  std::optional<io::CsvLog> log_;
   std::optional<RigidityTracker> tracker_;
   int episode_ = -1;
   Lobes lobes_;

@@ -2,11 +2,8 @@
 
 #include "io/packing_file.hpp"
 #include "io/text.hpp"
-#include "observers/observers.hpp"
 
-#include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
@@ -16,6 +13,7 @@ namespace budjam::tools {
 namespace fs = std::filesystem;
 using io::CsvField;
 using io::Json;
+namespace run_files = io::run_files;
 
 // ---- RunLog -------------------------------------------------------------------------------------
 
@@ -34,21 +32,20 @@ const std::vector<std::string>& RunLog::division_columns() {
   return c;
 }
 
-RunLog::RunLog(fs::path run_dir, std::uint64_t seed, bool resuming) : dir_(std::move(run_dir)), seed_(seed) {
-  fs::create_directories(dir_ / "packings");
-  if (!resuming) {
-    steps_.emplace(dir_ / "steps.csv", step_columns());
-    divisions_.emplace(dir_ / "divisions.csv", division_columns());
-  }
+RunLog::RunLog(const fs::path& run_dir, std::uint64_t seed, bool resuming)
+    : CsvLogObserver({{run_dir / run_files::steps, step_columns()}, {run_dir / run_files::divisions, division_columns()}},
+                     resuming),
+      dir_(run_dir),
+      seed_(seed) {
+  fs::create_directories(dir_ / run_files::packings);
 }
 
 void RunLog::on_step_accepted(const StepAccepted& e) {
-  if (!steps_ || !divisions_) throw std::logic_error("run_log: logs not open (resumed without its checkpoint state)");
   const StateView& s = e.state;
   const bool above = s.phase == Phase::jammed && s.network;
   const ContactNetwork* n = s.network;
   auto opt = [&](auto v) { return above ? CsvField(v) : CsvField::missing(); };
-  steps_->row({s.step, s.attempts, s.dt, s.packing->size(), s.phi, s.P, s.E_per_cell, to_string(s.phase),
+  log(kSteps).row({s.step, s.attempts, s.dt, s.packing->size(), s.phi, s.P, s.E_per_cell, to_string(s.phase),
                above ? CsvField(n->N_c) : CsvField::missing(), above ? CsvField(n->N_f) : CsvField::missing(),
                above ? CsvField(n->N_f_single_pass) : CsvField::missing(),
                above ? CsvField(n->N_u) : CsvField::missing(), above ? CsvField(n->N_u_buds) : CsvField::missing(),
@@ -60,11 +57,11 @@ void RunLog::on_step_accepted(const StepAccepted& e) {
 
 void RunLog::on_divided(const Divided& e) {
   const Division& d = e.division;
-  divisions_->row({e.state.step, e.state.phi, to_string(e.state.phase), e.state.packing->size(), d.mother_id,
+  log(kDivisions).row({e.state.step, e.state.phi, to_string(e.state.phase), e.state.packing->size(), d.mother_id,
                    d.daughter_id, d.mother_index, d.daughter_index, d.x, d.y, d.theta, d.b});
 }
 
-void RunLog::write_pack(const std::string& file, const StateView& s, const std::string& kind,
+void RunLog::write_pack(const std::string& stem, const StateView& s, const std::string& kind,
                         std::optional<double> dphi) {
   io::PackingMeta meta;
   meta.set("kind", kind);
@@ -82,131 +79,23 @@ void RunLog::write_pack(const std::string& file, const StateView& s, const std::
     meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
     meta.set_number("Z", s.network->Z);
   }
-  io::write_packing(dir_ / "packings" / file, *s.packing, meta);
+  io::write_packing(dir_ / run_files::packing(stem), *s.packing, meta);
 }
 
 void RunLog::on_unjammed(const Unjammed&) {
   // The jamming point, the targets and φ_2 of the lost episode are void (summary.json drops
   // them too); they are written again when reached in the next episode.
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir_ / "packings", ec)) {
-    const std::string f = entry.path().filename().string();
-    if (f == "jammed.pack" || f == "phi2.pack" || (f.rfind("target_", 0) == 0 && entry.path().extension() == ".pack"))
+  for (const auto& entry : fs::directory_iterator(dir_ / run_files::packings, ec))
+    if (entry.path().extension() == ".pack" && run_files::is_run_packing_stem(entry.path().stem().string()))
       fs::remove(entry.path(), ec);
-  }
 }
 
-void RunLog::on_jammed(const Jammed& e) { write_pack("jammed.pack", e.state, "jammed", std::nullopt); }
-void RunLog::on_depleted(const Depleted& e) { write_pack("phi2.pack", e.state, "phi2", std::nullopt); }
+void RunLog::on_jammed(const Jammed& e) { write_pack(std::string(run_files::jammed), e.state, "jammed", std::nullopt); }
+void RunLog::on_depleted(const Depleted& e) { write_pack(std::string(run_files::phi2), e.state, "phi2", std::nullopt); }
 void RunLog::on_target_reached(const TargetReached& e) {
-  write_pack("target_" + std::to_string(e.target.index) + ".pack", e.state, "target", e.target.dphi);
+  write_pack(run_files::target_stem(e.target.index), e.state, "target", e.target.dphi);
 }
-
-void RunLog::on_finished(const Finished&) {
-  steps_->finish();
-  divisions_->finish();
-}
-void RunLog::on_failed(const Failed&) {
-  // A failed run's logs are complete up to the failure: they are finished too (summary.json says
-  // the run failed).
-  steps_->finish();
-  divisions_->finish();
-}
-
-void RunLog::save_state(std::ostream& os) {
-  steps_->sync();
-  divisions_->sync();
-  os << steps_->bytes() << ' ' << divisions_->bytes() << '\n';
-}
-
-void RunLog::load_state(std::istream& is) {
-  std::uint64_t a = 0, b = 0;
-  if (!(is >> a >> b)) throw InputError("checkpoint: bad run_log state");
-  steps_.emplace(io::CsvLog::resume(dir_ / "steps.csv", step_columns(), a));
-  divisions_.emplace(io::CsvLog::resume(dir_ / "divisions.csv", division_columns(), b));
-}
-
-// ---- bud_events.csv -------------------------------------------------------------------------------
-
-namespace {
-
-const std::vector<std::string> kBudColumns{"episode", "cell_id", "event", "step", "phi", "a"};
-
-class BudEventLog : public Observer {
- public:
-  BudEventLog(fs::path dir, bool resuming) : path_(std::move(dir) / "bud_events.csv") {
-    if (!resuming) log_.emplace(path_, kBudColumns);
-  }
-  std::string name() const override { return "bud_events"; }
-  void on_bud_event(const BudEventHappened& e) override {
-    const BudEvent& b = e.event;
-    log_->row({b.episode, b.cell_id, to_string(b.kind), b.step, b.phi, b.a});
-  }
-  void on_finished(const Finished&) override { log_->finish(); }
-  void on_failed(const Failed&) override { log_->finish(); }
-  void save_state(std::ostream& os) override {
-    log_->sync();
-    os << log_->bytes() << '\n';
-  }
-  void load_state(std::istream& is) override {
-    std::uint64_t bytes = 0;
-    if (!(is >> bytes)) throw InputError("checkpoint: bad bud_events state");
-    log_.emplace(io::CsvLog::resume(path_, kBudColumns, bytes));
-  }
-
- private:
-  fs::path path_;
-  std::optional<io::CsvLog> log_;
-};
-
-const ObserverRegistration bud_events_registration{
-    "bud_events", [](const ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.bud_events) return nullptr;
-      return std::make_unique<BudEventLog>(c.run_dir, c.resuming);
-    }};
-
-// ---- progress on stderr ---------------------------------------------------------------------------
-
-class Progress : public Observer {
- public:
-  std::string name() const override { return "progress"; }
-  void on_step_accepted(const StepAccepted& e) override {
-    const auto now = Clock::now();
-    if (now - last_ < std::chrono::seconds(2)) return;
-    line("", e.state, now);
-  }
-  void on_jammed(const Jammed& e) override { line("jammed: ", e.state, Clock::now()); }
-  void on_unjammed(const Unjammed& e) override { line("unjammed (jamming search restarts): ", e.state, Clock::now()); }
-  void on_target_reached(const TargetReached& e) override {
-    line("target dphi=" + io::format_double(e.target.dphi) + ": ", e.state, Clock::now());
-  }
-  void on_depleted(const Depleted& e) override { line("phi_2: ", e.state, Clock::now()); }
-  void on_finished(const Finished& e) override { line("finished: ", e.state, Clock::now()); }
-  void on_failed(const Failed& e) override { line(std::string("FAILED (") + to_string(e.result.status) + "): ", e.state, Clock::now()); }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  void line(const std::string& what, const StateView& s, Clock::time_point now) {
-    const double dt = std::chrono::duration<double>(now - last_).count();
-    const double rate = dt > 0 ? static_cast<double>(s.attempts - last_attempts_) / dt : 0.0;
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "grow: %sstep %ld  phi %.8f  N %zu  P %.3e  %s  %.1f steps/s", what.c_str(),
-                  s.step, s.phi, s.packing->size(), s.P, to_string(s.phase), rate);
-    std::cerr << buf << '\n';
-    last_ = now;
-    last_attempts_ = s.attempts;
-  }
-  Clock::time_point last_ = Clock::now();
-  long last_attempts_ = 0;
-};
-
-const ObserverRegistration progress_registration{
-    "progress", [](const ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (c.quiet || !c.scene.progress) return nullptr;
-      return std::make_unique<Progress>();
-    }};
-
-}  // namespace
 
 // ---- summary.json --------------------------------------------------------------------------------
 
@@ -303,8 +192,8 @@ void write_summary(const fs::path& run_dir, const GrowthDriver& driver, const Se
   t["force_evaluations"] = evals;
   t["force_evaluations_per_second"] = timing.wall_seconds > 0 ? evals / timing.wall_seconds : 0.0;
   t["final_N"] = driver.packing().size();
-  io::write_json(run_dir / kTimingFile, t);
-  io::write_json(run_dir / kSummaryFile, summary_json(driver));  // last: marks the run complete
+  io::write_json(run_dir / run_files::timing, t);
+  io::write_json(run_dir / run_files::summary, summary_json(driver));  // last: marks the run complete
 }
 
 }  // namespace budjam::tools

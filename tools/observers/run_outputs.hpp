@@ -1,12 +1,14 @@
 #pragma once
 // The files of a growth run directory (docs/growth.md, "Run directory"):
 //   steps.csv, divisions.csv, packings/{jammed,phi2,target_<k>}.pack   (RunLog, always)
-//   bud_events.csv                                                    (observer "bud_events")
 //   summary.json, timing.json                                         (write_summary, at the end)
-// and the progress line on stderr (observer "progress").
+// (bud_events.csv and the progress line are observers of their own: observe_bud_events.cpp,
+// observe_progress.cpp).
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
+#include "io/run_directory.hpp"
+#include "observers/csv_log_observer.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -15,10 +17,10 @@
 namespace budjam::tools {
 
 // steps.csv, divisions.csv and the packings at jamming, φ_2 and each target.
-class RunLog : public Observer {
+class RunLog : public CsvLogObserver {
  public:
   // resuming: the logs are reopened by load_state (cut back to the checkpoint) instead of created.
-  RunLog(std::filesystem::path run_dir, std::uint64_t seed, bool resuming);
+  RunLog(const std::filesystem::path& run_dir, std::uint64_t seed, bool resuming);
   std::string name() const override { return "run_log"; }
   void on_step_accepted(const StepAccepted& e) override;
   void on_divided(const Divided& e) override;
@@ -26,19 +28,15 @@ class RunLog : public Observer {
   void on_unjammed(const Unjammed& e) override;
   void on_target_reached(const TargetReached& e) override;
   void on_depleted(const Depleted& e) override;
-  void on_finished(const Finished& e) override;
-  void on_failed(const Failed& e) override;
-  void save_state(std::ostream& os) override;
-  void load_state(std::istream& is) override;
 
   static const std::vector<std::string>& step_columns();
   static const std::vector<std::string>& division_columns();
 
  private:
-  void write_pack(const std::string& file, const StateView& s, const std::string& kind, std::optional<double> dphi);
+  void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
   std::filesystem::path dir_;
   std::uint64_t seed_;
-  std::optional<io::CsvLog> steps_, divisions_;
+  static constexpr std::size_t kSteps = 0, kDivisions = 1;  // log(k)
 };
 
 // The run's summary (deterministic: same scene and seed => same bytes) and timing.json (wall
@@ -50,11 +48,5 @@ struct SessionTiming {
   long force_evaluations_at_start = 0;
 };
 void write_summary(const std::filesystem::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
-
-// Run-directory file names.
-inline constexpr const char* kSummaryFile = "summary.json";
-inline constexpr const char* kTimingFile = "timing.json";
-inline constexpr const char* kCheckpointFile = "checkpoint.txt";
-inline constexpr const char* kSceneFile = "scene.toml";
 
 }  // namespace budjam::tools

@@ -1,0 +1,24 @@
+#pragma once
+// SIGTERM and SIGINT during `budjam grow`: the handler only records the signal (nothing else is
+// async-signal-safe); the run checks it between growth steps, writes a checkpoint at the next
+// accepted state and exits with 128 + the signal number (docs/files.md, "Signals"). A second
+// signal of the same kind ends the process at once, as if no handler had been installed.
+#include <csignal>
+
+namespace budjam::cli {
+
+class StopSignals {
+ public:
+  StopSignals();   // installs the handlers
+  ~StopSignals();  // restores the previous ones
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+  // The signal received (SIGTERM or SIGINT), or 0.
+  static int received();
+
+ private:
+  struct sigaction old_term_ {}, old_int_ {};
+};
+
+}  // namespace budjam::cli

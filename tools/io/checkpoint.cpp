@@ -1,0 +1,451 @@
+#include "io/checkpoint.hpp"
+
+#include "budjam/growth.hpp"
+#include "budjam/packing_rules.hpp"
+#include "io/atomic_file.hpp"
+#include "io/scene_file.hpp"
+#include "io/text.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <unordered_set>
+
+namespace budjam::io {
+
+namespace {
+
+// Exact text of a double (17 significant digits read back bit-identically).
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string hex64(std::uint64_t v) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::uint64_t scene_hash(const Scene& scene) { return fnv1a64(scene_to_toml(scene)); }
+
+constexpr std::string_view kMagic = "budjam-checkpoint";
+constexpr std::string_view kChecksum = "checksum ";
+
+// ---- reading: one line at a time, every problem named by file and line --------------------------
+
+class Lines {
+ public:
+  Lines(std::string_view text, std::string file) : file_(std::move(file)) {
+    while (!text.empty()) {
+      const std::size_t end = text.find('\n');
+      if (end == std::string_view::npos) fail_at(lines_.size() + 1, "the last line does not end with a newline");
+      lines_.push_back(text.substr(0, end));
+      text.remove_prefix(end + 1);
+    }
+  }
+  [[noreturn]] void fail_at(std::size_t line, const std::string& what) const {
+    throw InputError(escape_control(file_ + ":" + std::to_string(line) + ": " + what));
+  }
+  [[noreturn]] void fail(const std::string& what) const { fail_at(at_, what); }
+  std::size_t line() const { return at_; }
+  std::size_t count() const { return lines_.size(); }
+  std::string_view raw(std::size_t line) const { return lines_[line - 1]; }
+  // The next line as it is.
+  std::string_view take() {
+    if (at_ >= lines_.size()) fail_at(lines_.size(), "truncated");
+    return lines_[at_++];
+  }
+
+  // The next line as words separated by single spaces; `key` (if not empty) must be its first
+  // word and is dropped; exactly `n` words must follow (n < 0: any number).
+  std::vector<std::string_view> next(std::string_view key, long n) {
+    if (at_ >= lines_.size()) fail_at(lines_.size(), "truncated: expected a line '" + std::string(key) + " ...'");
+    const std::string_view l = lines_[at_++];
+    std::vector<std::string_view> w;
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t sp = l.find(' ', start);
+      w.push_back(l.substr(start, sp == std::string_view::npos ? std::string_view::npos : sp - start));
+      if (w.back().empty()) fail("empty field (fields are separated by one space)");
+      if (sp == std::string_view::npos) break;
+      start = sp + 1;
+    }
+    if (!key.empty()) {
+      if (w.front() != key) fail("expected '" + std::string(key) + "', found '" + std::string(w.front()) + "'");
+      w.erase(w.begin());
+    }
+    if (n >= 0 && static_cast<long>(w.size()) != n)
+      fail("expected " + std::to_string(n) + " values" + (key.empty() ? "" : " after '" + std::string(key) + "'") +
+           ", found " + std::to_string(w.size()));
+    return w;
+  }
+
+  double real(std::string_view w, const char* what) const {
+    const auto v = parse_double(w);
+    if (!v || !std::isfinite(*v)) fail(std::string(what) + ": not a finite number (got '" + std::string(w) + "')");
+    return *v;
+  }
+  double positive(std::string_view w, const char* what) const {
+    const double v = real(w, what);
+    if (!(v > 0)) fail(std::string(what) + ": must be positive (got '" + std::string(w) + "')");
+    return v;
+  }
+  std::int64_t integer(std::string_view w, const char* what, std::int64_t lo, std::int64_t hi) const {
+    const auto v = parse_int64(w);
+    if (!v) fail(std::string(what) + ": not an integer (got '" + std::string(w) + "')");
+    if (*v < lo || *v > hi)
+      fail(std::string(what) + ": " + std::to_string(*v) + " is outside [" + std::to_string(lo) + ", " +
+           std::to_string(hi) + "]");
+    return *v;
+  }
+  std::size_t count_of(std::string_view w, const char* what, std::size_t hi) const {
+    return static_cast<std::size_t>(integer(w, what, 0, static_cast<std::int64_t>(hi)));
+  }
+  bool flag(std::string_view w, const char* what) const { return integer(w, what, 0, 1) == 1; }
+
+ private:
+  std::string file_;
+  std::vector<std::string_view> lines_;
+  std::size_t at_ = 0;
+};
+
+constexpr std::int64_t kLongMax = std::numeric_limits<long>::max();
+
+// No state of a run holds more cells than a packing fraction of 4 allows (jamming is near 0.85,
+// and overlaps stay small): each cell covers at least a mother disk, π D²/4.
+std::size_t max_cells(const Scene& scene) {
+  return static_cast<std::size_t>(4.0 * scene.L * scene.L / (0.25 * std::numbers::pi * kMotherDiameter * kMotherDiameter)) +
+         scene.n_seeds + 2;
+}
+
+struct Section {
+  std::string name;
+  std::size_t line = 0;  // of its "observer" line
+  std::string body;
+};
+
+}  // namespace
+
+std::uint64_t fnv1a64(std::string_view bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string format_checkpoint(const Scene& scene, const GrowthState& s, const std::vector<Observer*>& observers) {
+  const RunResult& r = s.result;
+  std::ostringstream os;
+  os << kMagic << ' ' << kCheckpointVersion << '\n';
+  os << "scene " << hex64(scene_hash(scene)) << '\n';
+  os << "seed " << s.seed << '\n';
+  os << "rng " << s.rng << '\n';
+  os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << s.step << ' '
+     << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' ' << s.episodes << '\n';
+  os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations
+     << ' ' << r.divisions << ' ' << r.saddles_relaxed << '\n';
+  os << "jamming " << (r.jamming ? 1 : 0);
+  if (const auto& j = r.jamming)
+    os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
+       << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c
+       << ' ' << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds)
+       << ' ' << num(j->n_J) << ' ' << j->tagged;
+  os << '\n';
+  os << "targets " << r.targets.size() << '\n';
+  for (const TargetRecord& t : r.targets)
+    os << t.index << ' ' << num(t.dphi) << ' ' << num(t.phi_target) << ' ' << t.step << ' ' << num(t.phi) << ' '
+       << num(t.P) << ' ' << num(t.E_per_cell) << ' ' << t.N << ' ' << t.N_nr << ' ' << t.N_f << ' ' << t.N_f_single
+       << ' ' << t.N_c << ' ' << t.N_u << ' ' << t.N_u_buds << ' ' << num(t.Z) << ' ' << num(t.u) << ' '
+       << num(t.u_buds) << ' ' << num(t.Z_iso) << ' ' << num(t.dZ) << ' ' << num(t.chi_c) << ' '
+       << t.divisions_since_jamming << '\n';
+  os << "depletion " << (r.depletion ? 1 : 0);
+  if (const auto& d = r.depletion)
+    os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' '
+       << num(d->Z) << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
+       << d->still_unconstrained << ' ' << d->divisions_since_jamming;
+  os << '\n';
+  os << "unjammings " << r.unjammings.size() << '\n';
+  for (const UnjamRecord& u : r.unjammings)
+    os << u.episode << ' ' << u.step << ' ' << num(u.phi) << ' ' << num(u.phi_J) << ' ' << u.targets_lost << '\n';
+  s.buds.save(os);
+  const Packing& p = s.packing;
+  os << "packing " << p.size() << ' ' << num(p.box.L) << ' ' << num(p.box.shear) << ' ' << p.next_id << '\n';
+  for (std::size_t i = 0; i < p.size(); ++i)
+    os << num(p.x(i)) << ' ' << num(p.y(i)) << ' ' << num(p.theta(i)) << ' ' << num(p.b[i]) << ' '
+       << num(p.gamma0[i]) << ' ' << p.id[i] << ' ' << p.parent[i] << '\n';
+  for (Observer* o : observers) {
+    std::ostringstream body;
+    o->save_state(body);
+    std::string text = std::move(body).str();
+    if (!text.empty() && text.back() != '\n') text += '\n';
+    os << "observer " << o->name() << ' ' << std::count(text.begin(), text.end(), '\n') << '\n' << text;
+  }
+  os << "end\n";
+  std::string out = std::move(os).str();
+  out += std::string(kChecksum) + hex64(fnv1a64(out)) + '\n';
+  return out;
+}
+
+void write_checkpoint(const std::filesystem::path& path, const Scene& scene, const GrowthState& state,
+                      const std::vector<Observer*>& observers) {
+  write_atomically(path, format_checkpoint(scene, state, observers));
+}
+
+GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
+                             const std::vector<Observer*>& observers) {
+  Lines in(text, file);
+  {
+    const auto w = in.next(kMagic, 1);
+    const std::int64_t version = in.integer(w[0], "version", 0, kLongMax);
+    if (version == 1)
+      in.fail("checkpoint version 1 was written before jamming candidates were checked for saddles "
+              "(jamming.check_minimum); start the run again");
+    if (version != kCheckpointVersion)
+      in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
+              std::to_string(kCheckpointVersion) + "); start the run again");
+  }
+  // The checksum first: an edited or damaged file is refused before any of it is interpreted.
+  const std::size_t last = in.count();
+  const std::string_view tail = in.raw(last);
+  if (tail.substr(0, kChecksum.size()) != kChecksum) in.fail_at(last, "truncated: the last line is not the checksum");
+  const std::string_view body = text.substr(0, text.size() - tail.size() - 1);
+  if (tail.substr(kChecksum.size()) != hex64(fnv1a64(body)))
+    in.fail_at(last, "checksum mismatch: the checkpoint was changed or damaged after it was written");
+  if (in.next("scene", 1)[0] != hex64(scene_hash(scene)))
+    in.fail("the run's scene.toml has changed since this checkpoint was written (its effective scene differs); "
+            "a run cannot continue under other parameters");
+
+  GrowthState s;
+  const auto seed_w = in.next("seed", 1);
+  const auto parsed_seed = parse_int64(seed_w[0]);
+  if (seed_w[0] != std::to_string(seed) || !parsed_seed)
+    in.fail("seed " + std::string(seed_w[0]) + " does not match the run's seed " + std::to_string(seed));
+  s.seed = seed;
+  {
+    const auto w = in.next("rng", -1);
+    std::string words;
+    for (const auto& x : w) words.append(x).push_back(' ');
+    std::istringstream rs(words);
+    rs >> s.rng;
+    std::string rest;
+    if (!rs || (rs >> rest)) in.fail("rng: not the state of a mt19937_64 random stream");
+  }
+
+  const std::int64_t max_steps = scene.max_steps;
+  {
+    const auto w = in.next("state", 8);
+    if (w[0] == "jammed") s.phase = Phase::jammed;
+    else if (w[0] == "unjammed") s.phase = Phase::unjammed;
+    else in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
+    s.dt = in.positive(w[1], "dt");
+    if (s.dt < scene.dt_min) in.fail("dt: below growth.dt_min");
+    s.last_dt = in.positive(w[2], "last dt");
+    s.attempts = in.integer(w[4], "attempts", 1, max_steps);
+    s.step = in.integer(w[3], "step", 1, s.attempts);
+    s.next_target = in.count_of(w[5], "next target", scene.targets.size());
+    s.divisions_since_jamming = in.integer(w[6], "divisions since jamming", 0, kLongMax);
+    s.episodes = static_cast<int>(in.integer(w[7], "episodes", 0, s.step));
+  }
+  RunResult& r = s.result;
+  {
+    const auto w = in.next("counters", 6);
+    r.accepted = in.integer(w[0], "accepted", s.step, s.step);
+    r.rejected = in.integer(w[1], "rejected", s.attempts - s.step, s.attempts - s.step);
+    r.force_evaluations = in.integer(w[2], "force evaluations", s.attempts, kLongMax);
+    r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
+    r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(scene)));
+    r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
+  }
+  // Cell counts are bounded by the cells that ever existed (checked against next_id below).
+  const std::size_t cells_cap = static_cast<std::size_t>(r.divisions) + 2 + scene.n_seeds;
+  {
+    auto w = in.next("jamming", -1);
+    if (w.empty()) in.fail("jamming: expected 0 or 1");
+    const bool has = in.flag(w[0], "jamming");
+    if (has != (s.phase == Phase::jammed)) in.fail("jamming: a record is present if and only if the phase is jammed");
+    if (has) {
+      if (w.size() != 19) in.fail("jamming: expected 19 values, found " + std::to_string(w.size()));
+      JammingRecord j;
+      j.episode = static_cast<int>(in.integer(w[1], "jamming episode", s.episodes - 1, s.episodes - 1));
+      j.step = in.integer(w[2], "jamming step", 1, s.step);
+      j.phi = in.positive(w[3], "phi_J"), j.P = in.real(w[4], "P_J"), j.E_per_cell = in.real(w[5], "E_J");
+      j.N = in.count_of(w[6], "N_J", cells_cap);
+      j.N_nr = in.count_of(w[7], "N_nr", j.N), j.N_f = in.count_of(w[8], "N_f", j.N);
+      j.N_u = in.count_of(w[9], "N_u", 2 * j.N), j.N_u_buds = in.count_of(w[10], "N_u_buds", j.N);
+      j.N_c = in.count_of(w[11], "N_c", 4 * j.N * j.N);
+      j.Z = in.real(w[12], "Z"), j.Z_iso = in.real(w[13], "Z_iso"), j.dZ = in.real(w[14], "dZ");
+      j.u = in.real(w[15], "u"), j.u_buds = in.real(w[16], "u_buds"), j.n_J = in.real(w[17], "n_J");
+      j.tagged = in.count_of(w[18], "tagged", j.N);
+      r.jamming = j;
+    } else if (w.size() != 1) {
+      in.fail("jamming: expected no values after 0");
+    }
+  }
+  {
+    const std::size_t n = in.count_of(in.next("targets", 1)[0], "targets", s.next_target);
+    if (n != s.next_target) in.fail("targets: " + std::to_string(n) + " landed, but the next target is " +
+                                    std::to_string(s.next_target));
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto w = in.next("", 21);
+      TargetRecord t;
+      t.index = in.count_of(w[0], "target index", k);
+      if (t.index != k) in.fail("target index: expected " + std::to_string(k));
+      t.dphi = in.real(w[1], "dphi");
+      if (t.dphi != scene.targets[k]) in.fail("dphi: not jamming.targets[" + std::to_string(k) + "] of the scene");
+      t.phi_target = in.positive(w[2], "phi_target");
+      t.step = in.integer(w[3], "target step", 1, s.step);
+      t.phi = in.positive(w[4], "phi"), t.P = in.real(w[5], "P"), t.E_per_cell = in.real(w[6], "E_per_cell");
+      t.N = in.count_of(w[7], "N", cells_cap);
+      t.N_nr = in.count_of(w[8], "N_nr", t.N), t.N_f = in.count_of(w[9], "N_f", t.N);
+      t.N_f_single = in.count_of(w[10], "N_f_single", t.N), t.N_c = in.count_of(w[11], "N_c", 4 * t.N * t.N);
+      t.N_u = in.count_of(w[12], "N_u", 2 * t.N), t.N_u_buds = in.count_of(w[13], "N_u_buds", t.N);
+      t.Z = in.real(w[14], "Z"), t.u = in.real(w[15], "u"), t.u_buds = in.real(w[16], "u_buds");
+      t.Z_iso = in.real(w[17], "Z_iso"), t.dZ = in.real(w[18], "dZ"), t.chi_c = in.real(w[19], "chi_c");
+      t.divisions_since_jamming = in.integer(w[20], "divisions since jamming", 0, s.divisions_since_jamming);
+      r.targets.push_back(t);
+    }
+  }
+  {
+    const auto w = in.next("depletion", -1);
+    if (w.empty()) in.fail("depletion: expected 0 or 1");
+    if (in.flag(w[0], "depletion")) {
+      if (s.phase != Phase::jammed) in.fail("depletion: recorded while unjammed");
+      if (w.size() != 13) in.fail("depletion: expected 13 values, found " + std::to_string(w.size()));
+      DepletionRecord d;
+      d.step = in.integer(w[1], "phi_2 step", 1, s.step);
+      d.phi = in.positive(w[2], "phi_2"), d.P = in.real(w[3], "P_2");
+      d.N = in.count_of(w[4], "N_2", cells_cap), d.N_nr = in.count_of(w[5], "N_nr", d.N);
+      d.Z = in.real(w[6], "Z"), d.u = in.real(w[7], "u"), d.u_buds = in.real(w[8], "u_buds");
+      d.Z_iso = in.real(w[9], "Z_iso"), d.dZ = in.real(w[10], "dZ");
+      d.still_unconstrained = in.count_of(w[11], "still unconstrained", 1);
+      d.divisions_since_jamming = in.integer(w[12], "divisions since jamming", 0, s.divisions_since_jamming);
+      r.depletion = d;
+    } else if (w.size() != 1) {
+      in.fail("depletion: expected no values after 0");
+    }
+  }
+  {
+    const std::size_t ended = static_cast<std::size_t>(s.episodes - (s.phase == Phase::jammed ? 1 : 0));
+    const std::size_t n = in.count_of(in.next("unjammings", 1)[0], "unjammings", ended);
+    if (n != ended) in.fail("unjammings: " + std::to_string(n) + " recorded, but " + std::to_string(ended) +
+                            " jamming episodes have ended");
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto w = in.next("", 5);
+      UnjamRecord u;
+      u.episode = static_cast<int>(in.integer(w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
+      u.step = in.integer(w[1], "unjamming step", 1, s.step);
+      u.phi = in.positive(w[2], "phi"), u.phi_J = in.positive(w[3], "phi_J");
+      u.targets_lost = in.count_of(w[4], "targets lost", scene.targets.size());
+      r.unjammings.push_back(u);
+    }
+  }
+  std::string buds_text;
+  std::vector<std::pair<std::int64_t, std::size_t>> tag_ids;  // (cell id, line): checked against the packing
+  {
+    const std::size_t buds_line = in.line() + 1;
+    const auto w = in.next("buds", 2);
+    const std::int64_t episode = in.integer(w[0], "buds episode", 0, s.episodes);
+    const std::size_t n = in.count_of(w[1], "tagged buds", cells_cap);
+    buds_text = "buds " + std::to_string(episode) + ' ' + std::to_string(n) + '\n';
+    std::int64_t previous = -1;
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto t = in.next("", 4);
+      const std::int64_t id = in.integer(t[0], "bud id", previous + 1, std::numeric_limits<std::int64_t>::max());
+      in.real(t[1], "b_J squared");
+      in.flag(t[2], "touched");
+      in.integer(t[3], "bud state", 0, 3);
+      previous = id;
+      tag_ids.emplace_back(id, in.line());
+      for (const auto& x : t) buds_text.append(x).push_back(' ');
+      buds_text.back() = '\n';
+    }
+    std::istringstream bs(buds_text);
+    try {
+      s.buds.load(bs);
+    } catch (const std::exception& e) {
+      in.fail_at(buds_line, std::string("buds: ") + e.what());
+    }
+  }
+  {
+    const auto w = in.next("packing", 4);
+    const std::size_t n = in.count_of(w[0], "cells", cells_cap);
+    if (n == 0) in.fail("packing: no cells");
+    Packing& p = s.packing;
+    p.box.L = in.positive(w[1], "L");
+    if (p.box.L != scene.L) in.fail("L: does not match the scene's box.L");
+    p.box.shear = in.real(w[2], "shear");
+    if (p.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
+    const std::int64_t next_id =
+        in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
+    std::unordered_set<std::int64_t> ids;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto c = in.next("", 7);
+      const double x = in.real(c[0], "x"), y = in.real(c[1], "y"), th = in.real(c[2], "theta");
+      const double b = in.real(c[3], "b"), g0 = in.real(c[4], "gamma0");
+      const std::int64_t id = in.integer(c[5], "id", 0, next_id - 1);
+      const std::int64_t parent = in.integer(c[6], "parent", -1, next_id - 1);
+      if (!ids.insert(id).second) in.fail("id " + std::to_string(id) + ": duplicate");
+      if (parent == id) in.fail("parent: a cell is not its own mother");
+      p.add_cell(x, y, th, b, g0, parent);
+      p.id.back() = id;
+      if (const auto problem = cell_problem(p, i, max_bud_diameter(scene.alpha0))) in.fail(*problem);
+    }
+    p.next_id = next_id;
+    if (const auto problem = box_problem(p, scene.skin)) in.fail(*problem);
+    for (const auto& [id, line] : tag_ids)
+      if (!ids.count(id)) in.fail_at(line, "bud id " + std::to_string(id) + ": no cell of the packing has it");
+  }
+
+  // Observer sections; their load_state runs only once everything above has passed.
+  std::vector<Section> sections;
+  while (in.line() + 1 < last && in.raw(in.line() + 1).substr(0, 9) == "observer ") {
+    const auto w = in.next("observer", 2);
+    Section sec{std::string(w[0]), in.line(), {}};
+    const std::size_t lines = in.count_of(w[1], "section lines", last - in.line() - 1);
+    for (std::size_t k = 0; k < lines; ++k) sec.body.append(in.take()).push_back('\n');
+    for (const Section& other : sections)
+      if (other.name == sec.name) in.fail("observer '" + sec.name + "': two sections");
+    sections.push_back(std::move(sec));
+  }
+  in.next("end", 0);
+  if (in.line() + 1 != last) in.fail_at(in.line() + 1, "unexpected line after 'end'");
+
+  std::vector<std::pair<Observer*, const Section*>> matched;
+  for (Observer* o : observers) {
+    const Section* found = nullptr;
+    for (const Section& sec : sections)
+      if (sec.name == o->name()) found = &sec;
+    if (!found && o->stateful())
+      in.fail_at(last, "no section for observer '" + o->name() +
+                           "': the run has an observer the checkpoint does not know (was the scene edited?)");
+    if (found) matched.emplace_back(o, found);
+  }
+  for (const Section& sec : sections) {
+    bool known = false;
+    for (Observer* o : observers) known |= o->name() == sec.name;
+    if (!known && !sec.body.empty())
+      in.fail_at(sec.line, "state saved for observer '" + sec.name + "', which this run does not have");
+  }
+  for (const auto& [o, sec] : matched) {
+    std::istringstream is(sec->body);
+    try {
+      o->load_state(is);
+    } catch (const std::exception& e) {
+      in.fail_at(sec->line, "observer '" + sec->name + "': " + e.what());
+    }
+  }
+  return s;
+}
+
+GrowthState read_checkpoint(const std::filesystem::path& path, const Scene& scene, std::uint64_t seed,
+                            const std::vector<Observer*>& observers) {
+  return parse_checkpoint(read_text_file(path), path.string(), scene, seed, observers);
+}
+
+}  // namespace budjam::io

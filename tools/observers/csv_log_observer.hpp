@@ -1,0 +1,50 @@
+#pragma once
+// The common part of every observer that appends rows to CSV logs in the run directory (steps,
+// divisions, bud events, moduli, spectra, rigidity): the logs are created when a run starts, or
+// reopened at their checkpointed lengths when it resumes (load_state), synced and measured for
+// a checkpoint (save_state), and finished with the run. A subclass adds its own state after the
+// lengths with save_more / load_more.
+#include "budjam/growth_driver.hpp"
+#include "io/atomic_file.hpp"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+class CsvLogObserver : public Observer {
+ public:
+  struct LogSpec {
+    std::filesystem::path path;
+    std::vector<std::string> columns;
+  };
+
+  bool stateful() const override { return true; }
+  void on_finished(const Finished&) override { finish(); }
+  void on_failed(const Failed&) override { finish(); }  // a failed run's logs are complete up to the failure
+  // One line: the byte length of each log; then save_more's text.
+  void save_state(std::ostream& os) final;
+  void load_state(std::istream& is) final;
+
+ protected:
+  // resuming: the logs are reopened by load_state instead of created.
+  CsvLogObserver(std::vector<LogSpec> logs, bool resuming);
+  // The k-th log (in the order given to the constructor); std::logic_error if not open.
+  io::CsvLog& log(std::size_t k = 0);
+
+  virtual void save_more(std::ostream&) {}
+  virtual void load_more(std::istream&) {}
+
+ private:
+  void finish();
+  std::vector<LogSpec> specs_;
+  std::vector<std::optional<io::CsvLog>> logs_;
+};
+
+// Whether `s` is one of the states of an "every k accepted steps above jamming" schedule
+// (k = schedule.every > 0): jammed, and k, 2k, ... steps past the jamming point.
+bool due_every(const Schedule& schedule, const StateView& s);
+
+}  // namespace budjam::tools
