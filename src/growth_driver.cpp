@@ -71,6 +71,23 @@ struct Reader {
   std::size_t size() { return static_cast<std::size_t>(integer()); }
 };
 
+// A relaxed trial above the jamming window: φ, s = √(E/N), and the slope ds/dφ it implies.
+struct Overshoot {
+  double phi = 0, s = 0, slope = 0;
+};
+
+// √(E/N) in the middle of the jamming window [ε_U, 2ε_U].
+double window_centre(double eps) { return 0.5 * (1.0 + std::sqrt(2.0)) * std::sqrt(eps); }
+
+// Slope ds/dφ of s = √(E/N) at an overjammed minimum, from its energy and pressure alone. Near φ_J,
+// U ≈ C (φ − φ_J)², so φ − φ_J = 2U / (dU/dφ); growing every length by λ at fixed centroids is
+// dU/dλ = 2U + Σ f r = 2U + 2L²P and dφ/dλ = 2φ, so dU/dφ ≈ (U + L²P)/φ. Buds grow alone and at
+// different rates, so this is an estimate; the second overshoot replaces it by a secant.
+double overshoot_slope(double phi, double s, double U, double P, double L) {
+  const double dphi = 2.0 * U * phi / (U + L * L * P);
+  return dphi > 0 ? s / dphi : 0.0;
+}
+
 }  // namespace
 
 struct GrowthDriver::Impl {
@@ -92,6 +109,10 @@ struct GrowthDriver::Impl {
   long divisions_since_jamming = 0;
   int episodes = 0;  // jamming episodes begun
   BudTracker buds;
+  // Secant search: the relaxed trials of this unjammed phase that overshot the jamming window.
+  std::vector<Overshoot> overshoots;
+  int slow_trials = 0;        // consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;   // φ from the accepted state to the lowest overshoot at the last trial
 
   // Derived from the accepted state (recomputed identically after a restore).
   double E = 0, P = 0, phi = 0;
@@ -280,6 +301,105 @@ struct GrowthDriver::Impl {
     return t;
   }
 
+  // ---- choosing the growth step --------------------------------------------------------------
+  // φ after a growth step Δt from the accepted state, divisions (and their draws) included. Known
+  // before relaxing: relaxation moves cells but does not change their areas.
+  double phi_after(double step) const {
+    Packing p = packing;
+    Rng r = rng;
+    grow_step(p, rates, step, scene, r);
+    return p.packing_fraction();
+  }
+
+  // A Δt in (0, dt_max] with |φ(Δt) − goal| ≤ tol, by bisection from φ(0) < goal < φ(dt_max). φ
+  // rises continuously with Δt except at divisions, where it drops, so the bracket always closes
+  // on a continuous crossing. Returns the lower end if the bracket shrinks to nothing first.
+  double dt_for_phi(double goal, double dt_max, double tol) const {
+    double lo = 0, hi = dt_max;
+    while (true) {
+      const double mid = 0.5 * (lo + hi);
+      if (!(mid > lo && mid < hi)) return lo;
+      const double miss = phi_after(mid) - goal;
+      if (std::abs(miss) <= tol) return mid;
+      (miss < 0 ? lo : hi) = mid;
+    }
+  }
+
+  // s = √(E/N) on the line through the lowest overshoot: the secant through the two lowest, or the
+  // virial slope of the lowest alone. Requires overshoots sorted by φ, not empty.
+  double overshoot_line_slope() const {
+    const Overshoot& a = overshoots[0];
+    if (overshoots.size() >= 2 && overshoots[1].s > a.s) return (overshoots[1].s - a.s) / (overshoots[1].phi - a.phi);
+    return a.slope;
+  }
+
+  // After an unjammed state was accepted: overshoots at or below it are gone, and an overshoot
+  // found from an earlier accepted state whose line puts this unjammed state above the jamming
+  // window does not hold on this path (φ_J depends on the path): dropped too.
+  void prune_overshoots() {
+    std::erase_if(overshoots, [&](const Overshoot& o) { return o.phi <= phi; });
+    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    const double s_top = std::sqrt(2.0 * scene.epsilon_U);
+    while (!overshoots.empty() && overshoots[0].s - overshoot_line_slope() * (overshoots[0].phi - phi) > s_top)
+      overshoots.erase(overshoots.begin());
+  }
+
+  // The φ the next trial of the secant search aims at: where s = √(E/N) reaches the middle of the
+  // jamming window on the line through the lowest overshoot, kept strictly inside the bracket
+  // (φ, lowest overshoot). Two trials in a row that do not halve the bracket make the next one a
+  // bisection, so the search is never slower than halving. nullopt without an overshoot.
+  std::optional<double> search_goal() {
+    if (overshoots.empty()) return std::nullopt;
+    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    const Overshoot& a = overshoots.front();
+    const double width = a.phi - phi;
+    slow_trials = (bracket_width > 0 && width > 0.5 * bracket_width) ? slow_trials + 1 : 0;
+    bracket_width = width;
+    double goal = phi + 0.5 * width;
+    const double slope = overshoot_line_slope();
+    if (slow_trials >= 2) slow_trials = 0;
+    else if (slope > 0) goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope;
+    return std::clamp(goal, phi + width / 32, a.phi - width / 32);
+  }
+
+  // Δt of the next trial: the nominal (or bisected) dt, or with the secant search, the Δt that
+  // reaches the search's goal below jamming or lands the next target exactly above it.
+  double trial_dt() {
+    if (scene.search == JammingSearch::bisection) return dt;
+    if (phase == Phase::unjammed) {
+      const std::optional<double> goal = search_goal();
+      return goal ? dt_for_phi(*goal, dt, 1e-3 * bracket_width) : dt;
+    }
+    if (next_target < scene.targets.size()) {
+      const double goal = result.jamming->phi + scene.targets[next_target];
+      if (phi_after(dt) > goal + scene.target_tolerance) return dt_for_phi(goal, dt, 0.5 * scene.target_tolerance);
+    }
+    return dt;
+  }
+
+  // Remembers a relaxed trial above the jamming window for the secant search. Requires the field
+  // to be current for `trial`.
+  void record_overshoot(const Packing& trial, double E_trial) {
+    const std::vector<Contact> c = find_contacts(trial, field.lobes(), field.neighbours());
+    const double s = std::sqrt(E_trial), phi_trial = trial.packing_fraction();
+    overshoots.push_back({phi_trial, s,
+                          overshoot_slope(phi_trial, s, E_trial * static_cast<double>(trial.size()),
+                                          pressure(c, trial.box), trial.box.L)});
+  }
+
+  bool fail_below_dt_min(double step) {
+    if (step >= scene.dt_min) return false;
+    fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) + " (phase " +
+                                      to_string(phase) + ", phi = " + num(phi) + ")");
+    return true;
+  }
+
+  void reset_search() {
+    overshoots.clear();
+    slow_trials = 0;
+    bracket_width = 0;
+  }
+
   RunStatus advance() {
     if (result.status != RunStatus::running) return result.status;
     if (!started) {
@@ -293,11 +413,14 @@ struct GrowthDriver::Impl {
     }
 
     // Trial step on copies: a rejection leaves the accepted packing and RNG untouched.
+    const double step_dt = trial_dt();
+    if (fail_below_dt_min(step_dt)) return result.status;
     Packing trial = packing;
     Rng trial_rng = rng;
-    const std::vector<Division> divisions = grow_step(trial, rates, dt, scene, trial_rng);
+    const std::vector<Division> divisions = grow_step(trial, rates, step_dt, scene, trial_rng);
     ++attempts;
-    if (!relax(trial, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(dt))) return result.status;
+    if (!relax(trial, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(step_dt)))
+      return result.status;
     const double eps = scene.epsilon_U;
     double E_trial = fresh_energy_per_cell(trial);
     if (scene.check_minimum && phase == Phase::unjammed && E_trial >= eps && E_trial <= 2.0 * eps &&
@@ -326,12 +449,15 @@ struct GrowthDriver::Impl {
         return result.status;
       }
     }
+    if (reject && phase == Phase::unjammed && scene.search == JammingSearch::secant) {
+      ++result.rejected;
+      record_overshoot(trial, E_trial);
+      return result.status;
+    }
     if (reject) {
       ++result.rejected;
       dt *= 0.5;
-      if (dt < scene.dt_min)
-        fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) +
-                                          " (phase " + to_string(phase) + ", phi = " + num(phi) + ")");
+      fail_below_dt_min(dt);
       return result.status;
     }
 
@@ -341,20 +467,23 @@ struct GrowthDriver::Impl {
     E = E_trial;
     ++step;
     ++result.accepted;
-    last_dt = dt;
+    last_dt = step_dt;
     result.divisions += static_cast<long>(divisions.size());
 
     bool jammed_now = false, unjammed_now = false;
     if (phase == Phase::unjammed && E >= eps) {
       phase = Phase::jammed;
       jammed_now = true;
+      reset_search();
     } else if (phase == Phase::jammed && E < eps) {
       phase = Phase::unjammed;
       unjammed_now = true;
+      reset_search();
     } else if (phase == Phase::jammed) {
       divisions_since_jamming += static_cast<long>(divisions.size());
     }
     derive();
+    if (phase == Phase::unjammed) prune_overshoots();
     dt = start_dt();
 
     // Records first, so that every event of this state sees the same, final view.
@@ -454,13 +583,16 @@ struct GrowthDriver::Impl {
   // ---- checkpoints ---------------------------------------------------------------------------
   std::string save() {
     std::ostringstream os;
-    os << "budjam-checkpoint 2\n";
+    os << "budjam-checkpoint 3\n";
     os << "seed " << seed << '\n';
     os << "rng " << rng << '\n';
     os << "state " << to_string(phase) << ' ' << num(dt) << ' ' << num(last_dt) << ' ' << step << ' ' << attempts
        << ' ' << next_target << ' ' << divisions_since_jamming << ' ' << episodes << '\n';
     os << "counters " << result.accepted << ' ' << result.rejected << ' ' << result.force_evaluations << ' '
        << result.fire_iterations << ' ' << result.divisions << ' ' << result.saddles_relaxed << '\n';
+    os << "search " << slow_trials << ' ' << num(bracket_width) << ' ' << overshoots.size();
+    for (const Overshoot& o : overshoots) os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
+    os << '\n';
     os << "jamming " << (result.jamming ? 1 : 0);
     if (const auto& j = result.jamming)
       os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
@@ -507,7 +639,10 @@ struct GrowthDriver::Impl {
     if (version == 1)
       throw InputError("checkpoint: version 1 was written before jamming candidates were checked for saddles "
                        "(jamming.check_minimum); start the run again");
-    if (version != 2) throw InputError("checkpoint: unknown version");
+    if (version == 2)
+      throw InputError("checkpoint: version 2 was written before the secant jamming search (jamming.search); "
+                       "start the run again");
+    if (version != 3) throw InputError("checkpoint: unknown version");
     r.expect("seed");
     const std::string s = r.word();
     if (std::to_string(seed) != s)
@@ -534,6 +669,15 @@ struct GrowthDriver::Impl {
     result.fire_iterations = r.integer();
     result.divisions = r.integer();
     result.saddles_relaxed = r.integer();
+    r.expect("search");
+    slow_trials = static_cast<int>(r.integer());
+    bracket_width = r.real();
+    overshoots.clear();
+    for (std::size_t k = 0, n = r.size(); k < n; ++k) {
+      Overshoot o;
+      o.phi = r.real(), o.s = r.real(), o.slope = r.real();
+      overshoots.push_back(o);
+    }
     r.expect("jamming");
     if (r.integer()) {
       JammingRecord j;

@@ -163,6 +163,8 @@ void validate(const Scene& s) {
   if (!(f.energy_floor < s.epsilon_U))
     fail("minimiser.energy_floor", "must be below jamming.epsilon_U = " + show(s.epsilon_U), f.energy_floor);
   if (f.max_iterations <= 0) fail("minimiser.max_iterations", "must be positive", f.max_iterations);
+  finite("minimiser.newton_force", f.newton_force);
+  if (f.newton_force < 0) fail("minimiser.newton_force", "must be zero (off) or positive", f.newton_force);
 
   // [observe]
   validate_schedule("observe.moduli", s.moduli);

@@ -117,6 +117,8 @@ const std::vector<std::pair<std::string, DivisionRule>> kDivision = {
     {"random", DivisionRule::random}, {"aligned", DivisionRule::aligned}, {"opposite", DivisionRule::opposite}};
 const std::vector<std::pair<std::string, InitialState>> kInit = {{"two_cells", InitialState::two_cells},
                                                                  {"random_seeds", InitialState::random_seeds}};
+const std::vector<std::pair<std::string, JammingSearch>> kSearch = {{"bisection", JammingSearch::bisection},
+                                                                   {"secant", JammingSearch::secant}};
 
 template <class E>
 std::string choice_name(E value, const std::vector<std::pair<std::string, E>>& choices) {
@@ -247,6 +249,13 @@ std::vector<Entry> make_entries() {
                    BUDJAM_FIELD(fire.energy_floor)));
   e.push_back(integer("minimiser", "max_iterations", "FIRE iterations before a minimisation fails",
                       BUDJAM_FIELD(fire.max_iterations)));
+  // Speed knobs (docs/minimiser.md "Newton finish", docs/growth.md "Jamming search").
+  e.push_back({{"jamming", "search", "step choice near φ_J and the targets: \"secant\" or \"bisection\" (MODEL.md's)"},
+               [](Scene& s, const toml::node& n, const std::string& key) { s.search = read_choice(n, key, kSearch); },
+               [](const Scene& s) -> SceneValue { return choice_name(s.search, kSearch); }});
+  e.push_back(real("minimiser", "newton_force",
+                   "below this largest force, Newton steps with the analytic Hessian finish the minimisation; 0 = FIRE alone",
+                   BUDJAM_FIELD(fire.newton_force)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", BUDJAM_FIELD(skin)));
 
   e.push_back(boolean("observe", "bud_events", "track unconstrained buds from jamming on (bud_events.csv)",
