@@ -91,8 +91,8 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
   };
   // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
   auto stopped = [&](double U, double fmax) {
-    if (fmax < tol) res.stop = MinimiserStop::force;
-    else if (U < floor_total) res.stop = MinimiserStop::energy_floor;
+    if (U < floor_total) res.stop = MinimiserStop::energy_floor;  // the more telling reason when both hold
+    else if (fmax < tol) res.stop = MinimiserStop::force;
     else return false;
     res.converged = true;
     return true;

@@ -234,6 +234,10 @@ std::vector<Entry> make_entries() {
   e.push_back(boolean("jamming", "check_minimum",
                       "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                       BUDJAM_FIELD(check_minimum)));
+  // Speed knob (docs/growth.md, "Jamming search").
+  e.push_back({{"jamming", "search", "step choice near φ_J and the targets: \"secant\" or \"bisection\" (MODEL.md's)"},
+               [](Scene& s, const toml::node& n, const std::string& key) { s.search = read_choice(n, key, kSearch); },
+               [](const Scene& s) -> SceneValue { return choice_name(s.search, kSearch); }});
 
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", BUDJAM_FIELD(fire.dt_start)));
   e.push_back(real("minimiser", "dt_max", "FIRE largest time step", BUDJAM_FIELD(fire.dt_max)));
@@ -249,10 +253,7 @@ std::vector<Entry> make_entries() {
                    BUDJAM_FIELD(fire.energy_floor)));
   e.push_back(integer("minimiser", "max_iterations", "FIRE iterations before a minimisation fails",
                       BUDJAM_FIELD(fire.max_iterations)));
-  // Speed knobs (docs/minimiser.md "Newton finish", docs/growth.md "Jamming search").
-  e.push_back({{"jamming", "search", "step choice near φ_J and the targets: \"secant\" or \"bisection\" (MODEL.md's)"},
-               [](Scene& s, const toml::node& n, const std::string& key) { s.search = read_choice(n, key, kSearch); },
-               [](const Scene& s) -> SceneValue { return choice_name(s.search, kSearch); }});
+  // Speed knob (docs/minimiser.md, "Newton finish").
   e.push_back(real("minimiser", "newton_force",
                    "below this largest force, Newton steps with the analytic Hessian finish the minimisation; 0 = FIRE alone",
                    BUDJAM_FIELD(fire.newton_force)));
