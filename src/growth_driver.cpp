@@ -275,6 +275,21 @@ struct GrowthDriver::Impl {
     }
   }
 
+  // The contact-network summary shared by the jamming and target records.
+  template <class Record>
+  void copy_network_summary(Record& r) const {
+    r.N_nr = net.N_nr;
+    r.N_f = net.N_f;
+    r.N_u = net.N_u;
+    r.N_u_buds = net.N_u_buds;
+    r.N_c = net.N_c;
+    r.Z = net.Z;
+    r.Z_iso = net.Z_iso;
+    r.dZ = net.dZ;
+    r.u = net.u;
+    r.u_buds = net.u_buds;
+  }
+
   TargetRecord target_record(std::size_t k) const {
     TargetRecord t;
     t.index = k;
@@ -285,17 +300,8 @@ struct GrowthDriver::Impl {
     t.P = P;
     t.E_per_cell = E;
     t.N = packing.size();
-    t.N_nr = net.N_nr;
-    t.N_f = net.N_f;
+    copy_network_summary(t);
     t.N_f_single = net.N_f_single_pass;
-    t.N_c = net.N_c;
-    t.N_u = net.N_u;
-    t.N_u_buds = net.N_u_buds;
-    t.Z = net.Z;
-    t.u = net.u;
-    t.u_buds = net.u_buds;
-    t.Z_iso = net.Z_iso;
-    t.dZ = net.dZ;
     t.chi_c = chi_c;
     t.divisions_since_jamming = divisions_since_jamming;
     return t;
@@ -400,6 +406,156 @@ struct GrowthDriver::Impl {
     bracket_width = 0;
   }
 
+  // ---- one growth attempt -------------------------------------------------------------------
+  // A relaxed trial step, made on copies: a rejection leaves the accepted packing and RNG untouched.
+  struct Trial {
+    Packing packing;
+    Rng rng;
+    std::vector<Division> divisions;
+    double dt = 0, E = 0;
+  };
+
+  // Grows and relaxes a trial from the accepted state; a jamming candidate that is a saddle is
+  // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
+  std::optional<Trial> make_trial() {
+    Trial t{packing, rng, {}, trial_dt(), 0};
+    if (fail_below_dt_min(t.dt)) return std::nullopt;
+    t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
+    ++attempts;
+    if (!relax(t.packing, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(t.dt)))
+      return std::nullopt;
+    const double eps = scene.epsilon_U;
+    t.E = fresh_energy_per_cell(t.packing);
+    if (scene.check_minimum && phase == Phase::unjammed && t.E >= eps && t.E <= 2.0 * eps && !is_minimum(t.packing)) {
+      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
+      FireParams deep = scene.fire;
+      deep.force_tol = 0;
+      ++result.saddles_relaxed;
+      if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return std::nullopt;
+      t.E = fresh_energy_per_cell(t.packing);
+    }
+    return t;
+  }
+
+  enum class Verdict { accept, reject, stop };
+
+  // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
+  Verdict judge(const Trial& t) const {
+    const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
+    if (phase == Phase::unjammed) return t.E > 2.0 * eps ? Verdict::reject : Verdict::accept;  // overshot jamming
+    if (t.E < eps) return Verdict::accept;  // unjamming
+    if (next_target < scene.targets.size())
+      return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance ? Verdict::reject
+                                                                                                  : Verdict::accept;
+    // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
+    if (scene.continue_to_phi2 && !result.depletion && phi_trial > result.jamming->phi + scene.max_dphi)
+      return Verdict::stop;
+    return Verdict::accept;
+  }
+
+  void reject(const Trial& t) {
+    ++result.rejected;
+    if (phase == Phase::unjammed && scene.search == JammingSearch::secant) {
+      record_overshoot(t.packing, t.E);
+      return;
+    }
+    dt *= 0.5;
+    fail_below_dt_min(dt);
+  }
+
+  // Makes the trial the accepted state and moves the phase; returns the phase change.
+  enum class Change { none, jammed, unjammed };
+  Change accept(Trial&& t) {
+    packing = std::move(t.packing);
+    rng = t.rng;
+    E = t.E;
+    ++step;
+    ++result.accepted;
+    last_dt = t.dt;
+    result.divisions += static_cast<long>(t.divisions.size());
+    Change change = Change::none;
+    if (phase == Phase::unjammed && E >= scene.epsilon_U) {
+      phase = Phase::jammed;
+      change = Change::jammed;
+      reset_search();
+    } else if (phase == Phase::jammed && E < scene.epsilon_U) {
+      phase = Phase::unjammed;
+      change = Change::unjammed;
+      reset_search();
+    } else if (phase == Phase::jammed) {
+      divisions_since_jamming += static_cast<long>(t.divisions.size());
+    }
+    derive();
+    if (phase == Phase::unjammed) prune_overshoots();
+    dt = start_dt();
+    return change;
+  }
+
+  // The jamming episode ends: φ_J, the targets and φ_2 belong to the next one.
+  std::vector<BudEvent> record_unjamming() {
+    UnjamRecord r;
+    r.episode = result.jamming->episode;
+    r.step = step;
+    r.phi = phi;
+    r.phi_J = result.jamming->phi;
+    r.targets_lost = result.targets.size();
+    result.unjammings.push_back(r);
+    std::vector<BudEvent> events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
+    start_episode(std::nullopt);
+    return events;
+  }
+
+  std::vector<BudEvent> record_jamming() {
+    JammingRecord j;
+    j.episode = episodes++;
+    j.step = step;
+    j.phi = phi;
+    j.P = P;
+    j.E_per_cell = E;
+    j.N = packing.size();
+    copy_network_summary(j);
+    j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
+    std::vector<BudEvent> events = buds.tag(j.episode, step, phi, packing, net);
+    j.tagged = events.size();
+    start_episode(j);
+    return events;
+  }
+
+  void start_episode(std::optional<JammingRecord> jamming) {
+    result.jamming = std::move(jamming);
+    result.targets.clear();
+    result.depletion.reset();
+    next_target = 0;
+    divisions_since_jamming = 0;
+  }
+
+  // Every target landed by the accepted state (in order), then φ_2 if it is the first state with at
+  // most one tagged bud unconstrained.
+  void land_targets_and_depletion(const StateView& v) {
+    while (next_target < scene.targets.size() &&
+           std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
+      result.targets.push_back(target_record(next_target));
+      ++next_target;
+      for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
+    }
+    if (result.depletion || buds.active() > 1) return;
+    DepletionRecord d;
+    d.step = step;
+    d.phi = phi;
+    d.P = P;
+    d.N = packing.size();
+    d.N_nr = net.N_nr;
+    d.Z = net.Z;
+    d.u = net.u;
+    d.u_buds = net.u_buds;
+    d.Z_iso = net.Z_iso;
+    d.dZ = net.dZ;
+    d.still_unconstrained = buds.active();
+    d.divisions_since_jamming = divisions_since_jamming;
+    result.depletion = d;
+    for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
+  }
+
   RunStatus advance() {
     if (result.status != RunStatus::running) return result.status;
     if (!started) {
@@ -411,164 +567,40 @@ struct GrowthDriver::Impl {
                                       " growth steps without reaching the end of the run");
       return result.status;
     }
-
-    // Trial step on copies: a rejection leaves the accepted packing and RNG untouched.
-    const double step_dt = trial_dt();
-    if (fail_below_dt_min(step_dt)) return result.status;
-    Packing trial = packing;
-    Rng trial_rng = rng;
-    const std::vector<Division> divisions = grow_step(trial, rates, step_dt, scene, trial_rng);
-    ++attempts;
-    if (!relax(trial, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(step_dt)))
-      return result.status;
-    const double eps = scene.epsilon_U;
-    double E_trial = fresh_energy_per_cell(trial);
-    if (scene.check_minimum && phase == Phase::unjammed && E_trial >= eps && E_trial <= 2.0 * eps &&
-        !is_minimum(trial)) {
-      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
-      FireParams deep = scene.fire;
-      deep.force_tol = 0;
-      ++result.saddles_relaxed;
-      if (!relax(trial, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return result.status;
-      E_trial = fresh_energy_per_cell(trial);
-    }
-    const double phi_trial = trial.packing_fraction();
-
-    bool reject = false;
-    if (phase == Phase::unjammed) {
-      reject = E_trial > 2.0 * eps;  // overshot jamming: bisect
-    } else if (E_trial >= eps) {
-      if (next_target < scene.targets.size()) {
-        reject = phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance;
-      } else if (scene.continue_to_phi2 && !result.depletion &&
-                 phi_trial > result.jamming->phi + scene.max_dphi) {
-        // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
+    std::optional<Trial> trial = make_trial();
+    if (!trial) return result.status;
+    switch (judge(*trial)) {
+      case Verdict::reject:
+        reject(*trial);
+        return result.status;
+      case Verdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;
         finish_events();
         return result.status;
-      }
+      case Verdict::accept:
+        break;
     }
-    if (reject && phase == Phase::unjammed && scene.search == JammingSearch::secant) {
-      ++result.rejected;
-      record_overshoot(trial, E_trial);
-      return result.status;
-    }
-    if (reject) {
-      ++result.rejected;
-      dt *= 0.5;
-      fail_below_dt_min(dt);
-      return result.status;
-    }
-
-    // Accept.
-    packing = std::move(trial);
-    rng = trial_rng;
-    E = E_trial;
-    ++step;
-    ++result.accepted;
-    last_dt = step_dt;
-    result.divisions += static_cast<long>(divisions.size());
-
-    bool jammed_now = false, unjammed_now = false;
-    if (phase == Phase::unjammed && E >= eps) {
-      phase = Phase::jammed;
-      jammed_now = true;
-      reset_search();
-    } else if (phase == Phase::jammed && E < eps) {
-      phase = Phase::unjammed;
-      unjammed_now = true;
-      reset_search();
-    } else if (phase == Phase::jammed) {
-      divisions_since_jamming += static_cast<long>(divisions.size());
-    }
-    derive();
-    if (phase == Phase::unjammed) prune_overshoots();
-    dt = start_dt();
+    const std::vector<Division> divisions = trial->divisions;
+    const Change change = accept(std::move(*trial));
 
     // Records first, so that every event of this state sees the same, final view.
     std::vector<BudEvent> bud_events;
-    if (phase == Phase::jammed && !jammed_now)
+    if (phase == Phase::jammed && change == Change::none)
       bud_events = buds.update(step, phi, packing, contacts, net, divisions);
-    if (unjammed_now) {
-      UnjamRecord r;
-      r.episode = result.jamming->episode;
-      r.step = step;
-      r.phi = phi;
-      r.phi_J = result.jamming->phi;
-      r.targets_lost = result.targets.size();
-      result.unjammings.push_back(r);
-      bud_events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
-      // The search for jamming restarts: φ_J, the targets and φ_2 belong to the next episode.
-      result.jamming.reset();
-      result.targets.clear();
-      result.depletion.reset();
-      next_target = 0;
-      divisions_since_jamming = 0;
-    }
-    if (jammed_now) {
-      JammingRecord j;
-      j.episode = episodes++;
-      j.step = step;
-      j.phi = phi;
-      j.P = P;
-      j.E_per_cell = E;
-      j.N = packing.size();
-      j.N_nr = net.N_nr;
-      j.N_f = net.N_f;
-      j.N_u = net.N_u;
-      j.N_u_buds = net.N_u_buds;
-      j.N_c = net.N_c;
-      j.Z = net.Z;
-      j.Z_iso = net.Z_iso;
-      j.dZ = net.dZ;
-      j.u = net.u;
-      j.u_buds = net.u_buds;
-      j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
-      bud_events = buds.tag(j.episode, step, phi, packing, net);
-      j.tagged = bud_events.size();
-      result.jamming = j;
-      result.targets.clear();
-      result.depletion.reset();
-      next_target = 0;
-      divisions_since_jamming = 0;
-    }
+    if (change == Change::unjammed) bud_events = record_unjamming();
+    if (change == Change::jammed) bud_events = record_jamming();
 
     const StateView v = view();
     for (const Division& d : divisions)
       for (Observer* o : observers) o->on_divided(Divided{v, d});
     emit_bud_events(v, bud_events);
     for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
-    if (unjammed_now)
+    if (change == Change::unjammed)
       for (Observer* o : observers) o->on_unjammed(Unjammed{v, result.unjammings.back()});
-    if (jammed_now)
+    if (change == Change::jammed)
       for (Observer* o : observers) o->on_jammed(Jammed{v, *result.jamming});
-
-    if (phase == Phase::jammed && !jammed_now) {
-      while (next_target < scene.targets.size() &&
-             std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
-        result.targets.push_back(target_record(next_target));
-        ++next_target;
-        for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
-      }
-      if (!result.depletion && buds.active() <= 1) {
-        DepletionRecord d;
-        d.step = step;
-        d.phi = phi;
-        d.P = P;
-        d.N = packing.size();
-        d.N_nr = net.N_nr;
-        d.Z = net.Z;
-        d.u = net.u;
-        d.u_buds = net.u_buds;
-        d.Z_iso = net.Z_iso;
-        d.dZ = net.dZ;
-        d.still_unconstrained = buds.active();
-        d.divisions_since_jamming = divisions_since_jamming;
-        result.depletion = d;
-        for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
-      }
-    }
+    if (phase == Phase::jammed && change == Change::none) land_targets_and_depletion(v);
 
     if (phase == Phase::jammed && next_target == scene.targets.size() &&
         (!scene.continue_to_phi2 || result.depletion)) {
