@@ -422,7 +422,7 @@ struct GrowthDriver::Impl {
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
-    if (!relax(t.packing, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(t.dt)))
+    if (!relax(t.packing, trial_minimiser(), "growth step " + std::to_string(attempts) + ", dt = " + num(t.dt)))
       return std::nullopt;
     const double eps = scene.epsilon_U;
     t.E = fresh_energy_per_cell(t.packing);
@@ -435,6 +435,14 @@ struct GrowthDriver::Impl {
       t.E = fresh_energy_per_cell(t.packing);
     }
     return t;
+  }
+
+  // The Newton finish only above jamming: below it the trials are unjammed or marginal, their
+  // Hessian is indefinite and Newton would cost a factorisation for nothing (docs/minimiser.md).
+  FireParams trial_minimiser() const {
+    FireParams params = scene.fire;
+    if (phase == Phase::unjammed) params.newton_force = 0;
+    return params;
   }
 
   enum class Verdict { accept, reject, stop };

@@ -1,6 +1,8 @@
 #pragma once
 // The quasistatic growth loop of MODEL.md ("Growth", "Jamming and compression targets"):
-//   growth step Δt → FIRE → classify E/N → accept / reject (halve Δt) → emit events.
+//   growth step Δt → FIRE → classify E/N → accept / reject → emit events. After a rejection the
+//   next Δt is half the last (jamming.search = bisection) or aimed by the secant search; the
+//   secant search also solves for the Δt that lands a target before relaxing (docs/growth.md).
 // Everything optional (logs, packings, moduli, spectra, rigidity) is an Observer that receives a
 // read-only view of each accepted state. The driver computes contacts, the contact network and the
 // bud pressures only when the protocol (feedback, depletion) or an observer needs them.
@@ -38,7 +40,7 @@ enum class RunStatus {
   running,
   finished,          // every target landed (and φ_2 found or φ_J + max_dphi reached if asked)
   step_limit,        // more than scene.max_steps growth steps (accepted + rejected)
-  dt_underflow,      // Δt halved below scene.dt_min
+  dt_underflow,      // a trial Δt below scene.dt_min (halved or solved for)
   minimiser_failed,  // FIRE hit its iteration limit
 };
 const char* to_string(RunStatus status);
