@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -332,6 +333,29 @@ TEST_CASE("a run restored from a checkpoint ends identical to the uninterrupted 
   GrowthDriver wrong(s, other);
   CHECK_THROWS_AS(wrong.restore(checkpoints.front()), InputError);
   CHECK_THROWS_AS(wrong.restore(checkpoints.front().substr(0, checkpoints.front().size() / 2)), InputError);
+}
+
+TEST_CASE("a run restored in the middle of the secant search (overshoots remembered) ends identical", "[driver]") {
+  const Reference& r = reference();
+  std::vector<std::string> checkpoints;
+  GrowthDriver first(r.scene);
+  first.set_checkpoint_writer(1, [&](const std::string& c) { checkpoints.push_back(c); });
+  first.run();
+  // The search line is "search <slow trials> <bracket width> <count> (<phi> <s> <slope>)*".
+  auto overshoots = [](const std::string& c) {
+    std::istringstream is(c.substr(c.find("\nsearch ") + 8));
+    std::string slow, width;
+    std::size_t n = 0;
+    is >> slow >> width >> n;
+    return n;
+  };
+  const auto mid = std::find_if(checkpoints.begin(), checkpoints.end(), [&](const std::string& c) { return overshoots(c) > 0; });
+  REQUIRE(mid != checkpoints.end());
+  GrowthDriver resumed(r.scene);
+  resumed.restore(*mid);
+  resumed.run();
+  CHECK(same_result(resumed.result(), r.result));
+  CHECK(same_packing(resumed.packing(), r.final_packing));
 }
 
 TEST_CASE("feedback acts only above jamming: P0 does not change the jammed state", "[driver]") {
