@@ -1,6 +1,7 @@
 // Speed of growth runs (docs/growth.md, "Speed"). Not a test: prints a table.
 //
-//   bench_grow [SCENE_DIR]        whole runs (demo scene; L = 15, P0 = 1e-3, Δφ = 1e-2) and the
+//   bench_grow [SCENE_DIR]        whole runs with each jamming search (demo scene; L = 15,
+//                                 P0 = 1e-3, Δφ = 1e-4, 1e-3, 1e-2 and φ_2) and the
 //                                 cost of one growth step above jamming against N (L = 8, 15, 20, 40)
 //   bench_grow --runs-only / --steps-only
 //
@@ -105,13 +106,18 @@ int main(int argc, char** argv) {
     else dir = argv[i];
   }
   if (runs) {
-    std::printf("== whole runs (two-cell start, protocol of MODEL.md) ==\n");
-    whole_run("demo.toml", io::load_scene(std::filesystem::path(dir) / "demo.toml"));
-    Scene l15 = io::load_scene(std::filesystem::path(dir) / "paper-L15.toml");
-    l15.targets = {1e-2};
-    l15.continue_to_phi2 = false;
-    l15.checkpoint_every = 0;
-    whole_run("paper-L15.toml, dphi=1e-2", l15);
+    std::printf("== whole runs (two-cell start), each jamming search ==\n");
+    for (JammingSearch search : {JammingSearch::bisection, JammingSearch::secant}) {
+      const std::string tag = search == JammingSearch::bisection ? " bisection" : " secant";
+      Scene demo = io::load_scene(std::filesystem::path(dir) / "demo.toml");
+      demo.search = search;
+      whole_run(("demo.toml" + tag).c_str(), demo);
+      Scene l15 = io::load_scene(std::filesystem::path(dir) / "paper-L15.toml");
+      l15.targets = {1e-4, 1e-3, 1e-2};  // and on to φ_2
+      l15.checkpoint_every = 0;
+      l15.search = search;
+      whole_run(("paper-L15 to phi_2" + tag).c_str(), l15);
+    }
   }
   if (steps) {
     std::printf("== one growth step above jamming (P ~ 2e-3, P0 = 1e-3) against N ==\n");

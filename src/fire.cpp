@@ -2,6 +2,8 @@
 // semi-implicit Euler integrator) over the scaled coordinates (x, y, θ̃ = r_g θ).
 #include "budjam/fire.hpp"
 
+#include "budjam/newton.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -30,6 +32,15 @@ void wrap_far_centroids(Packing& p) {
 
 }  // namespace
 
+const char* to_string(MinimiserStop stop) {
+  switch (stop) {
+    case MinimiserStop::force: return "force";
+    case MinimiserStop::energy_floor: return "energy_floor";
+    case MinimiserStop::iteration_cap: return "iteration_cap";
+  }
+  return "?";
+}
+
 double force_resolution(const Packing& p) {
   double extent = p.box.L;
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -41,6 +52,7 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
   FireResult res;
   const std::size_t n = p.size();
   if (n == 0) {
+    res.stop = MinimiserStop::energy_floor;
     res.converged = true;
     return res;
   }
@@ -77,25 +89,47 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
       q[3 * i + 2] += h * vel[3 * i + 2] * inv_rg[i];
     }
   };
-  auto done = [&](double U, double fmax) {
-    // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
-    return fmax < tol || U < floor_total;
+  // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
+  auto stopped = [&](double U, double fmax) {
+    if (U < floor_total) res.stop = MinimiserStop::energy_floor;  // the more telling reason when both hold
+    else if (fmax < tol) res.stop = MinimiserStop::force;
+    else return false;
+    res.converged = true;
+    return true;
   };
 
   double U = field.evaluate(p, F);
   ++res.evaluations;
   double fmax = scale_forces();
-  if (done(U, fmax)) {
-    res.converged = true;
-    res.energy = U;
-    res.max_force = fmax;
-    return res;
-  }
 
   double dt = prm.dt_start;
   double alpha = prm.alpha_start;
   long n_positive = 0;
-  for (long it = 1; it <= prm.max_iterations; ++it) {
+  double newton_below = prm.newton_force;  // Newton is tried when fmax falls below this
+  const NewtonParams newton{tol, floor_total};
+  for (long it = 1; !stopped(U, fmax); ++it) {
+    if (fmax < newton_below) {
+      const NewtonResult nr = newton_finish(p, field, newton);
+      res.newton_iterations += nr.iterations;
+      res.evaluations += nr.evaluations;
+      U = nr.energy;
+      if (nr.stop == NewtonStop::converged) {
+        fmax = nr.max_force;
+        continue;  // stopped() now holds
+      }
+      // Back to FIRE from rest at the best Newton iterate (the field is current for it). An
+      // indefinite Hessian means FIRE is not near a minimum (typically an unjammed packing whose
+      // last overlaps are being pushed apart): Newton is not tried again in this minimisation.
+      newton_below = nr.stop == NewtonStop::indefinite ? 0.0 : 0.1 * nr.max_force;
+      U = field.evaluate(p, F);
+      ++res.evaluations;
+      fmax = scale_forces();
+      v.setZero();
+      dt = prm.dt_start;
+      alpha = prm.alpha_start;
+      n_positive = 0;
+    }
+    if (it > prm.max_iterations) break;
     res.iterations = it;
     const double power = F.dot(v);
     if (power > 0.0) {
@@ -124,10 +158,6 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
     U = field.evaluate(p, F);
     ++res.evaluations;
     fmax = scale_forces();
-    if (done(U, fmax)) {
-      res.converged = true;
-      break;
-    }
   }
   res.energy = U;
   res.max_force = fmax;

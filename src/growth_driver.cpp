@@ -41,6 +41,20 @@ std::string num(double v) {
   return buf;
 }
 
+using Overshoot = JammingOvershoot;
+
+// √(E/N) in the middle of the jamming window [ε_U, 2ε_U].
+double window_centre(double eps) { return 0.5 * (1.0 + std::sqrt(2.0)) * std::sqrt(eps); }
+
+// Slope ds/dφ of s = √(E/N) at an overjammed minimum, from its energy and pressure alone. Near φ_J,
+// U ≈ C (φ − φ_J)², so φ − φ_J = 2U / (dU/dφ); growing every length by λ at fixed centroids is
+// dU/dλ = 2U + Σ f r = 2U + 2L²P and dφ/dλ = 2φ, so dU/dφ ≈ (U + L²P)/φ. Buds grow alone and at
+// different rates, so this is an estimate; the second overshoot replaces it by a secant.
+double overshoot_slope(double phi, double s, double U, double P, double L) {
+  const double dphi = 2.0 * U * phi / (U + L * L * P);
+  return dphi > 0 ? s / dphi : 0.0;
+}
+
 }  // namespace
 
 struct GrowthDriver::Impl {
@@ -62,6 +76,10 @@ struct GrowthDriver::Impl {
   long divisions_since_jamming = 0;
   int episodes = 0;  // jamming episodes begun
   BudTracker buds;
+  // Secant search: the relaxed trials of this unjammed phase that overshot the jamming window.
+  std::vector<Overshoot> overshoots;
+  int slow_trials = 0;        // consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;   // φ from the accepted state to the lowest overshoot at the last trial
 
   // Derived from the accepted state (recomputed identically after a restore).
   double E = 0, P = 0, phi = 0;
@@ -223,6 +241,21 @@ struct GrowthDriver::Impl {
     }
   }
 
+  // The contact-network summary shared by the jamming and target records.
+  template <class Record>
+  void copy_network_summary(Record& r) const {
+    r.N_nr = net.N_nr;
+    r.N_f = net.N_f;
+    r.N_u = net.N_u;
+    r.N_u_buds = net.N_u_buds;
+    r.N_c = net.N_c;
+    r.Z = net.Z;
+    r.Z_iso = net.Z_iso;
+    r.dZ = net.dZ;
+    r.u = net.u;
+    r.u_buds = net.u_buds;
+  }
+
   TargetRecord target_record(std::size_t k) const {
     TargetRecord t;
     t.index = k;
@@ -233,20 +266,268 @@ struct GrowthDriver::Impl {
     t.P = P;
     t.E_per_cell = E;
     t.N = packing.size();
-    t.N_nr = net.N_nr;
-    t.N_f = net.N_f;
+    copy_network_summary(t);
     t.N_f_single = net.N_f_single_pass;
-    t.N_c = net.N_c;
-    t.N_u = net.N_u;
-    t.N_u_buds = net.N_u_buds;
-    t.Z = net.Z;
-    t.u = net.u;
-    t.u_buds = net.u_buds;
-    t.Z_iso = net.Z_iso;
-    t.dZ = net.dZ;
     t.chi_c = chi_c;
     t.divisions_since_jamming = divisions_since_jamming;
     return t;
+  }
+
+  // ---- choosing the growth step --------------------------------------------------------------
+  // φ after a growth step Δt from the accepted state, divisions (and their draws) included. Known
+  // before relaxing: relaxation moves cells but does not change their areas.
+  double phi_after(double step) const {
+    Packing p = packing;
+    Rng r = rng;
+    grow_step(p, rates, step, scene, r);
+    return p.packing_fraction();
+  }
+
+  // A Δt in (0, dt_max] with |φ(Δt) − goal| ≤ tol, by bisection from φ(0) < goal < φ(dt_max). φ
+  // rises continuously with Δt except at divisions, where it drops, so the bracket always closes
+  // on a continuous crossing. Returns the lower end if the bracket shrinks to nothing first.
+  double dt_for_phi(double goal, double dt_max, double tol) const {
+    double lo = 0, hi = dt_max;
+    while (true) {
+      const double mid = 0.5 * (lo + hi);
+      if (!(mid > lo && mid < hi)) return lo;
+      const double miss = phi_after(mid) - goal;
+      if (std::abs(miss) <= tol) return mid;
+      (miss < 0 ? lo : hi) = mid;
+    }
+  }
+
+  // s = √(E/N) on the line through the lowest overshoot: the secant through the two lowest, or the
+  // virial slope of the lowest alone. Requires overshoots sorted by φ, not empty.
+  double overshoot_line_slope() const {
+    const Overshoot& a = overshoots[0];
+    if (overshoots.size() >= 2 && overshoots[1].s > a.s) return (overshoots[1].s - a.s) / (overshoots[1].phi - a.phi);
+    return a.slope;
+  }
+
+  // After an unjammed state was accepted: overshoots at or below it are gone, and an overshoot
+  // found from an earlier accepted state whose line puts this unjammed state above the jamming
+  // window does not hold on this path (φ_J depends on the path): dropped too.
+  void prune_overshoots() {
+    std::erase_if(overshoots, [&](const Overshoot& o) { return o.phi <= phi; });
+    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    const double s_top = std::sqrt(2.0 * scene.epsilon_U);
+    while (!overshoots.empty() && overshoots[0].s - overshoot_line_slope() * (overshoots[0].phi - phi) > s_top)
+      overshoots.erase(overshoots.begin());
+  }
+
+  // The φ the next trial of the secant search aims at: where s = √(E/N) reaches the middle of the
+  // jamming window on the line through the lowest overshoot, kept strictly inside the bracket
+  // (φ, lowest overshoot). Two trials in a row that do not halve the bracket make the next one a
+  // bisection, so the search is never slower than halving. nullopt without an overshoot.
+  std::optional<double> search_goal() {
+    if (overshoots.empty()) return std::nullopt;
+    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    const Overshoot& a = overshoots.front();
+    const double width = a.phi - phi;
+    slow_trials = (bracket_width > 0 && width > 0.5 * bracket_width) ? slow_trials + 1 : 0;
+    bracket_width = width;
+    double goal = phi + 0.5 * width;
+    const double slope = overshoot_line_slope();
+    if (slow_trials >= 2) slow_trials = 0;
+    else if (slope > 0) goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope;
+    return std::clamp(goal, phi + width / 32, a.phi - width / 32);
+  }
+
+  // Δt of the next trial: the nominal (or bisected) dt, or with the secant search, the Δt that
+  // reaches the search's goal below jamming or lands the next target exactly above it.
+  double trial_dt() {
+    if (scene.search == JammingSearch::bisection) return dt;
+    if (phase == Phase::unjammed) {
+      const std::optional<double> goal = search_goal();
+      return goal ? dt_for_phi(*goal, dt, 1e-3 * bracket_width) : dt;
+    }
+    if (next_target < scene.targets.size()) {
+      const double goal = result.jamming->phi + scene.targets[next_target];
+      if (phi_after(dt) > goal + scene.target_tolerance) return dt_for_phi(goal, dt, 0.5 * scene.target_tolerance);
+    }
+    return dt;
+  }
+
+  // Remembers a relaxed trial above the jamming window for the secant search. Requires the field
+  // to be current for `trial`.
+  void record_overshoot(const Packing& trial, double E_trial) {
+    const std::vector<Contact> c = find_contacts(trial, field.lobes(), field.neighbours());
+    const double s = std::sqrt(E_trial), phi_trial = trial.packing_fraction();
+    overshoots.push_back({phi_trial, s,
+                          overshoot_slope(phi_trial, s, E_trial * static_cast<double>(trial.size()),
+                                          pressure(c, trial.box), trial.box.L)});
+  }
+
+  bool fail_below_dt_min(double step) {
+    if (step >= scene.dt_min) return false;
+    fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) + " (phase " +
+                                      to_string(phase) + ", phi = " + num(phi) + ")");
+    return true;
+  }
+
+  void reset_search() {
+    overshoots.clear();
+    slow_trials = 0;
+    bracket_width = 0;
+  }
+
+  // ---- one growth attempt -------------------------------------------------------------------
+  // A relaxed trial step, made on copies: a rejection leaves the accepted packing and RNG untouched.
+  struct Trial {
+    Packing packing;
+    Rng rng;
+    std::vector<Division> divisions;
+    double dt = 0, E = 0;
+  };
+
+  // Grows and relaxes a trial from the accepted state; a jamming candidate that is a saddle is
+  // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
+  std::optional<Trial> make_trial() {
+    Trial t{packing, rng, {}, trial_dt(), 0};
+    if (fail_below_dt_min(t.dt)) return std::nullopt;
+    t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
+    ++attempts;
+    if (!relax(t.packing, trial_minimiser(), "growth step " + std::to_string(attempts) + ", dt = " + num(t.dt)))
+      return std::nullopt;
+    const double eps = scene.epsilon_U;
+    t.E = fresh_energy_per_cell(t.packing);
+    if (scene.check_minimum && phase == Phase::unjammed && t.E >= eps && t.E <= 2.0 * eps && !is_minimum(t.packing)) {
+      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
+      FireParams deep = scene.fire;
+      deep.force_tol = 0;
+      ++result.saddles_relaxed;
+      if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return std::nullopt;
+      t.E = fresh_energy_per_cell(t.packing);
+    }
+    return t;
+  }
+
+  // The Newton finish only above jamming: below it the trials are unjammed or marginal, their
+  // Hessian is indefinite and Newton would cost a factorisation for nothing (docs/minimiser.md).
+  FireParams trial_minimiser() const {
+    FireParams params = scene.fire;
+    if (phase == Phase::unjammed) params.newton_force = 0;
+    return params;
+  }
+
+  enum class Verdict { accept, reject, stop };
+
+  // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
+  Verdict judge(const Trial& t) const {
+    const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
+    if (phase == Phase::unjammed) return t.E > 2.0 * eps ? Verdict::reject : Verdict::accept;  // overshot jamming
+    if (t.E < eps) return Verdict::accept;  // unjamming
+    if (next_target < scene.targets.size())
+      return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance ? Verdict::reject
+                                                                                                  : Verdict::accept;
+    // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
+    if (scene.continue_to_phi2 && !result.depletion && phi_trial > result.jamming->phi + scene.max_dphi)
+      return Verdict::stop;
+    return Verdict::accept;
+  }
+
+  void reject(const Trial& t) {
+    ++result.rejected;
+    if (phase == Phase::unjammed && scene.search == JammingSearch::secant) {
+      record_overshoot(t.packing, t.E);
+      return;
+    }
+    dt *= 0.5;
+    fail_below_dt_min(dt);
+  }
+
+  // Makes the trial the accepted state and moves the phase; returns the phase change.
+  enum class Change { none, jammed, unjammed };
+  Change accept(Trial&& t) {
+    packing = std::move(t.packing);
+    rng = t.rng;
+    E = t.E;
+    ++step;
+    ++result.accepted;
+    last_dt = t.dt;
+    result.divisions += static_cast<long>(t.divisions.size());
+    Change change = Change::none;
+    if (phase == Phase::unjammed && E >= scene.epsilon_U) {
+      phase = Phase::jammed;
+      change = Change::jammed;
+      reset_search();
+    } else if (phase == Phase::jammed && E < scene.epsilon_U) {
+      phase = Phase::unjammed;
+      change = Change::unjammed;
+      reset_search();
+    } else if (phase == Phase::jammed) {
+      divisions_since_jamming += static_cast<long>(t.divisions.size());
+    }
+    derive();
+    if (phase == Phase::unjammed) prune_overshoots();
+    dt = start_dt();
+    return change;
+  }
+
+  // The jamming episode ends: φ_J, the targets and φ_2 belong to the next one.
+  std::vector<BudEvent> record_unjamming() {
+    UnjamRecord r;
+    r.episode = result.jamming->episode;
+    r.step = step;
+    r.phi = phi;
+    r.phi_J = result.jamming->phi;
+    r.targets_lost = result.targets.size();
+    result.unjammings.push_back(r);
+    std::vector<BudEvent> events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
+    start_episode(std::nullopt);
+    return events;
+  }
+
+  std::vector<BudEvent> record_jamming() {
+    JammingRecord j;
+    j.episode = episodes++;
+    j.step = step;
+    j.phi = phi;
+    j.P = P;
+    j.E_per_cell = E;
+    j.N = packing.size();
+    copy_network_summary(j);
+    j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
+    std::vector<BudEvent> events = buds.tag(j.episode, step, phi, packing, net);
+    j.tagged = events.size();
+    start_episode(j);
+    return events;
+  }
+
+  void start_episode(std::optional<JammingRecord> jamming) {
+    result.jamming = std::move(jamming);
+    result.targets.clear();
+    result.depletion.reset();
+    next_target = 0;
+    divisions_since_jamming = 0;
+  }
+
+  // Every target landed by the accepted state (in order), then φ_2 if it is the first state with at
+  // most one tagged bud unconstrained.
+  void land_targets_and_depletion(const StateView& v) {
+    while (next_target < scene.targets.size() &&
+           std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
+      result.targets.push_back(target_record(next_target));
+      ++next_target;
+      for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
+    }
+    if (result.depletion || buds.active() > 1) return;
+    DepletionRecord d;
+    d.step = step;
+    d.phi = phi;
+    d.P = P;
+    d.N = packing.size();
+    d.N_nr = net.N_nr;
+    d.Z = net.Z;
+    d.u = net.u;
+    d.u_buds = net.u_buds;
+    d.Z_iso = net.Z_iso;
+    d.dZ = net.dZ;
+    d.still_unconstrained = buds.active();
+    d.divisions_since_jamming = divisions_since_jamming;
+    result.depletion = d;
+    for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
   }
 
   RunStatus advance() {
@@ -260,155 +541,40 @@ struct GrowthDriver::Impl {
                                       " growth steps without reaching the end of the run");
       return result.status;
     }
-
-    // Trial step on copies: a rejection leaves the accepted packing and RNG untouched.
-    Packing trial = packing;
-    Rng trial_rng = rng;
-    const std::vector<Division> divisions = grow_step(trial, rates, dt, scene, trial_rng);
-    ++attempts;
-    if (!relax(trial, scene.fire, "growth step " + std::to_string(attempts) + ", dt = " + num(dt))) return result.status;
-    const double eps = scene.epsilon_U;
-    double E_trial = fresh_energy_per_cell(trial);
-    if (scene.check_minimum && phase == Phase::unjammed && E_trial >= eps && E_trial <= 2.0 * eps &&
-        !is_minimum(trial)) {
-      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
-      FireParams deep = scene.fire;
-      deep.force_tol = 0;
-      ++result.saddles_relaxed;
-      if (!relax(trial, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return result.status;
-      E_trial = fresh_energy_per_cell(trial);
-    }
-    const double phi_trial = trial.packing_fraction();
-
-    bool reject = false;
-    if (phase == Phase::unjammed) {
-      reject = E_trial > 2.0 * eps;  // overshot jamming: bisect
-    } else if (E_trial >= eps) {
-      if (next_target < scene.targets.size()) {
-        reject = phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance;
-      } else if (scene.continue_to_phi2 && !result.depletion &&
-                 phi_trial > result.jamming->phi + scene.max_dphi) {
-        // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
+    std::optional<Trial> trial = make_trial();
+    if (!trial) return result.status;
+    switch (judge(*trial)) {
+      case Verdict::reject:
+        reject(*trial);
+        return result.status;
+      case Verdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;
         finish_events();
         return result.status;
-      }
+      case Verdict::accept:
+        break;
     }
-    if (reject) {
-      ++result.rejected;
-      dt *= 0.5;
-      if (dt < scene.dt_min)
-        fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) +
-                                          " (phase " + to_string(phase) + ", phi = " + num(phi) + ")");
-      return result.status;
-    }
-
-    // Accept.
-    packing = std::move(trial);
-    rng = trial_rng;
-    E = E_trial;
-    ++step;
-    ++result.accepted;
-    last_dt = dt;
-    result.divisions += static_cast<long>(divisions.size());
-
-    bool jammed_now = false, unjammed_now = false;
-    if (phase == Phase::unjammed && E >= eps) {
-      phase = Phase::jammed;
-      jammed_now = true;
-    } else if (phase == Phase::jammed && E < eps) {
-      phase = Phase::unjammed;
-      unjammed_now = true;
-    } else if (phase == Phase::jammed) {
-      divisions_since_jamming += static_cast<long>(divisions.size());
-    }
-    derive();
-    dt = start_dt();
+    const std::vector<Division> divisions = trial->divisions;
+    const Change change = accept(std::move(*trial));
 
     // Records first, so that every event of this state sees the same, final view.
     std::vector<BudEvent> bud_events;
-    if (phase == Phase::jammed && !jammed_now)
+    if (phase == Phase::jammed && change == Change::none)
       bud_events = buds.update(step, phi, packing, contacts, net, divisions);
-    if (unjammed_now) {
-      UnjamRecord r;
-      r.episode = result.jamming->episode;
-      r.step = step;
-      r.phi = phi;
-      r.phi_J = result.jamming->phi;
-      r.targets_lost = result.targets.size();
-      result.unjammings.push_back(r);
-      bud_events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
-      // The search for jamming restarts: φ_J, the targets and φ_2 belong to the next episode.
-      result.jamming.reset();
-      result.targets.clear();
-      result.depletion.reset();
-      next_target = 0;
-      divisions_since_jamming = 0;
-    }
-    if (jammed_now) {
-      JammingRecord j;
-      j.episode = episodes++;
-      j.step = step;
-      j.phi = phi;
-      j.P = P;
-      j.E_per_cell = E;
-      j.N = packing.size();
-      j.N_nr = net.N_nr;
-      j.N_f = net.N_f;
-      j.N_u = net.N_u;
-      j.N_u_buds = net.N_u_buds;
-      j.N_c = net.N_c;
-      j.Z = net.Z;
-      j.Z_iso = net.Z_iso;
-      j.dZ = net.dZ;
-      j.u = net.u;
-      j.u_buds = net.u_buds;
-      j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
-      bud_events = buds.tag(j.episode, step, phi, packing, net);
-      j.tagged = bud_events.size();
-      result.jamming = j;
-      result.targets.clear();
-      result.depletion.reset();
-      next_target = 0;
-      divisions_since_jamming = 0;
-    }
+    if (change == Change::unjammed) bud_events = record_unjamming();
+    if (change == Change::jammed) bud_events = record_jamming();
 
     const StateView v = view();
     for (const Division& d : divisions)
       for (Observer* o : observers) o->on_divided(Divided{v, d});
     emit_bud_events(v, bud_events);
     for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
-    if (unjammed_now)
+    if (change == Change::unjammed)
       for (Observer* o : observers) o->on_unjammed(Unjammed{v, result.unjammings.back()});
-    if (jammed_now)
+    if (change == Change::jammed)
       for (Observer* o : observers) o->on_jammed(Jammed{v, *result.jamming});
-
-    if (phase == Phase::jammed && !jammed_now) {
-      while (next_target < scene.targets.size() &&
-             std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
-        result.targets.push_back(target_record(next_target));
-        ++next_target;
-        for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
-      }
-      if (!result.depletion && buds.active() <= 1) {
-        DepletionRecord d;
-        d.step = step;
-        d.phi = phi;
-        d.P = P;
-        d.N = packing.size();
-        d.N_nr = net.N_nr;
-        d.Z = net.Z;
-        d.u = net.u;
-        d.u_buds = net.u_buds;
-        d.Z_iso = net.Z_iso;
-        d.dZ = net.dZ;
-        d.still_unconstrained = buds.active();
-        d.divisions_since_jamming = divisions_since_jamming;
-        result.depletion = d;
-        for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
-      }
-    }
+    if (phase == Phase::jammed && change == Change::none) land_targets_and_depletion(v);
 
     if (phase == Phase::jammed && next_target == scene.targets.size() &&
         (!scene.continue_to_phi2 || result.depletion)) {
@@ -424,7 +590,7 @@ struct GrowthDriver::Impl {
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
     return GrowthState{seed,  rng,         phase, dt,     last_dt, step, attempts, next_target, divisions_since_jamming,
-                       episodes, result, buds,  packing};
+                       episodes, result, buds,  packing, JammingSearchState{overshoots, slow_trials, bracket_width}};
   }
 
   void restore(GrowthState s) {
@@ -445,6 +611,9 @@ struct GrowthDriver::Impl {
     result.status = RunStatus::running;
     buds = std::move(s.buds);
     packing = std::move(s.packing);
+    overshoots = std::move(s.search.overshoots);
+    slow_trials = s.search.slow_trials;
+    bracket_width = s.search.bracket_width;
     started = true;
     final_emitted = false;
     E = fresh_energy_per_cell(packing);

@@ -199,6 +199,9 @@ std::vector<SceneKey> make_keys() {
   e.push_back(flag("jamming", "check_minimum",
                    "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                    BUDJAM_FIELD(check_minimum)));
+  e.push_back(choice("jamming", "search",
+                     "step choice near φ_J and the targets: \"secant\" or \"bisection\" (the paper's halving)",
+                     {"bisection", "secant"}, BUDJAM_FIELD(search)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));
@@ -220,6 +223,10 @@ std::vector<SceneKey> make_keys() {
                    kZeroOrPositive, BUDJAM_FIELD(fire.energy_floor)));
   e.push_back(integer("minimiser", "max_iterations", "FIRE iterations before a minimisation fails", kPositive,
                       BUDJAM_FIELD(fire.max_iterations)));
+  e.push_back(real("minimiser", "newton_force",
+                   "above jamming, Newton steps (analytic Hessian) finish a minimisation once the largest force is "
+                   "below this; 0 = off",
+                   kZeroOrPositive, BUDJAM_FIELD(fire.newton_force)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));
 

@@ -149,6 +149,7 @@ TEST_CASE("FIRE reaches its force tolerance on a random overlapping packing", "[
     const FireResult r = minimise(p, field, params);
     INFO("seed " << seed << " iterations " << r.iterations);
     CHECK(r.converged);
+    CHECK(r.stop == MinimiserStop::force);
     CHECK(r.max_force < params.force_tol);
     CHECK(r.energy / 100 > 1e-4);  // φ = 1 is far above jamming: stopped by the force rule
     CHECK(r.energy == Approx(ForceField().energy(p)).epsilon(1e-12));
@@ -167,6 +168,7 @@ TEST_CASE("FIRE relaxes a dilute overlapping packing to E/N below 1e-20 quickly"
     const FireResult r = minimise(p, field);
     INFO("seed " << seed << " evaluations " << r.evaluations);
     CHECK(r.converged);
+    CHECK(r.stop == MinimiserStop::energy_floor);
     CHECK(r.energy / 60 < 1e-20);
     CHECK(energy_per_cell(p) < 1e-20);
     CHECK(r.evaluations < 3000);
@@ -211,6 +213,7 @@ TEST_CASE("FIRE gives up after max_iterations and reports it", "[fast]") {
   params.max_iterations = 10;
   const FireResult r = minimise(p, field, params);
   CHECK_FALSE(r.converged);
+  CHECK(r.stop == MinimiserStop::iteration_cap);
   CHECK(r.iterations == 10);
   CHECK(r.max_force > params.force_tol);
 }

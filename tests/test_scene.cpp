@@ -200,6 +200,7 @@ TEST_CASE("every key of the table reads back the value written for it", "[scene]
     else if (auto* str = std::get_if<std::string>(&after)) {
       if (k.key() == "cells.division") *str = "aligned";
       else if (k.key() == "init.kind") *str = "random_seeds";
+      else if (k.key() == "jamming.search") *str = "bisection";
       else if (k.key() == "growth.P0") after = 0.125;
       else *str += "x";
     }

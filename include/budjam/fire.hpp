@@ -23,11 +23,25 @@ struct FireParams {
   double force_tol = 1e-12;  // on the accuracy front (docs/analysis.md, "Accuracy against cost")
   double energy_floor = 1e-20;
   long max_iterations = 1000000;
+  // Second-order finish (newton.hpp): once the largest force falls below newton_force, Newton
+  // steps with the analytic Hessian take over; FIRE resumes if they give up (and Newton is tried
+  // again only after FIRE has lowered the force tenfold). 0 = FIRE alone.
+  double newton_force = 0.0;
 };
 
+// Why a minimisation stopped.
+enum class MinimiserStop {
+  force,          // largest generalised force below the tolerance
+  energy_floor,   // E/N below energy_floor (certainly unjammed)
+  iteration_cap,  // max_iterations FIRE iterations without either
+};
+const char* to_string(MinimiserStop stop);
+
 struct FireResult {
-  bool converged = false;
-  long iterations = 0;
+  MinimiserStop stop = MinimiserStop::iteration_cap;
+  bool converged = false;  // stop != iteration_cap
+  long iterations = 0;     // FIRE iterations
+  long newton_iterations = 0;  // Newton steps (one Hessian factorisation each)
   long evaluations = 0;    // force evaluations made by this call
   double energy = 0.0;     // U at the end
   double max_force = 0.0;  // largest |F| component at the end (θ component as F_θ / r_g)

@@ -1,6 +1,8 @@
 #pragma once
 // The quasistatic growth loop of MODEL.md ("Growth", "Jamming and compression targets"):
-//   growth step Δt → FIRE → classify E/N → accept / reject (halve Δt) → emit events.
+//   growth step Δt → FIRE → classify E/N → accept / reject → emit events. After a rejection the
+//   next Δt is half the last (jamming.search = bisection) or aimed by the secant search; the
+//   secant search also solves for the Δt that lands a target before relaxing (docs/growth.md).
 // Everything optional (logs, packings, moduli, spectra, rigidity) is an Observer that receives a
 // read-only view of each accepted state. The driver computes contacts, the contact network and the
 // bud pressures only when the protocol (feedback, depletion) or an observer needs them.
@@ -38,7 +40,7 @@ enum class RunStatus {
   running,
   finished,          // every target landed (and φ_2 found or φ_J + max_dphi reached if asked)
   step_limit,        // more than scene.max_steps growth steps (accepted + rejected)
-  dt_underflow,      // Δt halved below scene.dt_min
+  dt_underflow,      // a trial Δt below scene.dt_min (halved or solved for)
   minimiser_failed,  // FIRE hit its iteration limit
 };
 const char* to_string(RunStatus status);
@@ -176,6 +178,19 @@ class Observer {
 // (tools/io/checkpoint.hpp) stores it, and the quantities derived from it (contacts, network,
 // pressures, rates) are recomputed identically after restore(), so that a resumed run repeats an
 // uninterrupted one bit for bit.
+// A relaxed trial above the jamming window, remembered by the secant search onto φ_J: its φ,
+// s = √(E/N), and the slope ds/dφ it implies.
+struct JammingOvershoot {
+  double phi = 0, s = 0, slope = 0;
+};
+
+// What the secant search onto φ_J carries from one trial to the next (docs/growth.md, "Jamming search").
+struct JammingSearchState {
+  std::vector<JammingOvershoot> overshoots;  // sorted by φ
+  int slow_trials = 0;       // consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;  // φ from the accepted state to the lowest overshoot at the last trial
+};
+
 struct GrowthState {
   std::uint64_t seed = 0;
   Rng rng;
@@ -189,6 +204,7 @@ struct GrowthState {
   RunResult result;                  // status `running`
   BudTracker buds;
   Packing packing;                   // the last accepted state
+  JammingSearchState search;
 };
 
 // Extra knobs that are not part of a scene (tests use them).

@@ -14,6 +14,11 @@ namespace budjam {
 
 enum class DivisionRule { random, aligned, opposite };
 enum class InitialState { two_cells, random_seeds };
+// How a growth step is chosen near φ_J and the Δφ targets (docs/growth.md, "Jamming search").
+// bisection: MODEL.md's protocol, halve Δt after every overshoot, restart from the nominal Δt.
+// secant: aim each trial at the middle of the jamming window by extrapolating √(E/N), which grows
+// linearly in φ − φ_J, and land a target by solving φ(Δt) = φ_J + Δφ before relaxing.
+enum class JammingSearch { bisection, secant };
 
 // Where an on-demand computation (moduli, DOS) is made along a run.
 struct Schedule {
@@ -63,6 +68,7 @@ struct Scene {
   // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
   // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
   bool check_minimum = true;
+  JammingSearch search = JammingSearch::secant;
 
   // [minimiser]
   FireParams fire;

@@ -150,6 +150,9 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
      << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' ' << s.episodes << '\n';
   os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations
      << ' ' << r.divisions << ' ' << r.saddles_relaxed << '\n';
+  os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
+  for (const JammingOvershoot& o : s.search.overshoots) os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
+  os << '\n';
   os << "jamming " << (r.jamming ? 1 : 0);
   if (const auto& j = r.jamming)
     os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
@@ -206,6 +209,9 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     if (version == 1)
       in.fail("checkpoint version 1 was written before jamming candidates were checked for saddles "
               "(jamming.check_minimum); start the run again");
+    if (version == 2 || version == 3)
+      in.fail("checkpoint version " + std::to_string(version) +
+              " was written before the secant jamming search (jamming.search); start the run again");
     if (version != kCheckpointVersion)
       in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
               std::to_string(kCheckpointVersion) + "); start the run again");
@@ -261,6 +267,25 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
     r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(scene)));
     r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
+  }
+  {
+    const auto w = in.next("search", -1);
+    if (w.size() < 3) in.fail("search: expected slow trials, bracket width and the number of overshoots");
+    JammingSearchState& q = s.search;
+    q.slow_trials = static_cast<int>(in.integer(w[0], "slow trials", 0, 2));
+    q.bracket_width = in.real(w[1], "bracket width");
+    if (!(q.bracket_width >= 0)) in.fail("bracket width: must be >= 0");
+    const std::size_t n = in.count_of(w[2], "overshoots", static_cast<std::size_t>(s.attempts));
+    if (w.size() != 3 + 3 * n)
+      in.fail("search: expected " + std::to_string(3 + 3 * n) + " values, found " + std::to_string(w.size()));
+    for (std::size_t k = 0; k < n; ++k) {
+      JammingOvershoot o;
+      o.phi = in.positive(w[3 + 3 * k], "overshoot phi");
+      o.s = in.positive(w[4 + 3 * k], "overshoot sqrt(E/N)");
+      o.slope = in.real(w[5 + 3 * k], "overshoot slope");
+      if (k > 0 && o.phi < q.overshoots.back().phi) in.fail("overshoots: not sorted by phi");
+      q.overshoots.push_back(o);
+    }
   }
   // Cell counts are bounded by the cells that ever existed (checked against next_id below).
   const std::size_t cells_cap = static_cast<std::size_t>(r.divisions) + 2 + scene.n_seeds;

@@ -23,7 +23,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 3;
+inline constexpr int kCheckpointVersion = 4;
 
 // FNV-1a, 64 bit: the content checksum of a checkpoint and the hash of its scene.
 std::uint64_t fnv1a64(std::string_view bytes);

@@ -1,0 +1,109 @@
+// Newton finish (newton.hpp): on jammed packings it lands on the minimum FIRE finds, with the
+// force falling quadratically, and it hands back to FIRE where the Hessian is indefinite.
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+#include "budjam/newton.hpp"
+#include "support/compressed_packing.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+
+using namespace budjam;
+
+namespace {
+
+// A jammed packing of random dumbbells just above its jamming point, relaxed by FIRE.
+const testing::CompressedPacking& jammed() {
+  static const testing::CompressedPacking cp = testing::compress_random_dumbbells(60, 5);
+  return cp;
+}
+
+// The same packing, every bud 0.2 % larger: overlaps grow and the cells are out of balance.
+Packing swollen(const Packing& p) {
+  Packing s = p;
+  for (double& b : s.b) b *= 1.002;
+  return s;
+}
+
+// Largest difference between two relaxations of the same packing in the position of a lobe that
+// carries a contact in `net`, after removing the mean translation (a zero mode of U). Free lobes
+// are left out: a rattler, or a contact-free bud turning about its mother, moves at no cost.
+double largest_difference(const Packing& a, const Packing& b, const ContactNetwork& net) {
+  Lobes la, lb;
+  place_lobes(a, la);
+  place_lobes(b, lb);
+  double mx = 0, my = 0, n = 0;
+  for (std::size_t l = 0; l < la.size(); ++l)
+    if (net.lobe_contacts[l] > 0) mx += lb.x[l] - la.x[l], my += lb.y[l] - la.y[l], n += 1;
+  double d = 0;
+  for (std::size_t l = 0; l < la.size(); ++l)
+    if (net.lobe_contacts[l] > 0)
+      d = std::max({d, std::abs(lb.x[l] - la.x[l] - mx / n), std::abs(lb.y[l] - la.y[l] - my / n)});
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("Newton finish lands on FIRE's minimum of a jammed packing: same energy and positions", "[newton]") {
+  Packing fire_only = swollen(jammed().packing), with_newton = fire_only;
+  ForceField f1, f2;
+  FireParams params;
+  const FireResult a = minimise(fire_only, f1, params);
+  params.newton_force = 1e-5;
+  const FireResult b = minimise(with_newton, f2, params);
+  REQUIRE(a.converged);
+  REQUIRE(b.converged);
+  INFO("FIRE alone: " << a.iterations << " iterations; with Newton: " << b.iterations << " + " << b.newton_iterations
+                      << " Newton steps");
+  CHECK(b.newton_iterations >= 1);
+  CHECK(b.max_force < params.force_tol);
+  CHECK(b.stop == MinimiserStop::force);
+  CHECK(b.energy / 60 > 1e-12);  // jammed: a real minimum with stressed contacts
+  CHECK(b.energy == Approx(a.energy).epsilon(1e-8));
+  Eigen::VectorXd F;
+  f1.evaluate(fire_only, F);
+  const std::vector<Contact> c = find_contacts(fire_only, f1.lobes(), f1.neighbours());
+  CHECK(largest_difference(fire_only, with_newton, analyse_network(fire_only.size(), c)) < 1e-7);
+  CHECK(b.iterations < a.iterations);
+}
+
+TEST_CASE("Newton steps with the analytic Hessian reduce the force quadratically near a minimum", "[newton]") {
+  Packing p = jammed().packing;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> kick(0.0, 1e-5);
+  for (Eigen::Index k = 0; k < p.q.size(); ++k) p.q[k] += kick(rng);
+  ForceField field;
+  NewtonParams one;
+  one.force_tol = 0;
+  one.max_iterations = 1;
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  std::vector<double> f{max_scaled_force(p, F)};
+  for (int k = 0; k < 3; ++k) {
+    const NewtonResult r = newton_finish(p, field, one);
+    REQUIRE(r.stop == NewtonStop::iteration_cap);
+    f.push_back(r.max_force);
+  }
+  INFO("largest force per Newton step: " << f[0] << " " << f[1] << " " << f[2] << " " << f[3]);
+  // f_{k+1} ≈ C f_k²: the ratio f_{k+1}/f_k falls with f_k, until the rounding floor.
+  CHECK(f[1] < 1e-2 * f[0]);
+  CHECK(f[2] / f[1] < f[1] / f[0]);
+  CHECK(f[2] < 1e-10);
+}
+
+TEST_CASE("with the Newton finish on, an unjammed packing still relaxes to E/N below the energy floor", "[newton]") {
+  // Below jamming the overlaps must open, and the prestress of the last ones makes H indefinite:
+  // Newton hands back to FIRE.
+  Packing p = jammed().packing;
+  testing::rescale_to(p, jammed().phi_below - 0.02);
+  for (std::size_t i = 0; i < p.size(); i += 2) p.q[3 * i] += 0.05;  // fresh overlaps
+  ForceField field;
+  FireParams params;
+  params.newton_force = 1e-2;
+  const FireResult r = minimise(p, field, params);
+  CHECK(r.converged);
+  CHECK(r.energy / static_cast<double>(p.size()) < 1e-16);  // below the jamming threshold ε_U
+}
