@@ -551,7 +551,7 @@ def figF1(T):
     save(fig, T.out, "figF1")
 
 
-# ---- accuracy against cost (issue 6) -----------------------------------------------------------------------
+# ---- accuracy against cost -----------------------------------------------------------------------
 
 def accuracy(T):
     """Error against cost per quantity and setting set; each knob's non-dominated settings for that

@@ -6,7 +6,7 @@ namespace budjam {
 
 namespace {
 
-// MODEL.md: fewer than 3 contacts, or exactly 3 split 2 + 1 between the lobes (the three force
+// The rattler rule (docs/model.md, "Contact network"): fewer than 3 contacts, or exactly 3 split 2 + 1 between the lobes (the three force
 // lines cannot meet in one point, so force and torque cannot both balance). 3 + 0 is not a
 // rattler: the free lobe is an unconstrained lobe (one floppy rotation, counted in N_u).
 // The rule is monotone (fewer contacts never turn a rattler into a non-rattler), so the iterative

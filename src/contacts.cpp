@@ -1,4 +1,4 @@
-// Contacts of a packing and the virial observables built on them (MODEL.md, "Interaction").
+// Contacts of a packing and the virial observables built on them (docs/model.md, "Interaction and energy").
 #include "budjam/contacts.hpp"
 
 #include "budjam/cell_list.hpp"

@@ -12,7 +12,7 @@ namespace budjam {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kDivisionNoise = 5e-5;  // rad, MODEL.md "division"
+constexpr double kDivisionNoise = 5e-5;  // rad, docs/model.md, "Growth": division
 
 double uniform_angle(Rng& rng) { return -kPi + 2.0 * kPi * uniform01(rng); }
 double noise(Rng& rng) { return kDivisionNoise * (2.0 * uniform01(rng) - 1.0); }

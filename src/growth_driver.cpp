@@ -166,7 +166,7 @@ struct GrowthDriver::Impl {
   }
 
   // Δt that the next step starts from (before any bisection halving), from the accepted state.
-  // MODEL.md: the nominal growth.dt. With growth.adaptive_dt, above jamming with feedback:
+  // The nominal growth.dt (docs/model.md, "Growth protocol"). With growth.adaptive_dt, above jamming with feedback:
   // dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0) = the factor of the least
   // compressed bud, so that the fastest-growing cell gains γ0_i·dt of relative area, as in a
   // nominal step. Depends on the accepted state only (a checkpoint restores it with Δt anyway).

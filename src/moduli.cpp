@@ -329,7 +329,7 @@ PackingState describe(const Packing& p, const std::vector<Contact>& contacts, co
   return s;
 }
 
-// Mean-field estimates (paper Eqs. S-Bext, S-G) over the load-bearing contacts `lb`.
+// Mean-field estimates (paper Eqs. 17–18, D4, D11) over the load-bearing contacts `lb`.
 void add_mean_field(PackingState& s, const std::vector<Contact>& lb) {
   if (lb.empty()) return;
   double sr = 0, sr2 = 0, m4 = 0;

@@ -1,5 +1,5 @@
 // `budjam accuracy --packings`: the post-processing knobs (moduli linear solver, ARPACK tol and ncv)
-// measured against dense references on the same packings, and the front verdict (issue 6).
+// measured against dense references on the same packings, and the front verdict.
 #include "budjam/fire.hpp"
 #include "compressed_packing.hpp"
 #include "random_packing.hpp"

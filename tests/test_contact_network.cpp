@@ -1,4 +1,4 @@
-// Rattler rules and Maxwell counting (MODEL.md, "Contact network") on hand-built contact lists.
+// Rattler rules and Maxwell counting (docs/model.md, "Contact network") on hand-built contact lists.
 #include "budjam/contact_network.hpp"
 
 #include <catch2/catch.hpp>

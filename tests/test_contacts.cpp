@@ -122,7 +122,7 @@ TEST_CASE("stress tensor is symmetric and P = -tr(Sigma)/2", "[fast]") {
 }
 
 TEST_CASE("pressure P equals -dU/dA when all lobe centres and the box are dilated affinely", "[fast]") {
-  // MODEL.md's P = (1/2L²) Σ f r is the virial of the lobe–lobe springs: the derivative of U under a
+  // The model's P = (1/2L²) Σ f r is the virial of the lobe–lobe springs: the derivative of U under a
   // dilation of every lobe centre (which also stretches the cells' mother–bud bars).
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const Packing p = random_packing(60, 1.0, seed);

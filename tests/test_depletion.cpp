@@ -64,7 +64,7 @@ TEST_CASE("lambda_c partitions the density increment between the sectors") {
   CHECK(lambda_c(0.2, 0.0) == 0.0);       // full arrest: all growth goes into free buds
   for (double u : {0.05, 0.2, 0.5})
     for (double chi : {1e-3, 0.3, 0.9}) {
-      const double g = u + (1 - u) * chi;  // ⟨g⟩, Eq. E7
+      const double g = u + (1 - u) * chi;  // ⟨g⟩, Eq. E5
       CHECK(lambda_c(u, chi) == Approx(1.0 - u / g));
     }
 }

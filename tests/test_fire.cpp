@@ -13,7 +13,7 @@ using namespace budjam;
 
 namespace {
 
-constexpr double kEpsilonU = 1e-16;  // MODEL.md's jamming threshold on E/N
+constexpr double kEpsilonU = 1e-16;  // the jamming threshold ε_U on E/N (docs/model.md)
 
 Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min = 0.01, double b_max = 1.02) {
   std::mt19937_64 rng(seed);

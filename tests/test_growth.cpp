@@ -1,4 +1,4 @@
-// Growth, growth law, division and initial states follow MODEL.md ("Growth") exactly.
+// Growth, growth law, division and initial states follow docs/model.md ("Growth") exactly.
 #include "budjam/growth.hpp"
 
 #include "budjam/contacts.hpp"
@@ -287,7 +287,7 @@ TEST_CASE("random seeds are newborn cells that overlap nowhere, also across the 
   CHECK_THROWS_AS(random_seeds(s, r2), InputError);
 }
 
-// ---- hard case (issue 6): a division into a crowded neighbourhood ------------------------------
+// ---- hard case: a division into a crowded neighbourhood ------------------------------
 // A jammed packing of random dumbbells (tests/support/compressed_packing.hpp) compressed well past
 // jamming, in which the most crowded cell is one growth step from dividing. The step goes through
 // the library's own path (growth_rates → grow_step → divide, one random stream) and FIRE relaxes
@@ -323,7 +323,7 @@ TEST_CASE("a division into a crowded neighbourhood places newborns exactly and F
   const std::vector<double> rates = growth_rates(p, nullptr, std::nullopt);
   const std::vector<Division> divisions = grow_step(p, rates, 1.0, scene, rng);
 
-  // Exactly the one division, bookkept as MODEL.md says.
+  // Exactly the one division, bookkept as the model says.
   REQUIRE(divisions.size() == 1);
   const Division& d = divisions[0];
   REQUIRE(p.size() == n + 1);

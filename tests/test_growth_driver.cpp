@@ -1,4 +1,4 @@
-// The quasistatic growth loop (MODEL.md, "Growth", "Jamming and compression targets", "Bud events").
+// The quasistatic growth loop (docs/model.md, "Growth", "Growth protocol", "Bud events and survival").
 #include "budjam/growth_driver.hpp"
 
 #include "budjam/contact_network.hpp"
@@ -169,7 +169,7 @@ TEST_CASE("a small run jams in the range of random dumbbell packings and lands e
   CHECK(J.N_nr > 0);
   CHECK(J.Z > 3.0);  // a rigid cluster of dumbbells
   CHECK(J.n_J == Approx(J.N_nr / (r.scene.L * r.scene.L)));
-  // At the onset of rigidity the contact count is the modified isostatic one (paper Eq. 2):
+  // At the onset of rigidity the contact count is the modified isostatic one (paper Eq. 3):
   // N_c = 6 N_nr − 2 N_u − 2, i.e. ΔZ = 0 — measured exactly at every jamming point in docs/growth.md.
   for (const JammingRecord* j : {&J, &*r.rec.first_jammed}) {
     CHECK(static_cast<long>(j->N_c) == 6 * static_cast<long>(j->N_nr) - 2 * static_cast<long>(j->N_u) - 2);
@@ -455,14 +455,14 @@ TEST_CASE("adaptive_dt lands strong-feedback targets in far fewer steps, each st
   CHECK(same_packing(again.packing(), d.packing()));
 }
 
-TEST_CASE("adaptive_dt off keeps MODEL.md's nominal step above jamming", "[driver]") {
+TEST_CASE("adaptive_dt off keeps the nominal step above jamming", "[driver]") {
   // The reference run (adaptive_dt = false): no accepted step is longer than growth.dt.
   const Reference& r = reference();
   CHECK_FALSE(r.scene.adaptive_dt);
   for (const auto& st : r.rec.steps) CHECK(st.dt <= r.scene.dt);
 }
 
-// ---- hard cases (issue 6) -----------------------------------------------------------------------
+// ---- hard cases -----------------------------------------------------------------------
 namespace {
 
 bool all_finite(const Packing& p) {
@@ -575,7 +575,7 @@ struct FactorAudit : Audit {
 
 }  // namespace
 
-// L = 6, two-cell start, seed 2. With MODEL.md's nominal Δt = 1, or adaptive_dt at its default
+// L = 6, two-cell start, seed 2. With the nominal Δt = 1, or adaptive_dt at its default
 // floor 1e-6, P0 = 1e-5 stalls growth before any bud reaches p = 708 P0 (measured with the default
 // floor, L = 6, six seeds: max p/P0 ≈ 260–460 after 8 s), so this run uses adaptive_dt with a floor
 // of 1e-300: every step starts from Δt = 1/g_max (up to ~1e300 when every bud is compressed), the
@@ -619,7 +619,7 @@ TEST_CASE("with P0 = 1e-5 through a run above jamming every growth factor is fin
 }
 
 // A landing tolerance no growth step can meet (1e-300: only an exact hit of φ_J + Δφ counts) with
-// MODEL.md's dt_min = 1e-12: after each accepted step below the target the bisection starts again
+// The default dt_min = 1e-12: after each accepted step below the target the bisection starts again
 // from Δt = 1 and must halve further, until Δt = 2⁻⁴⁰ < 1e-12. Measured (L = 6, seed 3, P0 = 1e-3):
 // ~1440 accepted and ~620 rejected steps; the last accepted state lies ~1e-15 below the target.
 TEST_CASE("a landing no step can reach halves dt from 1 past growth.dt_min = 1e-12 and fails with dt_underflow, reporting no false target",
@@ -717,7 +717,7 @@ TEST_CASE("a jamming candidate that is a saddle is relaxed on: the jamming point
   REQUIRE(d1.run() == RunStatus::finished);
   REQUIRE(without.record);
   REQUIRE(with.record);
-  // MODEL.md's energy rule alone accepts the saddle, a hypostatic state
+  // The energy rule alone accepts the saddle, a hypostatic state
   CHECK(d0.result().saddles_relaxed == 0);
   CHECK_FALSE(without.minimum());
   CHECK(without.record->dZ < 0);

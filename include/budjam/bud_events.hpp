@@ -1,5 +1,5 @@
 #pragma once
-// Survival of the buds that are unconstrained at jamming (MODEL.md, "Bud events").
+// Survival of the buds that are unconstrained at jamming (docs/model.md, "Bud events and survival").
 // At jamming every unconstrained bud is tagged (by cell id); from then on, for each accepted state,
 // a tagged bud can: touch something for the first time (first_contact), stop being unconstrained
 // (completed: the event of the Kaplan–Meier estimate), divide before completion (censored), or

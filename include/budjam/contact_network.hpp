@@ -1,6 +1,6 @@
 #pragma once
 // Rattlers, unconstrained lobes and Maxwell counting of a relaxed packing
-// (MODEL.md, "Contact network"; paper Eqs. 1–5).
+// (docs/model.md, "Contact network").
 #include "budjam/contacts.hpp"
 #include <cstddef>
 #include <vector>
@@ -21,8 +21,8 @@ struct ContactNetwork {
   double Z = 0.0;                   // N_c / N_nr
   double u = 0.0;                   // N_u / N_nr
   double u_buds = 0.0;              // N_u_buds / N_nr (the paper's u_J at jamming)
-  double Z_iso = 0.0;               // 6 − 2u − 2/N_nr            (Eq. 3)
-  double dZ = 0.0;                  // Z − Z_iso                    (Eq. 4)
+  double Z_iso = 0.0;               // 6 − 2u − 2/N_nr            (Eq. 4)
+  double dZ = 0.0;                  // Z − Z_iso                    (Eq. 5)
 
   bool unconstrained_bud(std::size_t cell) const {
     return !rattler[cell] && lobe_contacts[bud_lobe(cell)] == 0;

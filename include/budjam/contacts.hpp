@@ -1,6 +1,6 @@
 #pragma once
 // Lobe–lobe contacts of a relaxed packing and the mechanical observables they carry
-// (MODEL.md, "Interaction").
+// (docs/model.md, "Interaction and energy").
 #include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <cstdint>
@@ -30,7 +30,7 @@ std::vector<Contact> find_contacts(const Packing& p, const Lobes& lobes, const N
 // those coincide too. Deterministic and antisymmetric in (i, j) up to the +x fallback.
 void coincident_normal(const Packing& p, std::size_t i, std::size_t j, double& nx, double& ny);
 
-// P = (1/(2L²)) Σ f r   (MODEL.md: r is the lobe-centre distance)
+// P = (1/(2L²)) Σ f r   (r is the lobe-centre distance)
 double pressure(const std::vector<Contact>& contacts, const Box& box);
 
 // Σ_αβ = −(1/L²) Σ f r̂_α r_β with r the lobe-centre vector; P = −(Σ_xx + Σ_yy)/2
@@ -40,7 +40,7 @@ Eigen::Matrix2d stress_tensor(const std::vector<Contact>& contacts, const Box& b
 // Σᶜ_αβ = −(1/L²) Σ f n_α R_β with R the minimum-image centroid-to-centroid vector of the contact.
 // It is exactly (1/L²) ∂U/∂ε_αβ, so Σᶜ_xy = (1/L²) dU/dγ under Lees–Edwards shear of the centroids
 // and −tr Σᶜ/2 = −dU/dA under affine compression of the centroids. It is symmetric when every
-// cell is torque-balanced. It is NOT the MODEL's stress_tensor: in a force- and torque-balanced
+// cell is torque-balanced. It is NOT stress_tensor (the model's contact virial): in a force- and torque-balanced
 // packing Σ = Σᶜ − (1/L²) Σ_cells s (F_bud·n̂) n̂n̂ᵀ, the virial of the rigid mother–bud bars
 // (s = lobe separation, F_bud = total contact force on the bud, parallel to n̂ in balance).
 Eigen::Matrix2d centroid_stress_tensor(const Packing& p, const std::vector<Contact>& contacts);

@@ -1,8 +1,8 @@
 #pragma once
 // The mean-field relations of the paper that turn measured inputs into predictions:
 // bud depletion (Eqs. 12–16), flux partition λ_c (Eq. 19), the growth bulk response B_grow
-// (Eq. 20), the no-feedback branch ΔZ_0(P) (Eq. 6), growth-rate heterogeneity h_γ (Eq. E6) and the
-// mean-field estimate of u_J (Eq. A9, Lambert W).
+// (Eq. 20), the no-feedback branch ΔZ_0(P) (Eq. 6), growth-rate heterogeneity h_γ (Eq. E4) and the
+// mean-field estimate of u_J (Eq. A10, Lambert W).
 #include "budjam/statistics.hpp"
 #include <numbers>
 #include <optional>
@@ -20,7 +20,7 @@ inline constexpr double kDiameterSquaredToArea = std::numbers::pi / 4.0;
 double lambert_w0(double x);
 
 // u_J = −W_0(−2 e⁻²)/2 ≈ 0.2032: the Poisson/mean-field solution of u_J = exp(−(2 − 2u_J)) other
-// than the trivial root u = 1 (paper Eq. A9).
+// than the trivial root u = 1 (paper Eq. A10).
 double u_J_mean_field();
 
 // λ_c = (1 − u) χ_c / (u + (1 − u) χ_c): fraction of the density increment entering the compressed
@@ -38,7 +38,7 @@ double phi2_excess_step(double n_J, double u_J, double chi_bar, double a_c);
 // Both readings of Eq. 14 from a survival curve measured in diameter squared.
 struct Phi2Prediction {
   double a_eps_d2 = 0, integral_S_d2 = 0;  // diameter squared
-  double dphi2_area = 0;                   // with a as true area (MODEL.md: the correct one)
+  double dphi2_area = 0;                   // with a as true area (the paper's meaning; docs/model.md)
   double dphi2_diameter_sq = 0;            // with a as diameter squared (the reference analysis)
 };
 Phi2Prediction predict_phi2(double n_J, double u_J, double chi_bar, double a_eps_d2, double integral_S_d2);
@@ -57,7 +57,7 @@ struct BGrow {
 std::optional<BGrow> b_grow(std::span<const double> phi, std::span<const double> P, double phi_at, std::size_t window = 5);
 
 // A piecewise-linear function through points sorted by x (equal x averaged), constant beyond the
-// ends. Used for ΔZ_0(P), the no-feedback branch of mean (P, ΔZ) per Δφ (MODEL.md).
+// ends. Used for ΔZ_0(P), the no-feedback branch of mean (P, ΔZ) per Δφ (docs/model.md, "Observables").
 class PiecewiseLinear {
  public:
   PiecewiseLinear() = default;
@@ -73,10 +73,10 @@ class PiecewiseLinear {
   std::vector<double> x_, y_;
 };
 
-// h_γ = Var(g)/⟨g⟩² with the population variance (Eq. E6). NaN for no data.
+// h_γ = Var(g)/⟨g⟩² with the population variance (Eq. E4). NaN for no data.
 double growth_heterogeneity(std::span<const double> g);
 
-// The same from the two-sector moments (Eq. E9): ⟨g⟩ = u + (1−u)χ_c, ⟨g²⟩ = u + (1−u)χ_c2.
+// The same from the two-sector moments (Eqs. E5–E7): ⟨g⟩ = u + (1−u)χ_c, ⟨g²⟩ = u + (1−u)χ_c2.
 double growth_heterogeneity_sectors(double u, double chi_c, double chi_c2);
 
 // Counts of `values` in [edges[k], edges[k+1]) (the last bin closed), edges ascending.

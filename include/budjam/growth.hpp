@@ -1,5 +1,5 @@
 #pragma once
-// Cell growth, the growth law, division and initial states (MODEL.md, "Growth").
+// Cell growth, the growth law, division and initial states (docs/model.md, "Growth").
 // One random stream per run, std::mt19937_64, drawn in a fixed documented order (docs/growth.md).
 #include "budjam/packing.hpp"
 #include "budjam/scene.hpp"
@@ -47,7 +47,7 @@ struct Division {
   double b = 0;                    // its bud diameter at division
 };
 
-// Splits cell i (MODEL.md): newborns at (x,y) ∓ (α0/2) n̂; the bud-side one is the daughter
+// Splits cell i: newborns at (x,y) ∓ (α0/2) n̂; the bud-side one is the daughter
 // (new id, parent = id of i, appended at the end), the mother-side one keeps index and id of i.
 // Draw order: mother side γ0, θ, noise; then daughter γ0, θ, noise.
 Division divide(Packing& p, std::size_t i, const Scene& scene, Rng& rng);

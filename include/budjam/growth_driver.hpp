@@ -1,5 +1,5 @@
 #pragma once
-// The quasistatic growth loop of MODEL.md ("Growth", "Jamming and compression targets"):
+// The quasistatic growth loop (docs/model.md, "Growth protocol"):
 //   growth step Δt → FIRE → classify E/N → accept / reject → emit events. After a rejection the
 //   next Δt is half the last (jamming.search = bisection) or aimed by the secant search; the
 //   secant search also solves for the Δt that lands a target before relaxing (docs/growth.md).

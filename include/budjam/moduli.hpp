@@ -162,7 +162,7 @@ struct PackingState {
   Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
   double max_torque_imbalance = 0;  // |τ_xy − τ_yx|: 0 in a relaxed packing
 
-  // Mean-field estimates of the paper (Eqs. S-Bext, S-G), with this packing's n, Z, ΔZ.
+  // Mean-field estimates of the paper (Eqs. 17–18, D4, D11), with this packing's n, Z, ΔZ.
   double ell_c = 0;             // ℓ_c: mean lobe-centre distance r of the load-bearing contacts
   double ell_c2_mean = 0;       // ⟨r²⟩ (for comparison; the formulas use ℓ_c²)
   double M4 = 0;                // ⟨n_x² n_y²⟩ measured over the load-bearing contacts (isotropic: 1/8)

@@ -1,6 +1,6 @@
 #pragma once
 // The state of a budding-cell packing: rigid mother–bud dumbbells in a periodic square box
-// (MODEL.md, "One cell"). Units: mother diameter D0 = 1, spring constant k = 1.
+// (docs/model.md, "One cell"). Units: mother diameter D0 = 1, spring constant k = 1.
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// Accuracy against cost (issue 6): which settings of one numerical knob are worth using. A setting
+// Accuracy against cost: which settings of one numerical knob are worth using. A setting
 // has a cost (seconds) and errors of several quantities; a setting is on the (Pareto) front when no
 // other setting of the same knob is at least as cheap and at least as accurate in every quantity
 // and better in one. Measured costs and errors carry noise, so comparisons allow ties:

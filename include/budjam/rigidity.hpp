@@ -1,5 +1,5 @@
 #pragma once
-// Rigidity of a packing's contact network (MODEL.md, "Contact network": rigidity), by the (2,3)
+// Rigidity of a packing's contact network (docs/model.md, "Contact network"), by the (2,3)
 // pebble game, and a tracker that follows it along growth and reports what changed.
 //
 // Framework: every lobe centre is a joint (lobe 2i = mother of cell i, 2i+1 = its bud); each cell

@@ -15,7 +15,7 @@ namespace budjam {
 enum class DivisionRule { random, aligned, opposite };
 enum class InitialState { two_cells, random_seeds };
 // How a growth step is chosen near φ_J and the Δφ targets (docs/growth.md, "Jamming search").
-// bisection: MODEL.md's protocol, halve Δt after every overshoot, restart from the nominal Δt.
+// bisection: the paper's protocol, halve Δt after every overshoot, restart from the nominal Δt.
 // secant: aim each trial at the middle of the jamming window by extrapolating √(E/N), which grows
 // linearly in φ − φ_J, and land a target by solving φ(Δt) = φ_J + Δφ before relaxing.
 enum class JammingSearch { bisection, secant };
@@ -51,7 +51,7 @@ struct Scene {
   double dt = 1.0;               // nominal growth step
   double dt_min = 1e-12;         // bisection below this is a failure
   long max_steps = 2000000;      // growth steps (accepted + rejected) before failing
-  // Adaptive growth step (docs/growth.md, not in MODEL.md; off = MODEL.md's protocol). Above
+  // Adaptive growth step (docs/growth.md; off = the paper's protocol). Above
   // jamming with feedback, strongly compressed buds grow at γ0·exp(−p/P0) ≪ γ0, so Δt = 1 barely
   // moves φ. With adaptive_dt every step (before any bisection halving) starts from
   // Δt = dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0): the fastest-growing cell

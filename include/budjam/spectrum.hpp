@@ -1,10 +1,10 @@
 #pragma once
 // Vibrational spectrum of an arrested packing (paper, appendix "Vibrational density of states";
-// MODEL.md "One cell" for the masses).
+// docs/model.md, "One cell", for the masses).
 //
 // The generalised problem H v = ω² M v is solved on the non-rattler cells, with M the diagonal
 // dumbbell mass matrix (m, m, I per cell). It is symmetrised with M^{-1/2}: the dynamical matrix
-// K = M^{-1/2} H M^{-1/2} (paper Eq. S-dynmat) has the same eigenvalues λ = ω², and its orthonormal
+// K = M^{-1/2} H M^{-1/2} (paper Eq. F2) has the same eigenvalues λ = ω², and its orthonormal
 // eigenvectors e are the mass-weighted modes, v = M^{-1/2} e.
 //
 // The two uniform translations t_x = (1,0,0,1,0,0,…), t_y = (0,1,0,0,1,0,…) are exact zero modes

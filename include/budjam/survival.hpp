@@ -1,5 +1,5 @@
 #pragma once
-// Kaplan–Meier survival S(a) of the buds that are unconstrained at jamming (paper Eq. 8; MODEL.md
+// Kaplan–Meier survival S(a) of the buds that are unconstrained at jamming (paper Eq. 8; docs/model.md
 // "Bud events"). The "time" is the added bud size a = b² − b_J² (diameter squared; true area π a/4)
 // at which a tagged bud is completed (the event) or leaves observation without completing
 // (censored: its cell divided, the run ended, or the packing unjammed).

@@ -365,7 +365,7 @@ periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's
         "packing"_a, "solver"_a = "ldlt",
         R"(Linear elastic response of a relaxed packing, as `budjam moduli` (docs/moduli.md).
 
-B and G (units k, 2D) from the contact-virial stress S (MODEL's convention, the headline values)
+B and G (units k, 2D) from the contact-virial stress S (the paper's convention, the headline values)
 (moduli) and from the energy stress tau (moduli_energy), relaxed and affine (*_affine); the response matrices R = dS/de,
 E = (1/A) d2U/de de (4x4, order xx, xy, yx, yy), the Voigt stiffness C (3x3), the shear
 stability of the box (G_min, G_max over simple-shear directions phi, radians).)");

@@ -1,5 +1,5 @@
 #pragma once
-// Accuracy against cost of the post-processing knobs (issue 6): the linear solver of the moduli and
+// Accuracy against cost of the post-processing knobs: the linear solver of the moduli and
 // ARPACK's tolerance and Lanczos vectors. They do not change the packing, so every setting is
 // measured on the same packings against a reference computed on each of them:
 //  - moduli: B, G of elastic_response with each solver against the dense LDLᵀ solve (with refinement);

@@ -1,5 +1,5 @@
 // `budjam accuracy [--reference DIR VARIANT_DIR...] [--packings NAME=DIR...] --out DIR`
-// Accuracy against cost of the numerical knobs (issue 6; docs/analysis.md, "Accuracy against cost").
+// Accuracy against cost of the numerical knobs (docs/analysis.md, "Accuracy against cost").
 //
 // Growth knobs: each VARIANT_DIR and the reference hold run directories seed<k>/ grown from the same
 // scene and seeds, differing in one knob (the reference has every knob tight). A variant directory is
@@ -84,11 +84,11 @@ double family_error_floor(const std::string& family, double floor) {
   return family == "moduli" ? std::max(floor, 1e-8) : floor;
 }
 
-// Knobs whose default is part of the model, not a numerical choice: MODEL.md defines the jamming
+// Knobs whose default is part of the model, not a numerical choice: the model defines the jamming
 // point by E/N ∈ [ε_U, 2ε_U] with ε_U = 1e-16, the value the paper's numbers came from, so another
 // ε_U moves φ_J by definition. Their fronts are measured and reported, but do not decide the verdict.
 const std::map<std::string, std::string> kPinnedByModel{
-    {"epsU", "MODEL.md fixes epsilon_U = 1e-16 (the jamming criterion the paper's numbers came from)"}};
+    {"epsU", "the model fixes epsilon_U = 1e-16 (the jamming criterion the paper's numbers came from)"}};
 
 struct Row {
   std::string family, knob, variant, set, unit;
