@@ -45,7 +45,8 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
 
 std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
 
-// Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR` in the background, its stderr to
+// Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR` in the background (a run of a few
+// seconds, long enough to be interrupted), its stderr to
 // DIR.stderr; returns its pid.
 pid_t start_grow(const fs::path& scene, const fs::path& dir) {
   const pid_t pid = ::fork();
@@ -53,7 +54,7 @@ pid_t start_grow(const fs::path& scene, const fs::path& dir) {
   if (pid == 0) {
     const std::string e = exe(), sc = scene.string(), out = dir.string(), err = dir.string() + ".stderr";
     if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(126);
-    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=8", "--out", out.c_str(),
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=12", "--out", out.c_str(),
             static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -221,7 +222,7 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
   const std::string extra = "[observe]\ncheckpoint_every = 25\n";
   const fs::path scene = small_scene("kill", extra);
   const fs::path ref = work_dir() / "kill_ref", dir = work_dir() / "kill_run";
-  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
 
   // Kill the same run some time after its first checkpoint.
   for (double delay : {0.0, 0.3}) {
@@ -257,7 +258,7 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
 
 namespace {
 
-// Starts `budjam grow SCENE --quiet --set box.L=8 --out DIR`, lets it run `delay` seconds after
+// Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR`, lets it run `delay` seconds after
 // its first row, sends `sig` and returns the exit status.
 int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig) {
   const pid_t pid = start_grow(scene, dir);
@@ -277,7 +278,7 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
   // checkpoint_every = 0: no periodic checkpoints, so the one resumed from is the signal's.
   const fs::path scene = small_scene("term", "[observe]\ncheckpoint_every = 0\n");
   const fs::path ref = work_dir() / "term_ref";
-  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
   for (const auto& [sig, code] : {std::pair{SIGTERM, 143}, std::pair{SIGINT, 130}}) {
     const fs::path dir = work_dir() / ("term_" + std::to_string(sig));
     const int status = grow_and_signal(scene, dir, 0.3, sig);
@@ -300,7 +301,7 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
 TEST_CASE("resume refuses every damaged checkpoint line and an edited scene, changing nothing", "[grow_cli][.slow]") {
   const fs::path scene = small_scene("damaged", "[observe]\ncheckpoint_every = 0\n");
   const fs::path ref = work_dir() / "damaged_ref", run = work_dir() / "damaged_run";
-  REQUIRE(grow(q(scene) + " --quiet --set box.L=8 --out " + q(ref)).code == 0);
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
   REQUIRE(WEXITSTATUS(grow_and_signal(scene, run, 0.5, SIGTERM)) == 143);
   const std::string checkpoint = slurp(run / "checkpoint.txt");
   std::vector<std::string> lines;
