@@ -17,9 +17,9 @@
 #include "io/scene_file.hpp"
 
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <numbers>
 #include <string>
@@ -44,10 +44,11 @@ void whole_run(const char* label, Scene scene) {
   // Cell evaluations: force evaluations weighted by the number of cells at the end (an upper
   // bound of the true Σ N per evaluation; most evaluations happen at the final N near jamming).
   const double n = static_cast<double>(d.packing().size());
-  std::printf("%-26s %-8s wall %7.2f s  cpu %7.2f s  N=%4zu  phi_J=%.6f  accepted=%5ld  rejected=%4ld  evals=%8ld  "
-              "evals/cpu-s=%7.0f  cell-evals/cpu-s=%.3g\n",
-              label, to_string(st), wall, cpu, d.packing().size(), r.jamming ? r.jamming->phi : 0.0, r.accepted,
-              r.rejected, r.force_evaluations, r.force_evaluations / cpu, r.force_evaluations * n / cpu);
+  std::printf(
+      "%-26s %-8s wall %7.2f s  cpu %7.2f s  N=%4zu  phi_J=%.6f  accepted=%5ld  rejected=%4ld  evals=%8ld  "
+      "evals/cpu-s=%7.0f  cell-evals/cpu-s=%.3g\n",
+      label, to_string(st), wall, cpu, d.packing().size(), r.jamming ? r.jamming->phi : 0.0, r.accepted, r.rejected,
+      r.force_evaluations, r.force_evaluations / cpu, r.force_evaluations * n / cpu);
 }
 
 void step_cost(double L) {
@@ -89,10 +90,11 @@ void step_cost(double L) {
   for (int k = 0; k < n_steps; ++k) one_step(evals);
   const double wall = cpu_seconds() - c0;  // CPU seconds
   const double N = static_cast<double>(p.size());
-  std::printf("L=%-4g N=%5zu phi=%.4f P=%.2e  per growth step: %8.4f cpu-s  %7.0f evals  %6.2f us/eval  "
-              "%5.3f us/eval/cell   (reached in %ld steps, %.1f s)\n",
-              L, p.size(), p.packing_fraction(), P, wall / n_steps, static_cast<double>(evals) / n_steps,
-              1e6 * wall / evals, 1e6 * wall / evals / N, steps, prep);
+  std::printf(
+      "L=%-4g N=%5zu phi=%.4f P=%.2e  per growth step: %8.4f cpu-s  %7.0f evals  %6.2f us/eval  "
+      "%5.3f us/eval/cell   (reached in %ld steps, %.1f s)\n",
+      L, p.size(), p.packing_fraction(), P, wall / n_steps, static_cast<double>(evals) / n_steps, 1e6 * wall / evals,
+      1e6 * wall / evals / N, steps, prep);
 }
 
 }  // namespace
@@ -101,9 +103,12 @@ int main(int argc, char** argv) {
   std::string dir = "data/scenes";
   bool runs = true, steps = true;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--runs-only")) steps = false;
-    else if (!std::strcmp(argv[i], "--steps-only")) runs = false;
-    else dir = argv[i];
+    if (!std::strcmp(argv[i], "--runs-only"))
+      steps = false;
+    else if (!std::strcmp(argv[i], "--steps-only"))
+      runs = false;
+    else
+      dir = argv[i];
   }
   if (runs) {
     std::printf("== whole runs (two-cell start), each jamming search ==\n");

@@ -78,9 +78,9 @@ int main(int argc, char** argv) {
         best_response = std::min(best_response, t_response);
         best_total = std::min(best_total, seconds_since(a));
       }
-      std::printf("  %7zu %7.2f %7zu %8zu %10.3e %10.2f %12.4f %12.4f %12.4f %10.4f %10.5f  %s\n", n, c.packing.box.L, e.N_nr,
-                  e.kernel.dofs, e.P, t_make, best_contacts, best_response, best_total, e.moduli.B, e.moduli.G_simple,
-                  to_string(e.kernel.method));
+      std::printf("  %7zu %7.2f %7zu %8zu %10.3e %10.2f %12.4f %12.4f %12.4f %10.4f %10.5f  %s\n", n, c.packing.box.L,
+                  e.N_nr, e.kernel.dofs, e.P, t_make, best_contacts, best_response, best_total, e.moduli.B,
+                  e.moduli.G_simple, to_string(e.kernel.method));
       std::fflush(stdout);
     }
   }

@@ -73,10 +73,11 @@ struct Stage {
   }
   void print(const char* name) const {
     const double a = accepted > 0 ? static_cast<double>(accepted) : 1.0;
-    std::printf("  %-8s accepted %6ld  rejected %5ld  evals %10ld  evals/acc %9.1f  cpu %9.2f s  cpu/acc %9.5f s  "
-                "wall %9.2f s  us/eval/cell %.3f\n",
-                name, accepted, rejected, evals, static_cast<double>(evals) / a, cpu, cpu / a, wall,
-                cell_evals > 0 ? 1e6 * cpu / cell_evals : 0.0);
+    std::printf(
+        "  %-8s accepted %6ld  rejected %5ld  evals %10ld  evals/acc %9.1f  cpu %9.2f s  cpu/acc %9.5f s  "
+        "wall %9.2f s  us/eval/cell %.3f\n",
+        name, accepted, rejected, evals, static_cast<double>(evals) / a, cpu, cpu / a, wall,
+        cell_evals > 0 ? 1e6 * cpu / cell_evals : 0.0);
   }
 };
 
@@ -101,15 +102,24 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--scene") scene_file = value();
-    else if (a == "--L") overrides.push_back("box.L=" + value());
-    else if (a == "--seeds") seeds = std::atol(value().c_str());
-    else if (a == "--targets") targets = value();
-    else if (a == "--max-attempts") max_attempts = std::atol(value().c_str());
-    else if (a == "--stop-after-rejections") max_rejections = std::atol(value().c_str());
-    else if (a == "--report-every") report_every = std::atol(value().c_str());
-    else if (a == "--csv") csv_path = value();
-    else if (a == "--set") overrides.push_back(value());
+    if (a == "--scene")
+      scene_file = value();
+    else if (a == "--L")
+      overrides.push_back("box.L=" + value());
+    else if (a == "--seeds")
+      seeds = std::atol(value().c_str());
+    else if (a == "--targets")
+      targets = value();
+    else if (a == "--max-attempts")
+      max_attempts = std::atol(value().c_str());
+    else if (a == "--stop-after-rejections")
+      max_rejections = std::atol(value().c_str());
+    else if (a == "--report-every")
+      report_every = std::atol(value().c_str());
+    else if (a == "--csv")
+      csv_path = value();
+    else if (a == "--set")
+      overrides.push_back(value());
     else {
       usage();
       return 2;
@@ -185,12 +195,13 @@ int main(int argc, char** argv) {
     }
     if (report_every > 0 && acc > 0 && r.accepted % report_every == 0) {
       const StateView v = d.view();
-      std::printf("  window to step %6ld  N %6zu  phi %.6f  P %.3e  E/N %.3e  %-8s | accepted %4ld rejected %4ld "
-                  "evals/acc %8.1f  cpu/acc %8.4f s  wall/acc %8.4f s  (cpu so far %.1f s)\n",
-                  v.step, d.packing().size(), v.phi, v.P, v.E_per_cell, to_string(v.phase), window.accepted,
-                  window.rejected, static_cast<double>(window.evals) / static_cast<double>(window.accepted),
-                  window.cpu / static_cast<double>(window.accepted), window.wall / static_cast<double>(window.accepted),
-                  c - c0);
+      std::printf(
+          "  window to step %6ld  N %6zu  phi %.6f  P %.3e  E/N %.3e  %-8s | accepted %4ld rejected %4ld "
+          "evals/acc %8.1f  cpu/acc %8.4f s  wall/acc %8.4f s  (cpu so far %.1f s)\n",
+          v.step, d.packing().size(), v.phi, v.P, v.E_per_cell, to_string(v.phase), window.accepted, window.rejected,
+          static_cast<double>(window.evals) / static_cast<double>(window.accepted),
+          window.cpu / static_cast<double>(window.accepted), window.wall / static_cast<double>(window.accepted),
+          c - c0);
       std::fflush(stdout);
       window = Stage{};
     }
@@ -205,13 +216,13 @@ int main(int argc, char** argv) {
   std::printf("status %s  N_final %zu  phi_final %.6f  P_final %.3e",
               st == RunStatus::running ? "stopped (--max-attempts / --stop-after-rejections)" : to_string(st),
               d.packing().size(), v.phi, v.P);
-  if (r.jamming)
-    std::printf("  N_J %zu  phi_J %.6f  step_J %ld", r.jamming->N, r.jamming->phi, r.jamming->step);
+  if (r.jamming) std::printf("  N_J %zu  phi_J %.6f  step_J %ld", r.jamming->N, r.jamming->phi, r.jamming->step);
   std::printf("  targets landed %zu  unjammings %zu\n", r.targets.size(), r.unjammings.size());
-  std::printf("  total    accepted %6ld  rejected %5ld  evals %10ld  evals/acc %9.1f  cpu %9.2f s  cpu/acc %9.5f s  "
-              "wall %9.2f s  peak RSS %ld KiB (at start %ld KiB)\n",
-              r.accepted, r.rejected, r.force_evaluations, static_cast<double>(r.force_evaluations) / acc, cpu,
-              cpu / acc, wall, rss_peak, rss_start);
+  std::printf(
+      "  total    accepted %6ld  rejected %5ld  evals %10ld  evals/acc %9.1f  cpu %9.2f s  cpu/acc %9.5f s  "
+      "wall %9.2f s  peak RSS %ld KiB (at start %ld KiB)\n",
+      r.accepted, r.rejected, r.force_evaluations, static_cast<double>(r.force_evaluations) / acc, cpu, cpu / acc, wall,
+      rss_peak, rss_start);
   approach.print("approach");
   bisect.print("bisect");
   above.print("above");

@@ -77,8 +77,10 @@ Error compare(const Eigen::VectorXd& ref, const Eigen::VectorXd& got) {
   Error e;
   for (Eigen::Index k = 0; k < got.size(); ++k) {
     const double d = std::abs(got[k] - ref[k]);
-    if (ref[k] > 1e-6) e.band_rel = std::max(e.band_rel, d / ref[k]);
-    else e.zero_abs = std::max(e.zero_abs, d);
+    if (ref[k] > 1e-6)
+      e.band_rel = std::max(e.band_rel, d / ref[k]);
+    else
+      e.zero_abs = std::max(e.zero_abs, d);
   }
   return e;
 }
@@ -106,13 +108,20 @@ int main(int argc, char** argv) {
       if (a + 1 >= argc) throw std::runtime_error(arg + ": needs a value");
       return argv[++a];
     };
-    if (arg == "--cache") cache = next();
-    else if (arg == "--accuracy-n") accuracy_n = std::stoul(next());
-    else if (arg == "--sizes") sizes = parse_sizes(next());
-    else if (arg == "--modes") modes = std::stoi(next());
-    else if (arg == "--seed") seed = std::stoull(next());
-    else if (arg == "--skip-accuracy") accuracy = false;
-    else if (arg == "--skip-scaling") scaling = false;
+    if (arg == "--cache")
+      cache = next();
+    else if (arg == "--accuracy-n")
+      accuracy_n = std::stoul(next());
+    else if (arg == "--sizes")
+      sizes = parse_sizes(next());
+    else if (arg == "--modes")
+      modes = std::stoi(next());
+    else if (arg == "--seed")
+      seed = std::stoull(next());
+    else if (arg == "--skip-accuracy")
+      accuracy = false;
+    else if (arg == "--skip-scaling")
+      scaling = false;
     else {
       std::cerr << "usage: bench_spectrum [--cache DIR] [--accuracy-n N] [--sizes N1,N2,..] [--modes K] [--seed S] "
                    "[--skip-accuracy] [--skip-scaling]\n";
@@ -133,7 +142,9 @@ int main(int argc, char** argv) {
     std::printf("## Accuracy against cost: N = %zu cells (N_nr = %zu, %zu modes, N_zero = %zu, phi = %.4f)\n\n",
                 accuracy_n, L.network.N_nr, ref.n_dof, nz, L.phi);
     std::printf("Dense reference (Eigen, eigenvalues only): %.2f s\n\n", t_dense);
-    std::printf("| K | ncv | tol | deflated | Lanczos nev | time [s] | factor [s] | OP applications | restarts | max rel. error (band) | max abs. error (zero modes) |\n");
+    std::printf(
+        "| K | ncv | tol | deflated | Lanczos nev | time [s] | factor [s] | OP applications | restarts | max rel. "
+        "error (band) | max abs. error (zero modes) |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
     auto row = [&](const SpectrumOptions& a) {
       const auto t1 = Clock::now();
@@ -162,7 +173,9 @@ int main(int argc, char** argv) {
       }
     }
     // The shift: σ only sets how the spectrum is stretched around 0.
-    std::printf("\nShift scan at K = 100 (default tol, ncv):\n\n| sigma | time [s] | OP applications | max rel. error (band) |\n|---|---|---|---|\n");
+    std::printf(
+        "\nShift scan at K = 100 (default tol, ncv):\n\n| sigma | time [s] | OP applications | max rel. error (band) "
+        "|\n|---|---|---|---|\n");
     for (double sigma : {-1e-5, -1e-4, -1e-3, -1e-2, -1e-1}) {
       SpectrumOptions a;
       a.method = SpectrumMethod::arpack;
@@ -176,7 +189,9 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     std::printf("\nWithout deflation of the cell-local zero modes (default tol, ncv):\n\n");
-    std::printf("| K | ncv | tol | deflated | Lanczos nev | time [s] | factor [s] | OP applications | restarts | max rel. error (band) | max abs. error (zero modes) |\n");
+    std::printf(
+        "| K | ncv | tol | deflated | Lanczos nev | time [s] | factor [s] | OP applications | restarts | max rel. "
+        "error (band) | max abs. error (zero modes) |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
     // Without deflating the cell-local zero modes: Lanczos must resolve the whole degenerate zero
     // cluster (the inertia count makes it take all of it).
@@ -192,8 +207,12 @@ int main(int argc, char** argv) {
   }
 
   if (scaling) {
-    std::printf("## Time against N: lowest %d modes (ARPACK shift-invert, sigma = -1e-3, default tol = 1e-10 and ncv)\n\n", modes);
-    std::printf("| N | N_nr | dof | N_u | phi | factor [s] | Lanczos [s] | total [s] | OP applications | lambda_K | N_zero (inertia) | max rel. error (band) | max abs. error (zero) | reference |\n");
+    std::printf(
+        "## Time against N: lowest %d modes (ARPACK shift-invert, sigma = -1e-3, default tol = 1e-10 and ncv)\n\n",
+        modes);
+    std::printf(
+        "| N | N_nr | dof | N_u | phi | factor [s] | Lanczos [s] | total [s] | OP applications | lambda_K | N_zero "
+        "(inertia) | max rel. error (band) | max abs. error (zero) | reference |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (std::size_t n : sizes) {
       const Loaded L = packing(n, seed, cache);

@@ -93,8 +93,8 @@ int main(int argc, char** argv) {
   if (sizes.empty()) sizes = {200, 1000, 3000, 10000};
 
   std::printf("%6s %6s %6s %6s %5s %5s | %9s %9s %9s %9s | %9s %9s | %9s %9s %9s | %9s %5s %5s %5s\n", "N", "N_nr",
-              "bars", "redund", "flop", "span", "game", "clusters", "winding", "analyse", "ins/bar", "ins1%",
-              "rm1_ret", "rm1_reb", "rm_retst", "grow_upd", "rebl", "+bars", "-bars");
+              "bars", "redund", "flop", "span", "game", "clusters", "winding", "analyse", "ins/bar", "ins1%", "rm1_ret",
+              "rm1_reb", "rm_retst", "grow_upd", "rebl", "+bars", "-bars");
   for (std::size_t n : sizes) {
     Packing p = random_packing(n, 0.95, 1000 + n);
     ForceField field;

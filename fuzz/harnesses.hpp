@@ -25,8 +25,7 @@ inline void scene(std::string_view text) {
     const Scene s = io::parse_scene(text, "fuzz.toml");
     const std::string again = io::scene_to_toml(s);
     if (io::scene_to_toml(io::parse_scene(again, "again.toml")) != again) std::abort();
-  } catch (const InputError&) {
-  }
+  } catch (const InputError&) {}
 }
 
 // Any input is read or refused; what is read is written back (format_packing must accept it) and
@@ -37,8 +36,7 @@ inline void packing(std::string_view text) {
     const std::string written = io::format_packing(f.packing, f.meta);  // throws only on a bug
     const io::PackingFile back = io::parse_packing(written, "again.pack");
     if (io::format_packing(back.packing, back.meta) != written) std::abort();
-  } catch (const InputError&) {
-  }
+  } catch (const InputError&) {}
 }
 
 // The scene the checkpoint corpus was written with (`budjam grow` of it, stopped by SIGTERM).
@@ -96,8 +94,7 @@ inline void checkpoint(std::string_view input) {
     GrowthDriver driver(quick);
     driver.restore(std::move(s));
     driver.advance();
-  } catch (const InputError&) {
-  }
+  } catch (const InputError&) {}
 }
 
 }  // namespace budjam::fuzz

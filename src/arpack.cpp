@@ -18,8 +18,10 @@ std::string arpack_info_message(const std::string& routine, int info) {
   const std::string head = "ARPACK " + routine + " info " + std::to_string(info) + ": ";
   switch (info) {
     case 0: return head + "normal exit";
-    case 1: return head + "maximum number of restarts reached before all Ritz values converged "
-                          "(raise max_restarts, ncv or tol)";
+    case 1:
+      return head +
+             "maximum number of restarts reached before all Ritz values converged "
+             "(raise max_restarts, ncv or tol)";
     case 3: return head + "no shifts could be applied during an implicit restart (raise ncv)";
     case -1: return head + "n must be positive";
     case -2: return head + "nev must be positive";
@@ -32,16 +34,20 @@ std::string arpack_info_message(const std::string& routine, int info) {
     case -9: return head + "the starting vector is zero";
     case -10: return head + "mode (iparam(7)) must be 1 to 5";
     case -11: return head + "mode 1 and bmat 'G' are incompatible";
-    case -12: return head + (routine == "dsaupd" ? "iparam(1) must be 0 or 1"
-                                                : "nev and which = 'BE' are incompatible");
+    case -12:
+      return head + (routine == "dsaupd" ? "iparam(1) must be 0 or 1" : "nev and which = 'BE' are incompatible");
     case -13: return head + "nev and which = 'BE' are incompatible";
     case -14: return head + "dsaupd did not find any eigenvalue to sufficient accuracy";
     case -15: return head + "howmny must be 'A' or 'S' when eigenvectors are wanted";
     case -16: return head + "howmny = 'S' is not implemented";
-    case -17: return head + "dseupd found a different number of converged Ritz values than dsaupd "
-                            "(raise ncv)";
-    case -9999: return head + "could not build a Lanczos factorisation (the operator may be "
-                              "singular or the starting vector deficient)";
+    case -17:
+      return head +
+             "dseupd found a different number of converged Ritz values than dsaupd "
+             "(raise ncv)";
+    case -9999:
+      return head +
+             "could not build a Lanczos factorisation (the operator may be "
+             "singular or the starting vector deficient)";
     default: return head + "unknown code";
   }
 }
@@ -60,8 +66,8 @@ LanczosResult run(int n, int mode, const char* which, double sigma, const Linear
   if (n <= 0) throw ArpackError("dsaupd", -1, arpack_info_message("dsaupd", -1));
   if (opt.nev <= 0 || opt.nev >= n)
     throw ArpackError("dsaupd", -2,
-                      "ARPACK: nev must satisfy 0 < nev < n (got nev " + std::to_string(opt.nev) +
-                          ", n " + std::to_string(n) + "); use a dense solver for the whole spectrum");
+                      "ARPACK: nev must satisfy 0 < nev < n (got nev " + std::to_string(opt.nev) + ", n " +
+                          std::to_string(n) + "); use a dense solver for the whole spectrum");
   const int nev = opt.nev;
   const int ncv = opt.ncv > 0 ? opt.ncv : std::min(n, std::max(2 * nev + 1, nev + 20));
   if (ncv <= nev || ncv > n)
@@ -69,8 +75,8 @@ LanczosResult run(int n, int mode, const char* which, double sigma, const Linear
                       arpack_info_message("dsaupd", -3) + " (got nev " + std::to_string(nev) + ", ncv " +
                           std::to_string(ncv) + ", n " + std::to_string(n) + ")");
   if (opt.start.size() != 0 && opt.start.size() != n)
-    throw std::invalid_argument("lanczos: start vector has length " + std::to_string(opt.start.size()) +
-                                ", expected " + std::to_string(n));
+    throw std::invalid_argument("lanczos: start vector has length " + std::to_string(opt.start.size()) + ", expected " +
+                                std::to_string(n));
 
   std::vector<double> resid(n);
   if (opt.start.size() == n) {
@@ -81,8 +87,7 @@ LanczosResult run(int n, int mode, const char* which, double sigma, const Linear
     for (auto& r : resid) r = U(rng);
   }
   const int lworkl = ncv * (ncv + 8);
-  std::vector<double> v(static_cast<std::size_t>(n) * ncv), workd(3 * static_cast<std::size_t>(n)),
-      workl(lworkl);
+  std::vector<double> v(static_cast<std::size_t>(n) * ncv), workd(3 * static_cast<std::size_t>(n)), workl(lworkl);
   int iparam[11] = {0};
   int ipntr[11] = {0};
   iparam[0] = 1;  // exact shifts

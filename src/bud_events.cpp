@@ -43,8 +43,7 @@ const char* to_string(BudEventKind kind) {
   return "?";
 }
 
-std::vector<BudEvent> BudTracker::tag(int episode, long step, double phi, const Packing& p,
-                                      const ContactNetwork& net) {
+std::vector<BudEvent> BudTracker::tag(int episode, long step, double phi, const Packing& p, const ContactNetwork& net) {
   tags_.clear();
   episode_ = episode;
   std::vector<BudEvent> events;
@@ -57,9 +56,8 @@ std::vector<BudEvent> BudTracker::tag(int episode, long step, double phi, const 
   return events;
 }
 
-std::vector<BudEvent> BudTracker::update(long step, double phi, const Packing& p,
-                                         const std::vector<Contact>& contacts, const ContactNetwork& net,
-                                         const std::vector<Division>& divisions) {
+std::vector<BudEvent> BudTracker::update(long step, double phi, const Packing& p, const std::vector<Contact>& contacts,
+                                         const ContactNetwork& net, const std::vector<Division>& divisions) {
   std::vector<BudEvent> events;
   if (active() == 0) return events;
   std::vector<char> touching(2 * p.size(), 0);  // lobes with any contact (also with rattlers)
@@ -101,13 +99,16 @@ std::vector<BudEvent> BudTracker::close(BudEventKind kind, long step, double phi
 }
 
 std::size_t BudTracker::active() const {
-  return static_cast<std::size_t>(std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kActive; }));
+  return static_cast<std::size_t>(
+      std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kActive; }));
 }
 std::size_t BudTracker::completed() const {
-  return static_cast<std::size_t>(std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kCompleted; }));
+  return static_cast<std::size_t>(
+      std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kCompleted; }));
 }
 std::size_t BudTracker::divided() const {
-  return static_cast<std::size_t>(std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kDivided; }));
+  return static_cast<std::size_t>(
+      std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.state == kDivided; }));
 }
 std::size_t BudTracker::touched() const {
   return static_cast<std::size_t>(std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.touched; }));

@@ -62,8 +62,8 @@ void NeighbourList::build(const Lobes& lobes, const Box& box) {
   double R_max = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(lobes.x[i]) || !std::isfinite(lobes.y[i]) || !std::isfinite(lobes.R[i]))
-      throw std::domain_error("neighbour list: lobe " + std::to_string(i) + " of cell " +
-                              std::to_string(cell_of(i)) + " has a non-finite position or radius");
+      throw std::domain_error("neighbour list: lobe " + std::to_string(i) + " of cell " + std::to_string(cell_of(i)) +
+                              " has a non-finite position or radius");
     R_max = std::max(R_max, lobes.R[i]);
   }
   const double L = box.L;
@@ -129,7 +129,7 @@ void NeighbourList::build(const Lobes& lobes, const Box& box) {
     std::sort(stencil.begin(), stencil.begin() + m);
     m = static_cast<int>(std::unique(stencil.begin(), stencil.begin() + m) - stencil.begin());
 
-      partners.clear();
+    partners.clear();
     const std::size_t ca = cell_of(a);
     for (int k = 0; k < m; ++k) {
       const auto cell = static_cast<std::size_t>(stencil[k]);
@@ -153,7 +153,7 @@ void NeighbourList::build(const Lobes& lobes, const Box& box) {
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Lobes& lobes, const Box& box,
-                                                                        double cutoff_extra) {
+                                                                       double cutoff_extra) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
   const std::size_t n = lobes.size();
   for (std::size_t a = 0; a < n; ++a)

@@ -112,11 +112,10 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
   S.sorted = 1;
   S.packed = 1;
 
-  const bool same_pattern =
-      m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
-      std::equal(m.outer.begin(), m.outer.end(), C.outerIndexPtr()) &&
-      static_cast<Eigen::Index>(m.inner.size()) == C.nonZeros() &&
-      std::equal(m.inner.begin(), m.inner.end(), C.innerIndexPtr());
+  const bool same_pattern = m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
+                            std::equal(m.outer.begin(), m.outer.end(), C.outerIndexPtr()) &&
+                            static_cast<Eigen::Index>(m.inner.size()) == C.nonZeros() &&
+                            std::equal(m.inner.begin(), m.inner.end(), C.innerIndexPtr());
   if (!same_pattern) {
     m.drop_factor();
     m.L = cholmod_analyze(&S, &m.common);

@@ -6,8 +6,8 @@ namespace budjam {
 
 namespace {
 
-// The rattler rule (docs/model.md, "Contact network"): fewer than 3 contacts, or exactly 3 split 2 + 1 between the lobes (the three force
-// lines cannot meet in one point, so force and torque cannot both balance). 3 + 0 is not a
+// The rattler rule (docs/model.md, "Contact network"): fewer than 3 contacts, or exactly 3 split 2 + 1 between the
+// lobes (the three force lines cannot meet in one point, so force and torque cannot both balance). 3 + 0 is not a
 // rattler: the free lobe is an unconstrained lobe (one floppy rotation, counted in N_u).
 // The rule is monotone (fewer contacts never turn a rattler into a non-rattler), so the iterative
 // removal has a unique fixed point whatever the order of removal.
@@ -31,9 +31,12 @@ ContactNetwork analyse_network(std::size_t n_cells, const std::vector<Contact>& 
     ++count[c.i];
     ++count[c.j];
     const bool bi = is_bud(c.i), bj = is_bud(c.j);
-    if (bi && bj) ++net.bud_bud;
-    else if (bi || bj) ++net.mother_bud;
-    else ++net.mother_mother;
+    if (bi && bj)
+      ++net.bud_bud;
+    else if (bi || bj)
+      ++net.mother_bud;
+    else
+      ++net.mother_mother;
   }
 
   // The paper code's single pass on the raw counts.

@@ -65,8 +65,8 @@ Phi2Prediction predict_phi2(double n_J, double u_J, double chi_bar, double a_eps
   p.a_eps_d2 = a_eps_d2;
   p.integral_S_d2 = integral_S_d2;
   p.dphi2_diameter_sq = phi2_excess(n_J, u_J, chi_bar, a_eps_d2, integral_S_d2);
-  p.dphi2_area = phi2_excess(n_J, u_J, chi_bar, kDiameterSquaredToArea * a_eps_d2,
-                             kDiameterSquaredToArea * integral_S_d2);
+  p.dphi2_area =
+      phi2_excess(n_J, u_J, chi_bar, kDiameterSquaredToArea * a_eps_d2, kDiameterSquaredToArea * integral_S_d2);
   return p;
 }
 

@@ -43,8 +43,7 @@ const char* to_string(MinimiserStop stop) {
 
 double force_resolution(const Packing& p) {
   double extent = p.box.L;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    extent = std::max({extent, std::abs(p.x(i)), std::abs(p.y(i))});
+  for (std::size_t i = 0; i < p.size(); ++i) extent = std::max({extent, std::abs(p.x(i)), std::abs(p.y(i))});
   return 16.0 * std::numeric_limits<double>::epsilon() * kSpring * extent;
 }
 
@@ -91,9 +90,12 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
   };
   // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
   auto stopped = [&](double U, double fmax) {
-    if (U < floor_total) res.stop = MinimiserStop::energy_floor;  // the more telling reason when both hold
-    else if (fmax < tol) res.stop = MinimiserStop::force;
-    else return false;
+    if (U < floor_total)
+      res.stop = MinimiserStop::energy_floor;  // the more telling reason when both hold
+    else if (fmax < tol)
+      res.stop = MinimiserStop::force;
+    else
+      return false;
     res.converged = true;
     return true;
   };

@@ -49,8 +49,7 @@ double growth_factor(double bud_pressure, std::optional<double> P0) {
   return std::exp(-x);
 }
 
-std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures,
-                                 std::optional<double> P0) {
+std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0) {
   std::vector<double> rates(p.gamma0);
   if (bud_pressures && P0) {
     if (bud_pressures->size() != p.size())
@@ -98,8 +97,7 @@ Division divide(Packing& p, std::size_t i, const Scene& scene, Rng& rng) {
   return d;
 }
 
-std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, double dt, const Scene& scene,
-                                Rng& rng) {
+std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, double dt, const Scene& scene, Rng& rng) {
   const std::size_t n = p.size();  // cells born in this step are appended past n: not grown
   if (rates.size() != n) throw std::invalid_argument("grow_step: one rate per cell expected");
   std::vector<Division> divisions;

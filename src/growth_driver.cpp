@@ -78,8 +78,8 @@ struct GrowthDriver::Impl {
   BudTracker buds;
   // Secant search: the relaxed trials of this unjammed phase that overshot the jamming window.
   std::vector<Overshoot> overshoots;
-  int slow_trials = 0;        // consecutive trials that did not halve the bracket around φ_J
-  double bracket_width = 0;   // φ from the accepted state to the lowest overshoot at the last trial
+  int slow_trials = 0;       // consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;  // φ from the accepted state to the lowest overshoot at the last trial
 
   // Derived from the accepted state (recomputed identically after a restore).
   double E = 0, P = 0, phi = 0;
@@ -236,8 +236,10 @@ struct GrowthDriver::Impl {
     const StateView v = view();
     if (phase == Phase::jammed) emit_bud_events(v, buds.close(BudEventKind::censored_end, step, phi, packing));
     for (Observer* o : observers) {
-      if (result.status == RunStatus::finished) o->on_finished(Finished{v, result});
-      else o->on_failed(Failed{v, result});
+      if (result.status == RunStatus::finished)
+        o->on_finished(Finished{v, result});
+      else
+        o->on_failed(Failed{v, result});
     }
   }
 
@@ -310,7 +312,8 @@ struct GrowthDriver::Impl {
   // window does not hold on this path (φ_J depends on the path): dropped too.
   void prune_overshoots() {
     std::erase_if(overshoots, [&](const Overshoot& o) { return o.phi <= phi; });
-    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    std::sort(overshoots.begin(), overshoots.end(),
+              [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
     const double s_top = std::sqrt(2.0 * scene.epsilon_U);
     while (!overshoots.empty() && overshoots[0].s - overshoot_line_slope() * (overshoots[0].phi - phi) > s_top)
       overshoots.erase(overshoots.begin());
@@ -322,15 +325,18 @@ struct GrowthDriver::Impl {
   // bisection, so the search is never slower than halving. nullopt without an overshoot.
   std::optional<double> search_goal() {
     if (overshoots.empty()) return std::nullopt;
-    std::sort(overshoots.begin(), overshoots.end(), [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
+    std::sort(overshoots.begin(), overshoots.end(),
+              [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
     const Overshoot& a = overshoots.front();
     const double width = a.phi - phi;
     slow_trials = (bracket_width > 0 && width > 0.5 * bracket_width) ? slow_trials + 1 : 0;
     bracket_width = width;
     double goal = phi + 0.5 * width;
     const double slope = overshoot_line_slope();
-    if (slow_trials >= 2) slow_trials = 0;
-    else if (slope > 0) goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope;
+    if (slow_trials >= 2)
+      slow_trials = 0;
+    else if (slope > 0)
+      goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope;
     return std::clamp(goal, phi + width / 32, a.phi - width / 32);
   }
 
@@ -417,10 +423,10 @@ struct GrowthDriver::Impl {
   Verdict judge(const Trial& t) const {
     const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
     if (phase == Phase::unjammed) return t.E > 2.0 * eps ? Verdict::reject : Verdict::accept;  // overshot jamming
-    if (t.E < eps) return Verdict::accept;  // unjamming
+    if (t.E < eps) return Verdict::accept;                                                     // unjamming
     if (next_target < scene.targets.size())
       return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance ? Verdict::reject
-                                                                                                  : Verdict::accept;
+                                                                                                   : Verdict::accept;
     // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
     if (scene.continue_to_phi2 && !result.depletion && phi_trial > result.jamming->phi + scene.max_dphi)
       return Verdict::stop;
@@ -544,16 +550,13 @@ struct GrowthDriver::Impl {
     std::optional<Trial> trial = make_trial();
     if (!trial) return result.status;
     switch (judge(*trial)) {
-      case Verdict::reject:
-        reject(*trial);
-        return result.status;
+      case Verdict::reject: reject(*trial); return result.status;
       case Verdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;
         finish_events();
         return result.status;
-      case Verdict::accept:
-        break;
+      case Verdict::accept: break;
     }
     const std::vector<Division> divisions = trial->divisions;
     const Change change = accept(std::move(*trial));
@@ -589,8 +592,20 @@ struct GrowthDriver::Impl {
   // ---- checkpoints ---------------------------------------------------------------------------
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
-    return GrowthState{seed,  rng,         phase, dt,     last_dt, step, attempts, next_target, divisions_since_jamming,
-                       episodes, result, buds,  packing, JammingSearchState{overshoots, slow_trials, bracket_width}};
+    return GrowthState{seed,
+                       rng,
+                       phase,
+                       dt,
+                       last_dt,
+                       step,
+                       attempts,
+                       next_target,
+                       divisions_since_jamming,
+                       episodes,
+                       result,
+                       buds,
+                       packing,
+                       JammingSearchState{overshoots, slow_trials, bracket_width}};
   }
 
   void restore(GrowthState s) {
@@ -635,8 +650,7 @@ void GrowthDriver::add_observer(Observer& observer) {
 RunStatus GrowthDriver::advance() { return impl_->advance(); }
 
 RunStatus GrowthDriver::run() {
-  while (impl_->advance() == RunStatus::running) {
-  }
+  while (impl_->advance() == RunStatus::running) {}
   return impl_->result.status;
 }
 

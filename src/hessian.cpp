@@ -57,7 +57,8 @@ SparseMatrix hessian(const Packing& p, const std::vector<Contact>& contacts, con
   for (const Contact& c : contacts) {
     const std::size_t i = cell_of(c.i), j = cell_of(c.j);
     if (i == j) throw std::invalid_argument("hessian: contact between lobes of one cell (" + std::to_string(i) + ")");
-    if (i >= p.size() || j >= p.size()) throw std::invalid_argument("hessian: contact refers to a cell outside the packing");
+    if (i >= p.size() || j >= p.size())
+      throw std::invalid_argument("hessian: contact refers to a cell outside the packing");
     const Eigen::Matrix<double, 6, 6> h = contact_hessian(p, c, terms);
     const Eigen::Index base[2] = {static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j)};
     for (int a = 0; a < 6; ++a)

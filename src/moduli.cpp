@@ -1,8 +1,8 @@
 #include "budjam/moduli.hpp"
 
 #include "budjam/cholmod_solver.hpp"
-#include "budjam/hessian.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/hessian.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -67,8 +67,10 @@ double column_residual(const Eigen::MatrixXd& rhs, const Eigen::MatrixXd& res) {
   double worst = 0;
   for (Eigen::Index k = 0; k < rhs.cols(); ++k) {
     const double b = rhs.col(k).norm();
-    if (b > 0) worst = std::max(worst, res.col(k).norm() / b);
-    else if (res.col(k).norm() > 0) worst = std::max(worst, res.col(k).norm());
+    if (b > 0)
+      worst = std::max(worst, res.col(k).norm() / b);
+    else if (res.col(k).norm() > 0)
+      worst = std::max(worst, res.col(k).norm());
   }
   return worst;
 }
@@ -147,8 +149,9 @@ Eigen::MatrixXd cg_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, cons
                          KernelTreatment& k) {
   Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper, Preconditioner> cg;
   cg.setTolerance(options.cg_tolerance);
-  cg.setMaxIterations(options.cg_max_iterations > 0 ? options.cg_max_iterations
-                                                    : static_cast<int>(std::min<Eigen::Index>(10 * Hf.rows(), 1 << 30)));
+  cg.setMaxIterations(options.cg_max_iterations > 0
+                          ? options.cg_max_iterations
+                          : static_cast<int>(std::min<Eigen::Index>(10 * Hf.rows(), 1 << 30)));
   cg.compute(Hf);
   if (cg.info() != Eigen::Success)
     throw std::runtime_error("elastic_response: the conjugate-gradient preconditioner could not be built");
@@ -197,7 +200,8 @@ CgPreconditioner parse_cg_preconditioner(const std::string& text, const std::str
 
 Eigen::Matrix2d energy_stress(const Packing& p, const std::vector<Contact>& contacts) {
   Eigen::Matrix2d W = Eigen::Matrix2d::Zero();
-  for (const Contact& c : contacts) W += c.force() * Eigen::Vector2d(c.nx, c.ny) * centroid_separation(p, c).transpose();
+  for (const Contact& c : contacts)
+    W += c.force() * Eigen::Vector2d(c.nx, c.ny) * centroid_separation(p, c).transpose();
   return -W / (p.box.L * p.box.L);
 }
 
@@ -440,8 +444,8 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       if (f.factor(Hf) && (llt || (f.negative_pivots() == 0 && f.rcond() > kSingularRcond))) {
         k.method = llt ? SolveMethod::cholesky : SolveMethod::ldlt;
         k.rcond = f.rcond();
-        return refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold,
-                             k.refinement_steps);
+        return refined_solve(
+            Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold, k.refinement_steps);
       }
       k.cholesky_failed_column = f.failed_column();
       return regularised_refinement(Hf, Xf, options, k);
@@ -451,8 +455,9 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
         k.method = SolveMethod::dense;
         k.rcond = ldl.rcond();
-        return refined_solve(Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps,
-                             threshold, k.refinement_steps);
+        return refined_solve(
+            Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps, threshold,
+            k.refinement_steps);
       }
       return regularised_refinement(Hf, Xf, options, k);
     }
@@ -579,8 +584,10 @@ Relaxation relax(const ResponseProblem& pr, const ModuliOptions& options) {
     if (free_index[d] >= 0) Xf.row(free_index[d]) = pr.Xi.row(d);
 
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
-  if (nf > 0 && Xf.norm() > 0) Uf = solve_pinned(Hf, Xf, options, r.kernel);
-  else r.kernel.method = SolveMethod::no_force_response;
+  if (nf > 0 && Xf.norm() > 0)
+    Uf = solve_pinned(Hf, Xf, options, r.kernel);
+  else
+    r.kernel.method = SolveMethod::no_force_response;
   r.U = Eigen::MatrixXd::Zero(nr, 4);
   for (Eigen::Index d = 0; d < nr; ++d)
     if (free_index[d] >= 0) r.U.row(d) = Uf.row(free_index[d]);

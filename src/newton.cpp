@@ -39,7 +39,8 @@ const char* to_string(NewtonStop stop) {
 double max_scaled_force(const Packing& p, const Eigen::VectorXd& F) {
   double fmax = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i)
-    fmax = std::max({fmax, std::abs(F[3 * i]), std::abs(F[3 * i + 1]), std::abs(F[3 * i + 2] / p.dumbbell(i).gyration)});
+    fmax =
+        std::max({fmax, std::abs(F[3 * i]), std::abs(F[3 * i + 1]), std::abs(F[3 * i + 2] / p.dumbbell(i).gyration)});
   return fmax;
 }
 

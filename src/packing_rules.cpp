@@ -1,8 +1,8 @@
 #include "budjam/packing_rules.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 
 namespace budjam {
 

@@ -25,7 +25,8 @@ bool dominates(const CostErrors& a, const CostErrors& b, const ParetoTolerance& 
   return better;
 }
 
-std::vector<std::size_t> dominated_by(const std::vector<CostErrors>& settings, std::size_t k, const ParetoTolerance& tol) {
+std::vector<std::size_t> dominated_by(const std::vector<CostErrors>& settings, std::size_t k,
+                                      const ParetoTolerance& tol) {
   std::vector<std::size_t> by;
   for (std::size_t j = 0; j < settings.size(); ++j)
     if (j != k && dominates(settings[j], settings[k], tol)) by.push_back(j);

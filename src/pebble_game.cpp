@@ -1,7 +1,7 @@
 #include "budjam/pebble_game.hpp"
 
-#include <boost/graph/breadth_first_search.hpp>
 #include <algorithm>
+#include <boost/graph/breadth_first_search.hpp>
 #include <deque>
 #include <numeric>
 #include <stdexcept>
@@ -100,8 +100,10 @@ bool PebbleGame::attached(std::uint32_t joint, int root) {
   for (const auto& [y, k] : neighbours_[joint]) {
     if (!spanned_ && !independent_[k] && !certified_[k]) continue;
     if (region_root(y) != root) continue;
-    if (first == none) first = y;
-    else if (y != first) return true;
+    if (first == none)
+      first = y;
+    else if (y != first)
+      return true;
   }
   return false;
 }
@@ -431,8 +433,7 @@ RigidClusters PebbleGame::rigid_clusters() {
             // Three pebbles pinned on the bar stand for its rigid-body motions in the plane (two
             // on u and one on v, or the reverse when u's search is blocked by v: the closed set
             // reachable from u and v always holds at least three free pebbles).
-            while (free_[u] < 2 && search(u, v, none, true) != none) {
-            }
+            while (free_[u] < 2 && search(u, v, none, true) != none) {}
             while (free_[u] + free_[v] < 3)
               if (search(v, u, none, true) == none)
                 throw std::logic_error("pebble game: three pebbles could not be gathered on a bar");

@@ -52,8 +52,8 @@ double wrap(double v, double L) { return v - L * std::floor(v / L); }
 
 std::string force_colour(double f, double f_max) {
   // Ramp through pale yellow → orange → red → dark red (YlOrRd-like), linear in f/f_max.
-  static constexpr std::array<std::array<double, 3>, 5> stops{{
-      {255, 237, 160}, {254, 178, 76}, {240, 59, 32}, {189, 0, 38}, {103, 0, 13}}};
+  static constexpr std::array<std::array<double, 3>, 5> stops{
+      {{255, 237, 160}, {254, 178, 76}, {240, 59, 32}, {189, 0, 38}, {103, 0, 13}}};
   double t = (f_max > 0 && f > 0) ? std::min(1.0, f / f_max) : 0.0;
   const double s = t * (stops.size() - 1);
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(s), stops.size() - 2);
@@ -72,7 +72,8 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
     throw std::invalid_argument("render_svg: the contact network does not belong to this packing");
   if (!(p.box.L > 0)) throw std::invalid_argument("render_svg: box side must be positive");
   for (const auto& c : contacts)
-    if (c.i >= 2 * n || c.j >= 2 * n) throw std::invalid_argument("render_svg: contact names a lobe that does not exist");
+    if (c.i >= 2 * n || c.j >= 2 * n)
+      throw std::invalid_argument("render_svg: contact names a lobe that does not exist");
 
   const double L = p.box.L, s = opt.pixels_per_unit, m = opt.margin * s;
   const double side = L * s;
@@ -147,8 +148,8 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
       const bool bearing = !net.rattler[cell_of(c.i)] && !net.rattler[cell_of(c.j)];
       const std::string colour = bearing ? force_colour(c.force(), f_max) : "#969696";
       const double width = bearing ? 1.0 + 3.0 * (f_max > 0 ? c.force() / f_max : 0.0) : 0.75;
-      for (const auto& d : images(std::min(x0, x1), std::max(x0, x1), std::min(y0, y1), std::max(y0, y1), p.box,
-                                  opt.periodic_images))
+      for (const auto& d :
+           images(std::min(x0, x1), std::max(x0, x1), std::min(y0, y1), std::max(y0, y1), p.box, opt.periodic_images))
         o += std::string("<line class=\"") + (bearing ? "contact" : "contact rattler") + "\" x1=\"" +
              num(X(x0 + d[0])) + "\" y1=\"" + num(Y(y0 + d[1])) + "\" x2=\"" + num(X(x1 + d[0])) + "\" y2=\"" +
              num(Y(y1 + d[1])) + "\" stroke=\"" + colour + "\" stroke-width=\"" + num(width) + "\"/>\n";
@@ -172,7 +173,8 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
     o += "<circle cx=\"" + num(lx0 + 6) + "\" cy=\"" + num(y + 5) +
          "\" r=\"5\" fill=\"#bcbddc\" stroke=\"#1a9641\" stroke-dasharray=\"3,2\" stroke-width=\"2\"/>\n";
     o += "<text x=\"" + num(lx0 + 16) + "\" y=\"" + num(y + 9) + "\">unconstrained bud</text>\n";
-    o += "<circle cx=\"" + num(lx0 + 6) + "\" cy=\"" + num(y + 25) + "\" r=\"5\" fill=\"#d9d9d9\" stroke=\"#969696\"/>\n";
+    o += "<circle cx=\"" + num(lx0 + 6) + "\" cy=\"" + num(y + 25) +
+         "\" r=\"5\" fill=\"#d9d9d9\" stroke=\"#969696\"/>\n";
     o += "<text x=\"" + num(lx0 + 16) + "\" y=\"" + num(y + 29) + "\">rattler</text>\n";
     o += "</g>\n";
     y += legend_h;

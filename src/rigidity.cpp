@@ -2,10 +2,10 @@
 
 #include "budjam/scene.hpp"  // InputError
 
+#include <algorithm>
 #include <boost/graph/breadth_first_search.hpp>
 #include <boost/graph/filtered_graph.hpp>
 #include <boost/property_map/property_map.hpp>
-#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -40,15 +40,12 @@ ImageShift image_shift(const Box& box, const Lobes& lobes, std::uint32_t a, std:
 // Z-order (Morton) index of a point of the box on a 2¹⁶ × 2¹⁶ grid.
 std::uint32_t morton(const Box& box, double x, double y) {
   wrap(box, x, y);
-  const auto cell = [&](double v) {
-    return static_cast<std::uint32_t>(std::clamp(v / box.L * 65536.0, 0.0, 65535.0));
-  };
+  const auto cell = [&](double v) { return static_cast<std::uint32_t>(std::clamp(v / box.L * 65536.0, 0.0, 65535.0)); };
   const std::uint32_t ix = cell(x), iy = cell(y);
   std::uint32_t key = 0;
   for (int bit = 0; bit < 16; ++bit) key |= (((ix >> bit) & 1u) << (2 * bit)) | (((iy >> bit) & 1u) << (2 * bit + 1));
   return key;
 }
-
 
 }  // namespace
 
@@ -98,8 +95,7 @@ std::vector<Winding> cluster_windings(std::size_t joints, const std::vector<Bar>
   using Graph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, boost::no_property,
                                       boost::property<boost::edge_index_t, std::uint32_t>>;
   Graph g(joints);
-  for (std::size_t k = 0; k < bars.size(); ++k)
-    boost::add_edge(bars[k].a, bars[k].b, static_cast<std::uint32_t>(k), g);
+  for (std::size_t k = 0; k < bars.size(); ++k) boost::add_edge(bars[k].a, bars[k].b, static_cast<std::uint32_t>(k), g);
   using IndexMap = boost::property_map<Graph, boost::edge_index_t>::type;
   const IndexMap bar_index = boost::get(boost::edge_index, g);
 
@@ -130,7 +126,9 @@ std::vector<Winding> cluster_windings(std::size_t joints, const std::vector<Bar>
       const ImageShift o = (*offset)[boost::source(e, s)];
       return boost::source(e, s) == (*bars)[k].a ? ImageShift{o.x + d.x, o.y + d.y} : ImageShift{o.x - d.x, o.y - d.y};
     }
-    void discover_vertex(Sub::vertex_descriptor v, const Sub&) const { touched->push_back(static_cast<std::uint32_t>(v)); }
+    void discover_vertex(Sub::vertex_descriptor v, const Sub&) const {
+      touched->push_back(static_cast<std::uint32_t>(v));
+    }
     void tree_edge(Sub::edge_descriptor e, const Sub& s) const { (*offset)[boost::target(e, s)] = across(e, s); }
     void non_tree_edge(Sub::edge_descriptor e, const Sub& s) const {
       const ImageShift there = across(e, s), here = (*offset)[boost::target(e, s)];
@@ -329,7 +327,8 @@ void RigidityTracker::diff_events(const Packing& p) {
   const long code = long{state_.spans_x} + 2L * long{state_.spans_y};
   if (first || memory_.floppy_plane != state_.floppy_plane)
     events_.push_back({RigidityEventKind::floppy_modes, -1, first ? -1L : memory_.floppy_plane, state_.floppy_plane});
-  if (!first && memory_.span_code != code) events_.push_back({RigidityEventKind::spanning, -1, memory_.span_code, code});
+  if (!first && memory_.span_code != code)
+    events_.push_back({RigidityEventKind::spanning, -1, memory_.span_code, code});
   if (!memory_.spanned && code != 0) {
     memory_.spanned = true;
     events_.push_back({RigidityEventKind::first_spanning, -1, 0, code});

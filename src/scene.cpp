@@ -7,8 +7,8 @@
 #include "budjam/scene_keys.hpp"
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -44,7 +44,8 @@ void validate(const Scene& s) {
 
   // [init]
   if (s.init == InitialState::random_seeds) {
-    if (s.n_seeds < 1) fail("init.cells", "must be at least 1 with init.kind = \"random_seeds\"", std::int64_t(s.n_seeds));
+    if (s.n_seeds < 1)
+      fail("init.cells", "must be at least 1 with init.kind = \"random_seeds\"", std::int64_t(s.n_seeds));
     // Newborn cells fit in disks of diameter α0. Random sequential placement of disks saturates
     // at a covered fraction 0.547; at most 0.4 keeps random non-overlapping placement quick.
     const double disk = 0.25 * std::numbers::pi * s.alpha0 * s.alpha0;
@@ -64,8 +65,10 @@ void validate(const Scene& s) {
   // The adaptive step is dt / max(g_max, floor): it must stay finite, or a bud whose growth factor
   // is exactly 0 would grow by 0 · ∞ = NaN.
   if (s.adaptive_floor < std::numeric_limits<double>::min() || !std::isfinite(s.dt / s.adaptive_floor))
-    fail("growth.adaptive_floor", "must be at least " + value_text(std::numeric_limits<double>::min()) +
-                                      " and keep growth.dt / adaptive_floor finite", s.adaptive_floor);
+    fail("growth.adaptive_floor",
+         "must be at least " + value_text(std::numeric_limits<double>::min()) +
+             " and keep growth.dt / adaptive_floor finite",
+         s.adaptive_floor);
 
   // [jamming]
   if (!s.targets.empty()) {

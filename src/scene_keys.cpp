@@ -86,7 +86,8 @@ SceneKey row(std::string section, std::string name, KeyType type, std::string he
   return k;
 }
 
-#define BUDJAM_FIELD(member) [](auto& s) -> auto& { return s.member; }
+#define BUDJAM_FIELD(member) \
+  [](auto& s) -> auto& { return s.member; }
 
 template <class Ref>
 SceneKey real(std::string sec, std::string name, std::string help, Range range, Ref ref) {
@@ -151,8 +152,8 @@ std::vector<SceneKey> make_keys() {
   e.push_back(real("cells", "r0", "mean innate growth rate r0 (per unit step)", kPositive, BUDJAM_FIELD(r0)));
   e.push_back(real("cells", "delta", "spread of innate rates: γ0 = r0 (1 + δ (U − 1/2))",
                    between(0, 2, "[)", " so that every γ0 > 0"), BUDJAM_FIELD(delta)));
-  e.push_back(real("cells", "alpha0", "aspect ratio of a newborn cell; division at 2 α0",
-                   between(1, 2, "()"), BUDJAM_FIELD(alpha0)));
+  e.push_back(real("cells", "alpha0", "aspect ratio of a newborn cell; division at 2 α0", between(1, 2, "()"),
+                   BUDJAM_FIELD(alpha0)));
   e.push_back(choice("cells", "division", "orientation of newborn cells: \"random\", \"aligned\" or \"opposite\"",
                      {"random", "aligned", "opposite"}, BUDJAM_FIELD(division)));
 
@@ -169,8 +170,10 @@ std::vector<SceneKey> make_keys() {
     return std::string("none");
   };
   P0.set = [](Scene& s, const SceneValue& v) {
-    if (const auto* d = std::get_if<double>(&v)) s.P0 = *d;
-    else s.P0.reset();
+    if (const auto* d = std::get_if<double>(&v))
+      s.P0 = *d;
+    else
+      s.P0.reset();
   };
   e.push_back(P0);
   e.push_back(real("growth", "dt", "nominal growth step Δt", kPositive, BUDJAM_FIELD(dt)));
@@ -187,9 +190,9 @@ std::vector<SceneKey> make_keys() {
                    BUDJAM_FIELD(epsilon_U)));
   e.push_back(real("jamming", "target_tolerance", "landing tolerance |φ − (φ_J + Δφ)|", kPositive,
                    BUDJAM_FIELD(target_tolerance)));
-  SceneKey targets = row("jamming", "targets", KeyType::reals,
-                         "Δφ above jamming to visit, strictly increasing, e.g. [1e-3, 1e-2]",
-                         above(0, " (Δφ above jamming)"));
+  SceneKey targets =
+      row("jamming", "targets", KeyType::reals, "Δφ above jamming to visit, strictly increasing, e.g. [1e-3, 1e-2]",
+          above(0, " (Δφ above jamming)"));
   targets.get = [](const Scene& s) -> SceneValue { return s.targets; };
   targets.set = [](Scene& s, const SceneValue& v) { s.targets = std::get<std::vector<double>>(v); };
   e.push_back(targets);
@@ -209,18 +212,17 @@ std::vector<SceneKey> make_keys() {
   e.push_back(real("minimiser", "dt_min", "FIRE smallest time step", kPositive, BUDJAM_FIELD(fire.dt_min)));
   e.push_back(integer("minimiser", "n_delay", "FIRE steps before the time step may grow", kZeroOrPositive,
                       BUDJAM_FIELD(fire.n_delay)));
-  e.push_back(real("minimiser", "f_inc", "FIRE time step growth factor", above(1),
-                   BUDJAM_FIELD(fire.f_inc)));
-  e.push_back(real("minimiser", "f_dec", "FIRE time step shrink factor",
-                   between(0, 1, "()"), BUDJAM_FIELD(fire.f_dec)));
-  e.push_back(real("minimiser", "alpha_start", "FIRE initial mixing α",
-                   between(0, 1, "()"), BUDJAM_FIELD(fire.alpha_start)));
-  e.push_back(real("minimiser", "f_alpha", "FIRE mixing decay factor", between(0, 1, "(]"),
-                   BUDJAM_FIELD(fire.f_alpha)));
+  e.push_back(real("minimiser", "f_inc", "FIRE time step growth factor", above(1), BUDJAM_FIELD(fire.f_inc)));
+  e.push_back(
+      real("minimiser", "f_dec", "FIRE time step shrink factor", between(0, 1, "()"), BUDJAM_FIELD(fire.f_dec)));
+  e.push_back(
+      real("minimiser", "alpha_start", "FIRE initial mixing α", between(0, 1, "()"), BUDJAM_FIELD(fire.alpha_start)));
+  e.push_back(
+      real("minimiser", "f_alpha", "FIRE mixing decay factor", between(0, 1, "(]"), BUDJAM_FIELD(fire.f_alpha)));
   e.push_back(real("minimiser", "force_tol", "relaxed when the largest generalised force is below this", kPositive,
                    BUDJAM_FIELD(fire.force_tol)));
-  e.push_back(real("minimiser", "energy_floor", "relaxed (certainly unjammed) when E/N is below this",
-                   kZeroOrPositive, BUDJAM_FIELD(fire.energy_floor)));
+  e.push_back(real("minimiser", "energy_floor", "relaxed (certainly unjammed) when E/N is below this", kZeroOrPositive,
+                   BUDJAM_FIELD(fire.energy_floor)));
   e.push_back(integer("minimiser", "max_iterations", "FIRE iterations before a minimisation fails", kPositive,
                       BUDJAM_FIELD(fire.max_iterations)));
   e.push_back(real("minimiser", "newton_force",
@@ -232,25 +234,30 @@ std::vector<SceneKey> make_keys() {
 
   e.push_back(flag("observe", "bud_events", "track unconstrained buds from jamming on (bud_events.csv)",
                    BUDJAM_FIELD(bud_events)));
-  e.push_back(flag("observe", "rigidity_events", "log rigidity (pebble game) along the run",
-                   BUDJAM_FIELD(rigidity_events)));
-  e.push_back(integer("observe", "checkpoint_every", "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT still write one)", kZeroOrPositive,
+  e.push_back(
+      flag("observe", "rigidity_events", "log rigidity (pebble game) along the run", BUDJAM_FIELD(rigidity_events)));
+  e.push_back(integer("observe", "checkpoint_every",
+                      "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT still write one)", kZeroOrPositive,
                       BUDJAM_FIELD(checkpoint_every)));
-  e.push_back(integer("observe", "trajectory_every",
-                      "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",
-                      kZeroOrPositive, BUDJAM_FIELD(trajectory_every)));
+  e.push_back(
+      integer("observe", "trajectory_every",
+              "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",
+              kZeroOrPositive, BUDJAM_FIELD(trajectory_every)));
   e.push_back(flag("observe", "progress", "progress line on stderr", BUDJAM_FIELD(progress)));
   for (const bool moduli : {true, false}) {
     const std::string sec = moduli ? "observe.moduli" : "observe.dos";
     const std::string what = moduli ? "elastic moduli" : "density of states";
     auto at = [moduli](auto& s) -> auto& { return moduli ? s.moduli : s.dos; };
-    e.push_back(flag(sec, "at_jamming", "compute the " + what + " at jamming",
-                     [at](auto& s) -> auto& { return at(s).at_jamming; }));
-    e.push_back(flag(sec, "at_phi2", "compute the " + what + " at φ_2", [at](auto& s) -> auto& { return at(s).at_phi2; }));
-    e.push_back(flag(sec, "at_targets", "compute the " + what + " at each target",
-                     [at](auto& s) -> auto& { return at(s).at_targets; }));
-    e.push_back(integer(sec, "every", "compute the " + what + " every k accepted steps above jamming; 0 = never",
-                        kZeroOrPositive, [at](auto& s) -> auto& { return at(s).every; }));
+    e.push_back(flag(
+        sec, "at_jamming", "compute the " + what + " at jamming", [at](auto& s) -> auto& { return at(s).at_jamming; }));
+    e.push_back(flag(
+        sec, "at_phi2", "compute the " + what + " at φ_2", [at](auto& s) -> auto& { return at(s).at_phi2; }));
+    e.push_back(flag(
+        sec, "at_targets",
+        "compute the " + what + " at each target", [at](auto& s) -> auto& { return at(s).at_targets; }));
+    e.push_back(integer(
+        sec, "every", "compute the " + what + " every k accepted steps above jamming; 0 = never",
+        kZeroOrPositive, [at](auto& s) -> auto& { return at(s).every; }));
   }
   return e;
 }
@@ -259,18 +266,21 @@ std::vector<SceneKey> make_keys() {
 
 }  // namespace
 
-bool Range::contains(double v) const {
-  return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-}
+bool Range::contains(double v) const { return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi); }
 
 std::string Range::requirement() const {
   const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
   std::string r;
-  if (has_lo && has_hi) r = "must lie in " + interval();
-  else if (has_lo && lo == 0) r = lo_open ? "must be positive" : "must be zero or positive";
-  else if (has_lo) r = std::string(lo_open ? "must exceed " : "must be at least ") + show(lo);
-  else if (has_hi) r = std::string(hi_open ? "must be below " : "must be at most ") + show(hi);
-  else return "";
+  if (has_lo && has_hi)
+    r = "must lie in " + interval();
+  else if (has_lo && lo == 0)
+    r = lo_open ? "must be positive" : "must be zero or positive";
+  else if (has_lo)
+    r = std::string(lo_open ? "must exceed " : "must be at least ") + show(lo);
+  else if (has_hi)
+    r = std::string(hi_open ? "must be below " : "must be at most ") + show(hi);
+  else
+    return "";
   return r + why;
 }
 

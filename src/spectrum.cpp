@@ -2,8 +2,8 @@
 
 #include "budjam/arpack.hpp"
 #include "budjam/cholmod_solver.hpp"
-#include "budjam/hessian.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/hessian.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Householder>
@@ -155,8 +155,8 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
   K.applyOnTheLeft(Q.adjoint());
   K.applyOnTheRight(Q);
   const Eigen::MatrixXd Kc = K.bottomRightCorner(nd, nd).selfadjointView<Eigen::Lower>();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kc, opt.vectors ? Eigen::ComputeEigenvectors
-                                                                    : Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kc,
+                                                    opt.vectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
   if (es.info() != Eigen::Success) throw std::runtime_error("spectrum: dense eigensolver did not converge");
   s.lambda = es.eigenvalues();
   if (opt.vectors) {
@@ -302,9 +302,8 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
   const std::size_t nd = static_cast<std::size_t>(mass.size()) - 2;
   SpectrumMethod method = options.method;
   if (method == SpectrumMethod::automatic)
-    method = (nd <= options.dense_max_dof || static_cast<std::size_t>(options.modes) >= nd)
-                 ? SpectrumMethod::dense
-                 : SpectrumMethod::arpack;
+    method = (nd <= options.dense_max_dof || static_cast<std::size_t>(options.modes) >= nd) ? SpectrumMethod::dense
+                                                                                            : SpectrumMethod::arpack;
   return method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
 }
 
@@ -334,8 +333,8 @@ BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule) {
   BandEdge b;
   b.n_zero = count_below(s.lambda, rule.lambda_tol);
   const std::size_t extended = s.n_dof - std::min(s.n_dof, b.n_zero);
-  b.n_band = std::min(extended, std::max(rule.band_min,
-                                         static_cast<std::size_t>(std::ceil(rule.band_fraction * extended))));
+  b.n_band =
+      std::min(extended, std::max(rule.band_min, static_cast<std::size_t>(std::ceil(rule.band_fraction * extended))));
   b.modes_needed = b.n_zero + b.n_band;
   // A partial spectrum counts its quasi-zero modes correctly only if it reaches above lambda_tol;
   // then the band modes must be among the computed ones as well.
@@ -420,8 +419,9 @@ long count_below_by_inertia(const Eigen::SparseMatrix<double>& H, const Eigen::V
   // zero eigenvalues of K, below any positive tol.
   CholmodSolver ldlt(Factorisation::ldlt);
   if (!ldlt.factor(dynamical_matrix(H, mass), tol, Eigen::VectorXd()))
-    throw std::runtime_error("count_below_by_inertia: zero pivot in the LDLᵀ factorisation of K − tol; "
-                             "tol is an eigenvalue to working precision");
+    throw std::runtime_error(
+        "count_below_by_inertia: zero pivot in the LDLᵀ factorisation of K − tol; "
+        "tol is an eigenvalue to working precision");
   return ldlt.negative_pivots() - 2;
 }
 

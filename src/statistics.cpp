@@ -83,12 +83,13 @@ BootstrapResult bootstrap(std::span<const double> x, const Statistic& statistic,
 }
 
 BootstrapResult bootstrap_median(std::span<const double> x, const BootstrapOptions& options) {
-  return bootstrap(x, [](std::span<const double> s) { return median(std::vector<double>(s.begin(), s.end())); },
-                   options);
+  return bootstrap(
+      x, [](std::span<const double> s) { return median(std::vector<double>(s.begin(), s.end())); }, options);
 }
 
 BootstrapResult bootstrap_mean(std::span<const double> x, const BootstrapOptions& options) {
-  return bootstrap(x, [](std::span<const double> s) { return mean(s); }, options);
+  return bootstrap(
+      x, [](std::span<const double> s) { return mean(s); }, options);
 }
 
 LinearFit linear_fit(std::span<const double> x, std::span<const double> y) {

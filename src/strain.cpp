@@ -100,8 +100,10 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
   for (double s : strains) {
     if (s == 0) continue;
     Packing p = ref;
-    if (kind == StrainKind::simple_shear) apply_simple_shear(p, s);
-    else apply_isotropic_scaling(p, std::exp(0.5 * s));
+    if (kind == StrainKind::simple_shear)
+      apply_simple_shear(p, s);
+    else
+      apply_isotropic_scaling(p, std::exp(0.5 * s));
     Measured m = relax_and_measure(p, fire, skin);
     m.sample.strain = s;
     m.sample.same_contacts = (m.pairs == m0.pairs);
@@ -136,7 +138,8 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
     sweep.curvature = 2.0 * c[2] / A;
   }
   // Central second differences about the relaxed reference (samples sorted by strain).
-  const auto zero = std::find_if(sweep.samples.begin(), sweep.samples.end(), [](const auto& s) { return s.strain == 0; });
+  const auto zero =
+      std::find_if(sweep.samples.begin(), sweep.samples.end(), [](const auto& s) { return s.strain == 0; });
   for (const StrainSample& plus : sweep.samples) {
     if (!(plus.strain > 0) || !plus.same_contacts) continue;
     const auto minus = std::find_if(sweep.samples.begin(), sweep.samples.end(),

@@ -9,7 +9,8 @@ namespace budjam {
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records) {
   std::vector<SurvivalRecord> r = records;
   for (const auto& x : r)
-    if (!std::isfinite(x.a) || x.a < 0) throw std::invalid_argument("kaplan_meier: added size a must be finite and >= 0");
+    if (!std::isfinite(x.a) || x.a < 0)
+      throw std::invalid_argument("kaplan_meier: added size a must be finite and >= 0");
   // Ascending a; at equal a, events before censorings (a censored record is at risk at its own a).
   std::sort(r.begin(), r.end(), [](const SurvivalRecord& x, const SurvivalRecord& y) {
     return x.a < y.a || (x.a == y.a && x.event && !y.event);

@@ -7,10 +7,10 @@
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
+#include <sys/wait.h>
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"
 #include "scratch.hpp"
-#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -55,12 +55,14 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
           "[fast]") {
   const fs::path set = packing_set();
   const fs::path out = work_dir() / "acc";
-  REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'").code == 0);
+  REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'")
+              .code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
 
   // Direct solvers agree with the dense reference at rounding level; CG to its tolerance (relative to
   // B; G relative to itself can be larger when G ≪ B).
-  for (const std::string v : {"ldlt", "ldlt refine=0", "ldlt refine_above=1e-15", "cholesky", "cholesky refine_above=1e-15"}) {
+  for (const std::string v :
+       {"ldlt", "ldlt refine=0", "ldlt refine_above=1e-15", "cholesky", "cholesky refine_above=1e-15"}) {
     const io::Json* r = row(acc, "moduli", v);
     REQUIRE(r != nullptr);
     INFO(v);
@@ -105,7 +107,8 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
 TEST_CASE("budjam accuracy refuses incomplete or malformed requests with exit code 2", "[fast]") {
   const fs::path out = work_dir() / "bad";
   CHECK(run_budjam("accuracy --out '" + out.string() + "'").code == 2);  // nothing to measure
-  CHECK(run_budjam("accuracy --packings 'x=" + (work_dir() / "missing").string() + "' --out '" + out.string() + "'").code == 2);
+  CHECK(run_budjam("accuracy --packings 'x=" + (work_dir() / "missing").string() + "' --out '" + out.string() + "'")
+            .code == 2);
   CHECK(run_budjam("accuracy --packings nodir --out '" + out.string() + "'").code == 2);
   CHECK(run_budjam("accuracy --reference '" + work_dir().string() + "' --out '" + out.string() + "'").code == 2);
   CHECK(run_budjam("accuracy --packings 'a,b=" + work_dir().string() + "' --out '" + out.string() + "'").code == 2);
@@ -116,7 +119,8 @@ TEST_CASE("a knob measured on two packing sets is judged on its joint front: geo
   const fs::path set = packing_set();
   const fs::path out = work_dir() / "acc_joint";
   REQUIRE(run_budjam("accuracy --packings 'a=" + (set / "1").string() + "' --packings 'b=" + (set / "2").string() +
-                     "' --min-seconds 0 --out '" + out.string() + "'").code == 0);
+                     "' --min-seconds 0 --out '" + out.string() + "'")
+              .code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
   auto cost = [&](const std::string& set_name, const std::string& family, const std::string& variant) {
     for (const auto& r : acc["rows"])
@@ -126,7 +130,8 @@ TEST_CASE("a knob measured on two packing sets is judged on its joint front: geo
   };
   auto default_of = [&](const std::string& set_name, const std::string& family) {
     for (const auto& r : acc["rows"])
-      if (r["set"] == set_name && r["family"] == family && r["default"].get<bool>()) return r["variant"].get<std::string>();
+      if (r["set"] == set_name && r["family"] == family && r["default"].get<bool>())
+        return r["variant"].get<std::string>();
     FAIL("no default");
     return std::string();
   };

@@ -8,6 +8,7 @@
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
+#include <sys/wait.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -16,7 +17,6 @@
 #include <map>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -58,16 +58,19 @@ std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
 const std::vector<fs::path>& runs() {
   static const std::vector<fs::path> dirs = [] {
     const fs::path scene = work_dir() / "small.toml";
-    std::ofstream(scene) << "[run]\nname = \"small\"\nseed = 1\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
-                         << "[jamming]\ntargets = [1e-3, 1e-2]\ncontinue_to_phi2 = true\n[observe]\nbud_events = true\n";
+    std::ofstream(scene)
+        << "[run]\nname = \"small\"\nseed = 1\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
+        << "[jamming]\ntargets = [1e-3, 1e-2]\ncontinue_to_phi2 = true\n[observe]\nbud_events = true\n";
     std::vector<fs::path> d;
     for (const auto& [P0, seed] : std::vector<std::pair<std::string, int>>{{"none", 3}, {"1e-3", 3}, {"1e-3", 4}}) {
       const fs::path dir = work_dir() / "runs" / ("P0_" + P0) / ("seed" + std::to_string(seed));
       REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir) + " --seed " + std::to_string(seed) +
-                     " --set growth.P0=" + P0).code == 0);
+                         " --set growth.P0=" + P0)
+                  .code == 0);
       for (const auto& e : fs::directory_iterator(dir / "packings"))
         if (e.path().extension() == ".pack")
-          REQUIRE(run_budjam_redirected("moduli " + q(e.path()), fs::path(e.path()).replace_extension(".moduli.json")) == 0);
+          REQUIRE(run_budjam_redirected("moduli " + q(e.path()),
+                                        fs::path(e.path()).replace_extension(".moduli.json")) == 0);
       d.push_back(dir);
     }
     return d;
@@ -93,7 +96,8 @@ TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its 
   REQUIRE(run_rows.size() == runs().size());
   for (const auto& dir : runs()) {
     const auto s = budjam::io::read_json(dir / "summary.json");
-    const auto it = std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& r) { return r.at("run") == dir.string(); });
+    const auto it =
+        std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& r) { return r.at("run") == dir.string(); });
     REQUIRE(it != run_rows.end());
     const auto& r = *it;
     CHECK(number(r.at("phi_J")) == Approx(s.at("phi_J").get<double>()).epsilon(1e-12));
@@ -112,8 +116,8 @@ TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its 
       });
       REQUIRE(row != tgt_rows.end());
       CHECK(number(row->at("P")) == Approx(t.at("P").get<double>()).epsilon(1e-12));
-      const auto side = budjam::io::read_json(dir / "packings" / ("target_" + std::to_string(t.at("index").get<long>()) +
-                                                                  ".moduli.json"));
+      const auto side = budjam::io::read_json(dir / "packings" /
+                                              ("target_" + std::to_string(t.at("index").get<long>()) + ".moduli.json"));
       CHECK(number(row->at("G")) == Approx(side.at("G").get<double>()).epsilon(1e-12));
       CHECK(number(row->at("B")) == Approx(side.at("B").get<double>()).epsilon(1e-12));
     }
@@ -138,12 +142,15 @@ TEST_CASE("analyse is deterministic: the same runs give byte-identical tables", 
   }
 }
 
-TEST_CASE("analyse --require moduli refuses a packing without its moduli file: exit 2, one line naming it", "[analyse]") {
+TEST_CASE("analyse --require moduli refuses a packing without its moduli file: exit 2, one line naming it",
+          "[analyse]") {
   const fs::path copy = work_dir() / "incomplete";
   fs::copy(runs().front(), copy, fs::copy_options::recursive);
   fs::remove(copy / "packings" / "target_0.moduli.json");
   const fs::path err = work_dir() / "analyse.err";
-  CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_incomplete") + " --main-L 6 --require moduli", "/dev/null", err) == 2);
+  CHECK(run_budjam_redirected(
+            "analyse " + q(copy) + " --out " + q(work_dir() / "t_incomplete") + " --main-L 6 --require moduli",
+            "/dev/null", err) == 2);
   const std::string e = slurp(err);
   CHECK(e.find("target_0.pack") != std::string::npos);
   CHECK(e.find("no moduli") != std::string::npos);
@@ -182,7 +189,8 @@ TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] 
   const auto run_rows = read_csv(out / "runs.csv");
   for (const auto& dir : runs()) {
     const auto s = budjam::io::read_json(dir / "summary.json");
-    const auto& r = *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
+    const auto& r =
+        *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
     const double step_J = s.at("step_J").get<double>();
     const double step_2 = s.at("step_2").is_number() ? s.at("step_2").get<double>() : INFINITY;
     double chi_sum = 0, n = 0, phi_2_paper = NAN;
@@ -190,7 +198,8 @@ TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] 
       const double step = number(row.at("step"));
       if (step < step_J) continue;
       if (step <= step_2) chi_sum += number(row.at("chi_c")), ++n;
-      if (step > step_J && std::isnan(phi_2_paper) && number(row.at("tagged_active")) == 0) phi_2_paper = number(row.at("phi"));
+      if (step > step_J && std::isnan(phi_2_paper) && number(row.at("tagged_active")) == 0)
+        phi_2_paper = number(row.at("phi"));
     }
     INFO(dir.string());
     if (std::isfinite(step_2)) CHECK(number(r.at("chi_bar")) == Approx(chi_sum / n).epsilon(1e-12));
@@ -209,7 +218,8 @@ TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[
   fs::copy(runs()[1], pool / "copy_a", fs::copy_options::recursive);
   fs::copy(runs()[1], pool / "copy_b", fs::copy_options::recursive);
   const fs::path out = work_dir() / "t_copies", err = work_dir() / "copies.err";
-  REQUIRE(run_budjam_redirected("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", "/dev/null", err) == 0);
+  REQUIRE(run_budjam_redirected("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", "/dev/null",
+                                err) == 0);
   const auto A = budjam::io::read_json(out / "analysis.json");
   CHECK(A.at("inputs").at("runs").get<long>() == 5);
   CHECK(A.at("inputs").at("used").get<long>() == 3);
@@ -234,7 +244,8 @@ TEST_CASE("analyse refuses an episode number no integer holds: exit 2, one line 
   text.replace(header_end + 1, field_end - header_end - 1, "1e300");
   std::ofstream(ev) << text;
   const fs::path err = work_dir() / "huge_episode.err";
-  CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", "/dev/null", err) == 2);
+  CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", "/dev/null",
+                              err) == 2);
   const std::string e = slurp(err);
   CHECK(e.find("bud_events.csv:2: episode") != std::string::npos);
   CHECK(std::count(e.begin(), e.end(), '\n') == 1);
@@ -247,8 +258,8 @@ budjam::io::Json without_run_only(budjam::io::Json j) {
   j.erase("inputs");
   j.erase("unavailable");
   for (auto& g : j["groups"])
-    for (const char* k : {"g_cells", "g_peak_weight_at_1", "g_compressed_median", "g_compressed_q25", "g_compressed_q75",
-                          "g_mean", "h_gamma_pooled"})
+    for (const char* k : {"g_cells", "g_peak_weight_at_1", "g_compressed_median", "g_compressed_q25",
+                          "g_compressed_q75", "g_mean", "h_gamma_pooled"})
       g.erase(k);
   return j;
 }
@@ -286,13 +297,15 @@ TEST_CASE("analyse --tables recomputes from an analysis' own tables exactly what
     CHECK(!fs::exists(b / f));
     CHECK(jb["unavailable"].contains(f));
   }
-  CHECK(jb["unavailable"]["growth_rates.csv"].get<std::string>().find("growth factor of each cell") != std::string::npos);
+  CHECK(jb["unavailable"]["growth_rates.csv"].get<std::string>().find("growth factor of each cell") !=
+        std::string::npos);
   CHECK(ja["unavailable"].empty());
   CHECK(jb["inputs"]["tables"] == a.string());
 }
 
-TEST_CASE("analyse --tables on tables of an earlier format names what they lack or define otherwise and leaves it empty",
-          "[analyse]") {
+TEST_CASE(
+    "analyse --tables on tables of an earlier format names what they lack or define otherwise and leaves it empty",
+    "[analyse]") {
   runs();
   const fs::path a = work_dir() / "old_runs", old = work_dir() / "old_tables", b = work_dir() / "old_out";
   REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
@@ -340,7 +353,8 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
   const auto row = t.find('\n') + 1;  // the first target's run
   t.replace(row, t.find(',', row) - row, "elsewhere/seed9");
   std::ofstream(a / "targets.csv") << t;
-  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "orphan_out") + " --main-L 6", "/dev/null", err) == 2);
+  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "orphan_out") + " --main-L 6",
+                              "/dev/null", err) == 2);
   const std::string msg = slurp(err);
   CHECK(msg.find((a / "targets.csv").string() + ":2: run elsewhere/seed9 is not in runs.csv") != std::string::npos);
   CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
@@ -350,5 +364,7 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
 TEST_CASE("analyse takes run directories or --tables, not both and not neither: exit 2", "[analyse]") {
   runs();
   CHECK(run_budjam("analyse --out " + q(work_dir() / "none_out")).code == 2);
-  CHECK(run_budjam("analyse " + all_runs() + "--tables " + q(work_dir()) + " --out " + q(work_dir() / "both_out")).code == 2);
+  CHECK(
+      run_budjam("analyse " + all_runs() + "--tables " + q(work_dir()) + " --out " + q(work_dir() / "both_out")).code ==
+      2);
 }

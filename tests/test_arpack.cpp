@@ -149,7 +149,8 @@ TEST_CASE("ARPACK errors name the problem and the remedy", "[arpack]") {
   opt.max_restarts = 1;
   opt.tol = 1e-15;
   try {
-    lanczos_extremal(1000, [&](const double* x, double* y) { apply_laplacian(1000, x, y); }, false, opt);
+    lanczos_extremal(
+        1000, [&](const double* x, double* y) { apply_laplacian(1000, x, y); }, false, opt);
     FAIL("an unconverged run was accepted");
   } catch (const ArpackError& e) {
     CHECK(e.info == 1);

@@ -9,14 +9,14 @@
 #include <catch2/catch.hpp>
 #include "small_disk.hpp"
 
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <bit>
 #include <csignal>
 #include <fstream>
 #include <limits>
 #include <sstream>
-#include <sys/stat.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 using namespace budjam;
 using namespace budjam::io;
@@ -253,7 +253,8 @@ TEST_CASE("json_text is deterministic and writes null for missing values", "[jso
   j["phi_J"] = 0.1 + 0.2;
   j["N"] = 412;
   CHECK(json_text(j) ==
-        "{\n  \"status\": \"ok\",\n  \"phi_2\": null,\n  \"P\": null,\n  \"phi_J\": 0.30000000000000004,\n  \"N\": 412\n}\n");
+        "{\n  \"status\": \"ok\",\n  \"phi_2\": null,\n  \"P\": null,\n  \"phi_J\": 0.30000000000000004,\n  \"N\": "
+        "412\n}\n");
   write_json(dir.path / "summary.json", j);
   const Json back = read_json(dir.path / "summary.json");
   CHECK(back == j);

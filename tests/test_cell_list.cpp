@@ -1,12 +1,12 @@
 // Linked cells + Verlet skin against the O(N²) oracle, in ordinary, sheared, tiny and huge boxes.
 #include "budjam/cell_list.hpp"
 
-#include <catch2/catch.hpp>
-#include "random_packing.hpp"
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_packing.hpp"
 
 using namespace budjam;
 

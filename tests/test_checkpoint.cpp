@@ -55,9 +55,9 @@ struct Run {
 };
 
 struct Snapshot {
-  std::string text;     // a checkpoint taken after jamming
+  std::string text;  // a checkpoint taken after jamming
   long step = 0;
-  RunResult final;      // of the uninterrupted run
+  RunResult final;  // of the uninterrupted run
   Packing final_packing;
   long final_count = 0;
 };
@@ -133,7 +133,8 @@ TEST_CASE("a checkpoint is refused for another scene, seed or set of observers",
   const std::vector<Observer*> obs{&c, &p};
   Scene edited = small_scene();
   edited.P0 = 2e-3;
-  CHECK_THROWS_WITH(parse_checkpoint(snap.text, "cp", edited, 3, obs), Contains("cp:2:") && Contains("scene.toml has changed"));
+  CHECK_THROWS_WITH(parse_checkpoint(snap.text, "cp", edited, 3, obs),
+                    Contains("cp:2:") && Contains("scene.toml has changed"));
   CHECK_THROWS_WITH(parse_checkpoint(snap.text, "cp", small_scene(), 4, obs), Contains("cp:3:") && Contains("seed"));
   // A stateful observer that the checkpoint does not know (an observer added to the scene).
   Counter extra;
@@ -157,13 +158,13 @@ TEST_CASE("any accidental change of a checkpoint is refused by its checksum, nam
     std::vector<std::string> edits;
     std::vector<std::string> v = lines;
     v.erase(v.begin() + static_cast<long>(k));
-    edits.push_back(join_lines(v));                       // line removed
+    edits.push_back(join_lines(v));  // line removed
     v = lines;
     v.insert(v.begin() + static_cast<long>(k), lines[k]);
-    edits.push_back(join_lines(v));                       // line repeated
+    edits.push_back(join_lines(v));  // line repeated
     v = lines;
     if (!v[k].empty()) v[k].back() = v[k].back() == '1' ? '2' : '1';
-    edits.push_back(join_lines(v));                       // last character changed
+    edits.push_back(join_lines(v));  // last character changed
     for (const std::string& e : edits) {
       if (e == snap.text) continue;
       INFO("edit of line " << k + 1);
@@ -182,8 +183,18 @@ TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-check
   // can continue from — never another exception, never a crash or a hang.
   const Snapshot& snap = snapshot();
   const std::vector<std::string> lines = split_lines(snap.text);
-  const std::vector<std::string> values{"", "x", "-1", "0", "1e308", "nan", "inf", "9223372036854775807",
-                                        "-9223372036854775808", "99999999999999999999", "0.5", "\x1b[2J"};
+  const std::vector<std::string> values{"",
+                                        "x",
+                                        "-1",
+                                        "0",
+                                        "1e308",
+                                        "nan",
+                                        "inf",
+                                        "9223372036854775807",
+                                        "-9223372036854775808",
+                                        "99999999999999999999",
+                                        "0.5",
+                                        "\x1b[2J"};
   long refused = 0, accepted = 0;
   for (std::size_t k = 1; k + 1 < lines.size(); ++k) {  // not the magic, not the checksum
     std::vector<std::string> fields;

@@ -6,13 +6,13 @@
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <tuple>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -22,8 +22,8 @@ namespace {
 
 using Result = budjam::testing::BudjamRun;
 using budjam::testing::run_budjam;
-using budjam::testing::work_dir;
 using budjam::testing::slurp;
+using budjam::testing::work_dir;
 
 fs::path write(const std::string& name, const std::string& text) {
   const fs::path p = work_dir() / name;
@@ -48,12 +48,13 @@ TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming th
   struct Case {
     std::string toml, key;
   };
-  for (const Case& c : std::vector<Case>{{"[growth]\nP0 = -1e-3\n", "growth.P0: must be positive"},
-                                         {"[growth]\nP00 = 1\n", "growth.P00: unknown key"},
-                                         {"[box]\nL = 1\n", "box.L: must exceed"},
-                                         {"[jamming]\ntargets = [0.01, 0.001]\n", "jamming.targets: must be strictly increasing"},
-                                         {"[cells]\nr0 = nan\n", "cells.r0: must be a finite number (got nan)"},
-                                         {"[growth\n", "bad.toml:1:"}}) {
+  for (const Case& c :
+       std::vector<Case>{{"[growth]\nP0 = -1e-3\n", "growth.P0: must be positive"},
+                         {"[growth]\nP00 = 1\n", "growth.P00: unknown key"},
+                         {"[box]\nL = 1\n", "box.L: must exceed"},
+                         {"[jamming]\ntargets = [0.01, 0.001]\n", "jamming.targets: must be strictly increasing"},
+                         {"[cells]\nr0 = nan\n", "cells.r0: must be a finite number (got nan)"},
+                         {"[growth\n", "bad.toml:1:"}}) {
     INFO(c.toml);
     const fs::path scene = write("bad.toml", c.toml);
     const Result r = run_budjam("validate '" + scene.string() + "'");
@@ -65,7 +66,8 @@ TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming th
 }
 
 TEST_CASE("budjam validate prints the effective scene, which reads back to the same scene", "[cli]") {
-  const fs::path scene = write("good.toml", "[run]\nname = \"cli\"\n[growth]\nP0 = 1e-3\n[jamming]\ntargets = [1e-3, 1e-2]\n");
+  const fs::path scene =
+      write("good.toml", "[run]\nname = \"cli\"\n[growth]\nP0 = 1e-3\n[jamming]\ntargets = [1e-3, 1e-2]\n");
   const Result r = run_budjam("validate '" + scene.string() + "' --set growth.P0=none --set run.seed=5");
   REQUIRE(r.code == 0);
   CHECK(r.err.empty());
@@ -115,8 +117,7 @@ TEST_CASE("command-line mistakes exit 2 with one stderr line", "[cli]") {
 
 TEST_CASE("budjam validate refuses an empty scene file and text that is not UTF-8: exit 2, one line naming the file",
           "[cli]") {
-  for (const auto& [name, text, message] :
-       std::vector<std::tuple<std::string, std::string, std::string>>{
+  for (const auto& [name, text, message] : std::vector<std::tuple<std::string, std::string, std::string>>{
            {"empty.toml", "", "empty.toml: empty scene file"},
            {"latin1.toml", "[run]\nname = \"caf\xe9\"\n", "latin1.toml:2:12: not valid UTF-8"}}) {
     INFO(name);

@@ -86,8 +86,7 @@ TEST_CASE("fewer than 3 contacts or a 2+1 split make a rattler; 3+0 does not", "
   CHECK(net.N == 9);
 }
 
-TEST_CASE("removing rattlers cascades: the iterative rule strips an open chain that one pass does not",
-          "[network]") {
+TEST_CASE("removing rattlers cascades: the iterative rule strips an open chain that one pass does not", "[network]") {
   // An open chain of 6 cells with mm and bb contacts between neighbours: the end cells have 2
   // contacts (rattlers), which leaves their neighbours with 2, and so on.
   const std::size_t n = 6;

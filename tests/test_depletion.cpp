@@ -59,9 +59,9 @@ TEST_CASE("phi_2 with a as true area is pi/4 of the diameter-squared reading") {
 }
 
 TEST_CASE("lambda_c partitions the density increment between the sectors") {
-  CHECK(lambda_c(0.0, 0.5) == 1.0);       // no free buds: everything loads the network
+  CHECK(lambda_c(0.0, 0.5) == 1.0);          // no free buds: everything loads the network
   CHECK(lambda_c(0.2, 1.0) == Approx(0.8));  // no feedback: λ_c = 1 − u
-  CHECK(lambda_c(0.2, 0.0) == 0.0);       // full arrest: all growth goes into free buds
+  CHECK(lambda_c(0.2, 0.0) == 0.0);          // full arrest: all growth goes into free buds
   for (double u : {0.05, 0.2, 0.5})
     for (double chi : {1e-3, 0.3, 0.9}) {
       const double g = u + (1 - u) * chi;  // ⟨g⟩, Eq. E5

@@ -6,10 +6,10 @@
 #include "budjam/fire.hpp"
 
 #include <catch2/catch.hpp>
-#include "random_packing.hpp"
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_packing.hpp"
 
 using namespace budjam;
 
@@ -225,8 +225,7 @@ TEST_CASE("lobes exactly touching (r = sigma) carry no energy, no force and no c
     place_lobes(p, l);
     return (l.x[2] - l.x[1]) - (l.R[1] + l.R[2]);
   };
-  for (int k = 0; k < 100 && gap() != 0.0; ++k)
-    p.q[3] = std::nextafter(p.q[3], gap() > 0 ? -1e300 : 1e300);
+  for (int k = 0; k < 100 && gap() != 0.0; ++k) p.q[3] = std::nextafter(p.q[3], gap() > 0 ? -1e300 : 1e300);
   REQUIRE(gap() == 0.0);
   ForceField field;
   Eigen::VectorXd F;

@@ -51,7 +51,8 @@ TEST_CASE("bootstrap by seed resamples whole seeds") {
   bo.resamples = 4000;
   SECTION("one state per seed: the plain bootstrap of the state means in seed order, draw for draw") {
     const std::vector<double> v{1, 4, 2, 8};
-    const auto b = cluster_bootstrap_mean(v, std::vector<std::size_t>{0, 1, 2, 3}, std::vector<std::uint64_t>{7, 3, 5, 1}, bo);
+    const auto b =
+        cluster_bootstrap_mean(v, std::vector<std::size_t>{0, 1, 2, 3}, std::vector<std::uint64_t>{7, 3, 5, 1}, bo);
     const auto plain = bootstrap_mean(std::vector<double>{8, 4, 2, 1}, bo);  // seeds 1, 3, 5, 7
     CHECK(b.estimate == Approx(3.75));
     CHECK(b.n == 4);
@@ -128,7 +129,7 @@ TEST_CASE("ω* collapse: proportionality fits through the origin and integer sig
   CHECK(c.packings == 3);
   CHECK(c.dZ_negative == 1);
   CHECK(c.Z_minus_6_negative == 2);
-  CHECK(c.dZ.slope == Approx(0.099 / 0.21));                  // Σ ΔZ ω* / Σ ΔZ²
+  CHECK(c.dZ.slope == Approx(0.099 / 0.21));  // Σ ΔZ ω* / Σ ΔZ²
   CHECK(c.Z_minus_6.slope == Approx((-0.04 + 0.04 - 0.006) / 0.56));
   CHECK(c.dZ.r2 > c.Z_minus_6.r2);
   CHECK_THROWS_AS(omega_collapse({}), std::invalid_argument);
@@ -157,9 +158,9 @@ TEST_CASE("Π(g): the δ peak at g = 1, densities on the paper's bins and quarti
   CHECK(d.cells == 7);
   CHECK(d.weight_at_one == Approx(2.0 / 7));
   REQUIRE(d.density.size() == 12);
-  CHECK(d.density[0] == Approx(1.0 / 7 / 0.03));   // 0.02 in [0, 0.03)
-  CHECK(d.density[7] == Approx(2.0 / 7 / 0.15));   // two at 0.5 in [0.45, 0.60)
-  CHECK(d.density[11] == Approx(1.0 / 7 / 0.025)); // 0.98 in [0.97, 0.995); 0.999 is beyond the last edge
+  CHECK(d.density[0] == Approx(1.0 / 7 / 0.03));    // 0.02 in [0, 0.03)
+  CHECK(d.density[7] == Approx(2.0 / 7 / 0.15));    // two at 0.5 in [0.45, 0.60)
+  CHECK(d.density[11] == Approx(1.0 / 7 / 0.025));  // 0.98 in [0.97, 0.995); 0.999 is beyond the last edge
   CHECK(d.density[5] == 0.0);
   CHECK(d.median == Approx(0.5));  // of {0.02, 0.5, 0.5, 0.98, 0.999}
   CHECK(d.q25 == Approx(0.5));
@@ -167,11 +168,12 @@ TEST_CASE("Π(g): the δ peak at g = 1, densities on the paper's bins and quarti
   CHECK_THROWS_AS(growth_rate_distribution(std::vector<double>{}, edges), std::invalid_argument);
 }
 
-TEST_CASE("survival.csv read back gives the Kaplan-Meier steps: events from the drop of S, censored from the risk set") {
+TEST_CASE(
+    "survival.csv read back gives the Kaplan-Meier steps: events from the drop of S, censored from the risk set") {
   // Ties of events with a censoring (a = 2, 4), censoring-only steps (a = 3, 5, 6; the last one
   // censored), and Ŝ falling by a third at a = 4 (2 events among 6 at risk): Ŝ = 10/11, 8/11, 16/33.
-  const std::vector<SurvivalRecord> records{{1, true},  {2, true},  {2, false}, {2, true},  {3, false},
-                                            {4, true},  {4, true},  {4, false}, {5, false}, {6, false}, {6, false}};
+  const std::vector<SurvivalRecord> records{{1, true}, {2, true},  {2, false}, {2, true},  {3, false}, {4, true},
+                                            {4, true}, {4, false}, {5, false}, {6, false}, {6, false}};
   const auto km = kaplan_meier(records);
   const auto dir = budjam::testing::work_dir() / "km_tables";
   std::filesystem::create_directories(dir);

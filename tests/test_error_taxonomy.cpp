@@ -3,10 +3,10 @@
 #include <catch2/catch.hpp>
 #include "scratch.hpp"
 
+#include <sys/wait.h>
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 using budjam::testing::slurp;
@@ -24,8 +24,8 @@ Result run_budjam(const std::string& args) {
   const char* exe = std::getenv("BUDJAM_EXE");
   REQUIRE(exe != nullptr);
   const fs::path err = work_dir() / "taxonomy.stderr";
-  const std::string cmd = "cd '" + work_dir().string() + "' && '" + exe + "' " + args + " 2>'" + err.string() +
-                          "' >/dev/null";
+  const std::string cmd =
+      "cd '" + work_dir().string() + "' && '" + exe + "' " + args + " 2>'" + err.string() + "' >/dev/null";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
 }
@@ -72,7 +72,8 @@ TEST_CASE("control bytes from a file are escaped in the one-line error", "[taxon
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
 
-TEST_CASE("a packing meta value with a carriage return is refused, so every packing read can be written", "[taxonomy]") {
+TEST_CASE("a packing meta value with a carriage return is refused, so every packing read can be written",
+          "[taxonomy]") {
   write(work_dir() / "cr.pack", with(kPacking, "meta kind jammed", "meta kind jam\rmed"));
   const Result r = run_budjam("validate cr.pack");
   CHECK(r.code == 2);

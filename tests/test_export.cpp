@@ -111,8 +111,7 @@ TEST_CASE("link forces close the virial: lobe stress = centroid stress + bar str
   CHECK(bars.norm() / area > 1e-3 * scale);
 }
 
-TEST_CASE("XYZ has one row per lobe and the box as Lattice; VTK one point per lobe and one line per bond",
-          "[export]") {
+TEST_CASE("XYZ has one row per lobe and the box as Lattice; VTK one point per lobe and one line per bond", "[export]") {
   const Packing& p = jammed().packing;
   const io::ParticleFrame f = io::particle_frame(p);
   const std::string xyz = io::format_extxyz(f);

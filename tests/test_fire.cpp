@@ -325,8 +325,7 @@ TEST_CASE("cells crossing the periodic boundary during minimisation relax as a s
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Packing corner;
   corner.box = {12.0, 0.0};
-  for (int i = 0; i < 8; ++i)
-    corner.add_cell(0.6 * u(rng), 0.6 * u(rng), 3 * u(rng), 0.5 + 0.5 * u(rng), 0.002, -1);
+  for (int i = 0; i < 8; ++i) corner.add_cell(0.6 * u(rng), 0.6 * u(rng), 3 * u(rng), 0.5 + 0.5 * u(rng), 0.002, -1);
   Packing middle = corner;
   for (std::size_t i = 0; i < middle.size(); ++i) {
     middle.q[3 * i] += 6.0;

@@ -7,6 +7,8 @@
 #include "scratch.hpp"
 #include "small_disk.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <chrono>
 #include <csignal>
@@ -14,16 +16,14 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 #include <thread>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace {
 
-using budjam::testing::work_dir;
 using budjam::testing::slurp;
+using budjam::testing::work_dir;
 
 std::string exe() {
   const char* e = std::getenv("BUDJAM_EXE");
@@ -39,7 +39,8 @@ Result grow(const std::string& args) { return budjam::testing::run_budjam("grow 
 fs::path small_scene(const std::string& name, const std::string& extra = "") {
   const fs::path p = work_dir() / (name + ".toml");
   std::ofstream(p) << "[run]\nname = \"" << name << "\"\nseed = 3\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
-                   << "[jamming]\ntargets = [1e-3, 1e-2]\n" << extra;
+                   << "[jamming]\ntargets = [1e-3, 1e-2]\n"
+                   << extra;
   return p;
 }
 

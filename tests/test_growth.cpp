@@ -127,9 +127,9 @@ TEST_CASE("division places two newborns at (x,y) -/+ (alpha0/2) n and keeps the 
   REQUIRE(p.size() == 3);
   CHECK(d.mother_index == 1);
   CHECK(d.daughter_index == 2);
-  CHECK(p.id[1] == id_before);           // mother side keeps the identity
+  CHECK(p.id[1] == id_before);  // mother side keeps the identity
   CHECK(p.parent[1] == -1);
-  CHECK(p.id[2] == next_before);         // daughter: new id, parent = old cell
+  CHECK(p.id[2] == next_before);  // daughter: new id, parent = old cell
   CHECK(p.parent[2] == id_before);
   CHECK(p.next_id == next_before + 1);
   CHECK(d.mother_id == id_before);
@@ -158,8 +158,7 @@ TEST_CASE("division places two newborns at (x,y) -/+ (alpha0/2) n and keeps the 
   }
 }
 
-TEST_CASE("division draws gamma0, theta, noise for the mother side, then the daughter, from one stream",
-          "[growth]") {
+TEST_CASE("division draws gamma0, theta, noise for the mother side, then the daughter, from one stream", "[growth]") {
   Scene s = base_scene();
   Packing p;
   p.box.L = s.L;
@@ -179,8 +178,7 @@ TEST_CASE("division draws gamma0, theta, noise for the mother side, then the dau
   CHECK(rng == ref);  // exactly six draws
 }
 
-TEST_CASE("aligned and opposite division rules orient the newborns along the old axis within 5e-5 rad",
-          "[growth]") {
+TEST_CASE("aligned and opposite division rules orient the newborns along the old axis within 5e-5 rad", "[growth]") {
   Scene s = base_scene();
   const double theta = -2.9;
   for (auto rule : {DivisionRule::aligned, DivisionRule::opposite}) {
@@ -200,8 +198,7 @@ TEST_CASE("aligned and opposite division rules orient the newborns along the old
   }
 }
 
-TEST_CASE("grow_step divides a cell as soon as alpha exceeds 2 alpha0; newborns do not grow in the step",
-          "[growth]") {
+TEST_CASE("grow_step divides a cell as soon as alpha exceeds 2 alpha0; newborns do not grow in the step", "[growth]") {
   Scene s = base_scene();
   Rng rng(5);
   Packing p;
@@ -292,8 +289,9 @@ TEST_CASE("random seeds are newborn cells that overlap nowhere, also across the 
 // jamming, in which the most crowded cell is one growth step from dividing. The step goes through
 // the library's own path (growth_rates → grow_step → divide, one random stream) and FIRE relaxes
 // the result as the growth driver does.
-TEST_CASE("a division into a crowded neighbourhood places newborns exactly and FIRE relaxes them to a finite force balance",
-          "[.hard][growth]") {
+TEST_CASE(
+    "a division into a crowded neighbourhood places newborns exactly and FIRE relaxes them to a finite force balance",
+    "[.hard][growth]") {
   testing::CompressionProtocol proto;
   proto.b_max = 1.0;  // every other cell stays below the division threshold during the step
   testing::CompressedPacking cp = testing::compress_random_dumbbells(40, 7, proto);
@@ -303,8 +301,8 @@ TEST_CASE("a division into a crowded neighbourhood places newborns exactly and F
   // The most crowded cell (most contacts) gets a bud just below the threshold b = 2α0 − 1 = 1.02.
   std::vector<int> contacts_of(n, 0);
   for (const Contact& c : cp.contacts) ++contacts_of[cell_of(c.i)], ++contacts_of[cell_of(c.j)];
-  const std::size_t k = static_cast<std::size_t>(std::max_element(contacts_of.begin(), contacts_of.end()) -
-                                                 contacts_of.begin());
+  const std::size_t k =
+      static_cast<std::size_t>(std::max_element(contacts_of.begin(), contacts_of.end()) - contacts_of.begin());
   p.b[k] = 1.0199;
   // Squeeze φ up by 0.08 and relax, so that every lobe is pressed into its neighbours.
   testing::rescale_to(p, p.packing_fraction() + 0.08);
@@ -360,8 +358,10 @@ TEST_CASE("a division into a crowded neighbourhood places newborns exactly and F
         double dx = lobes.x[a] - lobes.x[o], dy = lobes.y[a] - lobes.y[o];
         p.box.minimum_image(dx, dy);
         const double overlap = lobes.R[a] + lobes.R[o] - std::hypot(dx, dy);
-        if (is_bud(a)) bud_depth = std::max(bud_depth, overlap / (2 * lobes.R[a]));
-        else mother_depth = std::max(mother_depth, overlap);
+        if (is_bud(a))
+          bud_depth = std::max(bud_depth, overlap / (2 * lobes.R[a]));
+        else
+          mother_depth = std::max(mother_depth, overlap);
       }
   INFO("newborn bud overlap / its diameter = " << bud_depth << ", newborn mother overlap = " << mother_depth);
   REQUIRE(bud_depth >= 1.0);
@@ -388,7 +388,8 @@ TEST_CASE("a division into a crowded neighbourhood places newborns exactly and F
   CHECK(U_after == Approx(fr.energy).epsilon(1e-12));
   double fmax = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    fmax = std::max({fmax, std::abs(f[3 * i]), std::abs(f[3 * i + 1]), std::abs(f[3 * i + 2]) / p.dumbbell(i).gyration});
+    fmax =
+        std::max({fmax, std::abs(f[3 * i]), std::abs(f[3 * i + 1]), std::abs(f[3 * i + 2]) / p.dumbbell(i).gyration});
   }
   CHECK(fmax <= tol);
   CHECK(U_after / static_cast<double>(p.size()) > scene.epsilon_U);  // still jammed: the division did not open space

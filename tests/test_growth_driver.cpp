@@ -150,8 +150,7 @@ const Reference& reference() {
 
 }  // namespace
 
-TEST_CASE("a small run jams in the range of random dumbbell packings and lands every target within 5e-9",
-          "[driver]") {
+TEST_CASE("a small run jams in the range of random dumbbell packings and lands every target within 5e-9", "[driver]") {
   const Reference& r = reference();
   REQUIRE(r.result.status == RunStatus::finished);
   REQUIRE(r.result.jamming);
@@ -192,8 +191,7 @@ TEST_CASE("a small run jams in the range of random dumbbell packings and lands e
   CHECK(r.result.rejected > 0);  // the jamming search overshot the window at least once
 }
 
-TEST_CASE("every accepted state before jamming is unjammed and phi grows monotonically between divisions",
-          "[driver]") {
+TEST_CASE("every accepted state before jamming is unjammed and phi grows monotonically between divisions", "[driver]") {
   const Reference& r = reference();
   const auto& steps = r.rec.steps;
   REQUIRE(steps.size() == static_cast<std::size_t>(r.result.accepted + 1));  // + the initial state
@@ -210,8 +208,10 @@ TEST_CASE("every accepted state before jamming is unjammed and phi grows monoton
   }
 }
 
-TEST_CASE("the bisection search halves the nominal step: every accepted step is a power of 2 and the jamming point lies in the window",
-          "[driver]") {
+TEST_CASE(
+    "the bisection search halves the nominal step: every accepted step is a power of 2 and the jamming point lies in "
+    "the window",
+    "[driver]") {
   Scene s = small_scene();
   s.search = JammingSearch::bisection;
   Recorder rec{Needs{false, false, false, true}};
@@ -256,8 +256,7 @@ TEST_CASE("buds grow with the rates frozen from the previous accepted state's bu
   CHECK(checked_free > 0);
 }
 
-TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with at most one left",
-          "[driver]") {
+TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with at most one left", "[driver]") {
   const Reference& r = reference();
   REQUIRE(r.rec.jammed);
   // Tags of the final jamming episode (an unjamming censors the earlier tags and re-tags later).
@@ -276,8 +275,8 @@ TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with
   // every tag ends exactly once: completed, divided or censored
   std::size_t ends = 0;
   for (const BudEvent& e : r.rec.bud_events)
-    if (e.kind == BudEventKind::completed || e.kind == BudEventKind::divided ||
-        e.kind == BudEventKind::censored_end || e.kind == BudEventKind::censored_unjam)
+    if (e.kind == BudEventKind::completed || e.kind == BudEventKind::divided || e.kind == BudEventKind::censored_end ||
+        e.kind == BudEventKind::censored_unjam)
       ++ends;
   CHECK(ends == tagged_all);
   for (const BudEvent& e : r.rec.bud_events)
@@ -342,8 +341,8 @@ TEST_CASE("a run restored in the middle of the secant search (overshoots remembe
   GrowthDriver first(r.scene);
   first.set_checkpoint_hook([&] { states.push_back(first.state()); });
   first.run();
-  const auto mid = std::find_if(states.begin(), states.end(),
-                                [](const GrowthState& g) { return !g.search.overshoots.empty(); });
+  const auto mid =
+      std::find_if(states.begin(), states.end(), [](const GrowthState& g) { return !g.search.overshoots.empty(); });
   REQUIRE(mid != states.end());
   GrowthDriver resumed(r.scene);
   resumed.restore(*mid);
@@ -525,8 +524,8 @@ struct Audit : Observer {
 struct FactorAudit : Audit {
   FactorAudit() : Audit(Needs{false, false, true, true}) {}
   long factors = 0, underflows = 0, frozen_checked = 0;
-  long denormal = 0;  // factors whose bare exp(−p/P0) would be a denormal (708.4 < p/P0 < 745.1)
-  double max_ratio = 0;  // largest p/P0 seen
+  long denormal = 0;                // factors whose bare exp(−p/P0) would be a denormal (708.4 < p/P0 < 745.1)
+  double max_ratio = 0;             // largest p/P0 seen
   std::vector<std::size_t> frozen;  // cells with factor 0 in the previous accepted state (feedback on)
   std::vector<double> frozen_b;
 
@@ -559,11 +558,13 @@ struct FactorAudit : Audit {
       max_ratio = std::max(max_ratio, x);
       const double e = std::exp(-x);
       if (e > 0.0 && e < std::numeric_limits<double>::min()) ++denormal;  // where a bare exp gives a denormal
-      if (e < std::numeric_limits<double>::min()) CHECK(g == 0.0);  // an underflow is exactly 0
-      else if (g != 0.0) CHECK(g == Approx(e).epsilon(1e-15));
+      if (e < std::numeric_limits<double>::min())
+        CHECK(g == 0.0);  // an underflow is exactly 0
+      else if (g != 0.0)
+        CHECK(g == Approx(e).epsilon(1e-15));
       if (g == 0.0) {
         CHECK(e < 2 * std::numeric_limits<double>::min());  // only a genuine underflow is zeroed
-        if (s.phase == Phase::jammed) {  // feedback on: the next step grows this bud at γ0·0
+        if (s.phase == Phase::jammed) {                     // feedback on: the next step grows this bud at γ0·0
           ++underflows;
           frozen.push_back(i);
           frozen_b.push_back(p.b[i]);
@@ -582,8 +583,10 @@ struct FactorAudit : Audit {
 // regime where a denormal instead of an exact 0 would let a "stopped" bud grow. Measured (FIRE
 // defaults of 2026-11-23): ~1900 accepted and ~230 rejected steps, the first underflow at
 // Δφ ≈ 0.02, max p/P0 ≈ 1460, ~470 underflowed factors (~60 where a bare exp() is a denormal).
-TEST_CASE("with P0 = 1e-5 through a run above jamming every growth factor is finite in [0, 1] and an underflowed one is exactly 0 and freezes its bud",
-          "[.hard][driver]") {
+TEST_CASE(
+    "with P0 = 1e-5 through a run above jamming every growth factor is finite in [0, 1] and an underflowed one is "
+    "exactly 0 and freezes its bud",
+    "[.hard][driver]") {
   Scene s = small_scene();
   s.seed = 2;
   s.P0 = 1e-5;
@@ -596,8 +599,8 @@ TEST_CASE("with P0 = 1e-5 through a run above jamming every growth factor is fin
   REQUIRE(d.run() == RunStatus::finished);
   const RunResult& r = d.result();
   INFO("accepted " << r.accepted << ", rejected " << r.rejected << ", max p/P0 = " << audit.max_ratio
-                   << ", underflowed factors " << audit.underflows
-                   << " (" << audit.denormal << " in the denormal range)");
+                   << ", underflowed factors " << audit.underflows << " (" << audit.denormal
+                   << " in the denormal range)");
   REQUIRE(r.jamming);
   REQUIRE(r.targets.size() == s.targets.size());
   CHECK(audit.targets == static_cast<long>(s.targets.size()));
@@ -622,8 +625,10 @@ TEST_CASE("with P0 = 1e-5 through a run above jamming every growth factor is fin
 // The default dt_min = 1e-12: after each accepted step below the target the bisection starts again
 // from Δt = 1 and must halve further, until Δt = 2⁻⁴⁰ < 1e-12. Measured (L = 6, seed 3, P0 = 1e-3):
 // ~1440 accepted and ~620 rejected steps; the last accepted state lies ~1e-15 below the target.
-TEST_CASE("a landing no step can reach halves dt from 1 past growth.dt_min = 1e-12 and fails with dt_underflow, reporting no false target",
-          "[.hard][driver]") {
+TEST_CASE(
+    "a landing no step can reach halves dt from 1 past growth.dt_min = 1e-12 and fails with dt_underflow, reporting no "
+    "false target",
+    "[.hard][driver]") {
   Scene s = small_scene();
   s.search = JammingSearch::bisection;
   s.targets = {1e-3};
@@ -698,8 +703,10 @@ TEST_CASE("the secant search finds a jamming point in the window that is a minim
 
 // L = 15, seed 3, no feedback: FIRE (|F| < 1e-12) stops on a saddle at E/N = 1.16e-16 that is one
 // contact short of isostatic (tests/data/saddle_jamming_L15_seed3.pack is that state).
-TEST_CASE("a jamming candidate that is a saddle is relaxed on: the jamming point found is a minimum, isostatic, and a little denser",
-          "[.slow][driver]") {
+TEST_CASE(
+    "a jamming candidate that is a saddle is relaxed on: the jamming point found is a minimum, isostatic, and a little "
+    "denser",
+    "[.slow][driver]") {
   Scene s;
   s.L = 15.0;
   s.seed = 3;

@@ -12,12 +12,12 @@
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"
 #include "scratch.hpp"
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -38,7 +38,7 @@ namespace {
 
 FireParams tight_fire() {
   FireParams f;
-  f.dt_max = 0.4;      // stable for the stiffest lobe contacts (docs/growth.md, "Speed")
+  f.dt_max = 0.4;       // stable for the stiffest lobe contacts (docs/growth.md, "Speed")
   f.force_tol = 1e-14;  // floored by FIRE at its force resolution
   return f;
 }
@@ -101,14 +101,16 @@ void check_finite_strain(const Relaxed& r, const ElasticResponse& e, double h, d
   INFO("B: linear " << e.moduli.B << " finite " << iso.modulus);
   INFO("B_energy: linear " << e.moduli_energy.B << " finite " << iso.modulus_energy);
   CHECK(std::abs(e.moduli.G_simple - shear.modulus) <= tol * std::abs(e.moduli.G_simple) + abs_floor);
-  CHECK(std::abs(e.moduli_energy.G_simple - shear.modulus_energy) <= tol * std::abs(e.moduli_energy.G_simple) + abs_floor);
+  CHECK(std::abs(e.moduli_energy.G_simple - shear.modulus_energy) <=
+        tol * std::abs(e.moduli_energy.G_simple) + abs_floor);
   CHECK(rel(e.moduli.B, iso.modulus) < tol);
   CHECK(rel(e.moduli_energy.B, iso.modulus_energy) < tol);
 }
 
 }  // namespace
 
-TEST_CASE("Linear-response G and B equal finite Lees-Edwards shear and isotropic rescaling slopes within 1%", "[fast]") {
+TEST_CASE("Linear-response G and B equal finite Lees-Edwards shear and isotropic rescaling slopes within 1%",
+          "[fast]") {
   for (double P : {1e-3, 1e-2}) {
     const Relaxed r = jammed(100, P, 0.3, 1.0, 1);
     const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
@@ -170,8 +172,9 @@ TEST_CASE("G_energy - G is the slope of the link stress under finite Lees-Edward
   CHECK(std::abs(link_slope - (e.G_energy() - e.G())) < 1e-3 * std::abs(e.G_energy() - e.G()));
 }
 
-TEST_CASE("P_energy = -dU/dA and B_energy = A d2U/dA2 from the energy of finite rescalings; the lobe-centre P is not -dU/dA",
-          "[fast]") {
+TEST_CASE(
+    "P_energy = -dU/dA and B_energy = A d2U/dA2 from the energy of finite rescalings; the lobe-centre P is not -dU/dA",
+    "[fast]") {
   const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 3);
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   const StrainSweep iso = strain_sweep(r.p, StrainKind::isotropic, doubling_strains(1e-8, 6), tight_fire());
@@ -242,7 +245,8 @@ TEST_CASE("Cells whose buds carry no load: both conventions coincide and equal t
   REQUIRE(e.kernel.well_posed);
 
   double G = 0, P = 0, born = 0;
-  for (const Eigen::Vector2d bond : {Eigen::Vector2d(ax, 0), Eigen::Vector2d(ax / 2, ay), Eigen::Vector2d(-ax / 2, ay)}) {
+  for (const Eigen::Vector2d bond :
+       {Eigen::Vector2d(ax, 0), Eigen::Vector2d(ax / 2, ay), Eigen::Vector2d(-ax / 2, ay)}) {
     const double len = bond.norm(), f = kSpring * (1 - len);
     const Eigen::Vector2d n = bond / len;
     G += len * len * n.y() * n.y() * (kSpring * n.x() * n.x() - f / len * n.y() * n.y());
@@ -319,7 +323,8 @@ TEST_CASE("Rotating a packing's stiffness by ψ turns its softest and stiffest s
   const auto turned = [](double a, double b) { return std::abs(std::remainder(a - b, std::numbers::pi)); };
   CHECK(turned(sr.phi_min, st.phi_min + psi) < 1e-6);
   CHECK(turned(sr.phi_max, st.phi_max + psi) < 1e-6);
-  for (double phi : {0.0, 0.4, 1.9}) CHECK(std::abs(shear_modulus_along(Er, phi + psi) - shear_modulus_along(e.E, phi)) < 1e-12 * scale);
+  for (double phi : {0.0, 0.4, 1.9})
+    CHECK(std::abs(shear_modulus_along(Er, phi + psi) - shear_modulus_along(e.E, phi)) < 1e-12 * scale);
 }
 
 TEST_CASE("A packing stable at fixed box but unstable to simple shear: finite strains confirm G(0) < 0 and G(90°)",
@@ -467,12 +472,14 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   CHECK(run_budjam("moduli '" + pack.string() + "'").out == run_budjam("moduli '" + pack.string() + "'").out);
 }
 
-TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal to budjam moduli on the saved packings", "[.slow]") {
+TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal to budjam moduli on the saved packings",
+          "[.slow]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const fs::path run = work_dir() / "demo";
-  const auto [code, out, err] = run_budjam("grow '" + std::string(src) + "/data/scenes/demo.toml' --quiet --out '" + run.string() +
-                                      "' --set observe.moduli.at_jamming=true --set observe.moduli.at_targets=true");
+  const auto [code, out, err] =
+      run_budjam("grow '" + std::string(src) + "/data/scenes/demo.toml' --quiet --out '" + run.string() +
+                 "' --set observe.moduli.at_jamming=true --set observe.moduli.at_targets=true");
   REQUIRE(code == 0);
   std::ifstream csv(run / "moduli.csv");
   REQUIRE(csv.good());
@@ -494,12 +501,14 @@ TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal t
   const std::vector<std::string> packs{"jammed", "target_0", "target_1"};
   for (std::size_t k = 0; k < 3; ++k) {
     CHECK(rows[k][col("well_posed")] == "true");
-    const io::Json j = io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").out);
+    const io::Json j =
+        io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").out);
     CHECK(std::stod(rows[k][col("B")]) == Approx(j["B"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_simple")]) == Approx(j["G"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_energy")]) == Approx(j["G_energy"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("B_energy")]) == Approx(j["B_energy"].get<double>()).epsilon(1e-9));
-    CHECK(std::stod(rows[k][col("G_min_stress")]) == Approx(j["shear_directions_stress"]["G_min"].get<double>()).epsilon(1e-9));
+    CHECK(std::stod(rows[k][col("G_min_stress")]) ==
+          Approx(j["shear_directions_stress"]["G_min"].get<double>()).epsilon(1e-9));
   }
 }
 
@@ -539,7 +548,8 @@ TEST_CASE("Rattlers are removed and the moduli still agree with finite strain", 
 TEST_CASE("Nearly isostatic packing: G -> 0 is resolved, finite and matches finite strain", "[.hard]") {
   // Small packings at tiny pressure are often exactly isostatic (ΔZ = 0).
   Relaxed r = jammed(60, 1e-7, 0.3, 1.0, 21);
-  for (std::uint64_t seed = 22; r.net.dZ > 2.0 / r.net.N_nr + 1e-12 && seed < 40; ++seed) r = jammed(60, 1e-7, 0.3, 1.0, seed);
+  for (std::uint64_t seed = 22; r.net.dZ > 2.0 / r.net.N_nr + 1e-12 && seed < 40; ++seed)
+    r = jammed(60, 1e-7, 0.3, 1.0, seed);
   REQUIRE(r.net.dZ <= 2.0 / r.net.N_nr + 1e-12);
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   REQUIRE(e.kernel.well_posed);
@@ -547,7 +557,8 @@ TEST_CASE("Nearly isostatic packing: G -> 0 is resolved, finite and matches fini
   check_finite_strain(r, e, 1e-8, 0.05, 1e-3 * e.moduli.B);
 }
 
-TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exactly by regularised refinement", "[.hard]") {
+TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exactly by regularised refinement",
+          "[.hard]") {
   // A rattler with 1 or 2 contacts, declared a non-rattler, brings an exact mechanism into H
   // (3 dofs, ≤ 2 constraints) that pinning does not remove. Its contacts carry (almost) no force,
   // so the moduli must not change.
@@ -592,8 +603,10 @@ TEST_CASE("A singular Hessian (a rattler forced into the system) is solved exact
 // The jamming point of an L = 15 run (paper-L15.toml, P0 = none, seed 3: E/N = 1.16e-16, P = 6.9e-9)
 // found by the model's energy rule. FIRE stopped at |F| < 1e-12 on a saddle: one extended mode has
 // λ ≈ −1e-8, the order of the prestress f/ℓ. Such a state has no linear response.
-TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, and no relaxed modulus is reported",
-          "[.hard]") {
+TEST_CASE(
+    "A jamming point that is a saddle: its unstable modes are counted by LDLt inertia and by dense eigenvalues alike, "
+    "and no relaxed modulus is reported",
+    "[.hard]") {
   const Relaxed r = data_packing("saddle_jamming_L15_seed3.pack");
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   REQUIRE(e.kernel.method == SolveMethod::unstable);
@@ -620,13 +633,14 @@ TEST_CASE("A jamming point that is a saddle: its unstable modes are counted by L
     o.solver = solver;
     CHECK(elastic_response(r.p, r.contacts, r.net, o).kernel.unstable_modes == below);
   }
-
 }
 
-TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, and exits 1", "[fast]") {
+TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, and exits 1",
+          "[fast]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const auto [code, out, err] = run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
+  const auto [code, out, err] =
+      run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
   CHECK(code == 1);
   const io::Json j = io::Json::parse(out);
   CHECK(j["energy_minimum"] == false);
@@ -655,12 +669,16 @@ ElasticResponse with_solver(const Relaxed& r, ModuliSolver solver, double cg_tol
 double response_difference(const ElasticResponse& a, const ElasticResponse& b) {
   const double scale = std::abs(b.moduli.B);
   return std::max({(a.E - b.E).cwiseAbs().maxCoeff(), (a.R - b.R).cwiseAbs().maxCoeff(),
-                   (a.R_energy - b.R_energy).cwiseAbs().maxCoeff()}) / scale;
+                   (a.R_energy - b.R_energy).cwiseAbs().maxCoeff()}) /
+         scale;
 }
 
 }  // namespace
 
-TEST_CASE("Every direct solver (CHOLMOD LDLt, dense LDLt, CHOLMOD LLt without refinement) gives the default's B, G, C to 1e-9", "[fast]") {
+TEST_CASE(
+    "Every direct solver (CHOLMOD LDLt, dense LDLt, CHOLMOD LLt without refinement) gives the default's B, G, C to "
+    "1e-9",
+    "[fast]") {
   // Two packings: many unconstrained buds (many pinned rotations) near jamming, and a compressed one.
   for (const Relaxed& r : {jammed(120, 1e-4, 0.01, 0.5, 6), jammed(100, 1e-2, 0.3, 1.0, 1)}) {
     const ElasticResponse ref = elastic_response(r.p, r.contacts, r.net);
@@ -686,7 +704,8 @@ TEST_CASE("Every direct solver (CHOLMOD LDLt, dense LDLt, CHOLMOD LLt without re
   }
 }
 
-TEST_CASE("Conjugate gradients reach their residual tolerance and B, G within 10 tol B of the Cholesky result", "[fast]") {
+TEST_CASE("Conjugate gradients reach their residual tolerance and B, G within 10 tol B of the Cholesky result",
+          "[fast]") {
   // The promise of cg_tolerance = t: relative residual ≤ t per strain column on the free rows, ≤ 10 t
   // verified on all rows, and B, G within 10 t B (measured ≤ 1 t B on grown and compressed packings).
   const Relaxed r = jammed(120, 1e-4, 0.01, 0.5, 6);
@@ -695,7 +714,8 @@ TEST_CASE("Conjugate gradients reach their residual tolerance and B, G within 10
     double previous = 1;
     for (const double t : {1e-4, 1e-7, 1e-10}) {
       const ElasticResponse e = with_solver(r, ModuliSolver::cg, t, pre);
-      INFO(to_string(pre) << " tol " << t << " residual " << e.kernel.residual << " iterations " << e.kernel.iterations);
+      INFO(to_string(pre) << " tol " << t << " residual " << e.kernel.residual << " iterations "
+                          << e.kernel.iterations);
       CHECK(e.kernel.method == (pre == CgPreconditioner::diagonal ? SolveMethod::cg_diagonal : SolveMethod::cg_ichol));
       CHECK(e.kernel.solver_tolerance == t);
       CHECK(e.kernel.iterations > 0);
@@ -721,7 +741,8 @@ TEST_CASE("Conjugate gradients reach their residual tolerance and B, G within 10
   CHECK_FALSE(starved.kernel.well_posed);
 }
 
-TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine select the solver; bad values exit 2", "[fast]") {
+TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine select the solver; bad values exit 2",
+          "[fast]") {
   const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 8);
   const ElasticResponse ref = elastic_response(r.p, r.contacts, r.net);
   const fs::path pack = work_dir() / "solver.pack";
@@ -752,8 +773,8 @@ TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine se
     REQUIRE(code == 0);
     CHECK(io::Json::parse(out)["kernel"]["refinement_steps"].get<int>() == 0);
   }
-  for (const std::string bad : {" --solver lu", " --solver cg --cg-tol 0", " --solver cg --cg-tol 1.5",
-                                " --cg-tol nan", " --cg-preconditioner ilu", " --refine -1", " --refine-above 2"}) {
+  for (const std::string bad : {" --solver lu", " --solver cg --cg-tol 0", " --solver cg --cg-tol 1.5", " --cg-tol nan",
+                                " --cg-preconditioner ilu", " --refine -1", " --refine-above 2"}) {
     INFO(bad);
     const auto r = run_budjam(p + bad);
     CHECK(r.code == 2);

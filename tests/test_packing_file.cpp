@@ -1,17 +1,17 @@
 // The packing file format (io/packing_file.hpp).
-#include "io/packing_file.hpp"
 #include "budjam/packing_rules.hpp"
+#include "io/packing_file.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
 #include <bit>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <random>
-#include <unistd.h>
+#include <sstream>
 
 using namespace budjam;
 using namespace budjam::io;
@@ -38,8 +38,8 @@ Packing random_packing(std::size_t n, std::uint64_t seed) {
   p.box.shear = 1e-7 * u(rng);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t parent = i < 2 ? -1 : static_cast<std::int64_t>(rng() % i);
-    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), 2 * std::numbers::pi * (u(rng) - 0.5), 0.01 + u(rng), 0.002 * (0.8 + 0.4 * u(rng)),
-               parent);
+    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), 2 * std::numbers::pi * (u(rng) - 0.5), 0.01 + u(rng),
+               0.002 * (0.8 + 0.4 * u(rng)), parent);
   }
   return p;
 }
@@ -178,7 +178,8 @@ TEST_CASE("each kind of corrupt packing file is refused with its line number", "
       {replace(kValid, "N 3", "N 3.5"), "t.pack:4: N: not an integer"},
       {replace(kValid, "meta phase jammed", "meta ph@se jammed"), "t.pack:6: invalid meta key"},
       {replace(kValid, "cells id parent x y theta b gamma0", "cells id x y"), "t.pack:7: the cells line must be"},
-      {replace(kValid, "4 4.5 -1 0.7245", "4 4.5 0.7245"), "t.pack:9: expected 7 columns (id parent x y theta b gamma0), found 6"},
+      {replace(kValid, "4 4.5 -1 0.7245", "4 4.5 0.7245"),
+       "t.pack:9: expected 7 columns (id parent x y theta b gamma0), found 6"},
       {replace(kValid, "0.0021\n", "0.0021 9\n"), "t.pack:9: expected 7 columns"},
       {replace(kValid, "4 4.5 -1", "4 abc -1"), "t.pack:9: column y: not a number (got \"abc\")"},
       {replace(kValid, "4 4.5 -1", "4 4.5x -1"), "t.pack:9: column y: not a number (got \"4.5x\")"},
@@ -193,7 +194,8 @@ TEST_CASE("each kind of corrupt packing file is refused with its line number", "
       {replace(kValid, "N 3", "N 4"), "t.pack:11: expected N = 4 cell rows, found 3"},
       {replace(kValid, "N 3", "N 2"), "t.pack:10: more cell rows than N = 2"},
       {replace(kValid, "end\n", ""), "t.pack:11: truncated: missing the \"end\" line"},
-      {replace(kValid, "2 0 5 4 3 0.01 0.0019\nend\n", ""), "t.pack:10: truncated: expected N = 3 cell rows, the file ends after 2"},
+      {replace(kValid, "2 0 5 4 3 0.01 0.0019\nend\n", ""),
+       "t.pack:10: truncated: expected N = 3 cell rows, the file ends after 2"},
       {replace(kValid, "end\n", "end\n0 -1 1 1 1 1 1\n"), "t.pack:12: unexpected text after \"end\""},
       {"budjam-packing 1\nL 8\nshear 0\n", "t.pack:4: truncated: the header has no \"cells\" line"},
   };
@@ -244,10 +246,13 @@ TEST_CASE("format_packing refuses packings that could not be read back", "[packi
 TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[packing_file]") {
   const std::vector<std::pair<std::string, std::string>> cases{
       {replace(kValid, "L 8\n", "L 1e-300\n"), "t.pack:2: box side L = 1e-300 must exceed"},
-      {replace(kValid, "L 8\n", "L 2.5\n"), "t.pack:2: box side L = 2.5 must exceed 2 (largest lobe diameter + skin) = 2.6"},
-      {replace(kValid, "shear 0\n", "shear 1e308\n"), "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
+      {replace(kValid, "L 8\n", "L 2.5\n"),
+       "t.pack:2: box side L = 2.5 must exceed 2 (largest lobe diameter + skin) = 2.6"},
+      {replace(kValid, "shear 0\n", "shear 1e308\n"),
+       "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
       {replace(kValid, "0 -1 4 3.5", "0 -1 1e300 3.5"), "t.pack:8: cell 0: position more than"},
-      {replace(kValid, "0.25 0.5 0.002", "0.25 1e300 0.002"), "t.pack:8: cell 0: bud diameter b = 1e+300 outside [0, 3]"},
+      {replace(kValid, "0.25 0.5 0.002", "0.25 1e300 0.002"),
+       "t.pack:8: cell 0: bud diameter b = 1e+300 outside [0, 3]"},
       {replace(kValid, "0.25 0.5 0.002", "0.25 3.5 0.002"), "t.pack:8: cell 0: bud diameter b = 3.5 outside"},
   };
   for (const auto& [text, message] : cases) CHECK_THROWS_WITH(parse_packing(text, "t.pack"), Contains(message));

@@ -37,7 +37,8 @@ TEST_CASE("A setting dominates another only if nowhere worse beyond noise and so
   CHECK_THROWS_AS(dominates(CostErrors{1.0, {0.0}}, base, tol), std::invalid_argument);
 }
 
-TEST_CASE("The front of a knob: a tolerance sweep keeps the cheap-loose and dear-tight ends, drops the wasteful", "[fast]") {
+TEST_CASE("The front of a knob: a tolerance sweep keeps the cheap-loose and dear-tight ends, drops the wasteful",
+          "[fast]") {
   const ParetoTolerance tol;
   // Error falls with cost, except "wasteful", which costs more than "tight" for the same error.
   const std::vector<CostErrors> s{{0.1, {1e-3}},    // 0 loose

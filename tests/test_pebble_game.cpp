@@ -134,11 +134,11 @@ TEST_CASE("two-cell dumbbell systems: each contact removes one mode until the pa
   CHECK(internal_floppy(g) == 3);  // relative motion of two free rigid bodies
   g.add_bar(0, 2);                 // mother–mother contact: both buds still swing
   CHECK(internal_floppy(g) == 2);
-  g.add_bar(1, 3);                 // bud–bud contact: a four-bar linkage
+  g.add_bar(1, 3);  // bud–bud contact: a four-bar linkage
   CHECK(internal_floppy(g) == 1);
-  g.add_bar(0, 3);                 // mother–bud contact: rigid
+  g.add_bar(0, 3);  // mother–bud contact: rigid
   CHECK(internal_floppy(g) == 0);
-  g.add_bar(1, 2);                 // the fourth possible contact can only be redundant
+  g.add_bar(1, 2);  // the fourth possible contact can only be redundant
   CHECK(g.redundant_bars() == 1);
   CHECK(internal_floppy(g) == 0);
 }

@@ -10,6 +10,7 @@
 
 #include <sys/wait.h>
 
+#include <unistd.h>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -20,7 +21,6 @@
 #include <numbers>
 #include <random>
 #include <sstream>
-#include <unistd.h>
 
 using namespace budjam;
 
@@ -483,7 +483,8 @@ TEST_CASE("the tracker, updated incrementally, agrees with an analysis from scra
     std::shuffle(order.begin(), order.end(), rng);
     RigidityTracker tracker(RigidityNetwork::load_bearing, policy);
     std::vector<std::vector<Contact>> states;
-    for (std::size_t k = order.size() / 2; k <= order.size(); k += order.size() / 10) states.emplace_back(order.begin(), order.begin() + k);
+    for (std::size_t k = order.size() / 2; k <= order.size(); k += order.size() / 10)
+      states.emplace_back(order.begin(), order.begin() + k);
     states.push_back(order);
     for (int r = 0; r < 4; ++r) {
       std::vector<Contact> fewer;
@@ -504,7 +505,8 @@ TEST_CASE("the tracker, updated incrementally, agrees with an analysis from scra
         CHECK_FALSE(tracker.last_update().rebuilt);  // pure insertions are played incrementally
         CHECK(tracker.last_update().bars_added > 0);
       }
-      if (tracker.last_update().bars_removed > 0) CHECK(tracker.last_update().rebuilt == (policy == RemovalPolicy::rebuild));
+      if (tracker.last_update().bars_removed > 0)
+        CHECK(tracker.last_update().rebuilt == (policy == RemovalPolicy::rebuild));
     }
     if (policy == RemovalPolicy::retest) CHECK(retests > 0);  // independent bars did leave
     // A newborn cell near cell 0, with its contacts: joints are appended, nothing is replayed
@@ -560,8 +562,8 @@ TEST_CASE("tracker events: a bud pinned by two contacts becomes rigid and remove
   CHECK(first[0].before == -1);
   const long floppy_without = tracker.state().floppy_plane;
   CHECK_FALSE(tracker.state().bud_rigid(cell));
-  const bool spanning_reported =
-      std::any_of(first.begin(), first.end(), [](const RigidityEvent& e) { return e.kind == RigidityEventKind::first_spanning; });
+  const bool spanning_reported = std::any_of(
+      first.begin(), first.end(), [](const RigidityEvent& e) { return e.kind == RigidityEventKind::first_spanning; });
   CHECK(spanning_reported == (tracker.state().spans_x || tracker.state().spans_y));
 
   const auto events = tracker.update(p, a.lobes, a.contacts, a.net);
@@ -600,7 +602,8 @@ TEST_CASE("the first spanning rigid cluster is reported once, when it appears", 
     const ContactNetwork net = analyse_network(p.size(), sub);
     const auto& ev = tracker.update(p, a.lobes, sub, net);
     const bool spans = tracker.state().spans_x || tracker.state().spans_y;
-    const auto n = std::count_if(ev.begin(), ev.end(), [](const RigidityEvent& e) { return e.kind == RigidityEventKind::first_spanning; });
+    const auto n = std::count_if(ev.begin(), ev.end(),
+                                 [](const RigidityEvent& e) { return e.kind == RigidityEventKind::first_spanning; });
     CHECK(n == ((spans && !spanned_before) ? 1 : 0));
     reported += static_cast<int>(n);
     spanned_before = spanned_before || spans;

@@ -6,8 +6,8 @@
 #include <catch2/catch.hpp>
 #include "scratch.hpp"
 
-#include <fstream>
 #include <unistd.h>
+#include <fstream>
 
 namespace fs = std::filesystem;
 using namespace budjam;
@@ -67,13 +67,14 @@ TEST_CASE("a non-empty directory without the marker is refused and left untouche
 TEST_CASE("an existing run is replaced only with overwrite, and only budjam's entries go", "[run_directory]") {
   const fs::path d = fresh("rerun");
   { RunDirectory::create(d, false); }
-  for (const char* f : {"scene.toml", "summary.json", "timing.json", "checkpoint.txt", "steps.csv",
-                        "divisions.csv.partial", "bud_events.csv", "moduli.csv", "dos.csv.partial",
-                        "rigidity_events.csv", "packings/jammed.pack", "packings/target_12.pack",
-                        "packings/target_1.moduli.json", "packings/phi2.dos.csv", "packings/.target_1.pack.tmp-abc123",
-                        "spectra/step_40.dos.json", ".summary.json.tmp-XyZ123"})
+  for (const char* f :
+       {"scene.toml", "summary.json", "timing.json", "checkpoint.txt", "steps.csv", "divisions.csv.partial",
+        "bud_events.csv", "moduli.csv", "dos.csv.partial", "rigidity_events.csv", "packings/jammed.pack",
+        "packings/target_12.pack", "packings/target_1.moduli.json", "packings/phi2.dos.csv",
+        "packings/.target_1.pack.tmp-abc123", "spectra/step_40.dos.json", ".summary.json.tmp-XyZ123"})
     put(d / f, "old");
-  for (const char* f : {"notes.txt", "packings/mine.pack", "packings/target_x.pack", "spectra/plot.py", "steps.csv.bak"})
+  for (const char* f :
+       {"notes.txt", "packings/mine.pack", "packings/target_x.pack", "spectra/plot.py", "steps.csv.bak"})
     put(d / f, "mine");
 
   CHECK_THROWS_WITH(RunDirectory::create(d, false), Contains("--overwrite"));
@@ -81,7 +82,8 @@ TEST_CASE("an existing run is replaced only with overwrite, and only budjam's en
 
   CHECK(remove_run_outputs(d) == std::vector<std::string>{"notes.txt", "packings/mine.pack", "packings/target_x.pack",
                                                           "spectra/plot.py", "steps.csv.bak"});
-  for (const char* f : {"notes.txt", "packings/mine.pack", "packings/target_x.pack", "spectra/plot.py", "steps.csv.bak"})
+  for (const char* f :
+       {"notes.txt", "packings/mine.pack", "packings/target_x.pack", "spectra/plot.py", "steps.csv.bak"})
     CHECK(slurp(d / f) == "mine");
   for (const char* f : {"scene.toml", "summary.json", "packings/jammed.pack", "packings/target_1.moduli.json",
                         "packings/.target_1.pack.tmp-abc123", "spectra/step_40.dos.json", ".summary.json.tmp-XyZ123"})

@@ -193,16 +193,25 @@ TEST_CASE("every key of the table reads back the value written for it", "[scene]
     const Scene base;
     const SceneValue before = scene_value(base, k.key());
     SceneValue after = before;
-    if (auto* b = std::get_if<bool>(&after)) *b = !*b;
-    else if (auto* i = std::get_if<std::int64_t>(&after)) *i += 3;
-    else if (auto* d = std::get_if<double>(&after)) *d = *d == 0 ? 0.5 : *d * 1.25;
-    else if (auto* v = std::get_if<std::vector<double>>(&after)) v->push_back(0.0625);
+    if (auto* b = std::get_if<bool>(&after))
+      *b = !*b;
+    else if (auto* i = std::get_if<std::int64_t>(&after))
+      *i += 3;
+    else if (auto* d = std::get_if<double>(&after))
+      *d = *d == 0 ? 0.5 : *d * 1.25;
+    else if (auto* v = std::get_if<std::vector<double>>(&after))
+      v->push_back(0.0625);
     else if (auto* str = std::get_if<std::string>(&after)) {
-      if (k.key() == "cells.division") *str = "aligned";
-      else if (k.key() == "init.kind") *str = "random_seeds";
-      else if (k.key() == "jamming.search") *str = "bisection";
-      else if (k.key() == "growth.P0") after = 0.125;
-      else *str += "x";
+      if (k.key() == "cells.division")
+        *str = "aligned";
+      else if (k.key() == "init.kind")
+        *str = "random_seeds";
+      else if (k.key() == "jamming.search")
+        *str = "bisection";
+      else if (k.key() == "growth.P0")
+        after = 0.125;
+      else
+        *str += "x";
     }
     REQUIRE(after != before);
     Scene s;
@@ -219,7 +228,9 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
     std::string toml, message;
   };
   const std::vector<Case> cases = {
-      {"[growth]\nP00 = 1\n", "test.toml:2:1: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps, adaptive_dt, adaptive_floor)"},
+      {"[growth]\nP00 = 1\n",
+       "test.toml:2:1: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps, adaptive_dt, "
+       "adaptive_floor)"},
       {"[grwoth]\nP0 = 1\n", "test.toml:1:2: grwoth: unknown section"},
       {"L = 8\n", "test.toml:1:1: L: unknown key"},
       {"[observe.moduli]\nevery_step = 1\n", "observe.moduli.every_step: unknown key"},
@@ -415,8 +426,8 @@ TEST_CASE("validate enforces each key's range from the knob table, with the row'
       if (open) return end;
       return k.type == KeyType::integer ? end + outward : std::nextafter(end, outward * HUGE_VAL);
     };
-    for (const auto& [end, open, outward] : {std::tuple{k.range.lo, k.range.lo_open, -1.0},
-                                             std::tuple{k.range.hi, k.range.hi_open, 1.0}}) {
+    for (const auto& [end, open, outward] :
+         {std::tuple{k.range.lo, k.range.lo_open, -1.0}, std::tuple{k.range.hi, k.range.hi_open, 1.0}}) {
       if (!std::isfinite(end)) continue;
       ++bounded;
       Scene s;
@@ -461,13 +472,13 @@ TEST_CASE("text that is not UTF-8 is refused with its line and column before the
     std::string toml, where;
   };
   const std::vector<Case> cases = {
-      {"[run]\nname = \"\xff\"\n", "test.toml:2:9:"},            // never a UTF-8 byte
-      {"[run]\nname = \"\xc0\xaf\"\n", "test.toml:2:9:"},        // overlong '/'
-      {"[run]\nname = \"\xed\xa0\x80\"\n", "test.toml:2:9:"},    // a surrogate
+      {"[run]\nname = \"\xff\"\n", "test.toml:2:9:"},              // never a UTF-8 byte
+      {"[run]\nname = \"\xc0\xaf\"\n", "test.toml:2:9:"},          // overlong '/'
+      {"[run]\nname = \"\xed\xa0\x80\"\n", "test.toml:2:9:"},      // a surrogate
       {"[run]\nname = \"\xf4\x90\x80\x80\"\n", "test.toml:2:9:"},  // above U+10FFFF
-      {"[run]\nname = \"\xe2\x82\"\n", "test.toml:2:9:"},        // truncated sequence
-      {"[run]\n# \xe2\x82", "test.toml:2:3:"},                      // truncated at the end
-      {"[run]\nname = \"x\xbf\"\n", "test.toml:2:10:"},           // a stray continuation byte
+      {"[run]\nname = \"\xe2\x82\"\n", "test.toml:2:9:"},          // truncated sequence
+      {"[run]\n# \xe2\x82", "test.toml:2:3:"},                     // truncated at the end
+      {"[run]\nname = \"x\xbf\"\n", "test.toml:2:10:"},            // a stray continuation byte
   };
   for (const Case& c : cases) {
     INFO(c.toml);

@@ -2,9 +2,9 @@
 // (paper appendix "Vibrational density of states"; docs/spectrum.md).
 #include "budjam/spectrum.hpp"
 
+#include "budjam/errors.hpp"
 #include "budjam/hessian.hpp"
 #include "budjam/rigidity.hpp"
-#include "budjam/errors.hpp"
 #include "compressed_packing.hpp"
 #include "run_budjam.hpp"
 #include "scratch.hpp"
@@ -12,11 +12,11 @@
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 #include <catch2/catch.hpp>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -114,8 +114,7 @@ TEST_CASE("a single dumbbell's moment of inertia equals the area integral of r²
   }
 }
 
-TEST_CASE("two springs between two cells give ω² = k (1/m1 + 1/m2) and κ (1/I1 + 1/I2)",
-          "[spectrum][mass]") {
+TEST_CASE("two springs between two cells give ω² = k (1/m1 + 1/m2) and κ (1/I1 + 1/I2)", "[spectrum][mass]") {
   // A hand-made harmonic system: spring k between x1 and x2, torsion spring κ between θ1 and θ2,
   // y free. Removing the two translations leaves the relative y motion and the common rotation
   // θ1 = θ2 at zero, and the two relative coordinates at k(1/m1 + 1/m2) and κ(1/I1 + 1/I2):
@@ -416,7 +415,7 @@ TEST_CASE("participation ratio is 1/n for a one-cell mode and 1 for an evenly sh
   s.n_dof = 10;
   s.lambda = Eigen::VectorXd::LinSpaced(2, 1.0, 2.0);
   s.modes = Eigen::MatrixXd::Zero(12, 2);
-  s.modes(5, 0) = 1.0;                                     // θ of cell 1 only
+  s.modes(5, 0) = 1.0;                                          // θ of cell 1 only
   for (int i = 0; i < 4; ++i) s.modes(3 * i + i % 3, 1) = 0.5;  // equal weight, different components
   const Eigen::VectorXd pr = participation_ratios(s);
   CHECK(pr[0] == Approx(0.25));
@@ -470,7 +469,7 @@ TEST_CASE("the D(ω) histogram is normalised by the number of modes", "[spectrum
   s.n_cells = 5;
   s.n_dof = 13;
   s.lambda.resize(13);
-  for (int k = 0; k < 3; ++k) s.lambda[k] = 1e-14 * k;  // quasi-zero
+  for (int k = 0; k < 3; ++k) s.lambda[k] = 1e-14 * k;              // quasi-zero
   for (int k = 3; k < 13; ++k) s.lambda[k] = std::pow(0.1 * k, 2);  // ω = 0.3 … 1.2
   const DosHistogram h = dos_histogram(s, 10, 1.0, 1e-6);
   CHECK(h.excluded == 3);
@@ -585,9 +584,9 @@ fs::path grown_demo(std::uint64_t seed) {
   const fs::path dir = work_dir() / ("demo-" + std::to_string(seed));
   if (!fs::exists(dir / "summary.json")) {
     const auto r = run_budjam("grow '" + scene("demo.toml").string() + "' --quiet --seed " + std::to_string(seed) +
-                          " --out '" + dir.string() +
-                          "' --set observe.dos.at_jamming=true --set observe.dos.at_targets=true"
-                          " --set observe.dos.at_phi2=true --set jamming.continue_to_phi2=true");
+                              " --out '" + dir.string() +
+                              "' --set observe.dos.at_jamming=true --set observe.dos.at_targets=true"
+                              " --set observe.dos.at_phi2=true --set jamming.continue_to_phi2=true");
     INFO(r.err);
     REQUIRE(r.code == 0);
   }
@@ -664,8 +663,10 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   const auto lanczos = csv_column(lb.string() + ".dos.csv", "lambda");
   REQUIRE(lanczos.size() >= 30);
   for (std::size_t k = 0; k < lanczos.size(); ++k) {
-    if (dense[k] > 1e-6) CHECK(std::abs(lanczos[k] - dense[k]) <= 1e-8 * dense[k]);
-    else CHECK(std::abs(lanczos[k]) < 1e-10);
+    if (dense[k] > 1e-6)
+      CHECK(std::abs(lanczos[k] - dense[k]) <= 1e-8 * dense[k]);
+    else
+      CHECK(std::abs(lanczos[k]) < 1e-10);
   }
 }
 

@@ -48,12 +48,13 @@ std::size_t dense_count_below(const Packing& p, const Analysed& a, double delta)
 
 }  // namespace
 
-TEST_CASE("A jamming point FIRE stopped on a saddle has one unstable mode, counted alike by LDLt inertia and dense eigenvalues",
-          "[stability]") {
+TEST_CASE(
+    "A jamming point FIRE stopped on a saddle has one unstable mode, counted alike by LDLt inertia and dense "
+    "eigenvalues",
+    "[stability]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const Packing p =
-      io::read_packing(std::filesystem::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
+  const Packing p = io::read_packing(std::filesystem::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
   const Analysed a = analyse(p);
   const Stability s = stability(p, a.contacts, a.net);
   CHECK_FALSE(s.minimum());
@@ -62,7 +63,8 @@ TEST_CASE("A jamming point FIRE stopped on a saddle has one unstable mode, count
   CHECK(dense_count_below(p, a, s.delta) == s.unstable_modes);
 }
 
-TEST_CASE("Packings compressed well above jamming are minima: no unstable mode, as the dense eigenvalues say", "[stability]") {
+TEST_CASE("Packings compressed well above jamming are minima: no unstable mode, as the dense eigenvalues say",
+          "[stability]") {
   FireParams fire;
   fire.force_tol = 1e-13;
   for (const std::uint64_t seed : {1u, 2u, 3u}) {

@@ -11,8 +11,8 @@ using namespace budjam;
 TEST_CASE("mean, variances and standard error match hand-worked values") {
   const std::vector<double> x{2, 4, 4, 4, 5, 5, 7, 9};  // mean 5, Σ(x − x̄)² = 32
   CHECK(mean(x) == Approx(5.0));
-  CHECK(population_variance(x) == Approx(4.0));        // 32 / 8
-  CHECK(sample_variance(x) == Approx(32.0 / 7.0));     // 32 / 7
+  CHECK(population_variance(x) == Approx(4.0));     // 32 / 8
+  CHECK(sample_variance(x) == Approx(32.0 / 7.0));  // 32 / 7
   CHECK(standard_error(x) == Approx(std::sqrt(32.0 / 7.0 / 8.0)));
   CHECK(std::isnan(standard_error(std::vector<double>{1.0})));
   CHECK(std::isnan(mean(std::vector<double>{})));

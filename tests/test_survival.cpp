@@ -1,8 +1,8 @@
 // Kaplan–Meier survival with censoring and Greenwood's variance, against a hand-worked example.
 #include "budjam/survival.hpp"
 
-#include <catch2/catch.hpp>
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 
 using namespace budjam;
@@ -122,7 +122,8 @@ void write_run(const std::filesystem::path& d) {
   std::ofstream ev(d / "bud_events.csv");
   ev << "episode,cell_id,event,step,phi,a\n";
   ev << "0,99,tagged,5,0.8,0\n0,99,censored_unjam,6,0.79,0.5\n";
-  const char* kinds[8] = {"completed", "completed", "divided", "completed", "censored_end", "completed", "completed", "divided"};
+  const char* kinds[8] = {"completed",    "completed", "divided",   "completed",
+                          "censored_end", "completed", "completed", "divided"};
   const double a[8] = {3, 1, 2, 3, 3, 5, 7, 6};
   for (int k = 0; k < 8; ++k) ev << "1," << k << ",tagged,10,0.83,0\n";
   for (int k = 0; k < 8; ++k) {
@@ -136,7 +137,8 @@ void write_run(const std::filesystem::path& d) {
 TEST_CASE("budjam survival pools the censored bud events of a run into the hand-worked curve") {
   const auto dir = budjam::testing::work_dir();
   write_run(dir / "run");
-  const auto r = budjam::testing::run_budjam("survival '" + (dir / "run").string() + "' -o '" + (dir / "km.csv").string() + "'");
+  const auto r =
+      budjam::testing::run_budjam("survival '" + (dir / "run").string() + "' -o '" + (dir / "km.csv").string() + "'");
   REQUIRE(r.code == 0);
   const auto j = nlohmann::json::parse(r.out);
   CHECK(j["records"] == 8);
@@ -153,9 +155,9 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
 TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia table") {
   // Remission times of the 6-MP arm of Freireich et al. (1963), + = censored; the estimates and
   // Greenwood standard errors of Klein & Moeschberger, Survival Analysis, Table 4.1A.
-  const std::vector<SurvivalRecord> sixmp{{6, true},   {6, true},   {6, true},   {6, false},  {7, true},   {9, false},
-                                          {10, true},  {10, false}, {11, false}, {13, true},  {16, true},  {17, false},
-                                          {19, false}, {20, false}, {22, true},  {23, true},  {25, false}, {32, false},
+  const std::vector<SurvivalRecord> sixmp{{6, true},   {6, true},   {6, true},   {6, false}, {7, true},   {9, false},
+                                          {10, true},  {10, false}, {11, false}, {13, true}, {16, true},  {17, false},
+                                          {19, false}, {20, false}, {22, true},  {23, true}, {25, false}, {32, false},
                                           {32, false}, {34, false}, {35, false}};
   const auto km = kaplan_meier(sixmp);
   const std::vector<std::array<double, 3>> table{{6, 0.857, 0.0764},  {7, 0.807, 0.0869},  {10, 0.753, 0.0963},
@@ -167,7 +169,7 @@ TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia tabl
     CHECK(std::sqrt(km.variance(t)) == Approx(se).margin(5e-5));
   }
   CHECK(km.S(35) == Approx(0.448).margin(5e-4));  // no completion after 23: Ŝ stays, undefined beyond 35
-  CHECK(*median_completion_size(km) == 23.0);      // the textbook median remission time
+  CHECK(*median_completion_size(km) == 23.0);     // the textbook median remission time
   // mean up to the last event: 6·1 + 1·6/7·... = ∫_0^23 Ŝ
   const double mean23 = 6 + (7 - 6) * (18.0 / 21) + (10 - 7) * km.S(7) + (13 - 10) * km.S(10) + (16 - 13) * km.S(13) +
                         (22 - 16) * km.S(16) + (23 - 22) * km.S(22);

@@ -23,22 +23,22 @@ struct ArpackError : std::runtime_error {
 };
 
 struct LanczosOptions {
-  int nev = 6;             // eigenpairs wanted
-  int ncv = 0;             // Lanczos basis size, nev < ncv ≤ n; 0 = min(n, max(2 nev + 1, nev + 20))
-  double tol = 0.0;        // relative Ritz residual |r| ≤ tol |θ|; 0 = machine precision
+  int nev = 6;               // eigenpairs wanted
+  int ncv = 0;               // Lanczos basis size, nev < ncv ≤ n; 0 = min(n, max(2 nev + 1, nev + 20))
+  double tol = 0.0;          // relative Ritz residual |r| ≤ tol |θ|; 0 = machine precision
   int max_restarts = 10000;  // ARPACK's maxitr
-  bool vectors = true;     // compute eigenvectors too
-  std::uint64_t seed = 1;  // starting vector: uniform in [−1,1)^n from this seed (reproducible;
-                           // ARPACK's own random start depends on how often it was called before)
-  Eigen::VectorXd start;   // if non-empty (length n), the starting vector instead, e.g. one
-                           // projected into the subspace the operator lives in
+  bool vectors = true;       // compute eigenvectors too
+  std::uint64_t seed = 1;    // starting vector: uniform in [−1,1)^n from this seed (reproducible;
+                             // ARPACK's own random start depends on how often it was called before)
+  Eigen::VectorXd start;     // if non-empty (length n), the starting vector instead, e.g. one
+                             // projected into the subspace the operator lives in
 };
 
 struct LanczosResult {
-  Eigen::VectorXd values;   // ascending
-  Eigen::MatrixXd vectors;  // matching columns, orthonormal (empty unless options.vectors)
-  int ncv = 0;              // basis size used
-  int restarts = 0;         // implicit restarts (ARPACK iparam(3))
+  Eigen::VectorXd values;         // ascending
+  Eigen::MatrixXd vectors;        // matching columns, orthonormal (empty unless options.vectors)
+  int ncv = 0;                    // basis size used
+  int restarts = 0;               // implicit restarts (ARPACK iparam(3))
   int operator_applications = 0;  // OP x products (iparam(9))
 };
 

@@ -5,14 +5,14 @@
 // (completed: the event of the Kaplan–Meier estimate), divide before completion (censored), or
 // still be unconstrained when the run or the jamming episode ends (censored).
 // a = b² − b_J² is the added bud size in diameter squared (true area π a / 4).
-#include "budjam/contact_network.hpp"
-#include "budjam/contacts.hpp"
-#include "budjam/growth.hpp"
-#include "budjam/packing.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
 #include <vector>
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/growth.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 
@@ -28,11 +28,11 @@ const char* to_string(BudEventKind kind);
 
 struct BudEvent {
   BudEventKind kind = BudEventKind::tagged;
-  int episode = 0;         // jamming episode
+  int episode = 0;  // jamming episode
   std::int64_t cell_id = -1;
-  long step = 0;           // accepted-step index
+  long step = 0;  // accepted-step index
   double phi = 0;
-  double a = 0;            // b² − b_J²
+  double a = 0;  // b² − b_J²
 };
 
 class BudTracker {
@@ -51,10 +51,10 @@ class BudTracker {
   std::vector<BudEvent> close(BudEventKind kind, long step, double phi, const Packing& p);
 
   std::size_t tagged() const { return tags_.size(); }
-  std::size_t active() const;      // tagged, neither completed nor divided nor closed
+  std::size_t active() const;  // tagged, neither completed nor divided nor closed
   std::size_t completed() const;
   std::size_t divided() const;
-  std::size_t touched() const;     // had their first contact
+  std::size_t touched() const;  // had their first contact
   int episode() const { return episode_; }
 
   void save(std::ostream& os) const;

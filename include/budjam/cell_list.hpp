@@ -2,10 +2,10 @@
 // Linked cells + Verlet skin over lobes. One rebuild is O(N); between rebuilds the pair list
 // is valid as long as no pair of lobes has closed in by more than the skin since the last build
 // (tested conservatively: the two largest lobe displacements sum to less than the skin).
-#include "budjam/packing.hpp"
 #include <cstdint>
 #include <utility>
 #include <vector>
+#include "budjam/packing.hpp"
 
 namespace budjam {
 
@@ -44,6 +44,6 @@ class NeighbourList {
 // O(N²) reference: every pair of lobes on different cells with r < R_a + R_b + cutoff_extra.
 // Only a test oracle; never called in a growth step.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Lobes& lobes, const Box& box,
-                                                                        double cutoff_extra);
+                                                                       double cutoff_extra);
 
 }  // namespace budjam

@@ -1,10 +1,10 @@
 #pragma once
 // Lobe–lobe contacts of a relaxed packing and the mechanical observables they carry
 // (docs/model.md, "Interaction and energy").
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
+#include "budjam/packing.hpp"
 
 namespace budjam {
 

@@ -3,12 +3,12 @@
 // bud depletion (Eqs. 12–16), flux partition λ_c (Eq. 19), the growth bulk response B_grow
 // (Eq. 20), the no-feedback branch ΔZ_0(P) (Eq. 6), growth-rate heterogeneity h_γ (Eq. E4) and the
 // mean-field estimate of u_J (Eq. A10, Lambert W).
-#include "budjam/statistics.hpp"
 #include <numbers>
 #include <optional>
 #include <span>
 #include <utility>
 #include <vector>
+#include "budjam/statistics.hpp"
 
 namespace budjam {
 
@@ -54,7 +54,8 @@ struct BGrow {
   double B = 0, B_se = 0;  // φ · slope, φ · slope error
   std::size_t points = 0;
 };
-std::optional<BGrow> b_grow(std::span<const double> phi, std::span<const double> P, double phi_at, std::size_t window = 5);
+std::optional<BGrow> b_grow(std::span<const double> phi, std::span<const double> P, double phi_at,
+                            std::size_t window = 5);
 
 // A piecewise-linear function through points sorted by x (equal x averaged), constant beyond the
 // ends. Used for ΔZ_0(P), the no-feedback branch of mean (P, ΔZ) per Δφ (docs/model.md, "Observables").

@@ -8,10 +8,10 @@
 //   kσ along coincident_normal() (contacts.hpp): the centroid-to-centroid direction, or +x when
 //   the centroids coincide too. Every direction is a one-sided derivative of U there; this
 //   choice is finite, deterministic and separates the cells.
-#include "budjam/cell_list.hpp"
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <vector>
+#include "budjam/cell_list.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 

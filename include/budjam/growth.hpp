@@ -1,13 +1,13 @@
 #pragma once
 // Cell growth, the growth law, division and initial states (docs/model.md, "Growth").
 // One random stream per run, std::mt19937_64, drawn in a fixed documented order (docs/growth.md).
-#include "budjam/packing.hpp"
-#include "budjam/scene.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <random>
 #include <vector>
+#include "budjam/packing.hpp"
+#include "budjam/scene.hpp"
 
 namespace budjam {
 
@@ -35,8 +35,7 @@ double growth_factor(double bud_pressure, std::optional<double> P0);
 
 // γ_i for the next step: γ0_i, times exp(−p_i/P0) when `bud_pressures` is given (feedback on:
 // above jamming and P0 set). `bud_pressures` must then have one entry per cell.
-std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures,
-                                 std::optional<double> P0);
+std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0);
 
 // One division as it happened (cell indices refer to the packing after the step).
 struct Division {
@@ -55,8 +54,7 @@ Division divide(Packing& p, std::size_t i, const Scene& scene, Rng& rng);
 // Grows every cell present at the start by b² ← (1 + γ_i Δt)(D² + b²) − D², in index order,
 // dividing a cell as soon as α > 2α0. Cells born in the step do not grow in it.
 // `rates` holds γ_i for the cells present at the start.
-std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, double dt,
-                                const Scene& scene, Rng& rng);
+std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, double dt, const Scene& scene, Rng& rng);
 
 // The paper's start: two cells at (L/2, L/2 ∓ 0.5), α = α0 and α = 1 + √(2.5α0 − (α0−1)² − 2).
 // Draw order per cell: γ0, then θ uniform in [−π, π).

@@ -14,12 +14,6 @@
 //   Depleted → then, at the end of the run, BudEvent* (censored_end) → Finished | Failed.
 // The initial relaxed state is announced as StepAccepted with step 0.
 // A rejected step emits nothing (it is undone exactly, RNG included).
-#include "budjam/bud_events.hpp"
-#include "budjam/contact_network.hpp"
-#include "budjam/contacts.hpp"
-#include "budjam/growth.hpp"
-#include "budjam/packing.hpp"
-#include "budjam/scene.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -28,6 +22,12 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include "budjam/bud_events.hpp"
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/growth.hpp"
+#include "budjam/packing.hpp"
+#include "budjam/scene.hpp"
 
 namespace budjam {
 
@@ -64,30 +64,30 @@ struct Needs {
 
 // Data of the (latest) jamming point.
 struct JammingRecord {
-  int episode = 0;              // 0 for the first jamming, k after the k-th unjamming
-  long step = 0;                // accepted-step index of the jammed state
+  int episode = 0;  // 0 for the first jamming, k after the k-th unjamming
+  long step = 0;    // accepted-step index of the jammed state
   double phi = 0, P = 0, E_per_cell = 0;
   std::size_t N = 0, N_nr = 0, N_f = 0, N_u = 0, N_u_buds = 0, N_c = 0;
   double Z = 0, Z_iso = 0, dZ = 0;
-  double u = 0;                 // N_u / N_nr (contact-free lobes)
-  double u_buds = 0;            // the paper's u_J: unconstrained buds / N_nr
-  double n_J = 0;               // N_nr / L²
-  std::size_t tagged = 0;       // unconstrained buds tagged for the bud events and φ_2
+  double u = 0;            // N_u / N_nr (contact-free lobes)
+  double u_buds = 0;       // the paper's u_J: unconstrained buds / N_nr
+  double n_J = 0;          // N_nr / L²
+  std::size_t tagged = 0;  // unconstrained buds tagged for the bud events and φ_2
 };
 
 struct TargetRecord {
-  std::size_t index = 0;        // k: position in scene.targets
-  double dphi = 0;              // requested Δφ
-  double phi_target = 0;        // φ_J + Δφ
+  std::size_t index = 0;  // k: position in scene.targets
+  double dphi = 0;        // requested Δφ
+  double phi_target = 0;  // φ_J + Δφ
   long step = 0;
   double phi = 0, P = 0, E_per_cell = 0;
   std::size_t N = 0, N_nr = 0, N_f = 0, N_f_single = 0, N_c = 0, N_u = 0, N_u_buds = 0;
   double Z = 0, u = 0, u_buds = 0, Z_iso = 0, dZ = 0;
-  double chi_c = 1;             // ⟨exp(−p/P0)⟩ over compressed buds (1 with P0 = none or none compressed)
+  double chi_c = 1;  // ⟨exp(−p/P0)⟩ over compressed buds (1 with P0 = none or none compressed)
   long divisions_since_jamming = 0;
 };
 
-struct DepletionRecord {        // φ_2
+struct DepletionRecord {  // φ_2
   long step = 0;
   double phi = 0, P = 0;
   std::size_t N = 0, N_nr = 0;
@@ -97,31 +97,31 @@ struct DepletionRecord {        // φ_2
 };
 
 struct UnjamRecord {
-  int episode = 0;              // the jamming episode that ended
+  int episode = 0;  // the jamming episode that ended
   long step = 0;
   double phi = 0;
-  double phi_J = 0;             // the φ_J that was lost
-  std::size_t targets_lost = 0; // targets landed in that episode (discarded: targets are re-visited)
+  double phi_J = 0;              // the φ_J that was lost
+  std::size_t targets_lost = 0;  // targets landed in that episode (discarded: targets are re-visited)
 };
 
 struct RunResult {
   RunStatus status = RunStatus::running;
-  std::string message;          // one line for failures
+  std::string message;  // one line for failures
   std::optional<JammingRecord> jamming;
-  std::vector<TargetRecord> targets;          // of the current jamming episode, in increasing Δφ
-  std::optional<DepletionRecord> depletion;   // φ_2 of the current jamming episode
+  std::vector<TargetRecord> targets;         // of the current jamming episode, in increasing Δφ
+  std::optional<DepletionRecord> depletion;  // φ_2 of the current jamming episode
   std::vector<UnjamRecord> unjammings;
-  long accepted = 0, rejected = 0;            // growth steps
+  long accepted = 0, rejected = 0;  // growth steps
   long force_evaluations = 0, fire_iterations = 0;
-  long divisions = 0;                          // all divisions in accepted steps
-  long saddles_relaxed = 0;                    // jamming candidates found to be saddles and relaxed on
+  long divisions = 0;        // all divisions in accepted steps
+  long saddles_relaxed = 0;  // jamming candidates found to be saddles and relaxed on
 };
 
 // Read-only view of an accepted state. Pointers are null when not computed for this state.
 struct StateView {
-  long step = 0;                // accepted steps so far; 0 = the initial state
-  long attempts = 0;            // growth steps tried so far (accepted + rejected)
-  double dt = 0;                // Δt of the step that produced this state
+  long step = 0;      // accepted steps so far; 0 = the initial state
+  long attempts = 0;  // growth steps tried so far (accepted + rejected)
+  double dt = 0;      // Δt of the step that produced this state
   double phi = 0, P = 0, E_per_cell = 0;
   Phase phase = Phase::unjammed;
   const Scene* scene = nullptr;
@@ -129,22 +129,48 @@ struct StateView {
   const std::vector<Contact>* contacts = nullptr;
   const ContactNetwork* network = nullptr;
   const std::vector<double>* bud_pressures = nullptr;
-  const JammingRecord* jamming = nullptr;     // null in the unjammed phase
-  const BudTracker* buds = nullptr;           // tags of the current jamming episode
-  long divisions_since_jamming = 0;           // 0 in the unjammed phase
-  std::size_t compressed_buds = 0;            // buds with ≥ 1 contact (valid when contacts != null)
-  double chi_c = 1;                           // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known)
+  const JammingRecord* jamming = nullptr;  // null in the unjammed phase
+  const BudTracker* buds = nullptr;        // tags of the current jamming episode
+  long divisions_since_jamming = 0;        // 0 in the unjammed phase
+  std::size_t compressed_buds = 0;         // buds with ≥ 1 contact (valid when contacts != null)
+  double chi_c = 1;                        // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known)
 };
 
-struct StepAccepted { const StateView& state; };
-struct Jammed { const StateView& state; const JammingRecord& jamming; };
-struct Unjammed { const StateView& state; const UnjamRecord& record; };
-struct TargetReached { const StateView& state; const TargetRecord& target; };
-struct Depleted { const StateView& state; const DepletionRecord& depletion; };
-struct Divided { const StateView& state; const Division& division; };  // state: after minimisation
-struct BudEventHappened { const StateView& state; const BudEvent& event; };
-struct Failed { const StateView& state; const RunResult& result; };    // state: last accepted
-struct Finished { const StateView& state; const RunResult& result; };
+struct StepAccepted {
+  const StateView& state;
+};
+struct Jammed {
+  const StateView& state;
+  const JammingRecord& jamming;
+};
+struct Unjammed {
+  const StateView& state;
+  const UnjamRecord& record;
+};
+struct TargetReached {
+  const StateView& state;
+  const TargetRecord& target;
+};
+struct Depleted {
+  const StateView& state;
+  const DepletionRecord& depletion;
+};
+struct Divided {
+  const StateView& state;
+  const Division& division;
+};  // state: after minimisation
+struct BudEventHappened {
+  const StateView& state;
+  const BudEvent& event;
+};
+struct Failed {
+  const StateView& state;
+  const RunResult& result;
+};  // state: last accepted
+struct Finished {
+  const StateView& state;
+  const RunResult& result;
+};
 
 class Observer {
  public:
@@ -187,23 +213,23 @@ struct JammingOvershoot {
 // What the secant search onto φ_J carries from one trial to the next (docs/growth.md, "Jamming search").
 struct JammingSearchState {
   std::vector<JammingOvershoot> overshoots;  // sorted by φ
-  int slow_trials = 0;       // consecutive trials that did not halve the bracket around φ_J
-  double bracket_width = 0;  // φ from the accepted state to the lowest overshoot at the last trial
+  int slow_trials = 0;                       // consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;                  // φ from the accepted state to the lowest overshoot at the last trial
 };
 
 struct GrowthState {
   std::uint64_t seed = 0;
   Rng rng;
   Phase phase = Phase::unjammed;
-  double dt = 0;                     // Δt of the next attempt
-  double last_dt = 0;                // Δt of the step that produced the accepted state
-  long step = 0, attempts = 0;       // accepted steps; growth steps tried
-  std::size_t next_target = 0;       // index in scene.targets of the next target to land
+  double dt = 0;                // Δt of the next attempt
+  double last_dt = 0;           // Δt of the step that produced the accepted state
+  long step = 0, attempts = 0;  // accepted steps; growth steps tried
+  std::size_t next_target = 0;  // index in scene.targets of the next target to land
   long divisions_since_jamming = 0;
-  int episodes = 0;                  // jamming episodes begun
-  RunResult result;                  // status `running`
+  int episodes = 0;  // jamming episodes begun
+  RunResult result;  // status `running`
   BudTracker buds;
-  Packing packing;                   // the last accepted state
+  Packing packing;  // the last accepted state
   JammingSearchState search;
 };
 

@@ -11,13 +11,13 @@
 //   plus the curvature of the rigid-body map (also a prestress term):
 //   H_θiθi += f s_a (n·ê_i),   H_θjθj −= f s_b (n·ê_j).
 // Periodic images and Lees–Edwards shear only enter through n and r, which the contact carries.
-#include "budjam/contact_network.hpp"
-#include "budjam/contacts.hpp"
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstddef>
 #include <vector>
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 

@@ -20,14 +20,14 @@
 // force Λ (> 0: compressed). τ counts that load, S does not: τ = S − (1/A) Σ_cells s Λ n̂ ⊗ n̂
 // (link_stress), and the moduli differ by the slope of the link term. They coincide when no
 // link is loaded (every bud contact-free).
-#include "budjam/contact_network.hpp"
-#include "budjam/contacts.hpp"
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstddef>
 #include <string>
 #include <vector>
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 
@@ -75,10 +75,13 @@ Eigen::Matrix2d link_stress(const Packing& p, const std::vector<Contact>& contac
 
 // How the pinned system H_ff U_f = Ξ_f was solved.
 enum class SolveMethod {
-  no_contacts,             // no load-bearing contacts: nothing to solve, no response
-  no_force_response,       // Ξ = 0: the affine strain is already relaxed (U = 0)
-  cholesky, ldlt, dense,   // the direct solvers of ModuliSolver
-  cg_ichol, cg_diagonal,   // conjugate gradients with either preconditioner
+  no_contacts,        // no load-bearing contacts: nothing to solve, no response
+  no_force_response,  // Ξ = 0: the affine strain is already relaxed (U = 0)
+  cholesky,
+  ldlt,
+  dense,  // the direct solvers of ModuliSolver
+  cg_ichol,
+  cg_diagonal,             // conjugate gradients with either preconditioner
   regularised_refinement,  // fallback of the direct solvers when the pinned system is still singular
                            // (a mechanism beyond the pinned modes)
   unstable                 // H has negative eigenvalues: a saddle, no relaxed response (relaxed moduli NaN)
@@ -89,28 +92,28 @@ const char* to_string(SolveMethod method);
 
 // How the singular Hessian was handled.
 struct KernelTreatment {
-  std::size_t dofs = 0;                 // 3 N_nr (reduced system before pinning)
-  std::size_t pinned_translation = 0;   // 2: x, y of one reference cell (the two global translations)
-  std::size_t pinned_lobe_rotation = 0; // θ of cells with exactly one contact-free lobe: the free lobe
-                                        // swings about the loaded one (an exact zero mode, also of the
-                                        // prestress term); pinning θ leaves that mode out
-  std::size_t pinned_zero_rows = 0;     // other dofs whose Hessian row is exactly zero
-  std::size_t reference_cell = 0;       // packing index of the cell whose x, y are pinned
+  std::size_t dofs = 0;                  // 3 N_nr (reduced system before pinning)
+  std::size_t pinned_translation = 0;    // 2: x, y of one reference cell (the two global translations)
+  std::size_t pinned_lobe_rotation = 0;  // θ of cells with exactly one contact-free lobe: the free lobe
+                                         // swings about the loaded one (an exact zero mode, also of the
+                                         // prestress term); pinning θ leaves that mode out
+  std::size_t pinned_zero_rows = 0;      // other dofs whose Hessian row is exactly zero
+  std::size_t reference_cell = 0;        // packing index of the cell whose x, y are pinned
   SolveMethod method = SolveMethod::no_contacts;
-  long cholesky_failed_column = -1;     // where the direct factorisation stopped (fallback only)
-  double regularisation = 0;            // δ of the fallback (H + δ1) factor, 0 otherwise
-  std::size_t unstable_modes = 0;       // eigenvalues of H below −δ (inertia of the LDLᵀ factor); > 0 only
-                                        // with method unstable. Jamming points found by the energy rule
-                                        // alone can be such saddles (docs/moduli.md, "Saddles")
-  int refinement_steps = 0;             // iterative-refinement steps taken
-  int iterations = 0;                   // cg: iterations, summed over the strain columns
-  double solver_tolerance = 0;          // cg: the relative residual asked for per column; 0 otherwise
-  double residual = 0;                  // max over strain columns of ‖H u − Ξ‖ / ‖Ξ‖ on ALL non-rattler
-                                        // rows (pinned rows included: they check Ξ ⊥ kernel)
-  double kernel_component = 0;          // max over columns and pinned kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖)
-  double rcond = 0;                     // CHOLMOD's reciprocal condition estimate of the factor
-  bool well_posed = false;              // residual ≤ tolerance: Ξ had no kernel component and the
-                                        // response is unique where it is measured
+  long cholesky_failed_column = -1;  // where the direct factorisation stopped (fallback only)
+  double regularisation = 0;         // δ of the fallback (H + δ1) factor, 0 otherwise
+  std::size_t unstable_modes = 0;    // eigenvalues of H below −δ (inertia of the LDLᵀ factor); > 0 only
+                                     // with method unstable. Jamming points found by the energy rule
+                                     // alone can be such saddles (docs/moduli.md, "Saddles")
+  int refinement_steps = 0;          // iterative-refinement steps taken
+  int iterations = 0;                // cg: iterations, summed over the strain columns
+  double solver_tolerance = 0;       // cg: the relative residual asked for per column; 0 otherwise
+  double residual = 0;               // max over strain columns of ‖H u − Ξ‖ / ‖Ξ‖ on ALL non-rattler
+                                     // rows (pinned rows included: they check Ξ ⊥ kernel)
+  double kernel_component = 0;       // max over columns and pinned kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖)
+  double rcond = 0;                  // CHOLMOD's reciprocal condition estimate of the factor
+  bool well_posed = false;           // residual ≤ tolerance: Ξ had no kernel component and the
+                                     // response is unique where it is measured
 };
 
 // Linear solver for the pinned system H_ff U_f = Ξ_f (accuracy against cost: docs/analysis.md).
@@ -134,17 +137,18 @@ ModuliSolver parse_moduli_solver(const std::string& text, const std::string& key
 CgPreconditioner parse_cg_preconditioner(const std::string& text, const std::string& key = "cg-preconditioner");
 
 struct ModuliOptions {
-  double residual_tolerance = 1e-8;     // relative; above it well_posed = false (cg: above
-                                        // max(residual_tolerance, 10·cg_tolerance))
-  double regularisation = 1e-10;        // fallback δ relative to the largest Hessian diagonal entry
+  double residual_tolerance = 1e-8;  // relative; above it well_posed = false (cg: above
+                                     // max(residual_tolerance, 10·cg_tolerance))
+  double regularisation = 1e-10;     // fallback δ relative to the largest Hessian diagonal entry
   int max_refinement_steps = 200;
   ModuliSolver solver = ModuliSolver::ldlt;
-  int direct_refinement_steps = 3;      // ldlt, cholesky, dense: at most this many refinement steps …
-  double refinement_threshold = 1e-12;  // … taken while the relative residual on the free rows exceeds this
-                                        //   (a safety net: the first solve gives ≲ 2e-14 on grown packings; docs/analysis.md)
-  double cg_tolerance = 1e-10;          // cg: relative residual per strain column, in (0, 1)
+  int direct_refinement_steps = 3;  // ldlt, cholesky, dense: at most this many refinement steps …
+  double refinement_threshold =
+      1e-12;                    // … taken while the relative residual on the free rows exceeds this
+                                //   (a safety net: the first solve gives ≲ 2e-14 on grown packings; docs/analysis.md)
+  double cg_tolerance = 1e-10;  // cg: relative residual per strain column, in (0, 1)
   CgPreconditioner cg_preconditioner = CgPreconditioner::incomplete_cholesky;
-  int cg_max_iterations = 0;            // cg: 0 = 10 × the number of free dofs
+  int cg_max_iterations = 0;  // cg: 0 = 10 × the number of free dofs
 };
 
 // The packing, its network and its stresses: what the response is measured on.
@@ -153,22 +157,22 @@ struct PackingState {
   std::size_t contacts = 0;  // load-bearing physical contacts (both cells non-rattlers)
   double L = 0, area = 0, phi = 0;
   double Z = 0, Z_iso = 0, dZ = 0, u = 0, u_buds = 0;
-  double n = 0;              // N_nr / L²
+  double n = 0;  // N_nr / L²
 
   // Stresses at the state (from all contacts).
-  double P = 0;              // lobe-centre contact virial, (1/(2L²)) Σ f r
-  double P_energy = 0;       // −tr τ / 2 = −dU/dA
+  double P = 0;                                             // lobe-centre contact virial, (1/(2L²)) Σ f r
+  double P_energy = 0;                                      // −tr τ / 2 = −dU/dA
   Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // S (lobe-centre contact virial)
   Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
-  double max_torque_imbalance = 0;  // |τ_xy − τ_yx|: 0 in a relaxed packing
+  double max_torque_imbalance = 0;                          // |τ_xy − τ_yx|: 0 in a relaxed packing
 
   // Mean-field estimates of the paper (Eqs. 17–18, D4, D11), with this packing's n, Z, ΔZ.
-  double ell_c = 0;             // ℓ_c: mean lobe-centre distance r of the load-bearing contacts
-  double ell_c2_mean = 0;       // ⟨r²⟩ (for comparison; the formulas use ℓ_c²)
-  double M4 = 0;                // ⟨n_x² n_y²⟩ measured over the load-bearing contacts (isotropic: 1/8)
-  double B_ext = 0;             // n k ℓ_c² Z / 8
-  double G_mf = 0;              // n k ℓ_c² M4 ΔZ / 2 with the measured M4
-  double G_mf_iso = 0;          // same with M4 = 1/8
+  double ell_c = 0;        // ℓ_c: mean lobe-centre distance r of the load-bearing contacts
+  double ell_c2_mean = 0;  // ⟨r²⟩ (for comparison; the formulas use ℓ_c²)
+  double M4 = 0;           // ⟨n_x² n_y²⟩ measured over the load-bearing contacts (isotropic: 1/8)
+  double B_ext = 0;        // n k ℓ_c² Z / 8
+  double G_mf = 0;         // n k ℓ_c² M4 ΔZ / 2 with the measured M4
+  double G_mf_iso = 0;     // same with M4 = 1/8
 };
 
 // Everything of one contact that the response needs (per load-bearing contact).
@@ -187,29 +191,29 @@ struct ContactResponseTerms {
 // Born term and the pinned kernel dofs. No solve.
 struct ResponseProblem {
   PackingState state;
-  Eigen::SparseMatrix<double> H;             // 3N_nr × 3N_nr
-  Eigen::MatrixXd Xi;                        // Ξ = −∂²U/∂q∂e, 3N_nr × 4
-  Response4 born = Response4::Zero();        // ∂²U/∂e∂e at fixed q (affine, prestress included)
-  std::vector<ContactResponseTerms> terms;   // one per load-bearing contact
-  std::vector<bool> pinned;                  // per non-rattler dof: fixed at 0 (an exact kernel direction)
-  KernelTreatment kernel;                    // the pinning (counts, reference cell, kernel_component)
+  Eigen::SparseMatrix<double> H;            // 3N_nr × 3N_nr
+  Eigen::MatrixXd Xi;                       // Ξ = −∂²U/∂q∂e, 3N_nr × 4
+  Response4 born = Response4::Zero();       // ∂²U/∂e∂e at fixed q (affine, prestress included)
+  std::vector<ContactResponseTerms> terms;  // one per load-bearing contact
+  std::vector<bool> pinned;                 // per non-rattler dof: fixed at 0 (an exact kernel direction)
+  KernelTreatment kernel;                   // the pinning (counts, reference cell, kernel_component)
 };
 
 // The non-affine relaxation du/de = H⁺Ξ of a problem (pinned rows 0; NaN for a saddle) and how it
 // was obtained and verified.
 struct Relaxation {
-  Eigen::MatrixXd U;        // 3N_nr × 4
-  KernelTreatment kernel;   // the problem's pinning plus the solve
+  Eigen::MatrixXd U;       // 3N_nr × 4
+  KernelTreatment kernel;  // the problem's pinning plus the solve
 };
 
 struct ElasticResponse : PackingState {
   // Response matrices (rows: stress component αβ, columns: strain component γδ; order xx, xy, yx, yy).
-  Response4 R = Response4::Zero();            // dS/de, relaxed (non-affine)
-  Response4 R_affine = Response4::Zero();     // dS/de, affine (u = 0)
-  Response4 R_energy = Response4::Zero();     // dτ/de, relaxed
+  Response4 R = Response4::Zero();         // dS/de, relaxed (non-affine)
+  Response4 R_affine = Response4::Zero();  // dS/de, affine (u = 0)
+  Response4 R_energy = Response4::Zero();  // dτ/de, relaxed
   Response4 R_energy_affine = Response4::Zero();
-  Response4 E = Response4::Zero();            // (1/A) d²U/de de, relaxed
-  Response4 E_affine = Response4::Zero();     // Born term (1/A) ∂²U/∂e∂e (with the prestress part)
+  Response4 E = Response4::Zero();         // (1/A) d²U/de de, relaxed
+  Response4 E_affine = Response4::Zero();  // Born term (1/A) ∂²U/∂e∂e (with the prestress part)
   // Stiffness tensor of the Lagrangian strain, Voigt order (xx, yy, xy): C11 = C_xxxx, C22 = C_yyyy,
   // C12 = C_xxyy, C33 = C_xyxy, C13 = C_xxxy, C23 = C_yyxy.
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();

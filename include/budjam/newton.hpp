@@ -26,18 +26,18 @@ enum class NewtonStop {
 const char* to_string(NewtonStop stop);
 
 struct NewtonParams {
-  double force_tol = 1e-12;      // same meaning as FireParams::force_tol (θ component as τ / r_g)
-  double energy_floor = 0.0;     // total U below which the packing counts as relaxed
+  double force_tol = 1e-12;   // same meaning as FireParams::force_tol (θ component as τ / r_g)
+  double energy_floor = 0.0;  // total U below which the packing counts as relaxed
   long max_iterations = 20;
-  double shift = 4.0;            // μ / (largest generalised force)
+  double shift = 4.0;  // μ / (largest generalised force)
 };
 
 struct NewtonResult {
   NewtonStop stop = NewtonStop::iteration_cap;
-  long iterations = 0;           // factorisations
-  long evaluations = 0;          // force evaluations (including rejected line-search points)
+  long iterations = 0;   // factorisations
+  long evaluations = 0;  // force evaluations (including rejected line-search points)
   double energy = 0.0;
-  double max_force = 0.0;        // at the end, θ component as τ / r_g
+  double max_force = 0.0;  // at the end, θ component as τ / r_g
 };
 
 // Newton iterations from p (which should be close to a minimum). On any stop p holds the last

@@ -21,9 +21,9 @@ struct CostErrors {
 };
 
 struct ParetoTolerance {
-  double cost_ratio = 1.15;    // timing noise: costs within 15 % are a tie
-  double error_ratio = 2.0;    // errors within a factor 2 are a tie (seed-to-seed spread)
-  double error_floor = 1e-9;   // errors both at or below this are a tie (rounding level)
+  double cost_ratio = 1.15;   // timing noise: costs within 15 % are a tie
+  double error_ratio = 2.0;   // errors within a factor 2 are a tie (seed-to-seed spread)
+  double error_floor = 1e-9;  // errors both at or below this are a tie (rounding level)
 };
 
 // −1: e_a better than e_b, 0: tie, +1: worse (NaN on either side: tie).
@@ -33,6 +33,7 @@ bool dominates(const CostErrors& a, const CostErrors& b, const ParetoTolerance& 
 // Indices of the settings that no other setting dominates, ascending.
 std::vector<std::size_t> pareto_front(const std::vector<CostErrors>& settings, const ParetoTolerance& tol);
 // Indices of the settings that dominate settings[k].
-std::vector<std::size_t> dominated_by(const std::vector<CostErrors>& settings, std::size_t k, const ParetoTolerance& tol);
+std::vector<std::size_t> dominated_by(const std::vector<CostErrors>& settings, std::size_t k,
+                                      const ParetoTolerance& tol);
 
 }  // namespace budjam

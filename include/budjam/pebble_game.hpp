@@ -32,11 +32,11 @@ struct RigidClusters {
 
 // Cumulative work counters, to measure what an update costs.
 struct PebbleWork {
-  std::size_t searches = 0;      // pebble searches started
-  std::size_t visited = 0;       // joints discovered by those searches
-  std::size_t failed = 0;        // searches that found no free pebble
-  std::size_t visited_failed = 0;  // joints discovered by the failed ones
-  std::size_t bars_tested = 0;   // independence tests (insertions and re-tests)
+  std::size_t searches = 0;          // pebble searches started
+  std::size_t visited = 0;           // joints discovered by those searches
+  std::size_t failed = 0;            // searches that found no free pebble
+  std::size_t visited_failed = 0;    // joints discovered by the failed ones
+  std::size_t bars_tested = 0;       // independence tests (insertions and re-tests)
   std::size_t quick_rejections = 0;  // redundant bars recognised from known rigid regions, no search
 };
 
@@ -129,7 +129,7 @@ class PebbleGame {
   std::vector<int> region_;         // per joint: a region id, −1 if none
   std::vector<int> region_parent_;  // union–find over region ids
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> neighbours_;  // per joint: (joint, bar)
-  bool spanned_ = true;  // every bar lies in the span of the independent ones (false mid-removal)
+  bool spanned_ = true;          // every bar lies in the span of the independent ones (false mid-removal)
   std::vector<char> certified_;  // mid-removal: redundant bars already re-tested
   PebbleWork work_;
 };

@@ -3,11 +3,11 @@
 // periodic images where they cross the box boundary (and clipped to the box), the contacts as
 // segments between lobe centres coloured by force, rattlers greyed and unconstrained buds marked.
 // Returns the document as a string; writing it (and converting it to PNG) is the caller's business.
+#include <string>
+#include <vector>
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
-#include <string>
-#include <vector>
 
 namespace budjam {
 
@@ -16,8 +16,8 @@ struct RenderOptions {
   double margin = 0.25;           // around the box, in units of D0
   bool periodic_images = true;    // draw the copies of lobes/contacts that cross the boundary
   bool draw_contacts = true;
-  bool legend = true;             // force scale and the meaning of the marks, below the box
-  std::string caption;            // text under the picture; "\n" separates lines
+  bool legend = true;   // force scale and the meaning of the marks, below the box
+  std::string caption;  // text under the picture; "\n" separates lines
 };
 
 // Colour of a contact with force f on the scale [0, f_max]: a perceptually ordered ramp from pale

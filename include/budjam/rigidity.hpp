@@ -16,13 +16,13 @@
 // box with a self-stress cannot rotate, so for a packing with a spanning self-stressed backbone
 // (every packing above jamming) floppy_plane is the periodic count, and for a network in which
 // no cycle winds (no spanning) floppy_periodic is. Both are reported.
+#include <cstdint>
+#include <string>
+#include <vector>
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
 #include "budjam/pebble_game.hpp"
-#include <cstdint>
-#include <string>
-#include <vector>
 
 namespace budjam {
 
@@ -41,11 +41,11 @@ struct ImageShift {
 
 // The bar-joint framework of a packing.
 struct Framework {
-  std::size_t joints = 0;             // 2N: every lobe has a joint; excluded cells' joints carry no bar
-  std::vector<bool> cell_included;    // per cell: part of the analysed network
-  std::size_t cells = 0;              // included cells
-  std::vector<Bar> bars;              // a < b, sorted by (a, b); (2i, 2i+1) is the bar of cell i
-  std::vector<ImageShift> shift;      // per bar
+  std::size_t joints = 0;           // 2N: every lobe has a joint; excluded cells' joints carry no bar
+  std::vector<bool> cell_included;  // per cell: part of the analysed network
+  std::size_t cells = 0;            // included cells
+  std::vector<Bar> bars;            // a < b, sorted by (a, b); (2i, 2i+1) is the bar of cell i
+  std::vector<ImageShift> shift;    // per bar
 };
 
 inline bool is_cell_bar(const Bar& bar) { return bar.a % 2 == 0 && bar.b == bar.a + 1; }
@@ -78,21 +78,21 @@ struct ClusterSummary {
 
 struct RigidityState {
   RigidityNetwork network = RigidityNetwork::load_bearing;
-  std::size_t N = 0;                 // cells in the packing
-  std::size_t cells = 0;             // cells in the analysed network (N_nr when load-bearing)
-  std::size_t joints = 0;            // 2·cells
-  std::size_t bars = 0;              // cells + contact bars
+  std::size_t N = 0;       // cells in the packing
+  std::size_t cells = 0;   // cells in the analysed network (N_nr when load-bearing)
+  std::size_t joints = 0;  // 2·cells
+  std::size_t bars = 0;    // cells + contact bars
   std::size_t contact_bars = 0;
   std::size_t independent_bars = 0;
-  std::size_t redundant_bars = 0;    // states of self-stress of the generic framework
-  long free_pebbles = 0;             // F = 2·joints − independent_bars
-  long floppy_plane = 0;             // F − 3 (0 for an empty network)
-  long floppy_periodic = 0;          // F − 2 (0 for an empty network)
-  std::vector<ClusterSummary> clusters;  // canonical order (RigidClusters)
-  std::size_t nontrivial_clusters = 0;   // clusters with ≥ 3 joints
-  int largest = -1;                  // most cells, then most joints, then lowest index
+  std::size_t redundant_bars = 0;         // states of self-stress of the generic framework
+  long free_pebbles = 0;                  // F = 2·joints − independent_bars
+  long floppy_plane = 0;                  // F − 3 (0 for an empty network)
+  long floppy_periodic = 0;               // F − 2 (0 for an empty network)
+  std::vector<ClusterSummary> clusters;   // canonical order (RigidClusters)
+  std::size_t nontrivial_clusters = 0;    // clusters with ≥ 3 joints
+  int largest = -1;                       // most cells, then most joints, then lowest index
   bool spans_x = false, spans_y = false;  // some rigid cluster winds the box in x / in y
-  std::vector<int> cell_cluster;     // per cell: cluster of its mother–bud bar, −1 if excluded
+  std::vector<int> cell_cluster;          // per cell: cluster of its mother–bud bar, −1 if excluded
 
   std::size_t largest_cells() const { return largest < 0 ? 0 : clusters[largest].cells; }
   std::size_t largest_joints() const { return largest < 0 ? 0 : clusters[largest].joints; }
@@ -100,9 +100,7 @@ struct RigidityState {
   // The bud is rigidly held by more than its own mother: the cell's bar lies in a rigid cluster
   // with ≥ 3 joints. False for a contact-free bud (a joint on one bar is never in such a cluster),
   // and false when the cell as a whole hinges on a single joint.
-  bool bud_rigid(std::size_t cell) const {
-    return cell_cluster[cell] >= 0 && clusters[cell_cluster[cell]].joints >= 3;
-  }
+  bool bud_rigid(std::size_t cell) const { return cell_cluster[cell] >= 0 && clusters[cell_cluster[cell]].joints >= 3; }
 };
 
 // Summary of a played game. `shift` is aligned with the game's bars; the cell bars are recognised
@@ -135,20 +133,20 @@ struct RigidityEvent {
 
 // What the last update cost.
 struct RigidityUpdate {
-  bool rebuilt = false;             // full replay of the game
+  bool rebuilt = false;  // full replay of the game
   std::size_t bars_added = 0;
   std::size_t bars_removed = 0;
   std::size_t independent_removed = 0;
-  std::size_t retested = 0;         // redundant bars re-tested after an independent bar left
+  std::size_t retested = 0;  // redundant bars re-tested after an independent bar left
 };
 
 // What a tracker remembers of the previous state: all it needs to diff the next one. Plain data,
 // so that a checkpoint can store it (the pebble game itself is rebuilt after a restore).
 struct RigidityMemory {
   bool has_state = false;
-  bool spanned = false;    // the first spanning cluster has been reported
+  bool spanned = false;  // the first spanning cluster has been reported
   long floppy_plane = 0;
-  long span_code = 0;      // spans_x + 2·spans_y
+  long span_code = 0;                                        // spans_x + 2·spans_y
   std::vector<std::pair<std::int64_t, std::uint8_t>> cells;  // sorted by id: bit 0 in largest, bit 1 bud rigid
 };
 
@@ -167,8 +165,8 @@ class RigidityTracker {
   // Brings the game to the new state — insertions only are played incrementally, the cell count
   // may grow (joints are appended) — and returns the changes since the previous state. The first
   // call sets the baseline: it reports the floppy-mode count and spanning, no per-cell events.
-  const std::vector<RigidityEvent>& update(const Packing& p, const Lobes& lobes,
-                                           const std::vector<Contact>& contacts, const ContactNetwork& net);
+  const std::vector<RigidityEvent>& update(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
+                                           const ContactNetwork& net);
 
   const RigidityState& state() const { return state_; }
   const RigidityUpdate& last_update() const { return last_; }

@@ -3,12 +3,12 @@
 // Plain data; the member initialisers are the defaults. Every field a scene file sets has a row in
 // the knob table (scene_keys.hpp); the TOML reader lives in tools/io (the library knows nothing of
 // files).
-#include "budjam/errors.hpp"
-#include "budjam/fire.hpp"
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
+#include "budjam/errors.hpp"
+#include "budjam/fire.hpp"
 
 namespace budjam {
 
@@ -47,10 +47,10 @@ struct Scene {
   std::size_t n_seeds = 0;  // cells placed at random for InitialState::random_seeds
 
   // [growth]
-  std::optional<double> P0;      // feedback pressure scale; nullopt = no feedback
-  double dt = 1.0;               // nominal growth step
-  double dt_min = 1e-12;         // bisection below this is a failure
-  long max_steps = 2000000;      // growth steps (accepted + rejected) before failing
+  std::optional<double> P0;  // feedback pressure scale; nullopt = no feedback
+  double dt = 1.0;           // nominal growth step
+  double dt_min = 1e-12;     // bisection below this is a failure
+  long max_steps = 2000000;  // growth steps (accepted + rejected) before failing
   // Adaptive growth step (docs/growth.md; off = the paper's protocol). Above
   // jamming with feedback, strongly compressed buds grow at γ0·exp(−p/P0) ≪ γ0, so Δt = 1 barely
   // moves φ. With adaptive_dt every step (before any bisection halving) starts from
@@ -60,11 +60,11 @@ struct Scene {
   double adaptive_floor = 1e-6;  // in (0, 1]
 
   // [jamming]
-  double epsilon_U = 1e-16;          // E/N below this: unjammed
-  double target_tolerance = 5e-9;    // |φ − (φ_J + Δφ)| on landing
-  std::vector<double> targets;       // Δφ, strictly increasing, > 0
-  bool continue_to_phi2 = false;     // keep growing past the last target until φ_2 is found
-  double max_dphi = 0.2;             // ... but never beyond φ_J + max_dphi
+  double epsilon_U = 1e-16;        // E/N below this: unjammed
+  double target_tolerance = 5e-9;  // |φ − (φ_J + Δφ)| on landing
+  std::vector<double> targets;     // Δφ, strictly increasing, > 0
+  bool continue_to_phi2 = false;   // keep growing past the last target until φ_2 is found
+  double max_dphi = 0.2;           // ... but never beyond φ_J + max_dphi
   // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
   // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
   bool check_minimum = true;
@@ -79,8 +79,8 @@ struct Scene {
   bool rigidity_events = false;
   Schedule moduli;
   Schedule dos;
-  long checkpoint_every = 100; // accepted steps between checkpoints; 0 = none (a signal still writes one)
-  long trajectory_every = 0;   // accepted steps between trajectory frames (and at events); 0 = none
+  long checkpoint_every = 100;  // accepted steps between checkpoints; 0 = none (a signal still writes one)
+  long trajectory_every = 0;    // accepted steps between trajectory frames (and at events); 0 = none
   bool progress = true;
 };
 

@@ -49,9 +49,9 @@ struct SceneKey {
   std::string section;  // "run", "box", ..., "observe.moduli"
   std::string name;
   KeyType type = KeyType::real;
-  std::string help;                  // one line: meaning and unit
-  Range range;                       // numbers (each element of a list)
-  std::vector<std::string> choices;  // KeyType::choice
+  std::string help;                               // one line: meaning and unit
+  Range range;                                    // numbers (each element of a list)
+  std::vector<std::string> choices;               // KeyType::choice
   std::int64_t min_integer = 0, max_integer = 0;  // KeyType::integer: what the field can hold
   std::function<SceneValue(const Scene&)> get;
   // Stores a value of the row's type (as get() returns it; a choice by one of its names).

@@ -26,15 +26,15 @@
 // modes of the spectrum (λ = their Rayleigh quotient, ~1e-17) and deflated from the Lanczos
 // operator, which then finds the other modes. Nothing is assumed about the packing: the test is
 // on K alone, and the independent inertia count (count_below_by_inertia) checks the total.
-#include "budjam/contact_network.hpp"
-#include "budjam/contacts.hpp"
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 
@@ -95,8 +95,8 @@ struct LocalMode {
 
 struct Spectrum {
   SpectrumMethod method = SpectrumMethod::dense;  // the one used (never automatic)
-  std::size_t n_cells = 0;       // n
-  std::size_t n_dof = 0;         // 3n − 2: modes of the full problem
+  std::size_t n_cells = 0;                        // n
+  std::size_t n_dof = 0;                          // 3n − 2: modes of the full problem
   // ω² of the computed modes. Dense: all n_dof, ascending. ARPACK: first the local.size()
   // deflated cell-local zero modes, then the Lanczos modes ascending, i.e. ascending except for
   // rounding-level order inside the zero cluster (all below any cutoff in use). ARPACK computes the
@@ -109,11 +109,11 @@ struct Spectrum {
   Eigen::MatrixXd modes;
   double translation_residual = 0;  // ‖K T‖/‖K‖_max: 0 up to rounding for a correct Hessian
   // ARPACK only:
-  double sigma = 0;              // shift actually used
+  double sigma = 0;  // shift actually used
   int ncv = 0, restarts = 0, operator_applications = 0;
-  long inertia_count = -1;       // #{λ < inertia_tol} by Sylvester inertia; −1 if not computed
-  long inertia_below_top = -1;   // #{λ < max computed λ − 1e-9 max|K|} by inertia (verify); −1 if not
-  int retries = 0;               // Lanczos reruns after the verification found a missed mode
+  long inertia_count = -1;      // #{λ < inertia_tol} by Sylvester inertia; −1 if not computed
+  long inertia_below_top = -1;  // #{λ < max computed λ − 1e-9 max|K|} by inertia (verify); −1 if not
+  int retries = 0;              // Lanczos reruns after the verification found a missed mode
   double seconds_factorise = 0, seconds_lanczos = 0;
 
   bool complete() const { return static_cast<std::size_t>(lambda.size()) == n_dof; }
@@ -187,10 +187,10 @@ struct SpectralSummary {
   std::size_t n_cells = 0, n_dof = 0, computed = 0;
   double lambda_min = 0, lambda_max_computed = 0;
   double lambda_tol = 1e-6;
-  std::size_t N_zero = 0;                                  // #{λ < lambda_tol}
+  std::size_t N_zero = 0;           // #{λ < lambda_tol}
   bool zero_count_complete = true;  // false if a partial spectrum does not reach max(lambda_tol,
                                     // 1e-5): the counts are then only lower bounds (compute more modes)
-  std::vector<std::pair<double, std::size_t>> zero_counts; // (tol, #{λ < tol}) for 1e-5 … 1e-8
+  std::vector<std::pair<double, std::size_t>> zero_counts;  // (tol, #{λ < tol}) for 1e-5 … 1e-8
   BandEdge band;
   double translation_residual = 0;
 };
@@ -207,12 +207,13 @@ struct PackingSpectrum {
   std::vector<std::size_t> cells;  // the non-rattler cells, in the order of the modes' blocks
   Spectrum spectrum;
   SpectralSummary summary;
-  Eigen::VectorXd participation;   // per computed mode (empty without vectors)
+  Eigen::VectorXd participation;  // per computed mode (empty without vectors)
 };
 
 // Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +
 // summarise). With options.modes ≤ 0 the ARPACK path computes as many modes as ω* needs:
-// modes_for_band_edge(n_dof, N_u), less the N_u cell-local zero modes when they are deflated. Throws InputError if the packing has no non-rattler cell (unjammed: no spectrum).
+// modes_for_band_edge(n_dof, N_u), less the N_u cell-local zero modes when they are deflated. Throws InputError if the
+// packing has no non-rattler cell (unjammed: no spectrum).
 PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  SpectrumOptions options = {}, const BandEdgeRule& rule = {});
 

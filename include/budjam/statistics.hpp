@@ -33,8 +33,8 @@ struct BootstrapOptions {
 };
 
 struct BootstrapResult {
-  double estimate = 0;  // the statistic of the data itself
-  double se = 0;        // standard deviation (n − 1 normalised) of the resampled statistics
+  double estimate = 0;    // the statistic of the data itself
+  double se = 0;          // standard deviation (n − 1 normalised) of the resampled statistics
   double lo = 0, hi = 0;  // percentile confidence interval of the resampled statistics
   int resamples = 0;
   std::size_t n = 0;

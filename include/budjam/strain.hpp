@@ -6,13 +6,13 @@
 //  - Lees–Edwards simple shear by δγ: box.shear += δγ, x_i += δγ y_i (unwrapped coordinates, so
 //    every minimum-image separation transforms exactly as (1 + e) with e_xy = δγ);
 //  - isotropic rescaling by a factor λ: L → λL, (x_i, y_i) → λ (x_i, y_i).
-#include "budjam/contacts.hpp"
-#include "budjam/fire.hpp"
-#include "budjam/packing.hpp"
 #include <Eigen/Core>
 #include <cstdint>
 #include <utility>
 #include <vector>
+#include "budjam/contacts.hpp"
+#include "budjam/fire.hpp"
+#include "budjam/packing.hpp"
 
 namespace budjam {
 
@@ -21,14 +21,14 @@ void apply_isotropic_scaling(Packing& p, double factor);
 
 // One relaxed state of a sweep.
 struct StrainSample {
-  double strain = 0;         // γ (shear) or ε = ln(A/A0) (rescaling: A = L², so λ = exp(ε/2))
-  double U = 0;              // energy after relaxation
-  double P = 0;              // lobe-centre contact-virial pressure
-  double P_energy = 0;       // −tr τ / 2 (energy stress, moduli.hpp)
+  double strain = 0;    // γ (shear) or ε = ln(A/A0) (rescaling: A = L², so λ = exp(ε/2))
+  double U = 0;         // energy after relaxation
+  double P = 0;         // lobe-centre contact-virial pressure
+  double P_energy = 0;  // −tr τ / 2 (energy stress, moduli.hpp)
   Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();         // S (lobe-centre contact virial)
   Eigen::Matrix2d stress_energy = Eigen::Matrix2d::Zero();  // τ
   Eigen::Matrix2d stress_link = Eigen::Matrix2d::Zero();    // load of the mother–bud links (link_stress)
-  bool same_contacts = true; // the set of contacting lobe pairs equals the unstrained one
+  bool same_contacts = true;  // the set of contacting lobe pairs equals the unstrained one
   FireResult fire;
 };
 

@@ -24,8 +24,8 @@
 
 #include <cmath>
 #include <deque>
-#include <memory>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,8 +84,8 @@ py::dict contacts_dict(const Packing& p) {
                   "sigma"_a = array(sigma), "force"_a = array(force), "rattler"_a = array(net.rattler),
                   "lobe_contacts"_a = array(net.lobe_contacts), "bud_pressure"_a = array(pc.bud_pressures),
                   "P"_a = pc.P, "N"_a = net.N, "N_nr"_a = net.N_nr, "N_f"_a = net.N_f, "N_c"_a = net.N_c,
-                  "N_u"_a = net.N_u, "N_u_buds"_a = net.N_u_buds, "Z"_a = net.Z, "Z_iso"_a = net.Z_iso,
-                  "dZ"_a = net.dZ, "u"_a = net.u, "u_buds"_a = net.u_buds);
+                  "N_u"_a = net.N_u, "N_u_buds"_a = net.N_u_buds, "Z"_a = net.Z, "Z_iso"_a = net.Z_iso, "dZ"_a = net.dZ,
+                  "u"_a = net.u, "u_buds"_a = net.u_buds);
 }
 
 py::dict rigidity_dict(const Packing& p, const std::string& network) {
@@ -132,9 +132,9 @@ py::dict moduli_dict(const Packing& p, const std::string& solver) {
                   "moduli_energy_affine"_a = moduli_of(e.moduli_energy_affine), "P"_a = e.P, "P_energy"_a = e.P_energy,
                   "stress"_a = e.stress, "stress_energy"_a = e.stress_energy, "R"_a = e.R, "R_affine"_a = e.R_affine,
                   "E"_a = e.E, "E_affine"_a = e.E_affine, "C"_a = e.C, "C_affine"_a = e.C_affine,
-                  "shear_stability"_a = py::dict("G_min"_a = e.shear.G_min, "phi_min"_a = e.shear.phi_min,
-                                                 "G_max"_a = e.shear.G_max, "phi_max"_a = e.shear.phi_max,
-                                                 "stable"_a = e.shear.stable),
+                  "shear_stability"_a =
+                      py::dict("G_min"_a = e.shear.G_min, "phi_min"_a = e.shear.phi_min, "G_max"_a = e.shear.G_max,
+                               "phi_max"_a = e.shear.phi_max, "stable"_a = e.shear.stable),
                   "energy_minimum"_a = e.energy_minimum(), "well_posed"_a = e.kernel.well_posed,
                   "residual"_a = e.kernel.residual, "N_nr"_a = e.N_nr, "Z"_a = e.Z, "dZ"_a = e.dZ);
 }
@@ -196,7 +196,6 @@ py::dict frame_dict(const io::ParticleFrame& f) {
                   "bond_force"_a = array(force), "bond_crosses_boundary"_a = array(crosses));
 }
 
-
 // The events of a growth run as Python dicts, in the order the driver emits them. Each carries the
 // state it happened in (step, phi, P, N, phase) and a copy of the packing.
 class EventQueue : public Observer {
@@ -204,16 +203,18 @@ class EventQueue : public Observer {
   std::string name() const override { return "python"; }
   void on_jammed(const Jammed& e) override {
     const JammingRecord& j = e.jamming;
-    push("jammed", e.state, py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.Z, "Z_iso"_a = j.Z_iso,
-                                     "dZ"_a = j.dZ, "N_nr"_a = j.N_nr, "u_J"_a = j.u_buds, "tagged"_a = j.tagged));
+    push("jammed", e.state,
+         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.Z, "Z_iso"_a = j.Z_iso, "dZ"_a = j.dZ,
+                  "N_nr"_a = j.N_nr, "u_J"_a = j.u_buds, "tagged"_a = j.tagged));
   }
   void on_unjammed(const Unjammed& e) override {
     push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
   }
   void on_target_reached(const TargetReached& e) override {
     const TargetRecord& t = e.target;
-    push("target", e.state, py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.Z, "dZ"_a = t.dZ,
-                                     "N_nr"_a = t.N_nr, "chi_c"_a = t.chi_c));
+    push("target", e.state,
+         py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.Z, "dZ"_a = t.dZ, "N_nr"_a = t.N_nr,
+                  "chi_c"_a = t.chi_c));
   }
   void on_depleted(const Depleted& e) override {
     push("phi2", e.state, py::dict("phi_2"_a = e.depletion.phi, "Z"_a = e.depletion.Z, "dZ"_a = e.depletion.dZ));
@@ -344,36 +345,43 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
         return "<budjam.Packing N=" + std::to_string(f.packing.size()) + " L=" + io::format_double(f.packing.box.L) + ">";
       });
 
-  m.def("read_packing", &io::read_packing, "path"_a, "Read a packing file (.pack). InputError names the file and line.");
-  m.def("contacts", [](const io::PackingFile& f) { return contacts_dict(f.packing); }, "packing"_a,
-        R"(Contacts of the packing as it is (nothing relaxed) and its contact network.
+  m.def("read_packing", &io::read_packing, "path"_a,
+        "Read a packing file (.pack). InputError names the file and line.");
+  m.def(
+      "contacts", [](const io::PackingFile& f) { return contacts_dict(f.packing); }, "packing"_a,
+      R"(Contacts of the packing as it is (nothing relaxed) and its contact network.
 
 Per contact (arrays): lobes i < j, unit normal (nx, ny) from j to i, centre distance r and
 sigma = R_i + R_j (D0), force = k (sigma - r) (k D0). Per cell: rattler (iterative rule); per
 lobe: lobe_contacts (with non-rattlers); bud_pressure (force per unit bud perimeter, k).
 Scalars: P (contact virial pressure, k), N, N_nr, N_f, N_c (counted twice), N_u, N_u_buds,
 Z, Z_iso, dZ, u, u_buds (paper Eqs. 1-5; docs/rigidity.md).)");
-  m.def("rigidity", [](const io::PackingFile& f, const std::string& network) { return rigidity_dict(f.packing, network); },
-        "packing"_a, "network"_a = "load-bearing",
-        R"(Rigidity by the (2,3) pebble game, as `budjam rigidity` (docs/rigidity.md).
+  m.def(
+      "rigidity",
+      [](const io::PackingFile& f, const std::string& network) { return rigidity_dict(f.packing, network); },
+      "packing"_a, "network"_a = "load-bearing",
+      R"(Rigidity by the (2,3) pebble game, as `budjam rigidity` (docs/rigidity.md).
 
 network: 'load-bearing' (rattlers removed) or 'raw'. Returns counts (joints, bars as an (n, 2)
 array of lobe pairs, independent/redundant bars, free pebbles, floppy modes in the plane and
 periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's mother-bud bar,
 -1 if not analysed), cluster_cells / cluster_joints per cluster, the largest cluster, spanning.)");
-  m.def("moduli", [](const io::PackingFile& f, const std::string& solver) { return moduli_dict(f.packing, solver); },
-        "packing"_a, "solver"_a = "ldlt",
-        R"(Linear elastic response of a relaxed packing, as `budjam moduli` (docs/moduli.md).
+  m.def(
+      "moduli", [](const io::PackingFile& f, const std::string& solver) { return moduli_dict(f.packing, solver); },
+      "packing"_a, "solver"_a = "ldlt",
+      R"(Linear elastic response of a relaxed packing, as `budjam moduli` (docs/moduli.md).
 
 B and G (units k, 2D) from the contact-virial stress S (the paper's convention, the headline values)
 (moduli) and from the energy stress tau (moduli_energy), relaxed and affine (*_affine); the response matrices R = dS/de,
 E = (1/A) d2U/de de (4x4, order xx, xy, yx, yy), the Voigt stiffness C (3x3), the shear
 stability of the box (G_min, G_max over simple-shear directions phi, radians).)");
-  m.def("spectrum", [](const io::PackingFile& f, const std::string& method, int modes) {
-          return spectrum_dict(f.packing, method, modes);
-        },
-        "packing"_a, "method"_a = "auto", "modes"_a = 0,
-        R"(Vibrational spectrum of the non-rattlers, as `budjam dos` (docs/spectrum.md).
+  m.def(
+      "spectrum",
+      [](const io::PackingFile& f, const std::string& method, int modes) {
+        return spectrum_dict(f.packing, method, modes);
+      },
+      "packing"_a, "method"_a = "auto", "modes"_a = 0,
+      R"(Vibrational spectrum of the non-rattlers, as `budjam dos` (docs/spectrum.md).
 
 eigenvalues lambda (k/m, ascending) and omega = sign(lambda) sqrt|lambda|; eigenvectors as the
 orthonormal columns of a (3n, k) array: the mass-weighted modes e = M^(1/2) u of the dynamical
@@ -387,22 +395,26 @@ ARPACK modes (0: as many as omega_star needs).)");
 `budjam survival` (each run's last jamming episode; completion is the event, division and the
 end of the run censor). a = b^2 - b_J^2 in D0^2 (diameter squared; times pi/4 for the area), S,
 its Greenwood variance, and at_risk / events / censored at each a; records and completed in all.)");
-  m.def("particle_frame", [](const io::PackingFile& f, const std::string& network) {
-          return frame_dict(io::particle_frame(f.packing, network_of(network)));
-        },
-        "packing"_a, "network"_a = "load-bearing",
-        "The packing as particles (one per lobe) and bonds (links, then contacts), as `budjam export` "
-        "writes it (docs/files.md, 'Export'): positions unwrapped (x, y) and wrapped with images, radius, "
-        "lineage id, rigid cluster, rattler; bonds a, b, kind (0 link, 1 contact), force (k D0, compressive).");
-  m.def("export", [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
-                     const std::string& network) {
-          if (format != "xyz" && format != "gsd" && format != "vtk")
-            throw py::value_error("format: must be 'xyz', 'gsd' or 'vtk' (got '" + format + "')");
-          io::write_particles(path, io::particle_frame(f.packing, network_of(network)), format);
-        },
-        "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
-        "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
-        "GSD (HOOMD schema) or legacy VTK.");
+  m.def(
+      "particle_frame",
+      [](const io::PackingFile& f, const std::string& network) {
+        return frame_dict(io::particle_frame(f.packing, network_of(network)));
+      },
+      "packing"_a, "network"_a = "load-bearing",
+      "The packing as particles (one per lobe) and bonds (links, then contacts), as `budjam export` "
+      "writes it (docs/files.md, 'Export'): positions unwrapped (x, y) and wrapped with images, radius, "
+      "lineage id, rigid cluster, rattler; bonds a, b, kind (0 link, 1 contact), force (k D0, compressive).");
+  m.def(
+      "export",
+      [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
+         const std::string& network) {
+        if (format != "xyz" && format != "gsd" && format != "vtk")
+          throw py::value_error("format: must be 'xyz', 'gsd' or 'vtk' (got '" + format + "')");
+        io::write_particles(path, io::particle_frame(f.packing, network_of(network)), format);
+      },
+      "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
+      "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
+      "GSD (HOOMD schema) or legacy VTK.");
 
   py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
 
@@ -414,8 +426,13 @@ P in k, N, phase) with a copy of the packing, and the fields of that event.)")
            "scene"_a, "seed"_a = py::none(), "set"_a = std::vector<std::string>{})
       .def("__iter__", [](Growth& g) -> Growth& { return g; })
       .def("__next__", &Growth::next)
-      .def_property_readonly("packing", [](const Growth& g) { return io::PackingFile{g.driver().packing(), {}}; },
-                             "the current (last accepted) packing")
-      .def_property_readonly("status", [](const Growth& g) { return std::string(to_string(g.driver().result().status)); },
-                             "'running', 'finished' or the reason of an early stop");
+      .def_property_readonly(
+          "packing",
+          [](const Growth& g) {
+            return io::PackingFile{g.driver().packing(), {}};
+          },
+          "the current (last accepted) packing")
+      .def_property_readonly(
+          "status", [](const Growth& g) { return std::string(to_string(g.driver().result().status)); },
+          "'running', 'finished' or the reason of an early stop");
 }

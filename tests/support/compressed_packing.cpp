@@ -116,7 +116,8 @@ CompressedPacking compress_random_dumbbells(std::size_t n, std::uint64_t seed, c
 
 CompressionResult compress_to_pressure(Packing start, double P_target, const FireParams& fire, double ratio,
                                        int max_rescalings) {
-  if (!(P_target > 0) || !(ratio > 1)) throw std::invalid_argument("compress_to_pressure: need P_target > 0, ratio > 1");
+  if (!(P_target > 0) || !(ratio > 1))
+    throw std::invalid_argument("compress_to_pressure: need P_target > 0, ratio > 1");
   CompressionResult res;
   ForceField field;
   struct State {
@@ -157,8 +158,10 @@ CompressionResult compress_to_pressure(Packing start, double P_target, const Fir
       res.converged = true;
       break;
     }
-    if (cur.P < P_target / ratio) lo = cur;
-    else hi = cur;
+    if (cur.P < P_target / ratio)
+      lo = cur;
+    else
+      hi = cur;
     double next;
     const Packing* from;
     if (!hi) {  // still below: compress by growing steps

@@ -27,9 +27,9 @@ namespace budjam::testing {
 struct CompressionProtocol {
   double phi_start = 0.40;
   double dphi_step = 0.01;
-  double jam_energy = 1e-12;    // E/N above this after FIRE: jammed
+  double jam_energy = 1e-12;  // E/N above this after FIRE: jammed
   long probe_iterations = 20000;
-  double force_tol = 1e-12;     // FIRE stopping force for the final state
+  double force_tol = 1e-12;  // FIRE stopping force for the final state
   double b_min = 0.01, b_max = 1.02;
 };
 
@@ -49,7 +49,7 @@ void rescale_to(Packing& p, double phi_new);
 CompressedPacking compress_random_dumbbells(std::size_t n, std::uint64_t seed, const CompressionProtocol& proto = {});
 
 struct CompressionResult {
-  Packing packing;     // relaxed, P within [P_target/ratio, P_target·ratio]
+  Packing packing;  // relaxed, P within [P_target/ratio, P_target·ratio]
   double P = 0;
   double phi = 0;
   int rescalings = 0;  // isotropic rescalings tried

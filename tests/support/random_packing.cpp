@@ -11,8 +11,7 @@
 
 namespace budjam::testing {
 
-Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min, double b_max,
-                       int periods) {
+Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min, double b_max, int periods) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<double> b(n);
@@ -55,7 +54,8 @@ Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, 
   std::vector<std::vector<std::size_t>> grid(static_cast<std::size_t>(g * g));
   auto lobes_of = [&](double x, double y, double th, double bi, double out[2][3]) {
     const Dumbbell d = Dumbbell::of(bi);
-    out[0][0] = x - d.mother_offset * std::cos(th), out[0][1] = y - d.mother_offset * std::sin(th), out[0][2] = 0.5 * d.D;
+    out[0][0] = x - d.mother_offset * std::cos(th), out[0][1] = y - d.mother_offset * std::sin(th),
+    out[0][2] = 0.5 * d.D;
     out[1][0] = x + d.bud_offset * std::cos(th), out[1][1] = y + d.bud_offset * std::sin(th), out[1][2] = 0.5 * d.b;
   };
   std::vector<std::array<double, 6>> placed;  // lobe centres and radii of placed cells
@@ -88,7 +88,9 @@ Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, 
         grid[static_cast<std::size_t>(gx * g + gy)].push_back(i);
       }
     }
-    if (!ok) throw std::invalid_argument("random_dumbbells: cannot place cell " + std::to_string(i) + " at phi = " + std::to_string(phi));
+    if (!ok)
+      throw std::invalid_argument("random_dumbbells: cannot place cell " + std::to_string(i) +
+                                  " at phi = " + std::to_string(phi));
   }
   return p;
 }

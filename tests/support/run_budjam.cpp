@@ -2,9 +2,9 @@
 
 #include "scratch.hpp"
 
+#include <sys/wait.h>
 #include <cstdlib>
 #include <stdexcept>
-#include <sys/wait.h>
 
 namespace budjam::testing {
 namespace {

@@ -1,16 +1,15 @@
 #include "scratch.hpp"
 
+#include <unistd.h>
 #include <fstream>
 #include <sstream>
 #include <system_error>
-#include <unistd.h>
 
 namespace budjam::testing {
 
 const std::filesystem::path& work_dir() {
   struct WorkDir {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("budjam-test-" + std::to_string(::getpid()));
+    std::filesystem::path path = std::filesystem::temp_directory_path() / ("budjam-test-" + std::to_string(::getpid()));
     WorkDir() {
       std::filesystem::remove_all(path);
       std::filesystem::create_directories(path);

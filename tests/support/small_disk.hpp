@@ -1,10 +1,10 @@
 #pragma once
 // A small tmpfs for disk-full tests: mounted when the tests run as root, otherwise (or when the
 // mount fails) `mounted` is false and the caller skips with a message.
-#include <filesystem>
-#include <string>
 #include <sys/mount.h>
 #include <unistd.h>
+#include <filesystem>
+#include <string>
 
 namespace budjam::testing {
 

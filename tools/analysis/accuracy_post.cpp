@@ -2,15 +2,15 @@
 
 #include "io/run_data.hpp"
 
-#include "budjam/moduli.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/moduli.hpp"
 #include "budjam/spectrum.hpp"
 #include "budjam/statistics.hpp"
 #include "io/packing_file.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <functional>
 #include <limits>
@@ -217,8 +217,10 @@ std::vector<PostRow> measure_postprocessing(const std::string& set, const std::v
     }
     timer.run(options);
 
-    const auto ref_k = static_cast<std::size_t>(std::find_if(mv.begin(), mv.end(), [](const auto& v) { return v.is_reference; }) - mv.begin());
-    const auto ref_s = static_cast<std::size_t>(std::find_if(sv.begin(), sv.end(), [](const auto& v) { return v.is_reference; }) - sv.begin());
+    const auto ref_k = static_cast<std::size_t>(
+        std::find_if(mv.begin(), mv.end(), [](const auto& v) { return v.is_reference; }) - mv.begin());
+    const auto ref_s = static_cast<std::size_t>(
+        std::find_if(sv.begin(), sv.end(), [](const auto& v) { return v.is_reference; }) - sv.begin());
     if (timer.failed[mjob[ref_k]] || timer.failed[sjob[ref_s]])
       throw std::runtime_error(path.string() + ": the dense reference failed");
     const ElasticResponse& ref = mres[ref_k];
@@ -280,8 +282,10 @@ std::vector<PostRow> measure_postprocessing(const std::string& set, const std::v
     finish(r, sa[k]);
   }
   for (auto& r : rows) {  // a family's errors only: the moduli do not have ω*, the spectra no B, G
-    if (r.family == "moduli") r.err_omega_star = r.err_band = r.max_err_omega_star = r.max_err_band = kNaN;
-    else r.err_B = r.err_G = r.max_err_B = r.max_err_G = r.max_residual = kNaN;
+    if (r.family == "moduli")
+      r.err_omega_star = r.err_band = r.max_err_omega_star = r.max_err_band = kNaN;
+    else
+      r.err_B = r.err_G = r.max_err_B = r.max_err_G = r.max_residual = kNaN;
     if (r.is_reference) r.err_B = r.err_G = r.err_omega_star = r.err_band = kNaN;
   }
   return rows;

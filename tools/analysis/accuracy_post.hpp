@@ -28,8 +28,8 @@ struct PostRow {
   double seconds = 0;                      // mean over packings of the best CPU time of one computation
   double err_B = 0, err_G = 0, err_omega_star = 0, err_band = 0;  // mean relative errors (NaN: n/a)
   double max_err_B = 0, max_err_G = 0, max_err_omega_star = 0, max_err_band = 0;
-  double max_residual = 0;                 // moduli: largest verified residual (KernelTreatment::residual)
-  bool all_well_posed = true;              // moduli: every computation passed the residual verification
+  double max_residual = 0;     // moduli: largest verified residual (KernelTreatment::residual)
+  bool all_well_posed = true;  // moduli: every computation passed the residual verification
 };
 
 struct PostOptions {

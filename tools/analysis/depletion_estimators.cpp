@@ -18,10 +18,10 @@ double growth_coordinate_average(std::span<const double> y, std::size_t first, s
   return mean(in);
 }
 
-std::vector<bool> paper_admitted(std::span<const double> divisions_at_end, std::span<const double> G_2, double max_divisions) {
+std::vector<bool> paper_admitted(std::span<const double> divisions_at_end, std::span<const double> G_2,
+                                 double max_divisions) {
   std::vector<bool> keep(divisions_at_end.size());
-  for (std::size_t k = 0; k < keep.size(); ++k)
-    keep[k] = divisions_at_end[k] <= max_divisions && !(G_2[k] <= 0);
+  for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = divisions_at_end[k] <= max_divisions && !(G_2[k] <= 0);
   return keep;
 }
 

@@ -59,8 +59,9 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
   j["zero_count_complete"] = m.zero_count_complete;
   // Band edge.
   j["omega_star"] = number_or_null(m.band.omega_star);
-  j["band"] = {{"rule", "sqrt(mean lambda) of the lowest n_band modes above lambda_tol, "
-                        "n_band = max(band_min, ceil(band_fraction * (n_dof - N_zero)))"},
+  j["band"] = {{"rule",
+                "sqrt(mean lambda) of the lowest n_band modes above lambda_tol, "
+                "n_band = max(band_min, ceil(band_fraction * (n_dof - N_zero)))"},
                {"band_min", request.rule.band_min},
                {"band_fraction", request.rule.band_fraction},
                {"n_band", m.band.n_band},

@@ -22,8 +22,8 @@ namespace budjam::tools {
 struct DosRequest {
   SpectrumOptions spectrum{.modes = 0};  // modes 0: as many as ω* needs
   BandEdgeRule rule;
-  std::size_t bins = 50;                 // D(ω) histogram bins on [0, ω_max of the computed modes]
-  bool pebble_game = true;               // also count floppy modes with the pebble game
+  std::size_t bins = 50;    // D(ω) histogram bins on [0, ω_max of the computed modes]
+  bool pebble_game = true;  // also count floppy modes with the pebble game
 };
 
 struct DosReport {

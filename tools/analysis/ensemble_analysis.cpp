@@ -55,16 +55,13 @@ namespace {
 namespace fs = std::filesystem;
 using io::Json;
 
-constexpr double kPmax = 0.1;      // confluence pressure scale (paper Eq. D25)
-constexpr double kM4 = 0.125;      // ⟨n_x² n_y²⟩ of an isotropic network
+constexpr double kPmax = 0.1;         // confluence pressure scale (paper Eq. D25)
+constexpr double kM4 = 0.125;         // ⟨n_x² n_y²⟩ of an isotropic network
 constexpr double kDphiGrowth = 3e-3;  // Δφ of the growth-rate crossover (appendix E)
 
 std::string num(double v) { return io::format_double(v); }
 
 // ---- per-run extraction ------------------------------------------------------------------------
-
-
-
 
 Json fraction_json(std::size_t k, std::size_t n) {
   return Json{{"fraction", n ? Json(static_cast<double>(k) / static_cast<double>(n)) : Json(nullptr)}, {"packings", n}};
@@ -80,7 +77,8 @@ std::vector<double> dphi_grid() {
 double json_number(const Json& j, std::initializer_list<const char*> keys) {
   for (const char* k : keys) {
     if (j.contains(k) && j[k].is_number()) return j[k].get<double>();
-    if (j.contains("moduli") && j["moduli"].contains(k) && j["moduli"][k].is_number()) return j["moduli"][k].get<double>();
+    if (j.contains("moduli") && j["moduli"].contains(k) && j["moduli"][k].is_number())
+      return j["moduli"][k].get<double>();
   }
   return kNaN;
 }
@@ -91,13 +89,13 @@ struct SidecarModuli {
   double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN, G_min = kNaN;
 };
 
-
 SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& files) {
   SidecarModuli m;
   const auto j = tools::sidecar(pack, "moduli");
   if (!j) {
     if (required && fs::exists(pack))
-      throw InputError(pack.string() + ": no moduli (expected " + fs::path(pack).replace_extension(".moduli.json").string() +
+      throw InputError(pack.string() + ": no moduli (expected " +
+                       fs::path(pack).replace_extension(".moduli.json").string() +
                        "; run `make -f Makefile.analysis moduli`)");
     return m;
   }
@@ -117,8 +115,9 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& file
 }
 
 // The numbers summary.json records at jamming and at budjam's φ_2, under their runs.csv names.
-constexpr std::string_view kSummaryKeys[] = {"phi_J",    "u_J",  "n_J",    "N_J",       "N_nr_J", "Z_J", "dZ_J", "P_J",
-                                             "tagged_J", "step_J", "u_J_lobes", "phi_2", "P_2",    "Z_2", "dZ_2", "N_div_2"};
+constexpr std::string_view kSummaryKeys[] = {"phi_J", "u_J", "n_J",      "N_J",    "N_nr_J",    "Z_J",
+                                             "dZ_J",  "P_J", "tagged_J", "step_J", "u_J_lobes", "phi_2",
+                                             "P_2",   "Z_2", "dZ_2",     "N_div_2"};
 
 // One jammed run's row (the caller skips runs that never jammed).
 RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_found) {
@@ -218,7 +217,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       y.B_grow_se = b->B_se;
     }
     y.below_phi2 = !x.depleted || y.phi <= x.phi_2;
-    const fs::path pack = r.dir / "packings" / ("target_" + std::to_string(json_integer(t, "index", summary)) + ".pack");
+    const fs::path pack =
+        r.dir / "packings" / ("target_" + std::to_string(json_integer(t, "index", summary)) + ".pack");
     const SidecarModuli sm = read_moduli(pack, need_moduli, moduli_found);
     y.B = sm.B;
     y.G = sm.G;
@@ -275,7 +275,6 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
 }
 
 // ---- grouping and statistics ---------------------------------------------------------------------
-
 
 std::vector<double> finite(std::vector<double> v) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
@@ -338,7 +337,8 @@ std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   return {runs.begin(), runs.end()};
 }
 
-void write_csv(const fs::path& path, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+void write_csv(const fs::path& path, const std::vector<std::string>& header,
+               const std::vector<std::vector<std::string>>& rows) {
   io::write_atomically(path, [&](std::ostream& os) {
     for (std::size_t k = 0; k < header.size(); ++k) os << (k ? "," : "") << header[k];
     os << '\n';
@@ -353,7 +353,6 @@ std::string cell(double v) { return std::isfinite(v) ? num(v) : std::string(); }
 
 // ---- reading ---------------------------------------------------------------------------------------
 
-
 DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& run) {
   DosRow q;
   q.run = run.dir.string();
@@ -363,7 +362,8 @@ DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& ru
   q.state = run.state;
   q.target = q.packing.rfind("target_", 0) == 0;
   const io::PackingFile f = io::read_packing(pack);
-  q.dphi = f.meta.has("dphi") ? f.meta.number("dphi") : (f.meta.has("phi_J") ? f.meta.number("phi") - f.meta.number("phi_J") : kNaN);
+  q.dphi = f.meta.has("dphi") ? f.meta.number("dphi")
+                              : (f.meta.has("phi_J") ? f.meta.number("phi") - f.meta.number("phi_J") : kNaN);
   q.omega_star = json_number(dos, {"omega_star"});
   q.N_zero = json_number(dos, {"N_zero"});
   if (!std::isfinite(q.omega_star) || !std::isfinite(q.N_zero))
@@ -491,7 +491,8 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
 // G_2 > 0, then Tukey's 1.5·IQR fences on the quantity itself.
 template <class F>
 Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
-  const auto admitted = paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, [](auto& r) { return r.G_2; }));
+  const auto admitted =
+      paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, [](auto& r) { return r.G_2; }));
   const auto kept = tukey_inliers(collect(rs, f), admitted);
   Json j = mean_se_json(kept);
   const Json m = median_json(kept, bo);
@@ -506,8 +507,8 @@ struct Tables {
   std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
 };
 
-Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km, const BootstrapOptions& bo,
-                Tables& t) {
+Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km,
+                const BootstrapOptions& bo, Tables& t) {
   const std::string P0s = key.P0 ? num(*key.P0) : "none";
   std::vector<const RunRow*> dep;
   for (const auto* r : rs)
@@ -551,14 +552,22 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   // over [φ_J, that φ_2]; runs with ≤ 10 divisions at their end and G_2 > 0, Tukey fences per P0.
   // G_2, and so G_2/P_2, are those of the packing saved at budjam's φ_2 (the only one saved near the
   // depletion point).
-  g["dphi_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.dphi_2_paper; }, bo);
-  g["P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper; }, bo);
-  g["P_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
-  g["G_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2; }, bo);
-  g["G_2_over_Pmax_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / kPmax; }, bo);
-  g["G_2_over_P_2_paper"] = paper_selected_json(rs, [](auto& r) { return r.G_2 / r.P_2; }, bo);  // one packing
-  g["chi_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.chi_bar_paper; }, bo);
-  g["lambda_bar_paper"] = paper_selected_json(rs, [](auto& r) { return r.lambda_bar_paper; }, bo);
+  g["dphi_2_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.dphi_2_paper; }, bo);
+  g["P_2_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.P_2_paper; }, bo);
+  g["P_2_over_Pmax_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
+  g["G_2_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.G_2; }, bo);
+  g["G_2_over_Pmax_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.G_2 / kPmax; }, bo);
+  g["G_2_over_P_2_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.G_2 / r.P_2; }, bo);  // one packing
+  g["chi_bar_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.chi_bar_paper; }, bo);
+  g["lambda_bar_paper"] = paper_selected_json(
+      rs, [](auto& r) { return r.lambda_bar_paper; }, bo);
   {
     // Packings unstable to some simple shear of the box (G_min < 0; moduli.hpp, ShearStability).
     std::size_t n = 0, k = 0, n2 = 0, k2 = 0;
@@ -617,8 +626,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
       if (k < r->divisions.size() && std::isfinite(r->divisions[k])) dv.push_back(r->divisions[k] / NJ);
     }
     if (!rem.empty())
-      t.remaining.push_back({num(key.L), P0s, num(grid[k]), num(mean(rem)), cell(rem.size() >= 2 ? standard_error(rem) : kNaN),
-                             std::to_string(rem.size())});
+      t.remaining.push_back({num(key.L), P0s, num(grid[k]), num(mean(rem)),
+                             cell(rem.size() >= 2 ? standard_error(rem) : kNaN), std::to_string(rem.size())});
     if (!dv.empty())
       t.divisions.push_back({num(key.L), P0s, num(grid[k]), num(median(dv)), num(quantile(dv, 0.25)),
                              num(quantile(dv, 0.75)), std::to_string(dv.size())});
@@ -666,7 +675,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   const auto P2 = finite(collect(dep, [](auto& r) { return r.P_2; }));
   const auto G2 = finite(collect(dep, [](auto& r) { return r.G_2; }));
   t.trajectory.push_back({num(key.L), P0s, cell(mean(finite(collect(dep, [](auto& r) { return r.dphi_2; })))),
-                          cell(mean(P2)), cell(mean(G2)), cell(med(P2)), cell(med(G2)), std::to_string(dep.size()), "true"});
+                          cell(mean(P2)), cell(mean(G2)), cell(med(P2)), cell(med(G2)), std::to_string(dep.size()),
+                          "true"});
   return g;
 }
 
@@ -715,8 +725,11 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
   j["all_targets"]["rms"] = res.empty() ? Json(nullptr) : Json(std::sqrt(sq / static_cast<double>(res.size())));
   Json per = Json::array();
   for (const auto& x : dz_identity_residuals(fed)) {
-    Json p = Json{{"P0", x.P0}, {"n", x.residual.n}, {"mean", io::number_or_null(x.residual.mean)},
-                  {"se", io::number_or_null(x.residual.se)}, {"rms", x.rms}};
+    Json p = Json{{"P0", x.P0},
+                  {"n", x.residual.n},
+                  {"mean", io::number_or_null(x.residual.mean)},
+                  {"se", io::number_or_null(x.residual.se)},
+                  {"rms", x.rms}};
     per.push_back(p);
   }
   j["per_P0_feedback"] = per;
@@ -808,17 +821,23 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
   Json h;
   h["runs"] = m.size();
   // budjam's u_J counts contact-free buds; the lobe count includes contact-free mothers
-  h["u_J"] = states_json(m, [](auto& r) { return r.u_J; }, bo);
-  h["u_J_lobes"] = states_json(m, [](auto& r) { return r.u_J_lobes; }, bo);
-  h["n_J"] = states_json(m, [](auto& r) { return r.n_J; }, bo);
-  h["phi_J"] = states_json(m, [](auto& r) { return r.phi_J; }, bo);
-  h["N_J"] = states_json(m, [](auto& r) { return r.N_J; }, bo);
+  h["u_J"] = states_json(
+      m, [](auto& r) { return r.u_J; }, bo);
+  h["u_J_lobes"] = states_json(
+      m, [](auto& r) { return r.u_J_lobes; }, bo);
+  h["n_J"] = states_json(
+      m, [](auto& r) { return r.n_J; }, bo);
+  h["phi_J"] = states_json(
+      m, [](auto& r) { return r.phi_J; }, bo);
+  h["N_J"] = states_json(
+      m, [](auto& r) { return r.N_J; }, bo);
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m);
   std::vector<double> rel_b;
   for (const auto* r : m)
     for (const auto& t : r->targets)
-      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0) rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
+      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0)
+        rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
   h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
   return h;
 }
@@ -838,8 +857,10 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
   if (strongest) {
     const auto& rs = groups.at({main_L, strongest});
     h["paper_P0"] = *strongest;
-    h["u_J_paper"] = states_json(rs, [](auto& r) { return r.u_J_lobes; }, bo);
-    h["n_J_paper"] = states_json(rs, [](auto& r) { return r.n_J; }, bo);
+    h["u_J_paper"] = states_json(
+        rs, [](auto& r) { return r.u_J_lobes; }, bo);
+    h["n_J_paper"] = states_json(
+        rs, [](auto& r) { return r.n_J; }, bo);
   }
   const double phiJ = h["phi_J"]["mean"].is_number() ? h["phi_J"]["mean"].get<double>() : kNaN;
   h["P_max_formula_measured_phiJ"] = io::number_or_null(2.0 / std::numbers::pi * (1.0 - phiJ));
@@ -873,7 +894,8 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
   tgt_header.push_back("below_phi2");
   std::vector<std::vector<std::string>> run_rows, tgt_rows, dos_out;
   for (const auto& r : e.rows) {
-    std::vector<std::string> row{r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), r.status, std::to_string(r.state)};
+    std::vector<std::string> row{r.dir.string(),         num(r.L), r.P0_label,
+                                 std::to_string(r.seed), r.status, std::to_string(r.state)};
     for (const auto& c : kRunColumns) row.push_back(cell(r.*c.field));
     run_rows.push_back(row);
     for (const auto& x : r.targets) {
@@ -884,10 +906,11 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
     }
   }
   for (const auto& q : e.dos_rows)
-    dos_out.push_back({q.run, q.packing, num(q.L), q.P0_label, std::to_string(q.state), cell(q.dphi), cell(q.omega_star),
-                       cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr), cell(q.N_zero), cell(q.N_u),
-                       cell(q.N_u_buds)});
-  auto write = [&](const char* name, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+    dos_out.push_back({q.run, q.packing, num(q.L), q.P0_label, std::to_string(q.state), cell(q.dphi),
+                       cell(q.omega_star), cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr),
+                       cell(q.N_zero), cell(q.N_u), cell(q.N_u_buds)});
+  auto write = [&](const char* name, const std::vector<std::string>& header,
+                   const std::vector<std::vector<std::string>>& rows) {
     if (!e.unavailable.count(name)) write_csv(out / name, header, rows);
   };
   write("runs.csv", run_header, run_rows);
@@ -898,8 +921,8 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
   write("growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
   write("trajectory.csv", {"L", "P0", "dphi", "P", "G", "P_median", "G_median", "runs", "endpoint"}, t.trajectory);
   write("dos.csv",
-        {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero", "N_u",
-         "N_u_buds"},
+        {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero",
+         "N_u", "N_u_buds"},
         dos_out);
 }
 

@@ -22,7 +22,7 @@ inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct TargetRow {
   double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
   double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
-  double dZ_pred = kNaN;                   // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
+  double dZ_pred = kNaN;  // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
   double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
   double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
   bool below_phi2 = false;
@@ -37,7 +37,8 @@ struct RunRow {
   std::string status;
   std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
   bool depleted = false;
-  double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN, P_J = kNaN;
+  double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN,
+         P_J = kNaN;
   double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (the paper's u_J ≃ 0.23)
   double tagged = kNaN, lc2_J = kNaN;
   double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
@@ -87,8 +88,8 @@ struct ModuliFiles {
 struct Ensemble {
   std::vector<RunRow> rows;
   std::vector<DosRow> dos_rows;
-  std::vector<std::string> failed;                    // runs that stopped early, with their status
-  std::vector<std::vector<std::string>> duplicates;   // copies of one run: the used one first
+  std::vector<std::string> failed;                   // runs that stopped early, with their status
+  std::vector<std::vector<std::string>> duplicates;  // copies of one run: the used one first
   ModuliFiles moduli;
   std::size_t dos_found = 0;
   std::size_t runs = 0;
@@ -109,27 +110,63 @@ struct TargetColumn {
 };
 
 // runs.csv after its leading columns run, L, P0, seed, status, jamming_state.
-inline constexpr RunColumn kRunColumns[] = {
-    {"phi_J", &RunRow::phi_J}, {"u_J", &RunRow::u_J}, {"u_J_lobes", &RunRow::u_J_lobes}, {"n_J", &RunRow::n_J},
-    {"N_J", &RunRow::N_J}, {"N_nr_J", &RunRow::N_nr_J}, {"Z_J", &RunRow::Z_J}, {"dZ_J", &RunRow::dZ_J},
-    {"phi_2", &RunRow::phi_2}, {"dphi_2", &RunRow::dphi_2}, {"P_2", &RunRow::P_2}, {"Z_2", &RunRow::Z_2},
-    {"dZ_2", &RunRow::dZ_2}, {"u_2", &RunRow::u_2}, {"N_div_2", &RunRow::N_div_2}, {"chi_bar", &RunRow::chi_bar},
-    {"lambda_bar", &RunRow::lambda_bar}, {"phi_2_paper", &RunRow::phi_2_paper}, {"dphi_2_paper", &RunRow::dphi_2_paper},
-    {"P_2_paper", &RunRow::P_2_paper}, {"N_div_2_paper", &RunRow::N_div_2_paper},
-    {"chi_bar_paper", &RunRow::chi_bar_paper}, {"lambda_bar_paper", &RunRow::lambda_bar_paper},
-    {"N_div_end", &RunRow::N_div_end}, {"a_eps", &RunRow::a_eps}, {"integral_S", &RunRow::int_S},
-    {"dphi_2_pred_area", &RunRow::pred_area}, {"dphi_2_pred_diameter_sq", &RunRow::pred_d2}, {"B_2", &RunRow::B_2},
-    {"G_2", &RunRow::G_2}, {"G_2_energy", &RunRow::G_2_energy}, {"G_min_2", &RunRow::G_min_2},
-    {"h_gamma", &RunRow::h_gamma}, {"lc2_J", &RunRow::lc2_J}, {"P_J", &RunRow::P_J}, {"step_J", &RunRow::step_J},
-    {"tagged_J", &RunRow::tagged}};
+inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
+                                            {"u_J", &RunRow::u_J},
+                                            {"u_J_lobes", &RunRow::u_J_lobes},
+                                            {"n_J", &RunRow::n_J},
+                                            {"N_J", &RunRow::N_J},
+                                            {"N_nr_J", &RunRow::N_nr_J},
+                                            {"Z_J", &RunRow::Z_J},
+                                            {"dZ_J", &RunRow::dZ_J},
+                                            {"phi_2", &RunRow::phi_2},
+                                            {"dphi_2", &RunRow::dphi_2},
+                                            {"P_2", &RunRow::P_2},
+                                            {"Z_2", &RunRow::Z_2},
+                                            {"dZ_2", &RunRow::dZ_2},
+                                            {"u_2", &RunRow::u_2},
+                                            {"N_div_2", &RunRow::N_div_2},
+                                            {"chi_bar", &RunRow::chi_bar},
+                                            {"lambda_bar", &RunRow::lambda_bar},
+                                            {"phi_2_paper", &RunRow::phi_2_paper},
+                                            {"dphi_2_paper", &RunRow::dphi_2_paper},
+                                            {"P_2_paper", &RunRow::P_2_paper},
+                                            {"N_div_2_paper", &RunRow::N_div_2_paper},
+                                            {"chi_bar_paper", &RunRow::chi_bar_paper},
+                                            {"lambda_bar_paper", &RunRow::lambda_bar_paper},
+                                            {"N_div_end", &RunRow::N_div_end},
+                                            {"a_eps", &RunRow::a_eps},
+                                            {"integral_S", &RunRow::int_S},
+                                            {"dphi_2_pred_area", &RunRow::pred_area},
+                                            {"dphi_2_pred_diameter_sq", &RunRow::pred_d2},
+                                            {"B_2", &RunRow::B_2},
+                                            {"G_2", &RunRow::G_2},
+                                            {"G_2_energy", &RunRow::G_2_energy},
+                                            {"G_min_2", &RunRow::G_min_2},
+                                            {"h_gamma", &RunRow::h_gamma},
+                                            {"lc2_J", &RunRow::lc2_J},
+                                            {"P_J", &RunRow::P_J},
+                                            {"step_J", &RunRow::step_J},
+                                            {"tagged_J", &RunRow::tagged}};
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
-inline constexpr TargetColumn kTargetColumns[] = {
-    {"phi", &TargetRow::phi}, {"P", &TargetRow::P}, {"Z", &TargetRow::Z}, {"Z_iso", &TargetRow::Z_iso},
-    {"dZ", &TargetRow::dZ}, {"dZ_pred", &TargetRow::dZ_pred}, {"u", &TargetRow::u}, {"u_lobes", &TargetRow::u_lobes},
-    {"chi_c", &TargetRow::chi_c}, {"lambda_c", &TargetRow::lambda}, {"B_grow", &TargetRow::B_grow},
-    {"B_grow_se", &TargetRow::B_grow_se}, {"B", &TargetRow::B}, {"G", &TargetRow::G}, {"G_energy", &TargetRow::G_energy},
-    {"G_min", &TargetRow::G_min}, {"B_ext_mean_field", &TargetRow::B_ext_mf}, {"N_div", &TargetRow::N_div},
-    {"N_nr", &TargetRow::N_nr}};
+inline constexpr TargetColumn kTargetColumns[] = {{"phi", &TargetRow::phi},
+                                                  {"P", &TargetRow::P},
+                                                  {"Z", &TargetRow::Z},
+                                                  {"Z_iso", &TargetRow::Z_iso},
+                                                  {"dZ", &TargetRow::dZ},
+                                                  {"dZ_pred", &TargetRow::dZ_pred},
+                                                  {"u", &TargetRow::u},
+                                                  {"u_lobes", &TargetRow::u_lobes},
+                                                  {"chi_c", &TargetRow::chi_c},
+                                                  {"lambda_c", &TargetRow::lambda},
+                                                  {"B_grow", &TargetRow::B_grow},
+                                                  {"B_grow_se", &TargetRow::B_grow_se},
+                                                  {"B", &TargetRow::B},
+                                                  {"G", &TargetRow::G},
+                                                  {"G_energy", &TargetRow::G_energy},
+                                                  {"G_min", &TargetRow::G_min},
+                                                  {"B_ext_mean_field", &TargetRow::B_ext_mf},
+                                                  {"N_div", &TargetRow::N_div},
+                                                  {"N_nr", &TargetRow::N_nr}};
 
 }  // namespace budjam::tools

@@ -19,14 +19,24 @@ namespace fs = std::filesystem;
 
 // What a runs.csv column is computed from, for the account of a column the tables lack.
 std::string needs(const std::string& column) {
-  static const std::map<std::string, std::string> from{
-      {"u_2", "steps.csv"},           {"chi_bar", "steps.csv"},          {"lambda_bar", "steps.csv"},
-      {"phi_2_paper", "steps.csv"},   {"dphi_2_paper", "steps.csv"},     {"P_2_paper", "steps.csv"},
-      {"N_div_2_paper", "steps.csv"}, {"chi_bar_paper", "steps.csv"},    {"lambda_bar_paper", "steps.csv"},
-      {"N_div_end", "steps.csv"},     {"a_eps", "bud_events.csv"},       {"integral_S", "bud_events.csv"},
-      {"B_2", "the moduli at φ_2"},   {"G_2", "the moduli at φ_2"},      {"G_2_energy", "the moduli at φ_2"},
-      {"G_min_2", "the moduli at φ_2"}, {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
-      {"lc2_J", "the jammed packing"}};
+  static const std::map<std::string, std::string> from{{"u_2", "steps.csv"},
+                                                       {"chi_bar", "steps.csv"},
+                                                       {"lambda_bar", "steps.csv"},
+                                                       {"phi_2_paper", "steps.csv"},
+                                                       {"dphi_2_paper", "steps.csv"},
+                                                       {"P_2_paper", "steps.csv"},
+                                                       {"N_div_2_paper", "steps.csv"},
+                                                       {"chi_bar_paper", "steps.csv"},
+                                                       {"lambda_bar_paper", "steps.csv"},
+                                                       {"N_div_end", "steps.csv"},
+                                                       {"a_eps", "bud_events.csv"},
+                                                       {"integral_S", "bud_events.csv"},
+                                                       {"B_2", "the moduli at φ_2"},
+                                                       {"G_2", "the moduli at φ_2"},
+                                                       {"G_2_energy", "the moduli at φ_2"},
+                                                       {"G_min_2", "the moduli at φ_2"},
+                                                       {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
+                                                       {"lc2_J", "the jammed packing"}};
   const auto it = from.find(column);
   return it != from.end() ? it->second : "summary.json";
 }
@@ -58,7 +68,8 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
   }
   if (e.rows.empty()) throw InputError(R.source + ": no runs");
   if (e.unavailable.count("P_J"))
-    e.unavailable["P_J"] += "; ΔZ_0(P) + 2(u_J − u) is taken from targets.csv (dZ_pred) as the earlier analysis computed it";
+    e.unavailable["P_J"] +=
+        "; ΔZ_0(P) + 2(u_J − u) is taken from targets.csv (dZ_pred) as the earlier analysis computed it";
   // The state a run jammed into: as the earlier analysis numbered it, else from its key (an earlier
   // format has no step_J: runs of one seed that jam with the same N_J at bit-identical φ_J are one state).
   if (R.has_column("jamming_state")) {
@@ -73,10 +84,12 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
   for (std::size_t k = 0; k < e.rows.size(); ++k) e.rows[k].state = states[k];
 }
 
-RunRow& run_of(const CsvTable& t, std::size_t row, std::vector<RunRow>& rows, const std::map<std::string, std::size_t>& index) {
+RunRow& run_of(const CsvTable& t, std::size_t row, std::vector<RunRow>& rows,
+               const std::map<std::string, std::size_t>& index) {
   const auto it = index.find(t.text(row, t.column("run")));
   if (it == index.end())
-    throw InputError(t.source + ":" + std::to_string(row + 2) + ": run " + t.text(row, t.column("run")) + " is not in runs.csv");
+    throw InputError(t.source + ":" + std::to_string(row + 2) + ": run " + t.text(row, t.column("run")) +
+                     " is not in runs.csv");
   return rows[it->second];
 }
 
@@ -113,8 +126,10 @@ void contact_counts(DosRow& q, const RunRow& run) {
 void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, std::size_t>& index) {
   const bool counts = D.has_column("N_c") && D.has_column("N_nr");
   if (!counts)
-    e.unavailable["dos.csv:N_c,N_nr"] = D.source + " has no integer contact counts: taken from targets.csv (Z_iso) for "
-                                       "the Δφ-target packings and from runs.csv (N_nr_J) for the jammed ones; 0 for others";
+    e.unavailable["dos.csv:N_c,N_nr"] =
+        D.source +
+        " has no integer contact counts: taken from targets.csv (Z_iso) for "
+        "the Δφ-target packings and from runs.csv (N_nr_J) for the jammed ones; 0 for others";
   const std::size_t c_pack = D.column("packing");
   for (std::size_t k = 0; k < D.size(); ++k) {
     RunRow& run = run_of(D, k, e.rows, index);
@@ -159,8 +174,8 @@ void read_survival(const CsvTable& S, Ensemble& e) {
   while (k < S.size()) {
     const auto g = groups.find({S.number(k, c_L), S.text(k, c_P0)});
     if (g == groups.end())
-      throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) + ", P0 = " + S.text(k, c_P0) +
-                       " has no run in runs.csv");
+      throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) +
+                       ", P0 = " + S.text(k, c_P0) + " has no run in runs.csv");
     const auto records = static_cast<std::size_t>(S.integer(k, c_risk, 0, std::numeric_limits<long long>::max()));
     std::vector<KaplanMeierStep> steps;
     std::size_t events = 0;
@@ -189,8 +204,9 @@ void read_survival(const CsvTable& S, Ensemble& e) {
 void drop_format1_averages(Ensemble& e) {
   for (auto& r : e.rows) r.chi_bar = r.lambda_bar = r.pred_area = r.pred_d2 = kNaN;
   for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area", "dphi_2_pred_diameter_sq"})
-    e.unavailable[c] = std::string("runs.csv of format 1 holds it with χ̄ a trapezoid in φ (it needs steps.csv of each run ") +
-                       "for the plain mean over the accepted states)";
+    e.unavailable[c] =
+        std::string("runs.csv of format 1 holds it with χ̄ a trapezoid in φ (it needs steps.csv of each run ") +
+        "for the plain mean over the accepted states)";
 }
 
 }  // namespace
@@ -199,14 +215,20 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
   Ensemble e;
   std::map<std::string, std::size_t> index;  // run → row
   read_runs(read_csv(dir / "runs.csv"), e, index);
-  if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1) drop_format1_averages(e);
+  if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1)
+    drop_format1_averages(e);
   e.runs = e.rows.size();
   read_targets(read_csv(dir / "targets.csv"), e, index);
-  if (fs::exists(dir / "dos.csv")) read_spectra(read_csv(dir / "dos.csv"), e, index);
-  else e.unavailable["dos.csv"] = (dir / "dos.csv").string() + " absent: no spectra";
+  if (fs::exists(dir / "dos.csv"))
+    read_spectra(read_csv(dir / "dos.csv"), e, index);
+  else
+    e.unavailable["dos.csv"] = (dir / "dos.csv").string() + " absent: no spectra";
   for (const auto& r : e.rows) e.survival.emplace(GroupKey{r.L, r.P0}, KaplanMeierCurve{});
-  if (fs::exists(dir / "survival.csv")) read_survival(read_csv(dir / "survival.csv"), e);
-  else e.unavailable["survival.csv"] = (dir / "survival.csv").string() + " absent: no pooled survival (needs bud_events.csv)";
+  if (fs::exists(dir / "survival.csv"))
+    read_survival(read_csv(dir / "survival.csv"), e);
+  else
+    e.unavailable["survival.csv"] =
+        (dir / "survival.csv").string() + " absent: no pooled survival (needs bud_events.csv)";
   const std::string steps = "needs steps.csv and divisions.csv of each run";
   const std::string cells = "needs the growth factor of each cell (the packing at Δφ = 3·10⁻³)";
   e.unavailable["remaining.csv"] = steps;

@@ -51,7 +51,8 @@ MeanSE mean_over_states(std::span<const double> values, std::span<const std::siz
 
 BootstrapResult cluster_bootstrap_mean(std::span<const double> values, std::span<const std::size_t> state,
                                        std::span<const std::uint64_t> cluster, const BootstrapOptions& options) {
-  if (cluster.size() != state.size()) throw std::invalid_argument("cluster_bootstrap_mean: clusters and states differ in size");
+  if (cluster.size() != state.size())
+    throw std::invalid_argument("cluster_bootstrap_mean: clusters and states differ in size");
   const auto means = state_means(values, state);
   if (means.empty()) throw std::invalid_argument("cluster_bootstrap_mean: no data");
   // the state means of each cluster

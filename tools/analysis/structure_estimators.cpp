@@ -60,8 +60,10 @@ GrowthRateDistribution growth_rate_distribution(std::span<const double> g, std::
   std::vector<double> below;
   std::size_t at_one = 0;
   for (double v : g) {
-    if (v == 1.0) ++at_one;  // p = 0 exactly: the δ(g − 1) of Eq. E2
-    else below.push_back(v);
+    if (v == 1.0)
+      ++at_one;  // p = 0 exactly: the δ(g − 1) of Eq. E2
+    else
+      below.push_back(v);
   }
   const double total = static_cast<double>(g.size());
   d.weight_at_one = static_cast<double>(at_one) / total;

@@ -54,7 +54,7 @@ std::vector<double> paper_growth_rate_edges();
 struct GrowthRateDistribution {
   std::size_t cells = 0;
   double weight_at_one = 0;
-  std::vector<double> density;  // one per bin of edges
+  std::vector<double> density;          // one per bin of edges
   double median = 0, q25 = 0, q75 = 0;  // of g < 1; NaN if none
 };
 // Throws std::invalid_argument for no cells or fewer than 2 edges.

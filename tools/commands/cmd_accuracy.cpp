@@ -26,8 +26,8 @@
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
 
-#include "budjam/pareto.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/pareto.hpp"
 #include "budjam/statistics.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
@@ -73,10 +73,11 @@ const std::map<std::string, std::vector<std::string>> kFamilyQuantities{
     {"growth", {"phi_J", "u_J", "Z_J", "phi_2", "P", "B", "G", "omega_star"}},
     {"moduli", {"B", "G"}},
     {"spectrum", {"omega_star", "band"}}};
-const std::map<std::string, std::string> kKnobLabel{
-    {"ftol", "minimiser.force_tol"}, {"epsU", "jamming.epsilon_U"}, {"tol", "jamming.target_tolerance"},
-    {"dt", "growth.dt"},             {"solver", "moduli linear solver"}, {"arpack_tol", "ARPACK tol"},
-    {"arpack_ncv", "ARPACK ncv"},    {"search", "jamming.search"},        {"newton", "minimiser.newton_force"}};
+const std::map<std::string, std::string> kKnobLabel{{"ftol", "minimiser.force_tol"},     {"epsU", "jamming.epsilon_U"},
+                                                    {"tol", "jamming.target_tolerance"}, {"dt", "growth.dt"},
+                                                    {"solver", "moduli linear solver"},  {"arpack_tol", "ARPACK tol"},
+                                                    {"arpack_ncv", "ARPACK ncv"},        {"search", "jamming.search"},
+                                                    {"newton", "minimiser.newton_force"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -94,14 +95,14 @@ struct Row {
   std::string family, knob, variant, set, unit;
   bool is_default = false, is_reference = false;
   std::size_t n = 0, failures = 0;
-  double seconds = kNaN;                  // measured: CPU seconds per run / per computation
-  double cost = kNaN;                     // what the front compares (seconds; growth: see cost_of_growth)
+  double seconds = kNaN;  // measured: CPU seconds per run / per computation
+  double cost = kNaN;     // what the front compares (seconds; growth: see cost_of_growth)
   double wall_seconds = kNaN, force_evaluations = kNaN;
   std::map<std::string, double> err;      // by quantity; absent = n/a
   std::map<std::string, double> max_err;  // post-processing: the worst packing
   double max_residual = kNaN;
   bool well_posed = true;
-  bool on_front = true;                   // of its knob (a default: of every knob of its family and set)
+  bool on_front = true;  // of its knob (a default: of every knob of its family and set)
 };
 
 double error_of(const Row& r, const std::string& q) {
@@ -192,7 +193,9 @@ std::vector<Row> growth_rows(const Options& o) {
     row.is_default = name == "default";
     row.knob = is_ref ? "reference" : row.is_default ? "default" : name.substr(0, name.find('_'));
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
-      throw InputError(dir.string() + ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search or newton, or default");
+      throw InputError(
+          dir.string() +
+          ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search or newton, or default");
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals;
     for (const auto& [s, d] : seeds_of(dir)) {
@@ -230,7 +233,8 @@ std::vector<Row> growth_rows(const Options& o) {
       cpu += r.seconds * static_cast<double>(r.n);
       evals += r.force_evaluations * static_cast<double>(r.n);
     }
-  for (Row& r : rows) r.cost = evals > 0 && std::isfinite(r.force_evaluations) ? r.force_evaluations * cpu / evals : r.seconds;
+  for (Row& r : rows)
+    r.cost = evals > 0 && std::isfinite(r.force_evaluations) ? r.force_evaluations * cpu / evals : r.seconds;
   return rows;
 }
 
@@ -245,7 +249,8 @@ std::vector<Row> post_rows(const Options& o) {
     if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
       throw InputError("--packings: expected NAME=DIR, got '" + spec + "'");
     const std::string name = spec.substr(0, eq);
-    if (name.find_first_of(",\"\n") != std::string::npos) throw InputError("--packings: NAME must not contain , \" or a newline");
+    if (name.find_first_of(",\"\n") != std::string::npos)
+      throw InputError("--packings: NAME must not contain , \" or a newline");
     const auto packs = tools::find_packings(spec.substr(eq + 1));
     std::cerr << "accuracy: " << name << ": " << packs.size() << " packings\n";
     for (const tools::PostRow& p : tools::measure_postprocessing(name, packs, po)) {
@@ -263,10 +268,11 @@ std::vector<Row> post_rows(const Options& o) {
       r.cost = p.seconds;
       r.max_residual = p.max_residual;
       r.well_posed = p.all_well_posed;
-      const std::pair<const char*, std::pair<double, double>> e[] = {{"B", {p.err_B, p.max_err_B}},
-                                                                     {"G", {p.err_G, p.max_err_G}},
-                                                                     {"omega_star", {p.err_omega_star, p.max_err_omega_star}},
-                                                                     {"band", {p.err_band, p.max_err_band}}};
+      const std::pair<const char*, std::pair<double, double>> e[] = {
+          {"B", {p.err_B, p.max_err_B}},
+          {"G", {p.err_G, p.max_err_G}},
+          {"omega_star", {p.err_omega_star, p.max_err_omega_star}},
+          {"band", {p.err_band, p.max_err_band}}};
       for (const auto& [q, v] : e)
         if (!std::isnan(v.first) || !p.is_reference) {
           const auto& fam = kFamilyQuantities.at(r.family);
@@ -292,7 +298,8 @@ std::vector<Group> groups_of(const std::vector<Row>& rows) {
   std::set<std::tuple<std::string, std::string, std::string>> seen;
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const Row& r = rows[k];
-    if (r.is_default || r.is_reference || r.knob == "repeat" || !seen.insert({r.family, r.set, r.knob}).second) continue;
+    if (r.is_default || r.is_reference || r.knob == "repeat" || !seen.insert({r.family, r.set, r.knob}).second)
+      continue;
     Group g{r.family, r.set, r.knob, {}};
     for (std::size_t j = 0; j < rows.size(); ++j)
       if (rows[j].family == r.family && rows[j].set == r.set && rows[j].is_default) g.members.push_back(j);
@@ -356,7 +363,9 @@ Json joint_fronts(const std::vector<Row>& rows, const std::vector<Group>& groups
       used.push_back(name);
     }
     const auto front = pareto_front(ce, tol);
-    Json j{{"family", family}, {"knob", knob}, {"knob_label", kKnobLabel.count(knob) ? kKnobLabel.at(knob) : knob},
+    Json j{{"family", family},
+           {"knob", knob},
+           {"knob_label", kKnobLabel.count(knob) ? kKnobLabel.at(knob) : knob},
            {"cost_tie", tol.cost_ratio - 1}};
     Json jsets = Json::array(), jset = Json::array(), jfront = Json::array(), jby = Json::array();
     for (const Group* g : sets) jsets.push_back(g->set);
@@ -384,8 +393,9 @@ std::string fmt(double v) {
 
 void run(const Options& o) {
   if (o.reference.empty() != o.variants.empty())
-    throw InputError("--reference: growth variants and the reference go together (got " +
-                     std::string(o.reference.empty() ? "variants without --reference" : "--reference without variants") + ")");
+    throw InputError(
+        "--reference: growth variants and the reference go together (got " +
+        std::string(o.reference.empty() ? "variants without --reference" : "--reference without variants") + ")");
   if (o.reference.empty() && o.packings.empty())
     throw InputError("accuracy: nothing to measure (give --reference DIR VARIANT_DIR... and/or --packings NAME=DIR)");
   if (!(o.time_noise >= 0) || !(o.error_ratio >= 1) || !(o.error_floor >= 0))
@@ -408,14 +418,17 @@ void run(const Options& o) {
         const double diff = std::abs(r.cost - d.cost) / std::min(r.cost, d.cost);
         noise_of[{r.family, r.set}] = diff;
         const double band = std::max(o.time_noise, 3 * diff);
-        noise.push_back(Json{{"family", r.family}, {"set", r.set}, {"relative_difference", io::number_or_null(diff)},
+        noise.push_back(Json{{"family", r.family},
+                             {"set", r.set},
+                             {"relative_difference", io::number_or_null(diff)},
                              {"cost_tie", band}});
         noise_md << "- timing noise, " << r.set << " " << r.family << ": the default timed twice differs by "
                  << fmt(100 * diff) << " %; cost tie band " << fmt(100 * band) << " %\n";
       }
   }
 
-  const ParetoTolerance base_tol{.cost_ratio = 1 + o.time_noise, .error_ratio = o.error_ratio, .error_floor = o.error_floor};
+  const ParetoTolerance base_tol{
+      .cost_ratio = 1 + o.time_noise, .error_ratio = o.error_ratio, .error_floor = o.error_floor};
   Json groups = Json::array();
   bool all_on_front = true;
   std::vector<std::string> off_front;
@@ -502,11 +515,18 @@ void run(const Options& o) {
     for (const auto& q : kQuantities) os << "err_" << q << ',';
     os << "on_front\n";
     for (const Row& r : rows) {
-      os << r.family << ',' << r.knob << ',' << r.set << ',' << r.variant << ',' << (r.is_default ? "true" : "false") << ','
-         << r.unit << ',' << r.n << ',' << (std::isfinite(r.seconds) ? io::format_double(r.seconds) : "") << ','
+      os << r.family << ',' << r.knob << ',' << r.set << ',' << r.variant << ',' << (r.is_default ? "true" : "false")
+         << ',' << r.unit << ',' << r.n << ',' << (std::isfinite(r.seconds) ? io::format_double(r.seconds) : "") << ','
          << (std::isfinite(r.cost) ? io::format_double(r.cost) : "");
-      Json x{{"family", r.family}, {"knob", r.knob}, {"set", r.set}, {"variant", r.variant}, {"default", r.is_default},
-             {"reference", r.is_reference}, {"unit", r.unit}, {"n", r.n}, {"seconds", io::number_or_null(r.seconds)},
+      Json x{{"family", r.family},
+             {"knob", r.knob},
+             {"set", r.set},
+             {"variant", r.variant},
+             {"default", r.is_default},
+             {"reference", r.is_reference},
+             {"unit", r.unit},
+             {"n", r.n},
+             {"seconds", io::number_or_null(r.seconds)},
              {"cost", io::number_or_null(r.cost)}};
       for (const auto& q : kQuantities) {
         const double e = error_of(r, q);
@@ -532,45 +552,56 @@ void run(const Options& o) {
 
   // Markdown table (2–3 significant digits) for the documentation.
   std::ostringstream md;
-  md << "| family | set | knob | setting | per | CPU s | cost s | φ_J | u_J | Z_J | φ_2 | P | B | G | ω* | band | on front |\n"
+  md << "| family | set | knob | setting | per | CPU s | cost s | φ_J | u_J | Z_J | φ_2 | P | B | G | ω* | band | on "
+        "front |\n"
      << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const Row& r : rows) {
-    md << "| " << r.family << " | " << r.set << " | " << r.knob << " | " << (r.is_default ? "**" + r.variant + "**" : r.variant)
-       << " | " << r.unit << " | " << fmt(r.seconds) << " | " << fmt(r.cost);
+    md << "| " << r.family << " | " << r.set << " | " << r.knob << " | "
+       << (r.is_default ? "**" + r.variant + "**" : r.variant) << " | " << r.unit << " | " << fmt(r.seconds) << " | "
+       << fmt(r.cost);
     for (const auto& q : kQuantities) {
       const double e = error_of(r, q);
       md << " | " << (r.err.count(q) ? (std::isnan(e) ? "n/a" : fmt(e)) : "");
     }
-    md << " | " << (r.is_reference ? "reference" : r.knob == "repeat" ? "(noise probe)" : r.on_front ? "yes" : "**no**") << " |\n";
+    md << " | "
+       << (r.is_reference       ? "reference"
+           : r.knob == "repeat" ? "(noise probe)"
+           : r.on_front         ? "yes"
+                                : "**no**")
+       << " |\n";
   }
   md << "\nKnobs measured on several packing sets, judged on their joint front (relative cost: geometric mean "
         "over the sets; errors: the worst set's):\n"
      << joint_md.str();
-  for (const auto& [knob, why] : kPinnedByModel) md << "\nNot judged (default set by the model): " << knob << ": " << why << '\n';
+  for (const auto& [knob, why] : kPinnedByModel)
+    md << "\nNot judged (default set by the model): " << knob << ": " << why << '\n';
   md << "\nDefaults on the front of every knob: " << (all_on_front ? "yes" : "no") << '\n';
   for (const auto& s : off_front) md << "- not on the front: " << s << '\n';
   md << noise_md.str();
   io::write_atomically(out / "accuracy.md", md.str());
 
   io::write_json(out / "accuracy.json",
-                 Json{{"note", "errors: mean over seeds (growth) or packings (moduli, spectrum) of |variant - reference| "
-                               "(phi_J, u_J, Z_J, phi_2) or of the relative error (P, B, G, omega_star averaged over the "
-                               "targets; band = the largest relative error of the n_band eigenvalues omega* averages); "
-                               "seconds: CPU seconds per run (growth) or per computation (best of interleaved repeats); "
-                               "cost (what the front compares): the seconds, except for growth: force evaluations per run "
-                               "times the sweep's mean CPU seconds per evaluation (deterministic); "
-                               "docs/analysis.md, 'Accuracy against cost'"},
+                 Json{{"note",
+                       "errors: mean over seeds (growth) or packings (moduli, spectrum) of |variant - reference| "
+                       "(phi_J, u_J, Z_J, phi_2) or of the relative error (P, B, G, omega_star averaged over the "
+                       "targets; band = the largest relative error of the n_band eigenvalues omega* averages); "
+                       "seconds: CPU seconds per run (growth) or per computation (best of interleaved repeats); "
+                       "cost (what the front compares): the seconds, except for growth: force evaluations per run "
+                       "times the sweep's mean CPU seconds per evaluation (deterministic); "
+                       "docs/analysis.md, 'Accuracy against cost'"},
                       {"reference", o.reference},
                       {"front_rule", Json{{"time_noise", o.time_noise},
                                           {"error_ratio", o.error_ratio},
                                           {"error_floor", o.error_floor},
-                                          {"rule", "a setting dominates the default if it is at most cost_tie dearer, "
-                                                   "no error is worse (errors within error_ratio, or both <= error_floor, "
-                                                   "tie) and it is cheaper beyond cost_tie or better in one error; "
-                                                   "cost_tie = time_noise, for a post-processing set max(time_noise, 3 x "
-                                                   "the relative difference of the default timed twice)"}}},
+                                          {"rule",
+                                           "a setting dominates the default if it is at most cost_tie dearer, "
+                                           "no error is worse (errors within error_ratio, or both <= error_floor, "
+                                           "tie) and it is cheaper beyond cost_tie or better in one error; "
+                                           "cost_tie = time_noise, for a post-processing set max(time_noise, 3 x "
+                                           "the relative difference of the default timed twice)"}}},
                       {"defaults_on_front", all_on_front},
-                      {"pinned_by_model", [] {
+                      {"pinned_by_model",
+                       [] {
                          Json p = Json::object();
                          for (const auto& [knob, why] : kPinnedByModel) p[knob] = why;
                          return p;
@@ -589,16 +620,22 @@ const bool registered = budjam::cli::register_command(
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("--reference", o->reference, "folder of the tight reference runs (seed*/)");
-       sub.add_option("VARIANT", o->variants, "folders of growth variant runs (seed*/), named <knob>_<value> or default");
+       sub.add_option("VARIANT", o->variants,
+                      "folders of growth variant runs (seed*/), named <knob>_<value> or default");
        sub.add_option("--packings", o->packings,
                       "NAME=DIR: measure the moduli solvers and ARPACK settings on DIR's packings/*.pack (repeatable)");
        sub.add_option("--out", o->out, "output directory")->required();
-       sub.add_option("--time-noise", o->time_noise, "front rule: relative cost difference that is a tie (post-processing: at least 3x the measured timing noise)")->capture_default_str();
+       sub.add_option("--time-noise", o->time_noise,
+                      "front rule: relative cost difference that is a tie (post-processing: at least 3x the measured "
+                      "timing noise)")
+           ->capture_default_str();
        sub.add_option("--error-ratio", o->error_ratio, "front rule: error factor that is a tie")->capture_default_str();
        sub.add_option("--error-floor", o->error_floor, "front rule: errors both below this tie")->capture_default_str();
-       sub.add_option("--min-seconds", o->min_seconds, "post-processing: repeat each computation for at least this CPU time")
+       sub.add_option("--min-seconds", o->min_seconds,
+                      "post-processing: repeat each computation for at least this CPU time")
            ->capture_default_str();
-       sub.add_option("--growth-set", o->growth_set, "name of the growth runs' set in the table")->capture_default_str();
+       sub.add_option("--growth-set", o->growth_set, "name of the growth runs' set in the table")
+           ->capture_default_str();
        sub.callback([o] { run(*o); });
      }});
 

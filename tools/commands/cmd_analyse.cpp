@@ -19,9 +19,12 @@ struct Options {
 
 void run(Options o) {
   for (const auto& w : o.require) {
-    if (w == "moduli") o.ensemble.require_moduli = true;
-    else if (w == "dos") o.ensemble.require_dos = true;
-    else throw InputError("--require: unknown item '" + w + "' (known: moduli, dos)");
+    if (w == "moduli")
+      o.ensemble.require_moduli = true;
+    else if (w == "dos")
+      o.ensemble.require_dos = true;
+    else
+      throw InputError("--require: unknown item '" + w + "' (known: moduli, dos)");
   }
   if (o.ensemble.bootstrap.resamples < 2) throw InputError("--resamples: must be at least 2");
   std::cerr << "analyse: " << tools::analyse_ensemble(o.ensemble) << "\n";
@@ -36,7 +39,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--tables", e.tables,
                       "instead of runs: the runs.csv, targets.csv, dos.csv, survival.csv of an earlier analysis");
        sub.add_option("--out", e.out, "output directory")->required();
-       sub.add_option("--main-L", e.main_L, "system size of the main figures (default 15 if present, else the largest)");
+       sub.add_option("--main-L", e.main_L,
+                      "system size of the main figures (default 15 if present, else the largest)");
        sub.add_option("--resamples", e.bootstrap.resamples, "bootstrap resamples (default 2000)");
        sub.add_option("--seed", e.bootstrap.seed, "bootstrap seed (default 1)");
        sub.add_option("--require", o->require, "fail if these per-packing results are missing: moduli, dos")

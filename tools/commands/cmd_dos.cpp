@@ -4,8 +4,8 @@
 // frequencies, participation ratios) and BASE.dos.json (N_zero at four cutoffs, ω*, N_u from the
 // contact network, floppy modes from the pebble game, D(ω), the method used). BASE defaults to the
 // packing path without ".pack", so a run's packings/<name>.dos.json is found by `budjam analyse`.
-#include "commands/command.hpp"
 #include "analysis/dos_report.hpp"
+#include "commands/command.hpp"
 #include "io/run_data.hpp"
 
 #include "budjam/errors.hpp"
@@ -57,17 +57,19 @@ void run(const Options& o) {
   const io::PackingFile f = io::read_packing(o.packing);
   const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
   if (o.ncv > 0 && o.modes > 0 && o.ncv <= o.modes)
-    throw InputError("--ncv: must exceed --modes (got " + std::to_string(o.ncv) + " ≤ " + std::to_string(o.modes) + ")");
+    throw InputError("--ncv: must exceed --modes (got " + std::to_string(o.ncv) + " ≤ " + std::to_string(o.modes) +
+                     ")");
   const std::size_t n_dof = pc.network.N_nr > 0 ? 3 * pc.network.N_nr - 2 : 0;
   if (req.spectrum.method == SpectrumMethod::arpack && o.modes > 0 && static_cast<std::size_t>(o.modes) >= n_dof)
-    throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) +
-                     " ≥ " + std::to_string(n_dof) + "); use --method dense");
+    throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) + " ≥ " +
+                     std::to_string(n_dof) + "); use --method dense");
 
   const tools::DosReport report = tools::dos_report(f.packing, pc.contacts, pc.network, req);
   fs::path base = o.out.empty() ? fs::path(o.packing) : fs::path(o.out);
   if (o.out.empty() && base.extension() == ".pack") base.replace_extension();
   const auto files = tools::write_dos_files(base, report, req);
-  if (!o.quiet) std::cout << tools::dos_line(report) << " -> " << files[0].string() << ", " << files[1].string() << "\n";
+  if (!o.quiet)
+    std::cout << tools::dos_line(report) << " -> " << files[0].string() << ", " << files[1].string() << "\n";
 }
 
 const bool registered = budjam::cli::register_command(
@@ -77,8 +79,9 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
        sub.add_option("--method", o->method, "auto (dense up to --dense-max-dof modes, else ARPACK), dense, arpack")
            ->capture_default_str();
-       sub.add_option("--modes", o->modes, "ARPACK: K Lanczos modes besides the deflated cell-local zero modes (so at least the lowest K); "
-                     "0 = as many as ω* needs (n_band + 16)")
+       sub.add_option("--modes", o->modes,
+                      "ARPACK: K Lanczos modes besides the deflated cell-local zero modes (so at least the lowest K); "
+                      "0 = as many as ω* needs (n_band + 16)")
            ->capture_default_str();
        sub.add_option("--tol", o->tol, "ARPACK relative residual tolerance; 0 = machine precision")
            ->capture_default_str();

@@ -25,7 +25,8 @@ struct Options {
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
   const io::PackingFile file = io::read_packing(o.packing);
-  std::filesystem::path out = o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
+  std::filesystem::path out =
+      o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
   io::write_particles(out, io::particle_frame(file.packing, which), o.format);
 }

@@ -54,8 +54,8 @@ void run(const Options& o) {
     run_dir.emplace(io::RunDirectory::resume(o.resume));
     const io::RunDirectory& d = *run_dir;
     if (fs::exists(d / run_files::summary))
-      throw InputError("--resume: " + d.path().string() + " holds a finished run (" +
-                       std::string(run_files::summary) + " exists)");
+      throw InputError("--resume: " + d.path().string() + " holds a finished run (" + std::string(run_files::summary) +
+                       " exists)");
     if (!fs::exists(d / run_files::checkpoint))
       throw InputError("--resume: no " + std::string(run_files::checkpoint) + " in " + d.path().string());
     scene = io::load_scene(d / run_files::scene);

@@ -8,9 +8,9 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/moduli.hpp"
-#include "budjam/errors.hpp"
 #include "budjam/strain.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
@@ -46,10 +46,12 @@ struct Options {
 ModuliOptions moduli_options(const Options& o) {
   ModuliOptions m;
   m.solver = parse_moduli_solver(o.solver, "--solver");
-  if (!(o.cg_tol > 0 && o.cg_tol < 1)) throw InputError("--cg-tol: must lie in (0, 1), got " + std::to_string(o.cg_tol));
+  if (!(o.cg_tol > 0 && o.cg_tol < 1))
+    throw InputError("--cg-tol: must lie in (0, 1), got " + std::to_string(o.cg_tol));
   m.cg_tolerance = o.cg_tol;
   m.cg_preconditioner = parse_cg_preconditioner(o.cg_preconditioner, "--cg-preconditioner");
-  if (o.refine < 0 || o.refine > 100) throw InputError("--refine: must be in [0, 100], got " + std::to_string(o.refine));
+  if (o.refine < 0 || o.refine > 100)
+    throw InputError("--refine: must be in [0, 100], got " + std::to_string(o.refine));
   m.direct_refinement_steps = o.refine;
   if (!(o.refine_above >= 0 && o.refine_above < 1))
     throw InputError("--refine-above: must lie in [0, 1), got " + std::to_string(o.refine_above));
@@ -78,8 +80,10 @@ Json tensor_json(const Eigen::Matrix3d& C) {
 }
 
 Json stress_json(const Eigen::Matrix2d& S) {
-  return Json{{"xx", number_or_null(S(0, 0))}, {"xy", number_or_null(S(0, 1))},
-              {"yx", number_or_null(S(1, 0))}, {"yy", number_or_null(S(1, 1))}};
+  return Json{{"xx", number_or_null(S(0, 0))},
+              {"xy", number_or_null(S(0, 1))},
+              {"yx", number_or_null(S(1, 0))},
+              {"yy", number_or_null(S(1, 1))}};
 }
 
 Json matrix_json(const Response4& R) {
@@ -148,12 +152,9 @@ Json response_json(const ElasticResponse& e) {
                        {"dtau_de", matrix_json(e.R_energy)},
                        {"E", matrix_json(e.E)},
                        {"E_affine", matrix_json(e.E_affine)}};
-  j["mean_field"] = Json{{"ell_c", number_or_null(e.ell_c)},
-                         {"ell_c2_mean", number_or_null(e.ell_c2_mean)},
-                         {"M4", number_or_null(e.M4)},
-                         {"B_ext", number_or_null(e.B_ext)},
-                         {"G", number_or_null(e.G_mf)},
-                         {"G_M4_isotropic", number_or_null(e.G_mf_iso)}};
+  j["mean_field"] = Json{{"ell_c", number_or_null(e.ell_c)}, {"ell_c2_mean", number_or_null(e.ell_c2_mean)},
+                         {"M4", number_or_null(e.M4)},       {"B_ext", number_or_null(e.B_ext)},
+                         {"G", number_or_null(e.G_mf)},      {"G_M4_isotropic", number_or_null(e.G_mf_iso)}};
   const KernelTreatment& k = e.kernel;
   j["kernel"] = Json{{"method", to_string(k.method)},
                      {"dofs", k.dofs},
@@ -200,11 +201,16 @@ Json sweep_json(const StrainSweep& s, double linear, double linear_energy, doubl
   j["relative_difference"] = number_or_null(std::abs(s.modulus - linear) / std::abs(linear));
   j["finite_energy"] = number_or_null(s.modulus_energy);
   j["linear_energy"] = number_or_null(linear_energy);
-  j["relative_difference_energy"] = number_or_null(std::abs(s.modulus_energy - linear_energy) / std::abs(linear_energy));
+  j["relative_difference_energy"] =
+      number_or_null(std::abs(s.modulus_energy - linear_energy) / std::abs(linear_energy));
   Json rows = Json::array();
   for (const auto& x : s.samples)
-    rows.push_back(Json{{"strain", x.strain}, {"P", x.P}, {"S_xy", x.stress(0, 1)}, {"U", x.U},
-                        {"same_contacts", x.same_contacts}, {"fire_iterations", x.fire.iterations}});
+    rows.push_back(Json{{"strain", x.strain},
+                        {"P", x.P},
+                        {"S_xy", x.stress(0, 1)},
+                        {"U", x.U},
+                        {"same_contacts", x.same_contacts},
+                        {"fire_iterations", x.fire.iterations}});
   j["points"] = rows;
   return j;
 }
@@ -213,7 +219,8 @@ Json sweep_json(const StrainSweep& s, double linear, double linear_energy, doubl
 // against the linear response `linear`.
 Json curvature_json(const StrainSweep& s, double linear) {
   Json central = Json::array();
-  for (const auto& [strain, value] : s.central_curvatures) central.push_back(Json{{"strain", strain}, {"curvature", value}});
+  for (const auto& [strain, value] : s.central_curvatures)
+    central.push_back(Json{{"strain", strain}, {"curvature", value}});
   return Json{{"samples", s.samples.size()},
               {"used", s.used},
               {"all_converged", s.all_converged},
@@ -288,16 +295,19 @@ const bool registered = budjam::cli::register_command(
        sub.add_flag("--check", o->check,
                     "also measure G, B (stress slopes) and G_energy, B_energy (energy curvatures) by finite "
                     "Lees-Edwards shear and isotropic rescaling with FIRE");
-       sub.add_option("--strain", o->strain, "strain step of --check (default: 1% of the smallest overlap, in [1e-10, 1e-6])")
+       sub.add_option("--strain", o->strain,
+                      "strain step of --check (default: 1% of the smallest overlap, in [1e-10, 1e-6])")
            ->check(CLI::PositiveNumber);
        sub.add_flag("--relax", o->relax, "FIRE-minimise the packing first");
-       sub.add_flag("--timing", o->timing,
-                    "add the computation time and that of the relaxation (pinned solve) alone (seconds; not deterministic)");
+       sub.add_flag(
+           "--timing", o->timing,
+           "add the computation time and that of the relaxation (pinned solve) alone (seconds; not deterministic)");
        sub.add_option("--solver", o->solver,
                       "linear solver of the pinned system: cholesky (CHOLMOD LLt + refinement), ldlt (CHOLMOD "
                       "simplicial LDLt + refinement), dense (Eigen LDLt, small systems), cg (conjugate gradients)")
            ->capture_default_str();
-       sub.add_option("--cg-tol", o->cg_tol, "cg: relative residual per strain column, in (0, 1)")->capture_default_str();
+       sub.add_option("--cg-tol", o->cg_tol, "cg: relative residual per strain column, in (0, 1)")
+           ->capture_default_str();
        sub.add_option("--cg-preconditioner", o->cg_preconditioner, "cg: ichol (incomplete Cholesky) or diagonal")
            ->capture_default_str();
        sub.add_option("--refine", o->refine, "cholesky, ldlt, dense: at most this many iterative-refinement steps")

@@ -6,8 +6,8 @@
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
 
-#include "budjam/render.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/render.hpp"
 #include "io/atomic_file.hpp"
 #include "io/packing_file.hpp"
 
@@ -38,8 +38,8 @@ void convert_svg(const fs::path& svg, const fs::path& to, const std::string& for
   fs::path tmp = to;
   tmp += ".tmp";
   // "--output=" and "--": a file name that starts with "-" is a file, not an option.
-  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.string(), "--", svg.string()}, "render",
-                                 "install Debian's librsvg2-bin");
+  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.string(), "--", svg.string()},
+                                 "render", "install Debian's librsvg2-bin");
   if (rc != 0) {
     fs::remove(tmp);
     throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
@@ -62,7 +62,8 @@ void run(const Options& o) {
   ro.draw_contacts = !o.no_contacts;
   char buf[256];
   const auto& m = f.meta;
-  std::snprintf(buf, sizeof buf, "%s: N = %zu, L = %g, phi = %.6f, P = %.3g\nZ = %.3f, rattlers = %zu, unconstrained buds = %zu",
+  std::snprintf(buf, sizeof buf,
+                "%s: N = %zu, L = %g, phi = %.6f, P = %.3g\nZ = %.3f, rattlers = %zu, unconstrained buds = %zu",
                 m.get("kind").value_or(fs::path(o.packing).stem().string()).c_str(), f.packing.size(), f.packing.box.L,
                 f.packing.packing_fraction(), pc.P, pc.network.Z, pc.network.N_f, pc.network.N_u_buds);
   ro.caption = buf;

@@ -72,7 +72,8 @@ const bool registered = budjam::cli::register_command(
            ->type_name("KEY=VALUE");
        sub.add_flag("--json", o->json, "print JSON instead of TOML");
        sub.add_flag("--comments", o->comments, "explain every key in the printed TOML");
-       sub.add_flag("--keys-markdown", o->keys_markdown, "print every scene key (type, default, range, meaning) as a Markdown table")
+       sub.add_flag("--keys-markdown", o->keys_markdown,
+                    "print every scene key (type, default, range, meaning) as a Markdown table")
            ->excludes(file);
        sub.callback([o] { run(*o); });
      }});

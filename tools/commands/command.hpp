@@ -25,10 +25,10 @@ namespace budjam::cli {
 
 // Exit codes of `budjam` (docs/files.md).
 enum ExitCode : int {
-  kExitOk = 0,          // success
-  kExitRunFailed = 1,   // the run ran and failed (step limit, step underflow, ...): RunFailure
-  kExitBadInput = 2,    // invalid command line, scene or input file: CLI11 errors, budjam::InputError
-  kExitInternal = 3,    // an output could not be written, or any other error: io::IoError, std::exception
+  kExitOk = 0,         // success
+  kExitRunFailed = 1,  // the run ran and failed (step limit, step underflow, ...): RunFailure
+  kExitBadInput = 2,   // invalid command line, scene or input file: CLI11 errors, budjam::InputError
+  kExitInternal = 3,   // an output could not be written, or any other error: io::IoError, std::exception
   // 128 + N: stopped by signal N (SIGINT 130, SIGTERM 143) after writing a checkpoint: Interrupted
 };
 

@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <exception>
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 
@@ -39,7 +39,8 @@ int main(int argc, char** argv) {
   std::sort(commands.begin(), commands.end(), [](const Command& a, const Command& b) { return a.name < b.name; });
   std::set<std::string> seen;
   for (const Command& c : commands) {
-    if (!seen.insert(c.name).second) return error("internal: subcommand \"" + c.name + "\" registered twice", kExitInternal);
+    if (!seen.insert(c.name).second)
+      return error("internal: subcommand \"" + c.name + "\" registered twice", kExitInternal);
     CLI::App* sub = app.add_subcommand(c.name, c.help);
     c.setup(*sub);
   }

@@ -18,7 +18,8 @@ class StopSignals {
   static int received();
 
  private:
-  struct sigaction old_term_ {}, old_int_ {};
+  struct sigaction old_term_ {
+  }, old_int_{};
 };
 
 }  // namespace budjam::cli

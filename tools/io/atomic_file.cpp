@@ -118,8 +118,8 @@ CsvField::CsvField(double v) : text(format_double(v)) {}
 CsvField::CsvField(std::optional<double> v) : text(v ? format_double(*v) : std::string()) {}
 
 CsvField::CsvField(std::string_view s) {
-  const bool quote = s.find_first_of(",\"\r\n") != std::string_view::npos ||
-                     (!s.empty() && (s.front() == ' ' || s.back() == ' '));
+  const bool quote =
+      s.find_first_of(",\"\r\n") != std::string_view::npos || (!s.empty() && (s.front() == ' ' || s.back() == ' '));
   if (!quote) {
     text = s;
     return;

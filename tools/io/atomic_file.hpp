@@ -46,8 +46,7 @@ struct CsvField {
   CsvField(std::optional<double> v);
   CsvField(bool v) : text(v ? "true" : "false") {}
   template <class I>
-    requires(std::is_integral_v<I> && !std::is_same_v<I, bool>)
-  CsvField(I v) : text(std::to_string(v)) {}
+  requires(std::is_integral_v<I> && !std::is_same_v<I, bool>) CsvField(I v) : text(std::to_string(v)) {}
   CsvField(std::string_view s);
   CsvField(const char* s) : CsvField(std::string_view(s)) {}
   CsvField(const std::string& s) : CsvField(std::string_view(s)) {}

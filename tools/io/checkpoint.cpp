@@ -118,7 +118,8 @@ constexpr std::int64_t kLongMax = std::numeric_limits<long>::max();
 // No state of a run holds more cells than a packing fraction of 4 allows (jamming is near 0.85,
 // and overlaps stay small): each cell covers at least a mother disk, π D²/4.
 std::size_t max_cells(const Scene& scene) {
-  return static_cast<std::size_t>(4.0 * scene.L * scene.L / (0.25 * std::numbers::pi * kMotherDiameter * kMotherDiameter)) +
+  return static_cast<std::size_t>(4.0 * scene.L * scene.L /
+                                  (0.25 * std::numbers::pi * kMotherDiameter * kMotherDiameter)) +
          scene.n_seeds + 2;
 }
 
@@ -148,17 +149,18 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << "rng " << s.rng << '\n';
   os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << s.step << ' '
      << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' ' << s.episodes << '\n';
-  os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations
-     << ' ' << r.divisions << ' ' << r.saddles_relaxed << '\n';
+  os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations << ' '
+     << r.divisions << ' ' << r.saddles_relaxed << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
-  for (const JammingOvershoot& o : s.search.overshoots) os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
+  for (const JammingOvershoot& o : s.search.overshoots)
+    os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
   os << '\n';
   os << "jamming " << (r.jamming ? 1 : 0);
   if (const auto& j = r.jamming)
     os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
-       << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c
-       << ' ' << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds)
-       << ' ' << num(j->n_J) << ' ' << j->tagged;
+       << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c << ' '
+       << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds) << ' '
+       << num(j->n_J) << ' ' << j->tagged;
   os << '\n';
   os << "targets " << r.targets.size() << '\n';
   for (const TargetRecord& t : r.targets)
@@ -169,8 +171,8 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
        << t.divisions_since_jamming << '\n';
   os << "depletion " << (r.depletion ? 1 : 0);
   if (const auto& d = r.depletion)
-    os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' '
-       << num(d->Z) << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
+    os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' ' << num(d->Z)
+       << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
        << d->still_unconstrained << ' ' << d->divisions_since_jamming;
   os << '\n';
   os << "unjammings " << r.unjammings.size() << '\n';
@@ -180,8 +182,8 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   const Packing& p = s.packing;
   os << "packing " << p.size() << ' ' << num(p.box.L) << ' ' << num(p.box.shear) << ' ' << p.next_id << '\n';
   for (std::size_t i = 0; i < p.size(); ++i)
-    os << num(p.x(i)) << ' ' << num(p.y(i)) << ' ' << num(p.theta(i)) << ' ' << num(p.b[i]) << ' '
-       << num(p.gamma0[i]) << ' ' << p.id[i] << ' ' << p.parent[i] << '\n';
+    os << num(p.x(i)) << ' ' << num(p.y(i)) << ' ' << num(p.theta(i)) << ' ' << num(p.b[i]) << ' ' << num(p.gamma0[i])
+       << ' ' << p.id[i] << ' ' << p.parent[i] << '\n';
   for (Observer* o : observers) {
     std::ostringstream body;
     o->save_state(body);
@@ -207,8 +209,9 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     const auto w = in.next(kMagic, 1);
     const std::int64_t version = in.integer(w[0], "version", 0, kLongMax);
     if (version == 1)
-      in.fail("checkpoint version 1 was written before jamming candidates were checked for saddles "
-              "(jamming.check_minimum); start the run again");
+      in.fail(
+          "checkpoint version 1 was written before jamming candidates were checked for saddles "
+          "(jamming.check_minimum); start the run again");
     if (version == 2 || version == 3)
       in.fail("checkpoint version " + std::to_string(version) +
               " was written before the secant jamming search (jamming.search); start the run again");
@@ -224,8 +227,9 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   if (tail.substr(kChecksum.size()) != hex64(fnv1a64(body)))
     in.fail_at(last, "checksum mismatch: the checkpoint was changed or damaged after it was written");
   if (in.next("scene", 1)[0] != hex64(scene_hash(scene)))
-    in.fail("the run's scene.toml has changed since this checkpoint was written (its effective scene differs); "
-            "a run cannot continue under other parameters");
+    in.fail(
+        "the run's scene.toml has changed since this checkpoint was written (its effective scene differs); "
+        "a run cannot continue under other parameters");
 
   GrowthState s;
   const auto seed_w = in.next("seed", 1);
@@ -246,9 +250,12 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   const std::int64_t max_steps = scene.max_steps;
   {
     const auto w = in.next("state", 8);
-    if (w[0] == "jammed") s.phase = Phase::jammed;
-    else if (w[0] == "unjammed") s.phase = Phase::unjammed;
-    else in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
+    if (w[0] == "jammed")
+      s.phase = Phase::jammed;
+    else if (w[0] == "unjammed")
+      s.phase = Phase::unjammed;
+    else
+      in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
     s.dt = in.positive(w[1], "dt");
     if (s.dt < scene.dt_min) in.fail("dt: below growth.dt_min");
     s.last_dt = in.positive(w[2], "last dt");
@@ -314,8 +321,8 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   }
   {
     const std::size_t n = in.count_of(in.next("targets", 1)[0], "targets", s.next_target);
-    if (n != s.next_target) in.fail("targets: " + std::to_string(n) + " landed, but the next target is " +
-                                    std::to_string(s.next_target));
+    if (n != s.next_target)
+      in.fail("targets: " + std::to_string(n) + " landed, but the next target is " + std::to_string(s.next_target));
     for (std::size_t k = 0; k < n; ++k) {
       const auto w = in.next("", 21);
       TargetRecord t;
@@ -358,12 +365,14 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   {
     const std::size_t ended = static_cast<std::size_t>(s.episodes - (s.phase == Phase::jammed ? 1 : 0));
     const std::size_t n = in.count_of(in.next("unjammings", 1)[0], "unjammings", ended);
-    if (n != ended) in.fail("unjammings: " + std::to_string(n) + " recorded, but " + std::to_string(ended) +
-                            " jamming episodes have ended");
+    if (n != ended)
+      in.fail("unjammings: " + std::to_string(n) + " recorded, but " + std::to_string(ended) +
+              " jamming episodes have ended");
     for (std::size_t k = 0; k < n; ++k) {
       const auto w = in.next("", 5);
       UnjamRecord u;
-      u.episode = static_cast<int>(in.integer(w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
+      u.episode =
+          static_cast<int>(in.integer(w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
       u.step = in.integer(w[1], "unjamming step", 1, s.step);
       u.phi = in.positive(w[2], "phi"), u.phi_J = in.positive(w[3], "phi_J");
       u.targets_lost = in.count_of(w[4], "targets lost", scene.targets.size());

@@ -109,8 +109,8 @@ std::string format_extxyz(const ParticleFrame& f) {
       << "pbc=\"T T F\" step=" << f.step << '\n';
   for (std::size_t k = 0; k < f.size(); ++k)
     out << (is_bud(k) ? "bud" : "mother") << ' ' << format_double(f.wrapped_x[k]) << ' '
-        << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]) << ' ' << cell_of(k) << ' '
-        << f.id[k] << ' ' << f.cluster[k] << ' ' << (f.rattler[k] ? 'T' : 'F') << '\n';
+        << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]) << ' ' << cell_of(k) << ' ' << f.id[k]
+        << ' ' << f.cluster[k] << ' ' << (f.rattler[k] ? 'T' : 'F') << '\n';
   return out.str();
 }
 
@@ -245,7 +245,8 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
   }
   std::filesystem::remove(input);
   if (rc == kNoGsdPackage)
-    throw IoError(path.string() + ": " + python + " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
+    throw IoError(path.string() + ": " + python +
+                  " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
   if (rc != 0) {
     std::filesystem::remove(tmp);
     throw IoError(path.string() + ": the GSD writer (" + python + ", package gsd) failed with status " +
@@ -255,10 +256,14 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
 }
 
 void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format) {
-  if (format == "xyz") write_atomically(path, format_extxyz(frame));
-  else if (format == "vtk") write_atomically(path, format_vtk(frame));
-  else if (format == "gsd") write_gsd(path, {frame});
-  else throw std::invalid_argument("write_particles: unknown format " + format);
+  if (format == "xyz")
+    write_atomically(path, format_extxyz(frame));
+  else if (format == "vtk")
+    write_atomically(path, format_vtk(frame));
+  else if (format == "gsd")
+    write_gsd(path, {frame});
+  else
+    throw std::invalid_argument("write_particles: unknown format " + format);
 }
 
 }  // namespace budjam::io

@@ -213,8 +213,8 @@ class Reader {
       }
       const auto [id, parent] = ids;
       if (id < 0 || id >= p.next_id)
-        fail(n, "column id: must lie in [0, next_id = " + std::to_string(p.next_id) + ") (got " +
-                    std::to_string(id) + ")");
+        fail(n, "column id: must lie in [0, next_id = " + std::to_string(p.next_id) + ") (got " + std::to_string(id) +
+                    ")");
       if (parent < -1 || parent >= p.next_id || parent == id)
         fail(n, "column parent: must be -1 or another id below next_id (got " + std::to_string(parent) + ")");
       if (!(val[3] >= 0)) fail(n, "column b: must not be negative (got " + std::string(t[5]) + ")");
@@ -258,7 +258,8 @@ class Reader {
 }  // namespace
 
 void PackingMeta::set(const std::string& key, std::string value) {
-  if (!valid_meta_key(key)) throw std::invalid_argument("packing meta key \"" + key + "\": letters, digits, _ . - only");
+  if (!valid_meta_key(key))
+    throw std::invalid_argument("packing meta key \"" + key + "\": letters, digits, _ . - only");
   if (!valid_meta_value(value)) throw std::invalid_argument("packing meta value of \"" + key + "\": must be one line");
   values[key] = std::move(value);
 }
@@ -289,8 +290,7 @@ std::int64_t PackingMeta::integer(const std::string& key) const {
 
 std::string format_packing(const Packing& p, const PackingMeta& meta) {
   const std::size_t n = p.size();
-  if (static_cast<std::size_t>(p.q.size()) != 3 * n || p.gamma0.size() != n || p.id.size() != n ||
-      p.parent.size() != n)
+  if (static_cast<std::size_t>(p.q.size()) != 3 * n || p.gamma0.size() != n || p.id.size() != n || p.parent.size() != n)
     throw std::invalid_argument("format_packing: the packing's arrays have inconsistent sizes");
   if (!(std::isfinite(p.box.L) && p.box.L > 0) || !std::isfinite(p.box.shear))
     throw std::invalid_argument("format_packing: the box is not finite and positive");
@@ -318,12 +318,14 @@ std::string format_packing(const Packing& p, const PackingMeta& meta) {
     const double v[5] = {p.q[3 * i], p.q[3 * i + 1], p.q[3 * i + 2], p.b[i], p.gamma0[i]};
     if (p.id[i] < 0 || p.id[i] >= p.next_id || p.parent[i] < -1 || p.parent[i] >= p.next_id || !(v[3] >= 0) ||
         !(v[4] >= 0))
-      throw std::invalid_argument("format_packing: cell " + std::to_string(i) + " has an invalid id, parent, b or gamma0");
+      throw std::invalid_argument("format_packing: cell " + std::to_string(i) +
+                                  " has an invalid id, parent, b or gamma0");
     s += std::to_string(p.id[i]);
     s += ' ';
     s += std::to_string(p.parent[i]);
     for (double x : v) {
-      if (!std::isfinite(x)) throw std::invalid_argument("format_packing: cell " + std::to_string(i) + " is not finite");
+      if (!std::isfinite(x))
+        throw std::invalid_argument("format_packing: cell " + std::to_string(i) + " is not finite");
       s += ' ';
       s += format_double(x);
     }

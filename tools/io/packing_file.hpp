@@ -16,8 +16,8 @@
 // Numbers are written as the shortest text that reads back bit-identically, so a packing
 // survives any number of write/read cycles unchanged. Lines starting with '#' are allowed
 // before the "cells" line. The "end" line makes any truncation detectable.
-#include "budjam/packing.hpp"
 #include "budjam/errors.hpp"
+#include "budjam/packing.hpp"
 
 #include <cstdint>
 #include <filesystem>

@@ -115,8 +115,8 @@ CsvTable read_csv(const fs::path& path) {
     auto rec = parse_record(text, pos, t.source + ":" + std::to_string(line));
     if (rec.size() == 1 && rec[0].empty()) continue;  // blank line
     if (rec.size() != t.columns.size())
-      throw InputError(t.source + ":" + std::to_string(line) + ": " + std::to_string(rec.size()) + " fields, header has " +
-                       std::to_string(t.columns.size()));
+      throw InputError(t.source + ":" + std::to_string(line) + ": " + std::to_string(rec.size()) +
+                       " fields, header has " + std::to_string(t.columns.size()));
     t.rows.push_back(std::move(rec));
   }
   return t;

@@ -50,7 +50,7 @@ struct RunData {
   double L() const { return summary.at("L").get<double>(); }
   std::optional<double> P0() const;  // nullopt = no feedback
   std::string P0_label() const;      // "none" or the number as text
-  std::uint64_t seed() const;  // InputError naming summary.json unless a non-negative integer
+  std::uint64_t seed() const;        // InputError naming summary.json unless a non-negative integer
   // A number from summary.json, NaN for null or absent.
   double get(const std::string& key) const;
   bool jammed() const { return summary.contains("phi_J") && !summary["phi_J"].is_null(); }

@@ -43,8 +43,8 @@ constexpr std::string_view kMarkerText = "budjam-run 1\n";
 // The top-level files a run writes (logs also as NAME.partial).
 const std::vector<std::string_view>& owned_files() {
   using namespace run_files;
-  static const std::vector<std::string_view> names{scene,      checkpoint, summary, timing, steps,
-                                                   divisions,  bud_events, moduli,  dos,    rigidity};
+  static const std::vector<std::string_view> names{scene,     checkpoint, summary, timing, steps,
+                                                   divisions, bud_events, moduli,  dos,    rigidity};
   return names;
 }
 
@@ -101,8 +101,8 @@ int take_lock(const fs::path& dir) {
 void write_marker(const fs::path& dir) {
   const fs::path path = dir / run_files::marker;
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  const bool ok = fd >= 0 && ::write(fd, kMarkerText.data(), kMarkerText.size()) ==
-                                 static_cast<ssize_t>(kMarkerText.size());
+  const bool ok =
+      fd >= 0 && ::write(fd, kMarkerText.data(), kMarkerText.size()) == static_cast<ssize_t>(kMarkerText.size());
   const int err = errno;
   if (fd >= 0) ::close(fd);
   if (!ok) throw IoError(path.string() + ": cannot write: " + std::strerror(err));
@@ -131,8 +131,10 @@ std::vector<std::string> remove_run_outputs(const fs::path& dir) {
     } else if ((name == run_files::packings || name == run_files::spectra) && e.is_directory() && !e.is_symlink()) {
       for (const auto& f : fs::directory_iterator(e.path())) {
         const std::string fname = f.path().filename().string();
-        if (!f.is_directory() && owned_in_subdirectory(name, fname)) fs::remove(f.path());
-        else kept.push_back(name + "/" + fname);
+        if (!f.is_directory() && owned_in_subdirectory(name, fname))
+          fs::remove(f.path());
+        else
+          kept.push_back(name + "/" + fname);
       }
       if (fs::is_empty(e.path())) fs::remove(e.path());
     } else {
@@ -166,8 +168,10 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite) {
   RunDirectory run(dir, fd);
   if (is_run_directory(dir)) {
     if (!overwrite)
-      throw InputError("--out: " + dir.string() + " holds a budjam run; pass --overwrite to replace it, or "
-                       "continue it with budjam grow --resume " + dir.string());
+      throw InputError("--out: " + dir.string() +
+                       " holds a budjam run; pass --overwrite to replace it, or "
+                       "continue it with budjam grow --resume " +
+                       dir.string());
     remove_run_outputs(dir);
   }
   write_marker(dir);

@@ -23,11 +23,11 @@ namespace budjam::io {
 
 // Every name in a run directory, relative to it.
 namespace run_files {
-inline constexpr std::string_view marker = ".budjam-run";     // "budjam-run 1": budjam created this run
-inline constexpr std::string_view lock = ".budjam-lock";      // flock(2) target; "pid host" of the writer
-inline constexpr std::string_view scene = "scene.toml";       // the effective scene, seed included
+inline constexpr std::string_view marker = ".budjam-run";  // "budjam-run 1": budjam created this run
+inline constexpr std::string_view lock = ".budjam-lock";   // flock(2) target; "pid host" of the writer
+inline constexpr std::string_view scene = "scene.toml";    // the effective scene, seed included
 inline constexpr std::string_view checkpoint = "checkpoint.txt";
-inline constexpr std::string_view summary = "summary.json";   // written last: the run is over
+inline constexpr std::string_view summary = "summary.json";  // written last: the run is over
 inline constexpr std::string_view timing = "timing.json";
 inline constexpr std::string_view steps = "steps.csv";
 inline constexpr std::string_view divisions = "divisions.csv";
@@ -35,10 +35,10 @@ inline constexpr std::string_view bud_events = "bud_events.csv";
 inline constexpr std::string_view moduli = "moduli.csv";
 inline constexpr std::string_view dos = "dos.csv";
 inline constexpr std::string_view rigidity = "rigidity_events.csv";
-inline constexpr std::string_view packings = "packings";       // <name>.pack and their sidecars
-inline constexpr std::string_view spectra = "spectra";         // step_<n>.dos.{json,csv}
-inline constexpr std::string_view jammed = "jammed";           // packings/jammed.pack
-inline constexpr std::string_view phi2 = "phi2";               // packings/phi2.pack
+inline constexpr std::string_view packings = "packings";  // <name>.pack and their sidecars
+inline constexpr std::string_view spectra = "spectra";    // step_<n>.dos.{json,csv}
+inline constexpr std::string_view jammed = "jammed";      // packings/jammed.pack
+inline constexpr std::string_view phi2 = "phi2";          // packings/phi2.pack
 
 // packings/<stem>.pack
 std::filesystem::path packing(std::string_view stem);
@@ -80,8 +80,8 @@ class RunDirectory {
 bool is_run_directory(const std::filesystem::path& dir);
 
 // Removes what a run creates in `dir` (run_files names, run packings and their sidecars, spectra,
-// temporaries) and nothing else, keeping the marker and the lock; directories are removed only once empty. Returns the entries
-// that were kept (relative paths, sorted), e.g. for a message.
+// temporaries) and nothing else, keeping the marker and the lock; directories are removed only once empty. Returns the
+// entries that were kept (relative paths, sorted), e.g. for a message.
 std::vector<std::string> remove_run_outputs(const std::filesystem::path& dir);
 
 // Removes the temporaries of interrupted atomic writes in `dir`, packings/ and spectra/.

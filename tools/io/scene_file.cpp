@@ -84,7 +84,8 @@ std::int64_t read_integer(const toml::node& n, const std::string& key, std::int6
     type_error(key, "an integer", n);
   }
   if (v < lo || v > hi) {
-    const std::string range = lo == 0 ? "a non-negative integer" : "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    const std::string range =
+        lo == 0 ? "a non-negative integer" : "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
     type_error(key, range, n);
   }
   return v;
@@ -155,8 +156,7 @@ std::string known_keys_of(const std::string& section) {
   for (const auto& k : scene_keys())
     if (k.section == section) out += (out.empty() ? "" : ", ") + k.name;
   for (const auto& s : sections())  // sub-tables such as [observe.moduli]
-    if (s.size() > section.size() && s.compare(0, section.size() + 1, section + ".") == 0)
-      out += ", [" + s + "]";
+    if (s.size() > section.size() && s.compare(0, section.size() + 1, section + ".") == 0) out += ", [" + s + "]";
   return out;
 }
 
@@ -184,9 +184,9 @@ void read_table(const toml::table& table, const std::string& prefix, Scene& scen
     const SceneKey* row = find_scene_key(key);
     if (!row) {
       if (!prefix.empty())
-        throw InputError(where + ": " + key + ": unknown key (known in [" + prefix + "]: " + known_keys_of(prefix) + ")");
-      if (node.is_table())
-        throw InputError(where + ": " + key + ": unknown section (known: " + top_sections() + ")");
+        throw InputError(where + ": " + key + ": unknown key (known in [" + prefix + "]: " + known_keys_of(prefix) +
+                         ")");
+      if (node.is_table()) throw InputError(where + ": " + key + ": unknown section (known: " + top_sections() + ")");
       throw InputError(where + ": " + key + ": unknown key; keys belong in sections (" + top_sections() + ")");
     }
     try {
@@ -206,8 +206,10 @@ std::string first_invalid_utf8(std::string_view text) {
     const auto c = static_cast<unsigned char>(text[i]);
     std::size_t len = 0;
     unsigned char lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-    if (c < 0x80) len = 1;
-    else if (c >= 0xC2 && c <= 0xDF) len = 2;
+    if (c < 0x80)
+      len = 1;
+    else if (c >= 0xC2 && c <= 0xDF)
+      len = 2;
     else if (c >= 0xE0 && c <= 0xEF) {
       len = 3;
       if (c == 0xE0) lo = 0xA0;  // overlong
@@ -234,7 +236,8 @@ std::string first_invalid_utf8(std::string_view text) {
 
 toml::table parse_toml(std::string_view text, const std::string& source) {
   if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
-    throw InputError(source + ": empty scene file (a scene names at least one section; [run] alone gives the defaults)");
+    throw InputError(source +
+                     ": empty scene file (a scene names at least one section; [run] alone gives the defaults)");
   if (const std::string at = first_invalid_utf8(text); !at.empty())
     throw InputError(source + ":" + at + ": not valid UTF-8 (scene files are UTF-8 text)");
   try {
@@ -275,8 +278,7 @@ void apply_override(Scene& scene, std::string_view assignment) {
   std::optional<toml::table> parsed;
   try {
     parsed = toml::parse("v = " + value);
-  } catch (const toml::parse_error&) {
-  }
+  } catch (const toml::parse_error&) {}
   try {
     if (parsed && parsed->size() == 1 && parsed->contains("v")) {
       k->set(scene, read_value(*k, *parsed->get("v")));
@@ -385,10 +387,14 @@ std::string scene_keys_markdown() {
         accepted += "`";
         break;
       case KeyType::flag: type = "bool"; break;
-      case KeyType::integer: type = "integer", accepted = range.empty() ? std::string("≥ ") + std::to_string(k.min_integer) : range; break;
+      case KeyType::integer:
+        type = "integer", accepted = range.empty() ? std::string("≥ ") + std::to_string(k.min_integer) : range;
+        break;
       case KeyType::real: type = "number", accepted = range; break;
       case KeyType::real_or_none: type = "number or `\"none\"`", accepted = range; break;
-      case KeyType::reals: type = "list of numbers", accepted = std::string("each ") + range + ", strictly increasing"; break;
+      case KeyType::reals:
+        type = "list of numbers", accepted = std::string("each ") + range + ", strictly increasing";
+        break;
     }
     out += "| `" + k.key() + "` | " + type + " | `" + toml_literal(k.get(defaults)) + "` | " + cell(accepted) + " | " +
            cell(k.help) + " |\n";

@@ -21,9 +21,9 @@ namespace {
 namespace fs = std::filesystem;
 using namespace budjam;
 
-const std::vector<std::string> kColumns{"episode",  "step",      "kind",    "dphi",  "phi",          "N",
-                                        "N_nr",     "method",    "n_dof",   "computed", "N_zero",    "N_u",
-                                        "N_u_buds", "floppy_modes", "omega_star", "Z",  "dZ"};
+const std::vector<std::string> kColumns{"episode",  "step",         "kind",       "dphi",     "phi",    "N",
+                                        "N_nr",     "method",       "n_dof",      "computed", "N_zero", "N_u",
+                                        "N_u_buds", "floppy_modes", "omega_star", "Z",        "dZ"};
 
 class DosObserver : public tools::CsvLogObserver {
  public:
@@ -77,10 +77,9 @@ class DosObserver : public tools::CsvLogObserver {
   tools::DosRequest request_;
 };
 
-const tools::ObserverRegistration registration{
-    "dos", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.dos.any()) return nullptr;
-      return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
-    }};
+const tools::ObserverRegistration registration{"dos", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.dos.any()) return nullptr;
+                                                 return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
+                                               }};
 
 }  // namespace

@@ -23,12 +23,57 @@ namespace {
 using namespace budjam;
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kColumns{
-    "event", "step", "phi", "dphi", "N", "N_nr", "N_f", "N_u", "N_u_buds", "contacts", "Z", "Z_iso", "dZ", "P",
-    "P_energy", "B", "G_simple", "G_pure", "G_mean", "B_affine", "G_simple_affine", "G_pure_affine", "B_energy",
-    "G_energy_simple", "G_energy_pure", "G_energy", "G_min", "shear_stable", "G_min_stress", "C_xxxx", "C_yyyy", "C_xxyy", "C_xyxy", "C_xxxy", "C_yyxy", "n", "n_J",
-    "ell_c", "M4", "B_ext", "G_mf", "B_ext_nJ", "G_mf_nJ", "kernel_method", "pinned_translation",
-    "pinned_lobe_rotation", "pinned_zero_rows", "residual", "kernel_component", "well_posed", "unstable_modes"};
+const std::vector<std::string> kColumns{"event",
+                                        "step",
+                                        "phi",
+                                        "dphi",
+                                        "N",
+                                        "N_nr",
+                                        "N_f",
+                                        "N_u",
+                                        "N_u_buds",
+                                        "contacts",
+                                        "Z",
+                                        "Z_iso",
+                                        "dZ",
+                                        "P",
+                                        "P_energy",
+                                        "B",
+                                        "G_simple",
+                                        "G_pure",
+                                        "G_mean",
+                                        "B_affine",
+                                        "G_simple_affine",
+                                        "G_pure_affine",
+                                        "B_energy",
+                                        "G_energy_simple",
+                                        "G_energy_pure",
+                                        "G_energy",
+                                        "G_min",
+                                        "shear_stable",
+                                        "G_min_stress",
+                                        "C_xxxx",
+                                        "C_yyyy",
+                                        "C_xxyy",
+                                        "C_xyxy",
+                                        "C_xxxy",
+                                        "C_yyxy",
+                                        "n",
+                                        "n_J",
+                                        "ell_c",
+                                        "M4",
+                                        "B_ext",
+                                        "G_mf",
+                                        "B_ext_nJ",
+                                        "G_mf_nJ",
+                                        "kernel_method",
+                                        "pinned_translation",
+                                        "pinned_lobe_rotation",
+                                        "pinned_zero_rows",
+                                        "residual",
+                                        "kernel_component",
+                                        "well_posed",
+                                        "unstable_modes"};
 
 class ModuliLog : public tools::CsvLogObserver {
  public:
@@ -93,13 +138,57 @@ class ModuliLog : public tools::CsvLogObserver {
     const ElasticResponse& e = *r;
     const double l2 = e.ell_c * e.ell_c;
     const KernelTreatment& k = e.kernel;
-    log().row({event, s.step, s.phi, dphi, e.N, e.N_nr, e.N_f, e.N_u, e.N_u_buds, e.contacts, e.Z, e.Z_iso, e.dZ,
-               e.P, e.P_energy, e.moduli.B, e.moduli.G_simple, e.moduli.G_pure, e.moduli.G_mean, e.moduli_affine.B,
-               e.moduli_affine.G_simple, e.moduli_affine.G_pure, e.moduli_energy.B, e.moduli_energy.G_simple,
-               e.moduli_energy.G_pure, e.G_energy(), e.shear.G_min, e.shear.stable, e.shear_stress.G_min, e.C(0, 0), e.C(1, 1), e.C(0, 1), e.C(2, 2), e.C(0, 2), e.C(1, 2), e.n, n_J,
-               e.ell_c, e.M4, e.B_ext, e.G_mf, n_J * kSpring * l2 * e.Z / 8.0, n_J * kSpring * l2 * e.M4 * e.dZ / 2.0,
-               to_string(k.method), k.pinned_translation, k.pinned_lobe_rotation, k.pinned_zero_rows, k.residual,
-               k.kernel_component, k.well_posed, k.unstable_modes});
+    log().row({event,
+               s.step,
+               s.phi,
+               dphi,
+               e.N,
+               e.N_nr,
+               e.N_f,
+               e.N_u,
+               e.N_u_buds,
+               e.contacts,
+               e.Z,
+               e.Z_iso,
+               e.dZ,
+               e.P,
+               e.P_energy,
+               e.moduli.B,
+               e.moduli.G_simple,
+               e.moduli.G_pure,
+               e.moduli.G_mean,
+               e.moduli_affine.B,
+               e.moduli_affine.G_simple,
+               e.moduli_affine.G_pure,
+               e.moduli_energy.B,
+               e.moduli_energy.G_simple,
+               e.moduli_energy.G_pure,
+               e.G_energy(),
+               e.shear.G_min,
+               e.shear.stable,
+               e.shear_stress.G_min,
+               e.C(0, 0),
+               e.C(1, 1),
+               e.C(0, 1),
+               e.C(2, 2),
+               e.C(0, 2),
+               e.C(1, 2),
+               e.n,
+               n_J,
+               e.ell_c,
+               e.M4,
+               e.B_ext,
+               e.G_mf,
+               n_J * kSpring * l2 * e.Z / 8.0,
+               n_J * kSpring * l2 * e.M4 * e.dZ / 2.0,
+               to_string(k.method),
+               k.pinned_translation,
+               k.pinned_lobe_rotation,
+               k.pinned_zero_rows,
+               k.residual,
+               k.kernel_component,
+               k.well_posed,
+               k.unstable_modes});
   }
 
   Schedule schedule_;
@@ -108,10 +197,11 @@ class ModuliLog : public tools::CsvLogObserver {
   std::string cached_error_;
 };
 
-const tools::ObserverRegistration registration{
-    "moduli", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.moduli.any()) return nullptr;  // not asked: never built, costs nothing
-      return std::make_unique<ModuliLog>(c.scene, c.run_dir, c.resuming);
-    }};
+const tools::ObserverRegistration registration{"moduli",
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.moduli.any())
+                                                   return nullptr;  // not asked: never built, costs nothing
+                                                 return std::make_unique<ModuliLog>(c.scene, c.run_dir, c.resuming);
+                                               }};
 
 }  // namespace

@@ -27,7 +27,9 @@ class Progress : public Observer {
   }
   void on_depleted(const Depleted& e) override { line("phi_2: ", e.state, Clock::now()); }
   void on_finished(const Finished& e) override { line("finished: ", e.state, Clock::now()); }
-  void on_failed(const Failed& e) override { line(std::string("FAILED (") + to_string(e.result.status) + "): ", e.state, Clock::now()); }
+  void on_failed(const Failed& e) override {
+    line(std::string("FAILED (") + to_string(e.result.status) + "): ", e.state, Clock::now());
+  }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -35,8 +37,8 @@ class Progress : public Observer {
     const double dt = std::chrono::duration<double>(now - last_).count();
     const double rate = dt > 0 ? static_cast<double>(s.attempts - last_attempts_) / dt : 0.0;
     char buf[256];
-    std::snprintf(buf, sizeof buf, "grow: %sstep %ld  phi %.8f  N %zu  P %.3e  %s  %.1f steps/s", what.c_str(),
-                  s.step, s.phi, s.packing->size(), s.P, to_string(s.phase), rate);
+    std::snprintf(buf, sizeof buf, "grow: %sstep %ld  phi %.8f  N %zu  P %.3e  %s  %.1f steps/s", what.c_str(), s.step,
+                  s.phi, s.packing->size(), s.P, to_string(s.phase), rate);
     std::cerr << buf << '\n';
     last_ = now;
     last_attempts_ = s.attempts;
@@ -45,10 +47,10 @@ class Progress : public Observer {
   long last_attempts_ = 0;
 };
 
-const tools::ObserverRegistration registration{
-    "progress", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (c.quiet || !c.scene.progress) return nullptr;
-      return std::make_unique<Progress>();
-    }};
+const tools::ObserverRegistration registration{"progress",
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (c.quiet || !c.scene.progress) return nullptr;
+                                                 return std::make_unique<Progress>();
+                                               }};
 
 }  // namespace

@@ -26,13 +26,15 @@ namespace {
 using namespace budjam;
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kColumns{"step",          "phi",    "episode",      "event",
-                                        "cell",          "before", "after",        "floppy_modes",
-                                        "floppy_modes_periodic", "redundant_bars", "largest_cells", "N_nr"};
+const std::vector<std::string> kColumns{"step",           "phi",           "episode",
+                                        "event",          "cell",          "before",
+                                        "after",          "floppy_modes",  "floppy_modes_periodic",
+                                        "redundant_bars", "largest_cells", "N_nr"};
 
 class RigidityLog : public tools::CsvLogObserver {
  public:
-  RigidityLog(const fs::path& dir, bool resuming) : CsvLogObserver({{dir / io::run_files::rigidity, kColumns}}, resuming) {}
+  RigidityLog(const fs::path& dir, bool resuming)
+      : CsvLogObserver({{dir / io::run_files::rigidity, kColumns}}, resuming) {}
   std::string name() const override { return "rigidity"; }
   Needs needs() const override {
     Needs n;
@@ -112,10 +114,11 @@ class RigidityLog : public tools::CsvLogObserver {
   Lobes lobes_;
 };
 
-const tools::ObserverRegistration registration{
-    "rigidity", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.rigidity_events) return nullptr;  // not asked: never built, costs nothing
-      return std::make_unique<RigidityLog>(c.run_dir, c.resuming);
-    }};
+const tools::ObserverRegistration registration{"rigidity",
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.rigidity_events)
+                                                   return nullptr;  // not asked: never built, costs nothing
+                                                 return std::make_unique<RigidityLog>(c.run_dir, c.resuming);
+                                               }};
 
 }  // namespace

@@ -95,10 +95,10 @@ class TrajectoryLog : public Observer {
   long last_step_ = -1;
 };
 
-const tools::ObserverRegistration reg{
-    "trajectory", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (c.scene.trajectory_every <= 0) return nullptr;
-      return std::make_unique<TrajectoryLog>(c.scene.trajectory_every, c.run_dir, c.resuming);
-    }};
+const tools::ObserverRegistration reg{"trajectory", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                        if (c.scene.trajectory_every <= 0) return nullptr;
+                                        return std::make_unique<TrajectoryLog>(c.scene.trajectory_every, c.run_dir,
+                                                                               c.resuming);
+                                      }};
 
 }  // namespace

@@ -14,22 +14,22 @@
 // Observers write their files under ctx.run_dir, atomically (io/atomic_file.hpp), and must
 // survive --resume: when ctx.resuming is true the run directory already holds their files up to
 // the checkpoint and their load_state() is called with what save_state() wrote.
-#include "budjam/growth_driver.hpp"
-#include "budjam/scene.hpp"
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
+#include "budjam/growth_driver.hpp"
+#include "budjam/scene.hpp"
 
 namespace budjam::tools {
 
 struct ObserverContext {
   const Scene& scene;
-  std::uint64_t seed;                 // the run's seed (scene.seed or --seed)
-  std::filesystem::path run_dir;      // exists when the factory is called
-  bool resuming = false;              // continuing from run_dir/checkpoint.txt
-  bool quiet = false;                 // --quiet: nothing on stderr
+  std::uint64_t seed;             // the run's seed (scene.seed or --seed)
+  std::filesystem::path run_dir;  // exists when the factory is called
+  bool resuming = false;          // continuing from run_dir/checkpoint.txt
+  bool quiet = false;             // --quiet: nothing on stderr
 };
 
 using ObserverFactory = std::function<std::unique_ptr<Observer>(const ObserverContext&)>;

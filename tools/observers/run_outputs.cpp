@@ -18,23 +18,42 @@ namespace run_files = io::run_files;
 // ---- RunLog -------------------------------------------------------------------------------------
 
 const std::vector<std::string>& RunLog::step_columns() {
-  static const std::vector<std::string> c{
-      "step",   "attempts", "dt",       "N",          "phi",   "P",       "E_per_cell", "phase",
-      "N_c",    "N_f",      "N_f_single", "N_u",      "N_u_buds", "Z",     "Z_iso",      "dZ",
-      "chi_c",  "compressed_buds", "tagged_active", "tagged_completed", "tagged_divided",
-      "divisions_since_jamming"};
+  static const std::vector<std::string> c{"step",
+                                          "attempts",
+                                          "dt",
+                                          "N",
+                                          "phi",
+                                          "P",
+                                          "E_per_cell",
+                                          "phase",
+                                          "N_c",
+                                          "N_f",
+                                          "N_f_single",
+                                          "N_u",
+                                          "N_u_buds",
+                                          "Z",
+                                          "Z_iso",
+                                          "dZ",
+                                          "chi_c",
+                                          "compressed_buds",
+                                          "tagged_active",
+                                          "tagged_completed",
+                                          "tagged_divided",
+                                          "divisions_since_jamming"};
   return c;
 }
 
 const std::vector<std::string>& RunLog::division_columns() {
-  static const std::vector<std::string> c{"step", "phi", "phase", "N", "mother_id", "daughter_id",
-                                          "mother_index", "daughter_index", "x", "y", "theta", "b"};
+  static const std::vector<std::string> c{"step",      "phi",         "phase",        "N",
+                                          "mother_id", "daughter_id", "mother_index", "daughter_index",
+                                          "x",         "y",           "theta",        "b"};
   return c;
 }
 
 RunLog::RunLog(const fs::path& run_dir, std::uint64_t seed, bool resuming)
-    : CsvLogObserver({{run_dir / run_files::steps, step_columns()}, {run_dir / run_files::divisions, division_columns()}},
-                     resuming),
+    : CsvLogObserver(
+          {{run_dir / run_files::steps, step_columns()}, {run_dir / run_files::divisions, division_columns()}},
+          resuming),
       dir_(run_dir),
       seed_(seed) {
   fs::create_directories(dir_ / run_files::packings);
@@ -45,20 +64,35 @@ void RunLog::on_step_accepted(const StepAccepted& e) {
   const bool above = s.phase == Phase::jammed && s.network;
   const ContactNetwork* n = s.network;
   auto opt = [&](auto v) { return above ? CsvField(v) : CsvField::missing(); };
-  log(kSteps).row({s.step, s.attempts, s.dt, s.packing->size(), s.phi, s.P, s.E_per_cell, to_string(s.phase),
-               above ? CsvField(n->N_c) : CsvField::missing(), above ? CsvField(n->N_f) : CsvField::missing(),
-               above ? CsvField(n->N_f_single_pass) : CsvField::missing(),
-               above ? CsvField(n->N_u) : CsvField::missing(), above ? CsvField(n->N_u_buds) : CsvField::missing(),
-               above ? CsvField(n->Z) : CsvField::missing(), above ? CsvField(n->Z_iso) : CsvField::missing(),
-               above ? CsvField(n->dZ) : CsvField::missing(), opt(s.chi_c), opt(s.compressed_buds),
-               opt(s.buds->active()), opt(s.buds->completed()), opt(s.buds->divided()),
-               opt(s.divisions_since_jamming)});
+  log(kSteps).row({s.step,
+                   s.attempts,
+                   s.dt,
+                   s.packing->size(),
+                   s.phi,
+                   s.P,
+                   s.E_per_cell,
+                   to_string(s.phase),
+                   above ? CsvField(n->N_c) : CsvField::missing(),
+                   above ? CsvField(n->N_f) : CsvField::missing(),
+                   above ? CsvField(n->N_f_single_pass) : CsvField::missing(),
+                   above ? CsvField(n->N_u) : CsvField::missing(),
+                   above ? CsvField(n->N_u_buds) : CsvField::missing(),
+                   above ? CsvField(n->Z) : CsvField::missing(),
+                   above ? CsvField(n->Z_iso) : CsvField::missing(),
+                   above ? CsvField(n->dZ) : CsvField::missing(),
+                   opt(s.chi_c),
+                   opt(s.compressed_buds),
+                   opt(s.buds->active()),
+                   opt(s.buds->completed()),
+                   opt(s.buds->divided()),
+                   opt(s.divisions_since_jamming)});
 }
 
 void RunLog::on_divided(const Divided& e) {
   const Division& d = e.division;
-  log(kDivisions).row({e.state.step, e.state.phi, to_string(e.state.phase), e.state.packing->size(), d.mother_id,
-                   d.daughter_id, d.mother_index, d.daughter_index, d.x, d.y, d.theta, d.b});
+  log(kDivisions)
+      .row({e.state.step, e.state.phi, to_string(e.state.phase), e.state.packing->size(), d.mother_id, d.daughter_id,
+            d.mother_index, d.daughter_index, d.x, d.y, d.theta, d.b});
 }
 
 void RunLog::write_pack(const std::string& stem, const StateView& s, const std::string& kind,
@@ -71,8 +105,10 @@ void RunLog::write_pack(const std::string& stem, const StateView& s, const std::
   meta.set_number("phi", s.phi);
   meta.set_number("P", s.P);
   meta.set_number("E_per_cell", s.E_per_cell);
-  if (s.scene->P0) meta.set_number("P0", *s.scene->P0);
-  else meta.set("P0", "none");
+  if (s.scene->P0)
+    meta.set_number("P0", *s.scene->P0);
+  else
+    meta.set("P0", "none");
   if (s.jamming) meta.set_number("phi_J", s.jamming->phi);
   if (dphi) meta.set_number("dphi", *dphi);
   if (s.network) {
@@ -166,11 +202,14 @@ Json summary_json(const GrowthDriver& driver) {
   j["targets"] = targets;
   Json unj = Json::array();
   for (const UnjamRecord& u : r.unjammings)
-    unj.push_back(Json{{"episode", u.episode}, {"step", u.step}, {"phi", u.phi}, {"phi_J", u.phi_J},
+    unj.push_back(Json{{"episode", u.episode},
+                       {"step", u.step},
+                       {"phi", u.phi},
+                       {"phi_J", u.phi_J},
                        {"targets_lost", u.targets_lost}});
   j["unjammings"] = unj;
-  j["final"] = Json{{"step", now.step}, {"phase", to_string(now.phase)}, {"phi", now.phi}, {"P", now.P},
-                    {"N", now.packing->size()}};
+  j["final"] = Json{
+      {"step", now.step}, {"phase", to_string(now.phase)}, {"phi", now.phi}, {"P", now.P}, {"N", now.packing->size()}};
   j["accepted_steps"] = r.accepted;
   j["rejected_steps"] = r.rejected;
   j["divisions"] = r.divisions;

@@ -44,7 +44,7 @@ class RunLog : public CsvLogObserver {
 io::Json summary_json(const GrowthDriver& driver);
 struct SessionTiming {
   double wall_seconds = 0;
-  long attempts_at_start = 0;           // growth steps already done when this session started
+  long attempts_at_start = 0;  // growth steps already done when this session started
   long force_evaluations_at_start = 0;
 };
 void write_summary(const std::filesystem::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
