@@ -2,14 +2,15 @@
 # One entry point for a fresh Debian machine (run as root):
 #   bash scripts/bootstrap.sh demo   install what is missing, build, grow + render the demo scene
 #   bash scripts/bootstrap.sh test   install what is missing, build, run the whole test suite
-#                                    (Release build: all labels; sanitizer build: the `hard` label)
+#                                    (Release build: all labels; sanitizer build: the `hard` label;
+#                                    30 s of fuzzing per parser; the clang-format check)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
           catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev python3-matplotlib librsvg2-bin
           pybind11-dev python3-dev python3-numpy python3-pandas python3-gsd python3-pytest python3-ase
-          python3-meshio help2man slurm-wlm munge)
+          python3-meshio help2man slurm-wlm munge clang-14 libclang-rt-14-dev clang-format-14)
 
 install_missing() {
   local missing=()
@@ -51,6 +52,9 @@ case "${1:-}" in
     # Hard cases again under AddressSanitizer + UndefinedBehaviorSanitizer.
     build build-sanitize -DBUDJAM_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
     (cd build-sanitize && ctest --output-on-failure -j"$(nproc)" -L hard)
+    # The parsers of scenes, packings and checkpoints under libFuzzer, 30 s each (docs/files.md).
+    bash scripts/fuzz.sh 30
+    bash scripts/check_format.sh
     ;;
   *)
     echo "usage: bash scripts/bootstrap.sh demo|test" >&2

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -126,8 +127,9 @@ void NeighbourList::build(const Lobes& lobes, const Box& box) {
       }
     }
     // Small grids (g < 4) repeat cells in the stencil: visit each once.
-    std::sort(stencil.begin(), stencil.begin() + m);
-    m = static_cast<int>(std::unique(stencil.begin(), stencil.begin() + m) - stencil.begin());
+    const auto used = std::span(stencil).first(static_cast<std::size_t>(m));
+    std::sort(used.begin(), used.end());
+    m = static_cast<int>(std::unique(used.begin(), used.end()) - used.begin());
 
     partners.clear();
     const std::size_t ca = cell_of(a);

@@ -245,7 +245,7 @@ TEST_CASE("Cells whose buds carry no load: both conventions coincide and equal t
   REQUIRE(e.kernel.well_posed);
 
   double G = 0, P = 0, born = 0;
-  for (const Eigen::Vector2d bond :
+  for (const Eigen::Vector2d& bond :
        {Eigen::Vector2d(ax, 0), Eigen::Vector2d(ax / 2, ay), Eigen::Vector2d(-ax / 2, ay)}) {
     const double len = bond.norm(), f = kSpring * (1 - len);
     const Eigen::Vector2d n = bond / len;

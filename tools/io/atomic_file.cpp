@@ -66,7 +66,10 @@ void write_atomically(const fs::path& path, std::string_view content) {
   fs::create_directories(dir, ec);
   if (ec) throw IoError(dir.string() + ": cannot create directory: " + ec.message());
 
-  std::string name = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  std::string leaf = ".";  // built by appends: GCC 12 -O3 misreads "." + string as overlapping (-Wrestrict)
+  leaf += path.filename().string();
+  leaf += ".tmp-XXXXXX";
+  std::string name = (dir / leaf).string();
   const int fd = ::mkstemp(name.data());
   if (fd < 0) io_fail(dir, "cannot create a temporary file", errno);
   const fs::path tmp = name;
@@ -124,12 +127,13 @@ CsvField::CsvField(std::string_view s) {
     text = s;
     return;
   }
-  text = "\"";
+  text.reserve(s.size() + 2);
+  text.push_back('"');
   for (char c : s) {
-    if (c == '"') text += '"';
-    text += c;
+    if (c == '"') text.push_back('"');
+    text.push_back(c);
   }
-  text += '"';
+  text.push_back('"');
 }
 
 namespace {
