@@ -97,12 +97,22 @@ TEST_CASE("a JSON value of the wrong type in an input is exit 2, not internal", 
   fs::create_directories(run / "packings");
   write(run / ".budjam-run", "budjam-run 1\n");
   write(run / "summary.json", R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1,
-    "L": 8, "P0": "strong", "targets": [], "unjammings": []})");
+    "L": 8, "P0": "strong", "phi_J": 0.84, "targets": [], "unjammings": []})");
   write(run / "steps.csv", "step,phi\n");
   write(run / "divisions.csv", "step,phi\n");
   const Result r = run_budjam("analyse json-run --out json-out");
   INFO(r.err);
   CHECK(r.code == 2);
+  CHECK(r.err.rfind("budjam: error: json-run/summary.json: P0", 0) == 0);
   CHECK(r.err.find("internal") == std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
+TEST_CASE("the spectrum of an unjammed packing is refused naming the packing", "[taxonomy]") {
+  write(work_dir() / "loose.pack", kPacking);  // two cells far apart: every cell is a rattler
+  const Result r = run_budjam("dos loose.pack");
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("loose.pack: no non-rattler cells") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }

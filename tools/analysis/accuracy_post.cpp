@@ -1,6 +1,7 @@
 #include "analysis/accuracy_post.hpp"
 
 #include "io/run_data.hpp"
+#include "io/run_directory.hpp"
 
 #include "budjam/errors.hpp"
 #include "budjam/moduli.hpp"
@@ -173,7 +174,8 @@ std::vector<fs::path> find_packings(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a directory");
   std::vector<fs::path> out;
   for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file() && e.path().extension() == ".pack" && e.path().parent_path().filename() == "packings")
+    if (e.is_regular_file() && e.path().extension() == ".pack" &&
+        e.path().parent_path().filename() == io::run_files::packings)
       out.push_back(e.path());
   std::sort(out.begin(), out.end());
   if (out.empty()) throw InputError(dir.string() + ": holds no packings/*.pack");

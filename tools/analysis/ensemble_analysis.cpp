@@ -24,6 +24,7 @@
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "io/run_data.hpp"
+#include "io/run_directory.hpp"
 
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"
@@ -204,7 +205,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     y.N_div = t.at("N_div").get<double>();
     y.N_nr = t.at("N_nr").get<double>();
     y.lambda = lambda_c(y.u, y.chi_c);
-    const fs::path summary = r.dir / "summary.json";
+    const fs::path summary = r.dir / io::run_files::summary;
     const long long tstep = json_integer(t, "step", summary);
     std::vector<double> ph, pp;
     for (std::size_t k = 0; k < st.size(); ++k)
@@ -218,7 +219,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     }
     y.below_phi2 = !x.depleted || y.phi <= x.phi_2;
     const fs::path pack =
-        r.dir / "packings" / ("target_" + std::to_string(json_integer(t, "index", summary)) + ".pack");
+        r.dir /
+        io::run_files::packing(io::run_files::target_stem(static_cast<std::size_t>(json_integer(t, "index", summary))));
     const SidecarModuli sm = read_moduli(pack, need_moduli, moduli_found);
     y.B = sm.B;
     y.G = sm.G;
@@ -237,14 +239,15 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     }
   }
   if (x.depleted) {
-    const SidecarModuli sm = read_moduli(r.dir / "packings" / "phi2.pack", need_moduli, moduli_found);
+    const SidecarModuli sm =
+        read_moduli(r.dir / io::run_files::packing(io::run_files::phi2), need_moduli, moduli_found);
     x.B_2 = sm.B;
     x.G_2 = sm.G;
     x.G_2_energy = sm.G_energy;
     x.G_min_2 = sm.G_min;
   }
   {
-    const fs::path jam = r.dir / "packings" / "jammed.pack";
+    const fs::path jam = r.dir / io::run_files::packing(io::run_files::jammed);
     if (fs::exists(jam)) x.lc2_J = tools::analyse_contacts(io::read_packing(jam).packing).lc2;
   }
 
@@ -321,14 +324,14 @@ std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   for (const auto& in : inputs) {
     const fs::path p(in);
     if (!fs::exists(p)) throw InputError(in + ": no such run directory");
-    if (fs::exists(p / "summary.json")) {
+    if (fs::exists(p / io::run_files::summary)) {
       runs.insert(p);
       continue;
     }
     if (!fs::is_directory(p)) throw InputError(in + ": not a directory");
     bool any = false;
     for (const auto& e : fs::recursive_directory_iterator(p))
-      if (e.is_regular_file() && e.path().filename() == "summary.json") {
+      if (e.is_regular_file() && e.path().filename() == io::run_files::summary) {
         runs.insert(e.path().parent_path());
         any = true;
       }
@@ -404,9 +407,14 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
     // A run that stopped early (step limit, say) still landed every state it recorded: its jamming
     // point, targets and φ_2 are used; it is listed so that the report can say so. One that never
     // jammed has nothing to contribute.
-    if (r.status() != "finished") e.failed.push_back(dirs[k].string() + " (" + r.status() + ")");
-    if (!r.jammed()) continue;
-    e.rows.push_back(extract(r, o.require_moduli, e.moduli));
+    try {
+      if (r.status() != "finished") e.failed.push_back(dirs[k].string() + " (" + r.status() + ")");
+      if (!r.jammed()) continue;
+      e.rows.push_back(extract(r, o.require_moduli, e.moduli));
+    } catch (const nlohmann::json::exception& x) {
+      // A value of the wrong type or a missing key in the run's summary: name the file.
+      throw InputError((dirs[k] / io::run_files::summary).string() + ": " + x.what());
+    }
   }
   std::vector<JammingKey> keys;
   for (const auto& r : e.rows) keys.push_back({r.L, r.seed, r.step_J, r.N_J, r.phi_J});
@@ -415,7 +423,7 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
 
   for (const auto& run : e.rows) {
     std::vector<fs::path> packs;  // in name order: the tables do not depend on the directory order
-    for (const auto& f : fs::directory_iterator(run.dir / "packings"))
+    for (const auto& f : fs::directory_iterator(run.dir / io::run_files::packings))
       if (f.path().extension() == ".pack") packs.push_back(f.path());
     std::sort(packs.begin(), packs.end());
     for (const auto& pack : packs) {

@@ -25,6 +25,7 @@
 #include "analysis/accuracy_post.hpp"
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
+#include "io/run_directory.hpp"
 
 #include "budjam/errors.hpp"
 #include "budjam/pareto.hpp"
@@ -117,7 +118,7 @@ std::map<std::string, fs::path> seeds_of(const fs::path& dir) {
   std::map<std::string, fs::path> m;
   if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a directory");
   for (const auto& e : fs::directory_iterator(dir))
-    if (e.is_directory() && fs::exists(e.path() / "summary.json")) m[e.path().filename().string()] = e.path();
+    if (e.is_directory() && fs::exists(e.path() / io::run_files::summary)) m[e.path().filename().string()] = e.path();
   if (m.empty()) throw InputError(dir.string() + ": holds no run directory (seed*/summary.json)");
   return m;
 }
@@ -136,8 +137,8 @@ struct Measured {
 Measured measure(const fs::path& run) {
   const tools::RunData r = tools::load_run(run);
   Measured m;
-  if (fs::exists(run / "timing.json")) {
-    const Json t = io::read_json(run / "timing.json");
+  if (fs::exists(run / io::run_files::timing)) {
+    const Json t = io::read_json(run / io::run_files::timing);
     m.wall = t.value("wall_seconds", kNaN);
     m.evaluations = t.value("force_evaluations", kNaN);
   }
@@ -152,7 +153,7 @@ Measured measure(const fs::path& run) {
   for (const auto& t : r.summary.at("targets")) {
     const double d = t.at("dphi").get<double>();
     m.P[d] = t.at("P").get<double>();
-    const fs::path pack = run / "packings" / ("target_" + std::to_string(t.at("index").get<long>()) + ".pack");
+    const fs::path pack = run / io::run_files::packing(io::run_files::target_stem(t.at("index").get<std::size_t>()));
     m.B[d] = sidecar_number(pack, "moduli", "B");
     m.G[d] = sidecar_number(pack, "moduli", "G");
     m.omega[d] = sidecar_number(pack, "dos", "omega_star");

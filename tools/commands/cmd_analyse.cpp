@@ -27,7 +27,8 @@ void run(Options o) {
       throw InputError("--require: unknown item '" + w + "' (known: moduli, dos)");
   }
   if (o.ensemble.bootstrap.resamples < 2) throw InputError("--resamples: must be at least 2");
-  std::cerr << "analyse: " << tools::analyse_ensemble(o.ensemble) << "\n";
+  const std::string done = tools::analyse_ensemble(o.ensemble);  // first: an error line stands alone
+  std::cerr << "analyse: " << done << "\n";
 }
 
 const bool registered = budjam::cli::register_command(

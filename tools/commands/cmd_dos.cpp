@@ -64,6 +64,8 @@ void run(const Options& o) {
     throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) + " ≥ " +
                      std::to_string(n_dof) + "); use --method dense");
 
+  if (pc.network.N_nr == 0)
+    throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
   const tools::DosReport report = tools::dos_report(f.packing, pc.contacts, pc.network, req);
   fs::path base = o.out.empty() ? fs::path(o.packing) : fs::path(o.out);
   if (o.out.empty() && base.extension() == ".pack") base.replace_extension();

@@ -124,6 +124,8 @@ CsvTable read_csv(const fs::path& path) {
 
 std::optional<double> RunData::P0() const {
   if (!summary.contains("P0") || summary["P0"].is_null()) return std::nullopt;
+  if (!summary["P0"].is_number())
+    throw InputError((dir / io::run_files::summary).string() + ": P0: not a number or null (no feedback)");
   return summary["P0"].get<double>();
 }
 
@@ -140,7 +142,8 @@ long long json_integer(const io::Json& j, const std::string& key, const fs::path
 
 std::uint64_t RunData::seed() const {
   const auto& s = summary.contains("seed") ? summary["seed"] : io::Json();
-  if (!s.is_number_unsigned()) throw InputError((dir / "summary.json").string() + ": seed: not a non-negative integer");
+  if (!s.is_number_unsigned())
+    throw InputError((dir / io::run_files::summary).string() + ": seed: not a non-negative integer");
   return s.get<std::uint64_t>();
 }
 
