@@ -80,12 +80,7 @@ class ModuliLog : public tools::CsvLogObserver {
   ModuliLog(const Scene& scene, const fs::path& dir, bool resuming)
       : CsvLogObserver({{dir / io::run_files::moduli, kColumns}}, resuming), schedule_(scene.moduli) {}
   std::string name() const override { return "moduli"; }
-  Needs needs() const override {
-    Needs n;
-    n.contacts = true;
-    n.network = true;
-    return n;
-  }
+  Needs needs() const override { return Needs{.contacts = true, .network = true}; }
 
   void on_step_accepted(const StepAccepted& e) override {
     if (tools::due_every(schedule_, e.state)) write("every", e.state, std::nullopt);

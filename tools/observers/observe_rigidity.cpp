@@ -36,12 +36,7 @@ class RigidityLog : public tools::CsvLogObserver {
   RigidityLog(const fs::path& dir, bool resuming)
       : CsvLogObserver({{dir / io::run_files::rigidity, kColumns}}, resuming) {}
   std::string name() const override { return "rigidity"; }
-  Needs needs() const override {
-    Needs n;
-    n.contacts = true;
-    n.network = true;
-    return n;
-  }
+  Needs needs() const override { return Needs{.contacts = true, .network = true}; }
 
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
