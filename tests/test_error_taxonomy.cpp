@@ -1,11 +1,10 @@
 // Bad input is exit 2 naming the file (and line), never "internal"; what a file holds cannot
 // reach the terminal raw; file names that look like options stay file names.
 #include <catch2/catch.hpp>
+#include "run_budjam.hpp"
 #include "scratch.hpp"
 
-#include <sys/wait.h>
 #include <algorithm>
-#include <cstdlib>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -14,20 +13,9 @@ using budjam::testing::work_dir;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string err;
-};
-
 // Runs `budjam ARGS` in the scratch directory.
-Result run_budjam(const std::string& args) {
-  const char* exe = std::getenv("BUDJAM_EXE");
-  REQUIRE(exe != nullptr);
-  const fs::path err = work_dir() / "taxonomy.stderr";
-  const std::string cmd =
-      "cd '" + work_dir().string() + "' && '" + exe + "' " + args + " 2>'" + err.string() + "' >/dev/null";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
+budjam::testing::BudjamRun run_budjam(const std::string& args) {
+  return budjam::testing::run_budjam_in(work_dir(), args);
 }
 
 const std::string kPacking =
@@ -53,7 +41,7 @@ TEST_CASE("a physically impossible packing is input (exit 2, file and line), not
   for (const auto& [text, message] : cases) {
     write(work_dir() / "bad.pack", text);
     for (const char* cmd : {"validate bad.pack", "moduli bad.pack", "render bad.pack -o bad.svg"}) {
-      const Result r = run_budjam(cmd);
+      const auto r = run_budjam(cmd);
       INFO(cmd << ": " << r.err);
       CHECK(r.code == 2);
       CHECK(r.err.find(message) != std::string::npos);
@@ -64,7 +52,7 @@ TEST_CASE("a physically impossible packing is input (exit 2, file and line), not
 
 TEST_CASE("control bytes from a file are escaped in the one-line error", "[taxonomy]") {
   write(work_dir() / "esc.pack", with(kPacking, "meta kind jammed", "meta k\x1b[2J\x07y x"));
-  const Result r = run_budjam("validate esc.pack");
+  const auto r = run_budjam("validate esc.pack");
   CHECK(r.code == 2);
   CHECK(r.err.find('\x1b') == std::string::npos);
   CHECK(r.err.find('\x07') == std::string::npos);
@@ -75,7 +63,7 @@ TEST_CASE("control bytes from a file are escaped in the one-line error", "[taxon
 TEST_CASE("a packing meta value with a carriage return is refused, so every packing read can be written",
           "[taxonomy]") {
   write(work_dir() / "cr.pack", with(kPacking, "meta kind jammed", "meta kind jam\rmed"));
-  const Result r = run_budjam("validate cr.pack");
+  const auto r = run_budjam("validate cr.pack");
   CHECK(r.code == 2);
   CHECK(r.err.find("cr.pack:6: meta kind: the value holds a carriage return") != std::string::npos);
 }
@@ -86,7 +74,7 @@ TEST_CASE("render --png passes a file name that starts with '-' as a file", "[ta
     return;
   }
   write(work_dir() / "good.pack", kPacking);
-  const Result r = run_budjam("render good.pack -o -x.svg --png");
+  const auto r = run_budjam("render good.pack -o -x.svg --png");
   INFO(r.err);
   CHECK(r.code == 0);
   CHECK(fs::file_size(work_dir() / "-x.png") > 0);
@@ -100,7 +88,7 @@ TEST_CASE("a JSON value of the wrong type in an input is exit 2, not internal", 
     "L": 8, "P0": "strong", "phi_J": 0.84, "targets": [], "unjammings": []})");
   write(run / "steps.csv", "step,phi\n");
   write(run / "divisions.csv", "step,phi\n");
-  const Result r = run_budjam("analyse json-run --out json-out");
+  const auto r = run_budjam("analyse json-run --out json-out");
   INFO(r.err);
   CHECK(r.code == 2);
   CHECK(r.err.rfind("budjam: error: json-run/summary.json: P0", 0) == 0);
@@ -110,7 +98,7 @@ TEST_CASE("a JSON value of the wrong type in an input is exit 2, not internal", 
 
 TEST_CASE("the spectrum of an unjammed packing is refused naming the packing", "[taxonomy]") {
   write(work_dir() / "loose.pack", kPacking);  // two cells far apart: every cell is a rattler
-  const Result r = run_budjam("dos loose.pack");
+  const auto r = run_budjam("dos loose.pack");
   INFO(r.err);
   CHECK(r.code == 2);
   CHECK(r.err.find("loose.pack: no non-rattler cells") != std::string::npos);

@@ -16,6 +16,10 @@ struct BudjamRun {
 // if BUDJAM_EXE is not set or budjam did not exit normally (killed by a signal).
 BudjamRun run_budjam(const std::string& args);
 
+// The same, run from the directory `dir`, so that relative file names in `args` (and in budjam's
+// messages) are relative to it.
+BudjamRun run_budjam_in(const std::filesystem::path& dir, const std::string& args);
+
 // Runs `budjam <args>` with stdout and stderr sent to the given files; returns the exit code.
 int run_budjam_redirected(const std::string& args, const std::filesystem::path& out,
                           const std::filesystem::path& err = "/dev/null");
