@@ -1,0 +1,82 @@
+#pragma once
+// Accuracy against cost of the numerical knobs (docs/analysis.md, "Accuracy against cost").
+//
+// Growth knobs: each variant directory and the reference hold run directories seed<k>/ grown from the
+// same scene and seeds, differing in one knob (the reference has every knob tight). A variant directory
+// is named <knob>_<value> (ftol_1e-11, epsU_1e-15, tol_1e-7, dt_2) or "default". Per variant: mean cost
+// per run (CPU seconds from cpu_time.json when the Makefile wrote it, else wall seconds from
+// timing.json; the front compares force evaluations at the mean CPU time per evaluation, which does
+// not depend on the machine's load) and the mean over seeds of the error against the same seed of the
+// reference: |Δ| of φ_J, u_J, Z_J, φ_2; relative error, averaged over the targets, of P, B, G, ω* (B,
+// G, ω* from the .moduli.json / .dos.json beside the target packings).
+//
+// Post-processing knobs (packing sets NAME=DIR): the moduli's linear solver and ARPACK's tol and ncv,
+// measured on every packings/*.pack below DIR (analysis/accuracy_post.hpp).
+//
+// For every knob the default and that knob's variants form one group; the default is "on the front"
+// when no variant dominates it (budjam/pareto.hpp: no more than the cost tie band dearer, no error
+// worse beyond a factor error_ratio unless both ≤ error_floor, and better in one of them). The cost
+// tie band is time_noise, for a post-processing set widened to 3× its measured timing noise (the
+// default is timed twice in the same rounds: row "… (timed again)", knob "repeat"). A knob measured
+// on several packing sets is judged on its joint front, and a knob whose default the model fixes is
+// reported, not judged.
+#include "io/json.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+struct SweepOptions {
+  std::string reference;              // folder of the tight reference runs (seed*/); empty: no growth knobs
+  std::vector<std::string> variants;  // folders of growth variant runs, named <knob>_<value> or default
+  std::vector<std::string> packings;  // post-processing packing sets, NAME=DIR
+  std::string growth_set = "growth runs";
+  double time_noise = 0.10;   // relative cost difference that is a tie
+  double error_ratio = 2.0;   // error factor that is a tie
+  double error_floor = 1e-9;  // errors both below this tie
+  double min_seconds = 0.2;   // post-processing: CPU time each computation is repeated for
+};
+
+// One setting of one knob: its cost and its errors against the reference.
+struct SweepRow {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::string family, knob, variant, set, unit;
+  bool is_default = false, is_reference = false;
+  std::size_t n = 0, failures = 0;
+  double seconds = kNaN;  // measured: CPU seconds per run / per computation
+  double cost = kNaN;     // what the front compares (seconds; growth: force evaluations at a common rate)
+  double wall_seconds = kNaN, force_evaluations = kNaN;
+  std::map<std::string, double> err;      // by quantity; absent = n/a
+  std::map<std::string, double> max_err;  // post-processing: the worst packing
+  double max_residual = kNaN;
+  bool well_posed = true;
+  bool on_front = true;  // of its knob (a default: of every knob of its family and set)
+};
+
+// The fronts of every knob and what they say about the defaults.
+struct SweepVerdict {
+  io::Json timing_noise = io::Json::array(), groups = io::Json::array(), joint_groups = io::Json::array();
+  bool all_on_front = true;
+  std::vector<std::string> off_front;  // "<set>: <knob>" whose default a variant dominates
+  std::string noise_md, joint_md;      // Markdown lines for accuracy.md
+};
+
+// Throws InputError for an inconsistent or empty request.
+void check_sweep_options(const SweepOptions& options);
+// The growth settings (variants, then the reference) against the reference runs.
+std::vector<SweepRow> growth_rows(const SweepOptions& options);
+// The post-processing settings of every packing set.
+std::vector<SweepRow> post_rows(const SweepOptions& options);
+// Judges every knob's front and marks the rows on it.
+SweepVerdict judge_fronts(std::vector<SweepRow>& rows, const SweepOptions& options);
+// DIR/accuracy.csv (one row per setting), DIR/accuracy.json (rows, groups with their fronts, the
+// verdict) and DIR/accuracy.md (the table as Markdown).
+void write_accuracy_tables(const std::filesystem::path& dir, const SweepOptions& options,
+                           const std::vector<SweepRow>& rows, const SweepVerdict& verdict);
+
+}  // namespace budjam::tools
