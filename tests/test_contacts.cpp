@@ -3,6 +3,7 @@
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
+#include "random_packing.hpp"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -10,24 +11,9 @@
 #include <random>
 
 using namespace budjam;
+using budjam::testing::random_packing;
 
 namespace {
-
-Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_min = 0.01, double b_max = 1.02) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<double> b(n);
-  double area = 0;
-  for (auto& bi : b) {
-    bi = b_min + (b_max - b_min) * u(rng);
-    area += 0.25 * std::numbers::pi * (1 + bi * bi);
-  }
-  Packing p;
-  p.box.L = std::sqrt(area / phi);
-  for (std::size_t i = 0; i < n; ++i)
-    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), std::numbers::pi * (2 * u(rng) - 1), b[i], 0.002, -1);
-  return p;
-}
 
 std::vector<Contact> contacts_of(const Packing& p, ForceField& field) {
   Eigen::VectorXd F;
