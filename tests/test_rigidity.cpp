@@ -643,14 +643,14 @@ TEST_CASE("a tracker restored from another's memory reports the same events for 
   CHECK_THROWS_AS(resumed.restore(unsorted), std::invalid_argument);
 }
 
-TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing as JSON", "[fast]") {
+TEST_CASE("budjam rigidity PACKING --json prints the library's analysis of the packing as JSON", "[fast]") {
   namespace fs = std::filesystem;
   const fs::path dir = testing::work_dir();
   const Packing p = random_packing(120, 1.6, 4);
   io::write_packing(dir / "p.pack", p);
   const Analysed a = analyse(p);  // brute-force contacts: the command finds them by neighbour list
   const auto run = [&](const std::string& args) {
-    return testing::run_budjam("rigidity '" + (dir / "p.pack").string() + "' " + args);
+    return testing::run_budjam("rigidity '" + (dir / "p.pack").string() + "' --json " + args);
   };
   for (RigidityNetwork which : {RigidityNetwork::load_bearing, RigidityNetwork::raw}) {
     const bool lb = which == RigidityNetwork::load_bearing;

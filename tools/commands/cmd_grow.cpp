@@ -54,10 +54,10 @@ std::string step_limit_notice(const Scene& scene, const RunResult& r, const fs::
   std::string line = "budjam: grow: run stopped at the step limit (growth.max_steps = " +
                      std::to_string(scene.max_steps) + " growth steps); recorded: ";
   if (!r.jamming) return line + "not jammed [" + summary.string() + "]";
-  line += "jamming at phi_J = " + io::format_double(r.jamming->phi) + ", " + std::to_string(r.targets.size()) +
+  line += "jamming at φ_J = " + io::format_double(r.jamming->phi) + ", " + std::to_string(r.targets.size()) +
           " of " + std::to_string(scene.targets.size()) + " Δφ targets";
   if (!r.targets.empty()) line += " (up to " + io::format_double(r.targets.back().dphi) + ")";
-  if (scene.continue_to_phi2) line += r.depletion ? ", φ_2" : ", φ_2 not reached";
+  if (scene.continue_to_phi2) line += r.depletion ? ", φ_2 reached" : ", φ_2 not reached";
   return line + " [" + summary.string() + "]";
 }
 
