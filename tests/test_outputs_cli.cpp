@@ -84,6 +84,9 @@ TEST_CASE("every column of every table budjam writes is in docs/files.md, and ev
                      shell_quoted(out / "phi2.dos"))
               .code == 0);
   REQUIRE(run_budjam("survival " + shell_quoted(run) + " --quiet --out " + shell_quoted(out / "survival")).code == 0);
+  REQUIRE(run_budjam("rigidity " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " +
+                     shell_quoted(out / "rigidity"))
+              .code == 0);
   REQUIRE(run_budjam("analyse " + shell_quoted(run) + " --out " + shell_quoted(out / "tables") + " --main-L 8").code ==
           0);
   const std::map<std::string, fs::path> tables{
@@ -96,6 +99,7 @@ TEST_CASE("every column of every table budjam writes is in docs/files.md, and ev
       {"`RUN/packings/<name>.dos.csv`", run / "packings/target_0.dos.csv"},
       {"`BASE.csv` of `budjam dos`", out / "phi2.dos.csv"},
       {"`BASE.csv` of `budjam survival`", out / "survival.csv"},
+      {"`BASE.csv` of `budjam rigidity`", out / "rigidity.csv"},
       {"`TABLES/runs.csv`", out / "tables/runs.csv"},
       {"`TABLES/targets.csv`", out / "tables/targets.csv"},
       {"`TABLES/survival.csv`", out / "tables/survival.csv"},
@@ -135,7 +139,7 @@ TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JS
   fs::create_directories(out);
   const std::vector<std::pair<std::string, bool>> commands{
       {"moduli " + shell_quoted(pack), false},
-      {"rigidity " + shell_quoted(pack), false},
+      {"rigidity " + shell_quoted(pack), true},
       {"dos " + shell_quoted(pack), true},
       {"survival " + shell_quoted(demo_run()), true}};
   for (const auto& [command, has_table] : commands) {
