@@ -19,8 +19,9 @@ for stamp in "$@"; do
 done
 line="[$stage $done/$total runs"
 paced=$((done - at_start - 1))  # items made after the first one of this make
-if ((paced > 0 && done < total)); then
-  eta=$((($(date +%s) - first) * (total - done) / paced))
+elapsed=$(($(date +%s) - ${first:-0}))
+if ((paced > 0 && elapsed > 0 && done < total)); then  # (a pace within one second is no pace)
+  eta=$((elapsed * (total - done) / paced))
   if ((eta >= 3600)); then
     line+=$(printf ', ETA %dh%02dm' $((eta / 3600)) $((eta % 3600 / 60)))
   else
