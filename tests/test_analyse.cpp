@@ -272,7 +272,8 @@ fs::path runs_with_spectra() {
   if (!fs::exists(dir)) {
     fs::copy(work_dir() / "runs", dir, fs::copy_options::recursive);
     for (const auto& e : fs::recursive_directory_iterator(dir))
-      if (e.path().extension() == ".pack") REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet --out " + q(fs::path(e.path()).replace_extension(".dos")))
+      if (e.path().extension() == ".pack")
+        REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet --out " + q(fs::path(e.path()).replace_extension(".dos")))
                     .code == 0);
   }
   return dir;

@@ -80,34 +80,33 @@ std::string one_line(const std::string& s) {
 TEST_CASE("every column of every table budjam writes is in docs/files.md, and every column listed there is written",
           "[cli]") {
   const fs::path run = demo_run(), out = work_dir() / "outputs";
-  REQUIRE(run_budjam("dos " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " +
-                     shell_quoted(out / "phi2.dos"))
-              .code == 0);
+  REQUIRE(
+      run_budjam("dos " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " + shell_quoted(out / "phi2.dos"))
+          .code == 0);
   REQUIRE(run_budjam("survival " + shell_quoted(run) + " --quiet --out " + shell_quoted(out / "survival")).code == 0);
   REQUIRE(run_budjam("rigidity " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " +
                      shell_quoted(out / "rigidity"))
               .code == 0);
   REQUIRE(run_budjam("analyse " + shell_quoted(run) + " --out " + shell_quoted(out / "tables") + " --main-L 8").code ==
           0);
-  const std::map<std::string, fs::path> tables{
-      {"`RUN/steps.csv`", run / "steps.csv"},
-      {"`RUN/divisions.csv`", run / "divisions.csv"},
-      {"`RUN/bud_events.csv`", run / "bud_events.csv"},
-      {"`RUN/moduli.csv`", run / "moduli.csv"},
-      {"`RUN/dos.csv`", run / "dos.csv"},
-      {"`RUN/rigidity_events.csv`", run / "rigidity_events.csv"},
-      {"`RUN/packings/<name>.dos.csv`", run / "packings/target_0.dos.csv"},
-      {"`BASE.csv` of `budjam dos`", out / "phi2.dos.csv"},
-      {"`BASE.csv` of `budjam survival`", out / "survival.csv"},
-      {"`BASE.csv` of `budjam rigidity`", out / "rigidity.csv"},
-      {"`TABLES/runs.csv`", out / "tables/runs.csv"},
-      {"`TABLES/targets.csv`", out / "tables/targets.csv"},
-      {"`TABLES/survival.csv`", out / "tables/survival.csv"},
-      {"`TABLES/remaining.csv`", out / "tables/remaining.csv"},
-      {"`TABLES/division_curve.csv`", out / "tables/division_curve.csv"},
-      {"`TABLES/growth_rates.csv`", out / "tables/growth_rates.csv"},
-      {"`TABLES/trajectory.csv`", out / "tables/trajectory.csv"},
-      {"`TABLES/dos.csv`", out / "tables/dos.csv"}};
+  const std::map<std::string, fs::path> tables{{"`RUN/steps.csv`", run / "steps.csv"},
+                                               {"`RUN/divisions.csv`", run / "divisions.csv"},
+                                               {"`RUN/bud_events.csv`", run / "bud_events.csv"},
+                                               {"`RUN/moduli.csv`", run / "moduli.csv"},
+                                               {"`RUN/dos.csv`", run / "dos.csv"},
+                                               {"`RUN/rigidity_events.csv`", run / "rigidity_events.csv"},
+                                               {"`RUN/packings/<name>.dos.csv`", run / "packings/target_0.dos.csv"},
+                                               {"`BASE.csv` of `budjam dos`", out / "phi2.dos.csv"},
+                                               {"`BASE.csv` of `budjam survival`", out / "survival.csv"},
+                                               {"`BASE.csv` of `budjam rigidity`", out / "rigidity.csv"},
+                                               {"`TABLES/runs.csv`", out / "tables/runs.csv"},
+                                               {"`TABLES/targets.csv`", out / "tables/targets.csv"},
+                                               {"`TABLES/survival.csv`", out / "tables/survival.csv"},
+                                               {"`TABLES/remaining.csv`", out / "tables/remaining.csv"},
+                                               {"`TABLES/division_curve.csv`", out / "tables/division_curve.csv"},
+                                               {"`TABLES/growth_rates.csv`", out / "tables/growth_rates.csv"},
+                                               {"`TABLES/trajectory.csv`", out / "tables/trajectory.csv"},
+                                               {"`TABLES/dos.csv`", out / "tables/dos.csv"}};
   for (const auto& [key, file] : tables) {
     INFO(key << " <- " << file);
     REQUIRE(fs::exists(file));
@@ -137,11 +136,10 @@ TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JS
           "[cli]") {
   const fs::path pack = demo_run() / "packings/phi2.pack", out = work_dir() / "convention";
   fs::create_directories(out);
-  const std::vector<std::pair<std::string, bool>> commands{
-      {"moduli " + shell_quoted(pack), false},
-      {"rigidity " + shell_quoted(pack), true},
-      {"dos " + shell_quoted(pack), true},
-      {"survival " + shell_quoted(demo_run()), true}};
+  const std::vector<std::pair<std::string, bool>> commands{{"moduli " + shell_quoted(pack), false},
+                                                           {"rigidity " + shell_quoted(pack), true},
+                                                           {"dos " + shell_quoted(pack), true},
+                                                           {"survival " + shell_quoted(demo_run()), true}};
   for (const auto& [command, has_table] : commands) {
     const std::string name = command.substr(0, command.find(' '));
     INFO(command);
@@ -169,8 +167,9 @@ TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JS
 
 TEST_CASE("survival keeps -o as --out: -o BASE.csv writes BASE.csv and BASE.json", "[cli]") {
   const fs::path base = work_dir() / "km";
-  REQUIRE(run_budjam("survival " + shell_quoted(demo_run()) + " --quiet -o " + shell_quoted(base.string() + ".csv"))
-              .code == 0);
+  REQUIRE(
+      run_budjam("survival " + shell_quoted(demo_run()) + " --quiet -o " + shell_quoted(base.string() + ".csv")).code ==
+      0);
   CHECK(csv_header(base.string() + ".csv").front() == "a");
   CHECK(budjam::io::read_json(base.string() + ".json").contains("a_eps"));
 }

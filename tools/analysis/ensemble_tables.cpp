@@ -180,7 +180,9 @@ void read_survival(const CsvTable& S, Ensemble& e) {
     std::vector<KaplanMeierStep> steps;
     std::size_t events = 0;
     double S_prev = 1;
-    for (++k; k < S.size() && S.number(k, c_L) == g->first.first && P0_label_from_csv(S.text(k, c_P0)) == g->first.second; ++k) {
+    for (++k;
+         k < S.size() && S.number(k, c_L) == g->first.first && P0_label_from_csv(S.text(k, c_P0)) == g->first.second;
+         ++k) {
       KaplanMeierStep st;
       st.a = S.number(k, c_a);
       st.S = S.number(k, c_S);

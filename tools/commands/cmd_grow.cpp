@@ -51,11 +51,12 @@ std::string safe_name(const std::string& s) {
 // The step limit is an expected end (a run with strong feedback all but stops growing): one line
 // saying what was recorded, and exit 0. The other failures are errors (exit 1).
 std::string step_limit_notice(const Scene& scene, const RunResult& r, const fs::path& summary) {
-  std::string line = "budjam: grow: run stopped at the step limit (growth.max_steps = " +
-                     std::to_string(scene.max_steps) + " growth steps); recorded: ";
+  std::string line =
+      "budjam: grow: run stopped at the step limit (growth.max_steps = " + std::to_string(scene.max_steps) +
+      " growth steps); recorded: ";
   if (!r.jamming) return line + "not jammed [" + summary.string() + "]";
-  line += "jamming at φ_J = " + io::format_double(r.jamming->phi) + ", " + std::to_string(r.targets.size()) +
-          " of " + std::to_string(scene.targets.size()) + " Δφ targets";
+  line += "jamming at φ_J = " + io::format_double(r.jamming->phi) + ", " + std::to_string(r.targets.size()) + " of " +
+          std::to_string(scene.targets.size()) + " Δφ targets";
   if (!r.targets.empty()) line += " (up to " + io::format_double(r.targets.back().dphi) + ")";
   if (scene.continue_to_phi2) line += r.depletion ? ", φ_2 reached" : ", φ_2 not reached";
   return line + " [" + summary.string() + "]";

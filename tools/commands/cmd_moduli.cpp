@@ -43,8 +43,8 @@ struct Options {
 
 std::string summary_line(const ElasticResponse& e) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G = %.6g%s", e.N,
-                e.N_nr, e.phi, e.P, e.B(), e.G(), e.energy_minimum() ? "" : " (a saddle: relaxed moduli undefined)");
+  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G = %.6g%s", e.N, e.N_nr,
+                e.phi, e.P, e.B(), e.G(), e.energy_minimum() ? "" : " (a saddle: relaxed moduli undefined)");
   return buf;
 }
 

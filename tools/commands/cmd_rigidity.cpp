@@ -14,9 +14,9 @@
 
 #include <chrono>
 #include <cstdio>
-#include <ostream>
 #include <iostream>
 #include <memory>
+#include <ostream>
 #include <string>
 
 namespace {
@@ -85,8 +85,8 @@ void run(const Options& o) {
   std::snprintf(line, sizeof line,
                 "rigidity: %s network, N = %zu, N_nr = %zu, floppy modes %ld (plane), %zu rigid clusters, largest "
                 "%zu cells, spans x %s, y %s",
-                o.network.c_str(), p.size(), net.N_nr, s.floppy_plane, s.clusters.size(),
-                s.largest_cells(), s.spans_x ? "yes" : "no", s.spans_y ? "yes" : "no");
+                o.network.c_str(), p.size(), net.N_nr, s.floppy_plane, s.clusters.size(), s.largest_cells(),
+                s.spans_x ? "yes" : "no", s.spans_y ? "yes" : "no");
   io::CommandResult result{j, {}, line};
   result.csv = [&s](std::ostream& os) {  // per cell, in the packing's order
     os << "cell,cluster,bud_rigid\n";
@@ -103,7 +103,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
        sub.add_option("--network", o->network, "load-bearing (rattlers removed, default) or raw (every cell)");
        sub.add_flag("--timing", o->timing, "add the wall time of the analysis (not deterministic)");
-       budjam::cli::add_output_options(sub, o->output, "BASE.json (the counts) and BASE.csv (each cell's rigid cluster)");
+       budjam::cli::add_output_options(sub, o->output,
+                                       "BASE.json (the counts) and BASE.csv (each cell's rigid cluster)");
        sub.callback([o] { run(*o); });
      }});
 

@@ -80,10 +80,9 @@ void run(const Options& o) {
     os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
     auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
       const double se = std::sqrt(var);
-      os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ','
-         << io::format_double(S) << ',' << io::format_double(se) << ','
-         << io::format_double(std::max(0.0, S - 1.96 * se)) << ',' << io::format_double(std::min(1.0, S + 1.96 * se))
-         << ',' << n << ',' << d << ',' << c << '\n';
+      os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ',' << io::format_double(S)
+         << ',' << io::format_double(se) << ',' << io::format_double(std::max(0.0, S - 1.96 * se)) << ','
+         << io::format_double(std::min(1.0, S + 1.96 * se)) << ',' << n << ',' << d << ',' << c << '\n';
     };
     row(0.0, 1.0, 0.0, km.records(), 0, 0);
     for (const auto& st : km.steps()) row(st.a, st.S, st.greenwood_var, st.at_risk, st.events, st.censored);
