@@ -4,6 +4,7 @@
 #include "io/json.hpp"
 
 #include <catch2/catch.hpp>
+#include "files_doc.hpp"
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
@@ -20,6 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using budjam::testing::csv_header;
+using budjam::testing::documented_columns;
 using budjam::testing::run_budjam;
 using budjam::testing::shell_quoted;
 using budjam::testing::slurp;
@@ -40,35 +43,6 @@ const fs::path& demo_run() {
     return d;
   }();
   return dir;
-}
-
-std::vector<std::string> csv_header(const fs::path& file) {
-  std::istringstream in(slurp(file));
-  std::string line, name;
-  std::getline(in, line);
-  std::vector<std::string> names;
-  std::istringstream fields(line);
-  while (std::getline(fields, name, ',')) names.push_back(name);
-  return names;
-}
-
-// The first-column names (`name`) of the table under the "#### " heading of docs/files.md that
-// contains `key`; empty if there is no such heading.
-std::vector<std::string> documented_columns(const std::string& key) {
-  std::istringstream doc(slurp(source_file("docs/files.md")));
-  std::string line;
-  bool in_section = false;
-  std::vector<std::string> names;
-  while (std::getline(doc, line)) {
-    if (line.rfind("#", 0) == 0) {
-      if (in_section) break;
-      in_section = line.rfind("#### ", 0) == 0 && line.find(key) != std::string::npos;
-    } else if (in_section && line.rfind("| `", 0) == 0) {
-      const auto end = line.find('`', 3);
-      names.push_back(line.substr(3, end - 3));
-    }
-  }
-  return names;
 }
 
 std::string one_line(const std::string& s) {
