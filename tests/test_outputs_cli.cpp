@@ -93,6 +93,25 @@ TEST_CASE("every column of every table budjam writes is in docs/files.md, and ev
   CHECK(slurp(out / "tables/runs.csv").find(",8,,1,") != std::string::npos);
 }
 
+TEST_CASE("every key of summary.json and timing.json is in docs/files.md, and every key listed there is written",
+          "[cli]") {
+  const budjam::io::Json summary = budjam::io::read_json(demo_run() / "summary.json");
+  std::vector<std::string> keys;
+  for (const auto& [key, value] : summary.items()) {
+    keys.push_back(key);
+    const std::string prefix = key + (value.is_array() ? "[]." : ".");
+    const budjam::io::Json* entry = key == "targets" ? &value.at(0) : key == "final" ? &value : nullptr;
+    if (entry)
+      for (const auto& [sub, unused] : entry->items()) keys.push_back(prefix + sub);
+  }
+  CHECK(keys == documented_columns("`RUN/summary.json`"));
+  // named: items() of a temporary would dangle
+  const budjam::io::Json timing = budjam::io::read_json(demo_run() / "timing.json");
+  std::vector<std::string> timing_keys;
+  for (const auto& [key, unused] : timing.items()) timing_keys.push_back(key);
+  CHECK(timing_keys == documented_columns("`RUN/timing.json`"));
+}
+
 TEST_CASE("analyse --tables reads the P0 \"none\" of earlier tables and writes it as an empty field", "[cli]") {
   const fs::path out = work_dir() / "reanalysed";
   REQUIRE(run_budjam("analyse --tables " + shell_quoted(source_file("data/reference/quick/tables")) + " --out " +
