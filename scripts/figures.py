@@ -35,8 +35,14 @@ class Missing(Exception):
 
 
 def read_csv(path):
+    """Rows as dicts of text; an empty P0 field (no feedback; "none" in tables of earlier versions)
+    becomes the label "none"."""
     with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        if r.get("P0") == "":
+            r["P0"] = "none"
+    return rows
 
 
 def num(s):

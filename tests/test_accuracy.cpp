@@ -9,6 +9,7 @@
 
 #include <sys/wait.h>
 #include <catch2/catch.hpp>
+#include "files_doc.hpp"
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
@@ -58,6 +59,7 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
   REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'")
               .code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
+  CHECK(testing::csv_header(out / "accuracy.csv") == testing::documented_columns("`DIR/accuracy.csv`"));
 
   // Direct solvers agree with the dense reference at rounding level; CG to its tolerance (relative to
   // B; G relative to itself can be larger when G ≪ B).

@@ -69,8 +69,9 @@ const std::vector<fs::path>& runs() {
                   .code == 0);
       for (const auto& e : fs::directory_iterator(dir / "packings"))
         if (e.path().extension() == ".pack")
-          REQUIRE(run_budjam_redirected("moduli " + q(e.path()),
-                                        fs::path(e.path()).replace_extension(".moduli.json")) == 0);
+          REQUIRE(run_budjam("moduli " + q(e.path()) + " --quiet --out " +
+                             q(fs::path(e.path()).replace_extension(".moduli")))
+                      .code == 0);
       d.push_back(dir);
     }
     return d;
@@ -165,8 +166,9 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
   const fs::path copy = work_dir() / "with_saddle";
   fs::copy(runs().front(), copy, fs::copy_options::recursive);
   // a real saddle's JSON (budjam moduli exits 1 on it) in place of target_0's
-  REQUIRE(run_budjam_redirected("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack"),
-                                copy / "packings" / "target_0.moduli.json") == 1);
+  REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack") + " --quiet --out " +
+                     q(copy / "packings" / "target_0.moduli"))
+              .code == 1);
   const fs::path out = work_dir() / "t_saddle";
   REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli").code == 0);
   CHECK(budjam::io::read_json(out / "analysis.json").at("inputs").at("moduli_saddles").get<long>() == 1);
@@ -270,7 +272,9 @@ fs::path runs_with_spectra() {
   if (!fs::exists(dir)) {
     fs::copy(work_dir() / "runs", dir, fs::copy_options::recursive);
     for (const auto& e : fs::recursive_directory_iterator(dir))
-      if (e.path().extension() == ".pack") REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet").code == 0);
+      if (e.path().extension() == ".pack")
+        REQUIRE(run_budjam("dos " + q(e.path()) + " --quiet --out " + q(fs::path(e.path()).replace_extension(".dos")))
+                    .code == 0);
   }
   return dir;
 }

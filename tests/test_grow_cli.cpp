@@ -127,11 +127,14 @@ TEST_CASE("the same scene and seed give a byte-identical summary.json; another s
   CHECK(slurp(a / "summary.json") == slurp(c / "summary.json"));
 }
 
-TEST_CASE("a step-limit failure exits 1 with status step_limit in summary.json", "[grow_cli]") {
+TEST_CASE("a run stopped at the step limit exits 0 with a one-line notice, not an error, and status step_limit",
+          "[grow_cli]") {
   const fs::path dir = work_dir() / "limit";
   const Result r = grow(q(small_scene("limit")) + " --quiet --set growth.max_steps=30 --out " + q(dir));
-  CHECK(r.code == 1);
-  CHECK(r.err.find("step_limit") != std::string::npos);
+  CHECK(r.code == 0);
+  CHECK(r.err.find("budjam: grow: run stopped at the step limit (growth.max_steps = 30 growth steps); recorded: "
+                   "not jammed") == 0);
+  CHECK(r.err.find("error") == std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   const auto s = budjam::io::read_json(dir / "summary.json");
   CHECK(s["status"] == "step_limit");

@@ -449,7 +449,7 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   const fs::path pack = work_dir() / "p.pack";
   io::write_packing(pack, r.p);
-  const auto [code, out, err] = run_budjam("moduli '" + pack.string() + "' --check");
+  const auto [code, out, err] = run_budjam("moduli '" + pack.string() + "' --check --json");
   REQUIRE(code == 0);
   const io::Json j = io::Json::parse(out);
   CHECK(j["B"].get<double>() == Approx(e.moduli.B).epsilon(1e-9));
@@ -469,7 +469,8 @@ TEST_CASE("budjam moduli prints the library's moduli as JSON and --check reports
   CHECK(j["check"]["simple_shear_G"]["relative_difference"].get<double>() < 0.01);
   CHECK(j["check"]["isotropic_B"]["relative_difference"].get<double>() < 0.01);
   // Deterministic output: the same file gives the same bytes.
-  CHECK(run_budjam("moduli '" + pack.string() + "'").out == run_budjam("moduli '" + pack.string() + "'").out);
+  const std::string again = "moduli '" + pack.string() + "' --json";
+  CHECK(run_budjam(again).out == run_budjam(again).out);
 }
 
 TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal to budjam moduli on the saved packings",
@@ -502,7 +503,7 @@ TEST_CASE("The moduli observer writes moduli.csv at jamming and targets, equal t
   for (std::size_t k = 0; k < 3; ++k) {
     CHECK(rows[k][col("well_posed")] == "true");
     const io::Json j =
-        io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "'").out);
+        io::Json::parse(run_budjam("moduli '" + (run / "packings" / (packs[k] + ".pack")).string() + "' --json").out);
     CHECK(std::stod(rows[k][col("B")]) == Approx(j["B"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_simple")]) == Approx(j["G"].get<double>()).epsilon(1e-9));
     CHECK(std::stod(rows[k][col("G_energy")]) == Approx(j["G_energy"].get<double>()).epsilon(1e-9));
@@ -640,7 +641,7 @@ TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false a
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const auto [code, out, err] =
-      run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack'");
+      run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack' --json");
   CHECK(code == 1);
   const io::Json j = io::Json::parse(out);
   CHECK(j["energy_minimum"] == false);
@@ -747,7 +748,7 @@ TEST_CASE("budjam moduli --solver, --cg-tol, --cg-preconditioner and --refine se
   const ElasticResponse ref = elastic_response(r.p, r.contacts, r.net);
   const fs::path pack = work_dir() / "solver.pack";
   io::write_packing(pack, r.p);
-  const std::string p = "moduli '" + pack.string() + "'";
+  const std::string p = "moduli '" + pack.string() + "' --json";
   {
     const auto [code, out, err] = run_budjam(p + " --solver ldlt --refine 1");
     REQUIRE(code == 0);

@@ -643,14 +643,14 @@ TEST_CASE("a tracker restored from another's memory reports the same events for 
   CHECK_THROWS_AS(resumed.restore(unsorted), std::invalid_argument);
 }
 
-TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing as JSON", "[fast]") {
+TEST_CASE("budjam rigidity PACKING --json prints the library's analysis of the packing as JSON", "[fast]") {
   namespace fs = std::filesystem;
   const fs::path dir = testing::work_dir();
   const Packing p = random_packing(120, 1.6, 4);
   io::write_packing(dir / "p.pack", p);
   const Analysed a = analyse(p);  // brute-force contacts: the command finds them by neighbour list
   const auto run = [&](const std::string& args) {
-    return testing::run_budjam("rigidity '" + (dir / "p.pack").string() + "' " + args);
+    return testing::run_budjam("rigidity '" + (dir / "p.pack").string() + "' --json " + args);
   };
   for (RigidityNetwork which : {RigidityNetwork::load_bearing, RigidityNetwork::raw}) {
     const bool lb = which == RigidityNetwork::load_bearing;
@@ -669,6 +669,15 @@ TEST_CASE("budjam rigidity PACKING prints the library's analysis of the packing 
     CHECK(j["rigid_clusters"]["largest_cells"] == s.largest_cells());
     CHECK(j["spans_x"] == s.spans_x);
     CHECK(j["spans_y"] == s.spans_y);
+    // --out BASE: the same JSON, and BASE.csv with each cell's cluster and bud rigidity
+    const fs::path base = dir / (lb ? "lb" : "raw");
+    REQUIRE(run((lb ? "" : "--network raw ") + std::string("--out '") + base.string() + "'").code == 0);
+    CHECK(testing::slurp(base.string() + ".json") == text);
+    std::string expected = "cell,cluster,bud_rigid\n";
+    for (std::size_t i = 0; i < p.size(); ++i)
+      expected += std::to_string(i) + ',' + std::to_string(s.cell_cluster[i]) + ',' +
+                  (s.bud_rigid(i) ? "true" : "false") + '\n';
+    CHECK(testing::slurp(base.string() + ".csv") == expected);
   }
   CHECK(run("--network nonsense").code == 2);  // bad input
 }

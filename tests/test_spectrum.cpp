@@ -645,7 +645,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   const fs::path dir = grown_demo(1);
   const fs::path pack = dir / "packings" / "target_1.pack";
   const fs::path base = work_dir() / "t1";
-  auto r = run_budjam("dos '" + pack.string() + "' --out '" + base.string() + "'");
+  auto r = run_budjam("dos '" + pack.string() + "' --out '" + base.string() + ".dos'");
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.out.find("dos: dense") != std::string::npos);
@@ -653,7 +653,7 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   CHECK(slurp(base.string() + ".dos.csv") == slurp(dir / "packings" / "target_1.dos.csv"));
 
   const fs::path lb = work_dir() / "t1-arpack";
-  r = run_budjam("dos '" + pack.string() + "' --method arpack --modes 30 --out '" + lb.string() + "' --quiet");
+  r = run_budjam("dos '" + pack.string() + "' --method arpack --modes 30 --out '" + lb.string() + ".dos' --quiet");
   REQUIRE(r.code == 0);
   const io::Json j = io::read_json(lb.string() + ".dos.json");
   CHECK(j["method"] == "arpack");

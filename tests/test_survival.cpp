@@ -137,9 +137,11 @@ void write_run(const std::filesystem::path& d) {
 TEST_CASE("budjam survival pools the censored bud events of a run into the hand-worked curve") {
   const auto dir = budjam::testing::work_dir();
   write_run(dir / "run");
-  const auto r =
-      budjam::testing::run_budjam("survival '" + (dir / "run").string() + "' -o '" + (dir / "km.csv").string() + "'");
+  // -o BASE (a trailing .csv dropped) writes km.csv and km.json; --json prints the same JSON.
+  const auto r = budjam::testing::run_budjam("survival '" + (dir / "run").string() + "' --json -o '" +
+                                             (dir / "km.csv").string() + "'");
   REQUIRE(r.code == 0);
+  CHECK(slurp(dir / "km.json") == r.out);
   const auto j = nlohmann::json::parse(r.out);
   CHECK(j["records"] == 8);
   CHECK(j["events"] == 5);

@@ -39,7 +39,7 @@ cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PAT
   -DCMAKE_BUILD_TYPE=Release >/dev/null || fail "configuring a project with find_package(budjam)"
 cmake --build "$work/consumer" >/dev/null || fail "building against the installed libraries"
 read -r n phi contacts < <("$work/consumer/packing_fraction" "$packing")
-expected=$("$prefix/bin/budjam" rigidity "$packing" | "$python" -c 'import json, sys; j = json.load(sys.stdin); print(j["N"], j["contacts"])')
+expected=$("$prefix/bin/budjam" rigidity "$packing" --json | "$python" -c 'import json, sys; j = json.load(sys.stdin); print(j["N"], j["contacts"])')
 [[ "$n $contacts" == "$expected" ]] || fail "consumer says N, contacts = $n $contacts, budjam rigidity $expected"
 
 # The Python module imports from the prefix, outside the source and build trees.

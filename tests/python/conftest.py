@@ -46,4 +46,4 @@ def sheared_packing(tmp_path_factory):
 
 
 def rigidity_json(run_budjam, packing):
-    return json.loads(run_budjam("rigidity", packing).stdout)
+    return json.loads(run_budjam("rigidity", packing, "--json").stdout)

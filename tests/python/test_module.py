@@ -72,7 +72,7 @@ def test_lobes_are_tangent_dumbbells():
 @pytest.mark.parametrize("network", ["load-bearing", "raw"])
 def test_rigidity_and_contacts_equal_budjam_rigidity(run_budjam, network):
     p = budjam.read_packing(PACKING)
-    cli = json.loads(run_budjam("rigidity", PACKING, "--network", network).stdout)
+    cli = json.loads(run_budjam("rigidity", PACKING, "--network", network, "--json").stdout)
     r, c = budjam.rigidity(p, network), budjam.contacts(p)
     assert len(c["force"]) == cli["contacts"]
     assert c["N_c"] // 2 == cli["contacts_load_bearing"]
@@ -93,7 +93,7 @@ def test_rigidity_and_contacts_equal_budjam_rigidity(run_budjam, network):
 
 @pytest.mark.slow
 def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
-    cli = json.loads(run_budjam("moduli", relaxed).stdout)
+    cli = json.loads(run_budjam("moduli", relaxed, "--json").stdout)
     m = budjam.moduli(budjam.read_packing(relaxed))
     assert m["energy_minimum"] and cli["energy_minimum"]
     assert m["B"] == cli["B"] and m["G"] == cli["G"]
@@ -109,7 +109,7 @@ def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
 
 @pytest.mark.slow
 def test_spectrum_equals_budjam_dos_and_modes_are_orthonormal_and_free_of_translations(run_budjam, relaxed):
-    run_budjam("dos", relaxed, "--quiet")
+    run_budjam("dos", relaxed, "--quiet", "--out", relaxed.with_suffix(".dos"))
     cli = json.loads(relaxed.with_suffix(".dos.json").read_text())
     table = pandas.read_csv(relaxed.with_suffix(".dos.csv"), float_precision="round_trip")
     s = budjam.spectrum(budjam.read_packing(relaxed))
@@ -191,7 +191,8 @@ def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
 
 @pytest.mark.slow
 def test_survival_equals_budjam_survival(run_dir, run_budjam, tmp_path):
-    summary = json.loads(run_budjam("survival", run_dir, "-o", tmp_path / "s.csv").stdout)
+    run_budjam("survival", run_dir, "--out", tmp_path / "s", "--quiet")
+    summary = json.loads((tmp_path / "s.json").read_text())
     table = pandas.read_csv(tmp_path / "s.csv", float_precision="round_trip")
     s = budjam.survival([run_dir])
     assert s["records"] == summary["records"] and s["completed"] == summary["events"]

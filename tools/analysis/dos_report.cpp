@@ -95,19 +95,22 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
   return j;
 }
 
-std::vector<fs::path> write_dos_files(const fs::path& base, const DosReport& r, const DosRequest& request) {
-  const fs::path json = fs::path(base.string() + ".dos.json"), csv = fs::path(base.string() + ".dos.csv");
-  const Spectrum& s = r.result.spectrum;
-  io::write_atomically(csv, [&](std::ostream& os) {
+io::CommandResult dos_result(const DosReport& r, const DosRequest& request) {
+  io::CommandResult result{dos_json(r, request), {}, dos_line(r)};
+  result.csv = [&r](std::ostream& os) {
+    const Spectrum& s = r.result.spectrum;
     os << "mode,lambda,omega,participation,quasi_zero\n";
     for (Eigen::Index n = 0; n < s.lambda.size(); ++n) {
       os << n << ',' << io::format_double(s.lambda[n]) << ',' << io::format_double(signed_omega(s.lambda[n])) << ','
          << (r.result.participation.size() ? io::format_double(r.result.participation[n]) : std::string()) << ','
          << (s.lambda[n] < r.result.summary.lambda_tol ? "true" : "false") << '\n';
     }
-  });
-  io::write_json(json, dos_json(r, request));
-  return {json, csv};
+  };
+  return result;
+}
+
+std::vector<fs::path> write_dos_files(const fs::path& base, const DosReport& r, const DosRequest& request) {
+  return io::write_result_files(fs::path(base.string() + ".dos"), dos_result(r, request));
 }
 
 std::string dos_line(const DosReport& r) {

@@ -12,6 +12,7 @@
 #include "budjam/rigidity.hpp"
 #include "budjam/spectrum.hpp"
 #include "io/json.hpp"
+#include "io/result_files.hpp"
 
 #include <filesystem>
 #include <string>
@@ -42,7 +43,12 @@ DosReport dos_report(const Packing& p, const std::vector<Contact>& contacts, con
 
 io::Json dos_json(const DosReport& report, const DosRequest& request);
 
-// Writes <base>.dos.json and <base>.dos.csv atomically; returns the two paths.
+// The JSON, the eigenvalue table (mode, lambda, omega, participation, quasi_zero) and dos_line;
+// the CSV writer refers to `report`, which must outlive it.
+io::CommandResult dos_result(const DosReport& report, const DosRequest& request);
+
+// Writes <base>.dos.json and <base>.dos.csv atomically (the sidecar files of a run's packings);
+// returns the two paths, JSON first.
 std::vector<std::filesystem::path> write_dos_files(const std::filesystem::path& base, const DosReport& report,
                                                    const DosRequest& request);
 

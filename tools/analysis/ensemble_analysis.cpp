@@ -517,14 +517,14 @@ struct Tables {
 
 Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km,
                 const BootstrapOptions& bo, Tables& t) {
-  const std::string P0s = key.P0 ? num(*key.P0) : "none";
+  const std::string P0_label = key.P0 ? num(*key.P0) : "none", P0s = P0_csv(P0_label);
   std::vector<const RunRow*> dep;
   for (const auto* r : rs)
     if (r->depleted) dep.push_back(r);
   Json g;
   g["L"] = key.L;
   g["P0"] = key.P0 ? Json(*key.P0) : Json(nullptr);
-  g["P0_label"] = P0s;
+  g["P0_label"] = P0_label;
   g["runs"] = rs.size();
   g["jammed"] = rs.size();
   g["depleted"] = dep.size();
@@ -902,19 +902,19 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
   tgt_header.push_back("below_phi2");
   std::vector<std::vector<std::string>> run_rows, tgt_rows, dos_out;
   for (const auto& r : e.rows) {
-    std::vector<std::string> row{r.dir.string(),         num(r.L), r.P0_label,
+    std::vector<std::string> row{r.dir.string(),         num(r.L), P0_csv(r.P0_label),
                                  std::to_string(r.seed), r.status, std::to_string(r.state)};
     for (const auto& c : kRunColumns) row.push_back(cell(r.*c.field));
     run_rows.push_back(row);
     for (const auto& x : r.targets) {
-      std::vector<std::string> trow{r.dir.string(), num(r.L), r.P0_label, std::to_string(r.seed), num(x.dphi)};
+      std::vector<std::string> trow{r.dir.string(), num(r.L), P0_csv(r.P0_label), std::to_string(r.seed), num(x.dphi)};
       for (const auto& c : kTargetColumns) trow.push_back(cell(x.*c.field));
       trow.push_back(x.below_phi2 ? "true" : "false");
       tgt_rows.push_back(trow);
     }
   }
   for (const auto& q : e.dos_rows)
-    dos_out.push_back({q.run, q.packing, num(q.L), q.P0_label, std::to_string(q.state), cell(q.dphi),
+    dos_out.push_back({q.run, q.packing, num(q.L), P0_csv(q.P0_label), std::to_string(q.state), cell(q.dphi),
                        cell(q.omega_star), cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr),
                        cell(q.N_zero), cell(q.N_u), cell(q.N_u_buds)});
   auto write = [&](const char* name, const std::vector<std::string>& header,

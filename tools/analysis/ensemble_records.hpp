@@ -69,6 +69,11 @@ struct DosRow {
   bool target = false;     // a Δφ-target packing (the paper's ω* figure uses only these)
 };
 
+// The P0 column of the tables is empty for no feedback (tables of earlier versions say "none");
+// in memory a group's label is "none" or the number's text, as analysis.json "P0_label" has it.
+inline std::string P0_csv(const std::string& label) { return label == "none" ? std::string() : label; }
+inline std::string P0_label_from_csv(const std::string& field) { return field.empty() ? "none" : field; }
+
 struct GroupKey {
   double L;
   std::optional<double> P0;

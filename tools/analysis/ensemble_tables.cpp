@@ -55,7 +55,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     RunRow x;
     x.dir = R.text(k, c_run);
     x.L = R.number(k, c_L);
-    x.P0_label = R.text(k, c_P0);
+    x.P0_label = P0_label_from_csv(R.text(k, c_P0));
     if (x.P0_label != "none") x.P0 = R.number(k, c_P0);
     x.seed = static_cast<std::uint64_t>(R.integer(k, c_seed, 0, std::numeric_limits<long long>::max()));
     x.status = R.text(k, c_status);
@@ -172,7 +172,7 @@ void read_survival(const CsvTable& S, Ensemble& e) {
                     c_se = S.column("se"), c_risk = S.column("at_risk");
   std::size_t k = 0;
   while (k < S.size()) {
-    const auto g = groups.find({S.number(k, c_L), S.text(k, c_P0)});
+    const auto g = groups.find({S.number(k, c_L), P0_label_from_csv(S.text(k, c_P0))});
     if (g == groups.end())
       throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) +
                        ", P0 = " + S.text(k, c_P0) + " has no run in runs.csv");
@@ -180,7 +180,9 @@ void read_survival(const CsvTable& S, Ensemble& e) {
     std::vector<KaplanMeierStep> steps;
     std::size_t events = 0;
     double S_prev = 1;
-    for (++k; k < S.size() && S.number(k, c_L) == g->first.first && S.text(k, c_P0) == g->first.second; ++k) {
+    for (++k;
+         k < S.size() && S.number(k, c_L) == g->first.first && P0_label_from_csv(S.text(k, c_P0)) == g->first.second;
+         ++k) {
       KaplanMeierStep st;
       st.a = S.number(k, c_a);
       st.S = S.number(k, c_S);

@@ -1,9 +1,10 @@
 // `budjam dos PACKING [--method auto|dense|arpack] [--modes K] [--tol T] [--ncv M] [--sigma S]
-//                     [--lambda-tol T] [--bins B] [--dense-max-dof D] [--no-pebble] [--out BASE] [--quiet]`
-// Vibrational spectrum of a relaxed packing (docs/spectrum.md): writes BASE.dos.csv (eigenvalues,
-// frequencies, participation ratios) and BASE.dos.json (N_zero at four cutoffs, ω*, N_u from the
-// contact network, floppy modes from the pebble game, D(ω), the method used). BASE defaults to the
-// packing path without ".pack", so a run's packings/<name>.dos.json is found by `budjam analyse`.
+//                     [--lambda-tol T] [--bins B] [--dense-max-dof D] [--no-pebble] [--out BASE] [--json] [--quiet]`
+// Vibrational spectrum of a relaxed packing (docs/spectrum.md). The output convention
+// (io/result_files.hpp): --out BASE writes BASE.csv (eigenvalues, frequencies, participation
+// ratios) and BASE.json (N_zero at four cutoffs, ω*, N_u from the contact network, floppy modes
+// from the pebble game, D(ω), the method used); `--out packings/<name>.dos` gives the sidecar
+// files of a run's packing that `budjam analyse` reads.
 #include "analysis/dos_report.hpp"
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
@@ -11,14 +12,12 @@
 #include "budjam/errors.hpp"
 #include "io/packing_file.hpp"
 
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace budjam;
 
 struct Options {
@@ -32,8 +31,7 @@ struct Options {
   std::size_t bins = 50;
   std::size_t dense_max_dof = SpectrumOptions{}.dense_max_dof;
   bool no_pebble = false;
-  std::string out;
-  bool quiet = false;
+  io::OutputRequest output;
 };
 
 void run(const Options& o) {
@@ -67,11 +65,7 @@ void run(const Options& o) {
   if (pc.network.N_nr == 0)
     throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
   const tools::DosReport report = tools::dos_report(f.packing, pc.contacts, pc.network, req);
-  fs::path base = o.out.empty() ? fs::path(o.packing) : fs::path(o.out);
-  if (o.out.empty() && base.extension() == ".pack") base.replace_extension();
-  const auto files = tools::write_dos_files(base, report, req);
-  if (!o.quiet)
-    std::cout << tools::dos_line(report) << " -> " << files[0].string() << ", " << files[1].string() << "\n";
+  io::emit(o.output, tools::dos_result(report, req), std::cout);
 }
 
 const bool registered = budjam::cli::register_command(
@@ -94,8 +88,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--dense-max-dof", o->dense_max_dof, "auto: largest problem solved densely")
            ->capture_default_str();
        sub.add_flag("--no-pebble", o->no_pebble, "skip the pebble-game count of floppy modes");
-       sub.add_option("--out", o->out, "output base: BASE.dos.json, BASE.dos.csv (default: PACKING without .pack)");
-       sub.add_flag("--quiet", o->quiet, "no summary line on stdout");
+       budjam::cli::add_output_options(sub, o->output, "BASE.json (the observables) and BASE.csv (the eigenvalues)");
        sub.callback([o] { run(*o); });
      }});
 

@@ -4,6 +4,8 @@
 // (io/run_directory.hpp: claimed with a marker and a lock): scene.toml (the effective scene, seed
 // included), steps.csv, divisions.csv, bud_events.csv, packings/*.pack, checkpoint.txt while
 // running (io/checkpoint.hpp), summary.json last. SIGTERM/SIGINT: checkpoint, exit 128 + signal.
+// A run that reaches growth.max_steps is an expected stop (status step_limit, a notice, exit 0);
+// the other failures (step-size underflow, minimiser failure) exit 1.
 #include "commands/command.hpp"
 #include "commands/stop_signals.hpp"
 #include "observers/observers.hpp"
@@ -14,10 +16,12 @@
 #include "io/checkpoint.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
+#include "io/text.hpp"
 
 #include <cctype>
 #include <chrono>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,6 +46,20 @@ std::string safe_name(const std::string& s) {
   std::string out;
   for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
   return out.empty() ? "run" : out;
+}
+
+// The step limit is an expected end (a run with strong feedback all but stops growing): one line
+// saying what was recorded, and exit 0. The other failures are errors (exit 1).
+std::string step_limit_notice(const Scene& scene, const RunResult& r, const fs::path& summary) {
+  std::string line =
+      "budjam: grow: run stopped at the step limit (growth.max_steps = " + std::to_string(scene.max_steps) +
+      " growth steps); recorded: ";
+  if (!r.jamming) return line + "not jammed [" + summary.string() + "]";
+  line += "jamming at φ_J = " + io::format_double(r.jamming->phi) + ", " + std::to_string(r.targets.size()) + " of " +
+          std::to_string(scene.targets.size()) + " Δφ targets";
+  if (!r.targets.empty()) line += " (up to " + io::format_double(r.targets.back().dphi) + ")";
+  if (scene.continue_to_phi2) line += r.depletion ? ", φ_2 reached" : ", φ_2 not reached";
+  return line + " [" + summary.string() + "]";
 }
 
 void run(const Options& o) {
@@ -103,6 +121,10 @@ void run(const Options& o) {
 
   tools::write_summary(dir, driver, timing);
   fs::remove(dir / run_files::checkpoint);  // a finished (or failed) run is not resumed
+  if (status == RunStatus::step_limit) {
+    std::cerr << step_limit_notice(scene, driver.result(), dir / run_files::summary) << std::endl;
+    return;
+  }
   if (status != RunStatus::finished)
     throw cli::RunFailure(std::string("grow: run failed (") + to_string(status) + "): " + driver.result().message +
                           " [" + (dir / run_files::summary).string() + "]");

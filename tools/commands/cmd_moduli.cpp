@@ -1,6 +1,8 @@
 // `budjam moduli PACKING [--check] [--strain H] [--relax] [--timing] [--solver cholesky|ldlt|dense|cg]
-//                [--cg-tol T] [--cg-preconditioner ichol|diagonal] [--refine N] [--refine-above R]`
-// Non-affine linear elastic response of a relaxed packing as JSON on stdout (docs/moduli.md).
+//                [--cg-tol T] [--cg-preconditioner ichol|diagonal] [--refine N] [--refine-above R]
+//                [--out BASE] [--json] [--quiet]`
+// Non-affine linear elastic response of a relaxed packing (docs/moduli.md) as JSON: BASE.json with
+// --out, on stdout with --json, else a summary line (io/result_files.hpp).
 // --check adds the independent finite-strain measurement (Lees–Edwards shear and isotropic
 // rescaling relaxed by FIRE) and the relative differences.
 #include "analysis/moduli_report.hpp"
@@ -15,6 +17,7 @@
 #include "io/packing_file.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -35,7 +38,15 @@ struct Options {
   std::string cg_preconditioner = "ichol";
   int refine = ModuliOptions{}.direct_refinement_steps;
   double refine_above = ModuliOptions{}.refinement_threshold;
+  io::OutputRequest output;
 };
+
+std::string summary_line(const ElasticResponse& e) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G = %.6g%s", e.N, e.N_nr,
+                e.phi, e.P, e.B(), e.G(), e.energy_minimum() ? "" : " (a saddle: relaxed moduli undefined)");
+  return buf;
+}
 
 // The linear-solver options (bad values: InputError naming the option, exit 2).
 ModuliOptions moduli_options(const Options& o) {
@@ -82,11 +93,11 @@ void run(const Options& o) {
     j["seconds"] = std::chrono::duration<double>(t3 - t0).count();
     j["solve_seconds"] = std::chrono::duration<double>(t2 - t1).count();
   }
-  std::cout << io::json_text(j);
+  io::emit(o.output, {j, {}, summary_line(e)}, std::cout);
   if (!e.energy_minimum())
     throw cli::RunFailure("moduli: " + o.packing + " is a saddle, not an energy minimum (" +
                           std::to_string(e.kernel.unstable_modes) +
-                          " unstable modes): no relaxed response; the JSON has the affine moduli");
+                          " unstable modes): no relaxed response; its JSON has the affine moduli");
 }
 
 const bool registered = budjam::cli::register_command(
@@ -116,6 +127,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--refine-above", o->refine_above,
                       "cholesky, ldlt, dense: refine only while the relative residual exceeds this")
            ->capture_default_str();
+       budjam::cli::add_output_options(sub, o->output, "BASE.json");
        sub.callback([o] { run(*o); });
      }});
 

@@ -1,6 +1,7 @@
-// `budjam rigidity PACKING [--network load-bearing|raw] [--timing]`
-// Rigidity of a packing's contact network by the (2,3) pebble game, as JSON on stdout
-// (docs/rigidity.md). The packing is taken as it is (nothing is relaxed): contacts are the
+// `budjam rigidity PACKING [--network load-bearing|raw] [--timing] [--out BASE] [--json] [--quiet]`
+// Rigidity of a packing's contact network by the (2,3) pebble game (docs/rigidity.md), as JSON:
+// BASE.json with --out (and BASE.csv: each cell's rigid cluster), on stdout with --json, else a
+// summary line (io/result_files.hpp). The packing is taken as it is (nothing is relaxed): contacts are the
 // overlapping lobe pairs, rattlers are removed by the iterative rule for the load-bearing network.
 #include "commands/command.hpp"
 
@@ -12,8 +13,10 @@
 #include "io/packing_file.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <memory>
+#include <ostream>
 #include <string>
 
 namespace {
@@ -25,6 +28,7 @@ struct Options {
   std::string packing;
   std::string network = "load-bearing";
   bool timing = false;
+  io::OutputRequest output;
 };
 
 void run(const Options& o) {
@@ -77,7 +81,19 @@ void run(const Options& o) {
       "self-stress of the generic framework; a cluster spans x (y) if it winds around the periodic box; "
       "docs/rigidity.md";
   if (o.timing) j["seconds"] = seconds;
-  std::cout << io::json_text(j);
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "rigidity: %s network, N = %zu, N_nr = %zu, floppy modes %ld (plane), %zu rigid clusters, largest "
+                "%zu cells, spans x %s, y %s",
+                o.network.c_str(), p.size(), net.N_nr, s.floppy_plane, s.clusters.size(), s.largest_cells(),
+                s.spans_x ? "yes" : "no", s.spans_y ? "yes" : "no");
+  io::CommandResult result{j, {}, line};
+  result.csv = [&s](std::ostream& os) {  // per cell, in the packing's order
+    os << "cell,cluster,bud_rigid\n";
+    for (std::size_t i = 0; i < s.cell_cluster.size(); ++i)
+      os << i << ',' << s.cell_cluster[i] << ',' << (s.bud_rigid(i) ? "true" : "false") << '\n';
+  };
+  io::emit(o.output, result, std::cout);
 }
 
 const bool registered = budjam::cli::register_command(
@@ -87,6 +103,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
        sub.add_option("--network", o->network, "load-bearing (rattlers removed, default) or raw (every cell)");
        sub.add_flag("--timing", o->timing, "add the wall time of the analysis (not deterministic)");
+       budjam::cli::add_output_options(sub, o->output,
+                                       "BASE.json (the counts) and BASE.csv (each cell's rigid cluster)");
        sub.callback([o] { run(*o); });
      }});
 

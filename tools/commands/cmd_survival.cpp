@@ -1,9 +1,9 @@
-// `budjam survival RUNDIR... [-o FILE.csv] [--epsilon E]`
+// `budjam survival RUNDIR... [-o|--out BASE] [--json] [--quiet] [--epsilon E]`
 // Kaplan–Meier survival S(a) of the buds unconstrained at jamming, pooled over the given finished
 // runs (each run's last jamming episode): completion is the event, division and the end of the run
-// censor. Writes the curve as CSV (a in diameter squared and as true area, Ŝ, Greenwood SE and a
-// 95 % band) and prints a JSON summary on stdout: a_ε with u_J S(a_ε) = ε (ε = 1/⟨N_nr,J⟩ unless
-// given) and ∫_0^{a_ε} S da, in both units (paper Eq. 14).
+// censor. The output convention (io/result_files.hpp): BASE.csv is the curve (a in diameter squared
+// and as true area, Ŝ, Greenwood SE and a 95 % band), BASE.json the summary: a_ε with
+// u_J S(a_ε) = ε (ε = 1/⟨N_nr,J⟩ unless given) and ∫_0^{a_ε} S da, in both units (paper Eq. 14).
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
 
@@ -30,9 +30,17 @@ using namespace budjam;
 
 struct Options {
   std::vector<std::string> runs;
-  std::string out;
+  io::OutputRequest output;
   std::optional<double> epsilon;
 };
+
+std::string summary_line(std::size_t runs, const KaplanMeierCurve& km, std::optional<double> a_eps) {
+  std::string line = "survival: " + std::to_string(runs) + " runs, " + std::to_string(km.records()) + " buds, " +
+                     std::to_string(km.events()) + " completed; a_eps = ";
+  line += a_eps ? io::format_double(*a_eps) + ", integral of S = " + io::format_double(km.integral(*a_eps))
+                : std::string("not reached");
+  return line + " (diameter squared)";
+}
 
 void run(const Options& o) {
   std::vector<SurvivalRecord> records;
@@ -52,21 +60,6 @@ void run(const Options& o) {
   const KaplanMeierCurve km = kaplan_meier(records);
   const auto a_eps = u_J > 0 ? a_epsilon(km, u_J, eps) : std::nullopt;
 
-  if (!o.out.empty()) {
-    io::write_atomically(fs::path(o.out), [&](std::ostream& os) {
-      os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
-      auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
-        const double se = std::sqrt(var);
-        os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ','
-           << io::format_double(S) << ',' << io::format_double(se) << ','
-           << io::format_double(std::max(0.0, S - 1.96 * se)) << ',' << io::format_double(std::min(1.0, S + 1.96 * se))
-           << ',' << n << ',' << d << ',' << c << '\n';
-      };
-      row(0.0, 1.0, 0.0, km.records(), 0, 0);
-      for (const auto& st : km.steps()) row(st.a, st.S, st.greenwood_var, st.at_risk, st.events, st.censored);
-    });
-  }
-
   io::Json j;
   j["runs"] = o.runs.size();
   j["records"] = km.records();
@@ -82,7 +75,19 @@ void run(const Options& o) {
   j["integral_S_area"] = a_eps ? io::Json(kDiameterSquaredToArea * km.integral(*a_eps)) : io::Json(nullptr);
   j["a_last"] = km.last_observation();
   j["note"] = "a = b^2 - b_J^2 (diameter squared); *_area = pi/4 times it (true area)";
-  std::cout << io::json_text(j);
+  io::CommandResult result{j, {}, summary_line(o.runs.size(), km, a_eps)};
+  result.csv = [&km](std::ostream& os) {
+    os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
+    auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
+      const double se = std::sqrt(var);
+      os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ',' << io::format_double(S)
+         << ',' << io::format_double(se) << ',' << io::format_double(std::max(0.0, S - 1.96 * se)) << ','
+         << io::format_double(std::min(1.0, S + 1.96 * se)) << ',' << n << ',' << d << ',' << c << '\n';
+    };
+    row(0.0, 1.0, 0.0, km.records(), 0, 0);
+    for (const auto& st : km.steps()) row(st.a, st.S, st.greenwood_var, st.at_risk, st.events, st.censored);
+  };
+  io::emit(o.output, result, std::cout);
 }
 
 const bool registered = budjam::cli::register_command(
@@ -90,7 +95,8 @@ const bool registered = budjam::cli::register_command(
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("RUNDIR", o->runs, "finished run directories (pooled)")->required();
-       sub.add_option("-o,--out", o->out, "write the curve as CSV")->type_name("FILE.csv");
+       budjam::cli::add_output_options(sub, o->output, "BASE.json (a_eps, the integral of S) and BASE.csv (the curve)",
+                                       true);
        sub.add_option("--epsilon", o->epsilon, "cutoff eps of u_J S(a_eps) = eps (default 1/<N_nr,J>)");
        sub.callback([o] { run(*o); });
      }});

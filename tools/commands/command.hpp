@@ -13,6 +13,8 @@
 // main.cpp creates one CLI11 subcommand per registered command, in name order, calls `setup` on
 // it and runs the one the user chose. A callback reports failure by throwing (exit codes below);
 // main prints exactly one line "budjam: error: <what()>" on stderr.
+#include "io/result_files.hpp"
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
@@ -61,6 +63,18 @@ inline std::vector<Command>& registry() {
 inline bool register_command(Command command) {
   registry().push_back(std::move(command));
   return true;
+}
+
+// --out BASE, --json and --quiet of the output convention (io/result_files.hpp). `files` names
+// what --out writes, e.g. "BASE.json (summary) and BASE.csv (the curve)". `short_o` also accepts
+// -o, for the commands that took it before the convention.
+inline void add_output_options(CLI::App& sub, io::OutputRequest& request, const std::string& files,
+                               bool short_o = false) {
+  sub.add_option(short_o ? "-o,--out" : "--out", request.base,
+                 "write " + files + ", atomically; a trailing .json or .csv of BASE is dropped")
+      ->type_name("BASE");
+  sub.add_flag("--json", request.json, "print the JSON on stdout (also with --out)");
+  sub.add_flag("--quiet", request.quiet, "no summary line on stdout");
 }
 
 }  // namespace budjam::cli

@@ -1,0 +1,191 @@
+// The output convention of the per-packing commands (docs/files.md, "Outputs of the commands") and
+// the column reference ("Columns and units"): every column budjam writes is documented, and every
+// documented column is written.
+#include "io/json.hpp"
+
+#include <catch2/catch.hpp>
+#include "files_doc.hpp"
+#include "run_budjam.hpp"
+#include "scratch.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using budjam::testing::csv_header;
+using budjam::testing::documented_columns;
+using budjam::testing::run_budjam;
+using budjam::testing::shell_quoted;
+using budjam::testing::slurp;
+using budjam::testing::source_file;
+using budjam::testing::work_dir;
+
+// A demo run without feedback, with every observer that writes a table: the logs, moduli,
+// spectra, rigidity events.
+const fs::path& demo_run() {
+  static const fs::path dir = [] {
+    const fs::path d = work_dir() / "run";
+    const auto r = run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --out " +
+                              shell_quoted(d) + " --set growth.P0=none" +
+                              " --set 'jamming.targets=[1e-3]' --set jamming.continue_to_phi2=true"
+                              " --set observe.rigidity_events=true --set observe.moduli.at_jamming=true"
+                              " --set observe.moduli.at_targets=true --set observe.dos.at_targets=true");
+    REQUIRE(r.code == 0);
+    return d;
+  }();
+  return dir;
+}
+
+std::string one_line(const std::string& s) {
+  return s.empty() || s.back() != '\n' ? std::string("(not one line)") : s.substr(0, s.find('\n'));
+}
+
+}  // namespace
+
+TEST_CASE("every column of every table budjam writes is in docs/files.md, and every column listed there is written",
+          "[cli]") {
+  const fs::path run = demo_run(), out = work_dir() / "outputs";
+  REQUIRE(
+      run_budjam("dos " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " + shell_quoted(out / "phi2.dos"))
+          .code == 0);
+  REQUIRE(run_budjam("survival " + shell_quoted(run) + " --quiet --out " + shell_quoted(out / "survival")).code == 0);
+  REQUIRE(run_budjam("rigidity " + shell_quoted(run / "packings/phi2.pack") + " --quiet --out " +
+                     shell_quoted(out / "rigidity"))
+              .code == 0);
+  REQUIRE(run_budjam("analyse " + shell_quoted(run) + " --out " + shell_quoted(out / "tables") + " --main-L 8").code ==
+          0);
+  const std::map<std::string, fs::path> tables{{"`RUN/steps.csv`", run / "steps.csv"},
+                                               {"`RUN/divisions.csv`", run / "divisions.csv"},
+                                               {"`RUN/bud_events.csv`", run / "bud_events.csv"},
+                                               {"`RUN/moduli.csv`", run / "moduli.csv"},
+                                               {"`RUN/dos.csv`", run / "dos.csv"},
+                                               {"`RUN/rigidity_events.csv`", run / "rigidity_events.csv"},
+                                               {"`RUN/packings/<name>.dos.csv`", run / "packings/target_0.dos.csv"},
+                                               {"`BASE.csv` of `budjam dos`", out / "phi2.dos.csv"},
+                                               {"`BASE.csv` of `budjam survival`", out / "survival.csv"},
+                                               {"`BASE.csv` of `budjam rigidity`", out / "rigidity.csv"},
+                                               {"`TABLES/runs.csv`", out / "tables/runs.csv"},
+                                               {"`TABLES/targets.csv`", out / "tables/targets.csv"},
+                                               {"`TABLES/survival.csv`", out / "tables/survival.csv"},
+                                               {"`TABLES/remaining.csv`", out / "tables/remaining.csv"},
+                                               {"`TABLES/division_curve.csv`", out / "tables/division_curve.csv"},
+                                               {"`TABLES/growth_rates.csv`", out / "tables/growth_rates.csv"},
+                                               {"`TABLES/trajectory.csv`", out / "tables/trajectory.csv"},
+                                               {"`TABLES/dos.csv`", out / "tables/dos.csv"}};
+  for (const auto& [key, file] : tables) {
+    INFO(key << " <- " << file);
+    REQUIRE(fs::exists(file));
+    std::vector<std::string> written = csv_header(file), documented = documented_columns(key);
+    REQUIRE(!documented.empty());
+    CHECK(written == documented);  // same names, same order
+  }
+  // No feedback is an empty P0 field, not "none".
+  CHECK(slurp(out / "tables/runs.csv").find(",none,") == std::string::npos);
+  CHECK(slurp(out / "tables/runs.csv").find(",8,,1,") != std::string::npos);
+}
+
+TEST_CASE("every key of summary.json and timing.json is in docs/files.md, and every key listed there is written",
+          "[cli]") {
+  const budjam::io::Json summary = budjam::io::read_json(demo_run() / "summary.json");
+  std::vector<std::string> keys;
+  for (const auto& [key, value] : summary.items()) {
+    keys.push_back(key);
+    const std::string prefix = key + (value.is_array() ? "[]." : ".");
+    const budjam::io::Json* entry = key == "targets" ? &value.at(0) : key == "final" ? &value : nullptr;
+    if (entry)
+      for (const auto& [sub, unused] : entry->items()) keys.push_back(prefix + sub);
+  }
+  CHECK(keys == documented_columns("`RUN/summary.json`"));
+  // named: items() of a temporary would dangle
+  const budjam::io::Json timing = budjam::io::read_json(demo_run() / "timing.json");
+  std::vector<std::string> timing_keys;
+  for (const auto& [key, unused] : timing.items()) timing_keys.push_back(key);
+  CHECK(timing_keys == documented_columns("`RUN/timing.json`"));
+}
+
+TEST_CASE("analyse --tables reads the P0 \"none\" of earlier tables and writes it as an empty field", "[cli]") {
+  const fs::path out = work_dir() / "reanalysed";
+  REQUIRE(run_budjam("analyse --tables " + shell_quoted(source_file("data/reference/quick/tables")) + " --out " +
+                     shell_quoted(out) + " --main-L 8")
+              .code == 0);
+  CHECK(slurp(source_file("data/reference/quick/tables/runs.csv")).find(",8,none,1,") != std::string::npos);
+  CHECK(slurp(out / "runs.csv").find(",8,,1,") != std::string::npos);
+  CHECK(slurp(out / "runs.csv").find(",none,") == std::string::npos);
+  const auto groups = budjam::io::read_json(out / "analysis.json").at("groups");
+  CHECK(std::any_of(groups.begin(), groups.end(),
+                    [](const auto& g) { return g.at("P0").is_null() && g.at("P0_label") == "none"; }));
+}
+
+TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JSON, neither prints one summary line",
+          "[cli]") {
+  const fs::path pack = demo_run() / "packings/phi2.pack", out = work_dir() / "convention";
+  fs::create_directories(out);
+  const std::vector<std::pair<std::string, bool>> commands{{"moduli " + shell_quoted(pack), false},
+                                                           {"rigidity " + shell_quoted(pack), true},
+                                                           {"dos " + shell_quoted(pack), true},
+                                                           {"survival " + shell_quoted(demo_run()), true}};
+  for (const auto& [command, has_table] : commands) {
+    const std::string name = command.substr(0, command.find(' '));
+    INFO(command);
+    const fs::path base = out / name;
+    const auto plain = run_budjam(command);
+    REQUIRE(plain.code == 0);
+    CHECK(one_line(plain.out).rfind(name + ": ", 0) == 0);  // "moduli: N = 48, ..."
+    CHECK(fs::is_empty(out));                               // no --out: nothing written
+
+    const auto json = run_budjam(command + " --json");
+    REQUIRE(json.code == 0);
+    CHECK(budjam::io::Json::parse(json.out).is_object());
+
+    // a trailing .json of BASE is dropped; the line names the files
+    const auto files = run_budjam(command + " --out " + shell_quoted(base.string() + ".json"));
+    REQUIRE(files.code == 0);
+    CHECK(one_line(files.out).find(" -> " + base.string() + ".json") != std::string::npos);
+    CHECK(fs::exists(base.string() + ".csv") == has_table);
+    CHECK(slurp(base.string() + ".json") == json.out);
+    CHECK(run_budjam(command + " --quiet --out " + shell_quoted(base)).out.empty());
+    fs::remove_all(out);
+    fs::create_directories(out);
+  }
+}
+
+TEST_CASE("survival keeps -o as --out: -o BASE.csv writes BASE.csv and BASE.json", "[cli]") {
+  const fs::path base = work_dir() / "km";
+  REQUIRE(
+      run_budjam("survival " + shell_quoted(demo_run()) + " --quiet -o " + shell_quoted(base.string() + ".csv")).code ==
+      0);
+  CHECK(csv_header(base.string() + ".csv").front() == "a");
+  CHECK(budjam::io::read_json(base.string() + ".json").contains("a_eps"));
+}
+
+TEST_CASE("scripts/progress.sh counts the stamps that exist and extrapolates the pace since the first made", "[cli]") {
+  const fs::path dir = work_dir() / "stamps";
+  fs::create_directories(dir);
+  std::string stamps;
+  for (const char* name : {"s0", "s1", "s2", "s3"}) stamps.append(" ").append(shell_quoted(dir / name));
+  const fs::path err = work_dir() / "progress.txt";
+  const auto shell = [](const std::string& cmd) { REQUIRE(std::system(cmd.c_str()) == 0); };
+  const std::string now = "$(date +%s)";
+  // made 120 s ago, 60 s ago and now, by a make that started 130 s ago
+  shell("cd " + shell_quoted(dir) + " && touch -d @$((" + now + " - 120)) s0 && touch -d @$((" + now +
+        " - 60)) s1 && touch s2");
+  const auto progress = [&](int at_start) {
+    shell("bash " + shell_quoted(source_file("scripts/progress.sh")) + " moduli $((" + now + " - 130)) " +
+          std::to_string(at_start) + stamps + " 2> " + shell_quoted(err));
+    return slurp(err);
+  };
+  // two made after the first in 120 s: the last one in ~60 s
+  CHECK_THAT(progress(0), Catch::Matchers::StartsWith("[moduli 3/4 runs, ETA 1m0"));
+  CHECK(progress(2) == "[moduli 3/4 runs]\n");  // one made by this make: no pace yet
+  std::ofstream(dir / "s3");
+  CHECK(progress(0) == "[moduli 4/4 runs]\n");  // done
+}

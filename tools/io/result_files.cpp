@@ -1,0 +1,46 @@
+#include "io/result_files.hpp"
+
+#include "io/atomic_file.hpp"
+
+#include <ostream>
+
+namespace budjam::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path with_suffix(const fs::path& base, const char* suffix) { return fs::path(base.string() + suffix); }
+
+}  // namespace
+
+fs::path result_base(const std::string& base) {
+  fs::path p(base);
+  if (p.extension() == ".json" || p.extension() == ".csv") p.replace_extension();
+  return p;
+}
+
+std::vector<fs::path> write_result_files(const fs::path& base, const CommandResult& result) {
+  std::vector<fs::path> written{with_suffix(base, ".json")};
+  if (result.csv) {
+    written.push_back(with_suffix(base, ".csv"));
+    write_atomically(written.back(), result.csv);
+  }
+  write_json(written.front(), result.json);
+  return written;
+}
+
+void emit(const OutputRequest& request, const CommandResult& result, std::ostream& out) {
+  std::vector<fs::path> written;
+  if (!request.base.empty()) written = write_result_files(result_base(request.base), result);
+  if (request.json) {
+    out << json_text(result.json);
+    return;
+  }
+  if (request.quiet) return;
+  out << result.summary;
+  for (std::size_t k = 0; k < written.size(); ++k) out << (k == 0 ? " -> " : ", ") << written[k].string();
+  out << '\n';
+}
+
+}  // namespace budjam::io

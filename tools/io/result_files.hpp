@@ -1,0 +1,42 @@
+#pragma once
+// The output convention of the commands that analyse one packing or a set of runs (moduli,
+// rigidity, dos, survival; docs/files.md "Outputs"):
+//   --out BASE   writes BASE.json, and BASE.csv where the result has a table, each atomically;
+//   --json       prints the JSON on stdout;
+//   neither      prints a one-line summary on stdout.
+// Growth observers write the same pair of files beside a run's packings (write_result_files).
+#include "io/json.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace budjam::io {
+
+struct CommandResult {
+  Json json;
+  std::function<void(std::ostream&)> csv;  // the table, header line first; empty: the result has none
+  std::string summary;                     // one line for a terminal, without the newline
+};
+
+struct OutputRequest {
+  std::string base;    // --out BASE; empty: no files
+  bool json = false;   // --json: the JSON on stdout
+  bool quiet = false;  // --quiet: no summary line
+};
+
+// BASE as given, less a trailing ".json" or ".csv": `--out survival.csv` writes survival.csv
+// and survival.json, not survival.csv.csv.
+std::filesystem::path result_base(const std::string& base);
+
+// Writes BASE.csv (if the result has a table), then BASE.json, so that a BASE.json present means
+// the pair is complete. Returns the paths written, JSON first.
+std::vector<std::filesystem::path> write_result_files(const std::filesystem::path& base, const CommandResult& result);
+
+// What the request asks for: the files, the JSON on `out`, or the summary line on `out` (also
+// after the files, naming them, unless quiet).
+void emit(const OutputRequest& request, const CommandResult& result, std::ostream& out);
+
+}  // namespace budjam::io
