@@ -46,6 +46,36 @@ def pm(stat, key="mean"):
     return s + f" (n={stat.get('n', '?')})"
 
 
+FINITE_SIZE_COLUMNS = [("u_J", "u_J (buds)"), ("u_J_lobes", "u_J (lobes)"), ("n_J", "n_J"), ("phi_J", "φ_J"),
+                       ("dphi_2", "Δφ_2 (≤ 1 left)"), ("dphi_2_paper", "Δφ_2 (none left, paper's selection)"),
+                       ("N_div_2_over_N_J", "N_div(φ_2)/N_J (median)"), ("G_2_over_Pmax", "G_2/P_max (median)")]
+
+
+def finite_size_rows(entries):
+    """The finite-size table of every P0 run at several sizes, with its N → ∞ extrapolation."""
+    if not entries:
+        return []
+    head = "| L | runs | N_J | " + " | ".join(t for _, t in FINITE_SIZE_COLUMNS) + " |"
+    rows = ["", "## Finite size", "",
+            "Per box size and feedback strength, and the extrapolation q(N_J) = q_∞ + c/N_J (weighted least squares on "
+            "the per-size values with their standard errors, errors widened by √(χ²/dof) when it exceeds 1); "
+            "χ²/dof ≫ 1 says the 1/N form does not describe the data.", ""]
+    for e in entries:
+        rows += [f"P0 = {e['P0_label']}:", "", head, "|" + " --- |" * (len(FINITE_SIZE_COLUMNS) + 3)]
+        for r in e["sizes"]:
+            cells = [pm({"mean": r[k]["value"], "se": r[k]["se"], "n": r[k]["n"]}) for k, _ in FINITE_SIZE_COLUMNS]
+            rows.append(f"| {r['L']:g} | {r['runs']} | {fmt(r['N_J']['mean'])} | " + " | ".join(cells) + " |")
+        limits = []
+        for k, _ in FINITE_SIZE_COLUMNS:
+            x = e["extrapolation"][k]
+            if x.get("limit") is None:
+                limits.append("—")
+            else:
+                limits.append(f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ²/dof {fmt(x['chi2'], 2)}/{x['dof']})")
+        rows += [f"| N → ∞ | | | " + " | ".join(limits) + " |", ""]
+    return rows
+
+
 def ci(stat):
     if not stat or stat.get("median") is None:
         return "not measured"
@@ -415,7 +445,7 @@ def main():
         "",
         "| Claim of the paper | Paper | budjam's definition | Paper's definition | Verdict | Figure |",
         "| --- | --- | --- | --- | --- | --- |",
-    ] + rows + size_rows + shear + [
+    ] + rows + size_rows + finite_size_rows(A.get("finite_size")) + shear + [
         "",
         "Per-group tables: " + ", ".join(f"`{n}`" for n in tables),
         "",

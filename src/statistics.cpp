@@ -122,6 +122,42 @@ LinearFit linear_fit(std::span<const double> x, std::span<const double> y) {
   return f;
 }
 
+WeightedFit weighted_linear_fit(std::span<const double> x, std::span<const double> y, std::span<const double> sigma) {
+  if (x.size() != y.size() || x.size() != sigma.size())
+    throw std::invalid_argument("weighted_linear_fit: x, y and sigma differ in length");
+  if (x.size() < 2) throw std::invalid_argument("weighted_linear_fit: need at least 2 points");
+  double sw = 0, swx = 0, swy = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!(std::isfinite(sigma[k]) && sigma[k] > 0))
+      throw std::invalid_argument("weighted_linear_fit: every sigma must be finite and positive");
+    const double w = 1.0 / (sigma[k] * sigma[k]);
+    sw += w;
+    swx += w * x[k];
+    swy += w * y[k];
+  }
+  // centred on the weighted mean of x, so that nearly equal x do not cancel catastrophically
+  const double mx = swx / sw, my = swy / sw;
+  double sxx = 0, sxy = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const double w = 1.0 / (sigma[k] * sigma[k]);
+    sxx += w * (x[k] - mx) * (x[k] - mx);
+    sxy += w * (x[k] - mx) * (y[k] - my);
+  }
+  if (!(sxx > 0)) throw std::invalid_argument("weighted_linear_fit: all x are equal");
+  WeightedFit f;
+  f.slope = sxy / sxx;
+  f.intercept = my - f.slope * mx;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const double e = (y[k] - (f.intercept + f.slope * x[k])) / sigma[k];
+    f.chi2 += e * e;
+  }
+  f.dof = x.size() - 2;
+  const double birge = f.dof > 0 ? std::max(1.0, f.chi2 / static_cast<double>(f.dof)) : 1.0;
+  f.slope_se = std::sqrt(birge / sxx);
+  f.intercept_se = std::sqrt(birge * (1.0 / sw + mx * mx / sxx));
+  return f;
+}
+
 MeanSE mean_se(std::span<const double> x) {
   MeanSE m;
   m.n = x.size();

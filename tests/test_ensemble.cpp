@@ -4,6 +4,7 @@
 // tables reader's reconstruction of a Kaplan–Meier curve from its printed steps.
 #include "analysis/depletion_estimators.hpp"
 #include "analysis/ensemble_tables.hpp"
+#include "analysis/finite_size.hpp"
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "budjam/depletion.hpp"
@@ -204,4 +205,55 @@ TEST_CASE(
   CHECK(median_completion_size(back) == median_completion_size(km));
   CHECK(back.integral(30) == km.integral(30));
   CHECK(e.unavailable.count("remaining.csv") == 1);
+}
+
+namespace {
+// One analysis.json group entry with the fields the finite-size table reads: u_J = 0.2 + 3/N_J
+// exactly, G_2/P_max a median that does not depend on size.
+io::Json size_group(double L, const char* P0_label, double N_J, double se) {
+  const io::Json mean_se = {{"n", 20}, {"mean", 0.2 + 3.0 / N_J}, {"se", se}};
+  io::Json g;
+  g["L"] = L;
+  g["P0"] = std::string(P0_label) == "none" ? io::Json(nullptr) : io::Json(std::stod(P0_label));
+  g["P0_label"] = P0_label;
+  g["runs"] = 20;
+  g["N_J"] = {{"n", 20}, {"mean", N_J}, {"se", 1.0}};
+  for (const char* k : {"u_J", "u_J_lobes", "n_J", "phi_J", "dphi_2"}) g[k] = mean_se;
+  g["dphi_2_paper"] = {{"n", 12}, {"mean", 0.02}, {"se", nullptr}, {"median", 0.02}};
+  g["N_div_2_over_N_J"] = {{"n", 20}, {"median", 0.05}, {"se", se}};
+  g["G_2_over_Pmax"] = {{"n", 20}, {"median", 0.4}, {"se", se}};
+  return g;
+}
+}  // namespace
+
+TEST_CASE("finite-size extrapolation recovers the N → ∞ limit of q_∞ + c/N and needs three sizes") {
+  io::Json groups = io::Json::array();
+  groups.push_back(size_group(20, "0.001", 300, 0.004));
+  groups.push_back(size_group(8, "0.001", 48, 0.01));
+  groups.push_back(size_group(15, "0.001", 176, 0.006));
+  groups.push_back(size_group(8, "none", 48, 0.01));
+  groups.push_back(size_group(15, "none", 176, 0.006));
+  groups.push_back(size_group(15, "1e-05", 176, 0.006));  // one size only: no row
+  const auto fs = finite_size_json(groups);
+  REQUIRE(fs.size() == 2);
+  const auto& fed = fs[0]["P0_label"] == "0.001" ? fs[0] : fs[1];
+  const auto& none = fs[0]["P0_label"] == "none" ? fs[0] : fs[1];
+  // rows sorted by L whatever the order of the groups
+  CHECK(fed["sizes"][0]["L"] == 8);
+  CHECK(fed["sizes"][2]["L"] == 20);
+  const auto& u = fed["extrapolation"]["u_J"];
+  CHECK(u["limit"].get<double>() == Approx(0.2).epsilon(1e-12));
+  CHECK(u["slope"].get<double>() == Approx(3.0).epsilon(1e-9));
+  CHECK(u["chi2"].get<double>() == Approx(0.0).margin(1e-18));
+  CHECK(u["limit_se"].get<double>() > 0);
+  // a size-independent median extrapolates to itself with zero slope
+  CHECK(fed["extrapolation"]["G_2_over_Pmax"]["limit"].get<double>() == Approx(0.4));
+  CHECK(fed["extrapolation"]["G_2_over_Pmax"]["slope"].get<double>() == Approx(0.0).margin(1e-9));
+  // values without an error bar are not fitted
+  CHECK(fed["extrapolation"]["dphi_2_paper"]["limit"].is_null());
+  CHECK(fed["extrapolation"]["dphi_2_paper"]["sizes"] == 0);
+  // two sizes: rows, but no extrapolation
+  CHECK(none["sizes"].size() == 2);
+  CHECK(none["extrapolation"]["u_J"]["limit"].is_null());
+  CHECK(none["extrapolation"]["u_J"]["why"].get<std::string>().find("fewer than 3") != std::string::npos);
 }

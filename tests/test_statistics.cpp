@@ -100,6 +100,52 @@ TEST_CASE("linear fit slope error matches the hand-worked residual variance") {
   CHECK_THROWS(linear_fit(std::vector<double>{1, 1}, std::vector<double>{0, 1}));
 }
 
+TEST_CASE("weighted fit with equal error bars is the ordinary fit, with the propagated slope error") {
+  const std::vector<double> x{0, 1, 2, 4}, y{0.1, 2.2, 3.9, 8.3}, sigma(4, 0.5);
+  const auto w = weighted_linear_fit(x, y, sigma);
+  const auto f = linear_fit(x, y);
+  CHECK(w.slope == Approx(f.slope).epsilon(1e-14));
+  CHECK(w.intercept == Approx(f.intercept).epsilon(1e-14));
+  CHECK(w.dof == 2);
+  // χ² = RSS/σ² here is below dof, so the error is σ/√Sxx, not widened (Sxx = Σ(x − x̄)² = 8.75)
+  REQUIRE(w.chi2 < 2);
+  CHECK(w.slope_se == Approx(0.5 / std::sqrt(8.75)));
+}
+
+TEST_CASE("weighted fit ignores a point whose error bar is huge and widens errors the scatter contradicts") {
+  const auto w = weighted_linear_fit(std::vector<double>{1, 2, 3}, std::vector<double>{1, 3, 100},
+                                     std::vector<double>{0.1, 0.1, 1e8});
+  CHECK(w.slope == Approx(2.0).epsilon(1e-9));
+  CHECK(w.intercept == Approx(-1.0).epsilon(1e-9));
+  // three points off a line by far more than their error bars: χ²/dof ≫ 1 scales the errors by √(χ²/dof)
+  const std::vector<double> x{0, 1, 2}, sigma(3, 0.01);
+  const auto off = weighted_linear_fit(x, std::vector<double>{0, 2, 1}, sigma);
+  CHECK(off.chi2 == Approx(1.5 / 1e-4));
+  CHECK(off.slope_se == Approx(linear_fit(x, std::vector<double>{0, 2, 1}).slope_se));
+  CHECK_THROWS_AS(weighted_linear_fit(x, std::vector<double>{0, 2, 1}, std::vector<double>{1, 0, 1}),
+                  std::invalid_argument);
+}
+
+TEST_CASE("weighted fit intercept errors cover the truth: pulls have unit spread over synthetic data") {
+  // y = 0.8 − 3/N with error bars that differ by a factor 4 between points, as a finite-size table's do
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const std::vector<double> x{1.0 / 48, 1.0 / 176, 1.0 / 300, 1.0 / 700, 1.0 / 1200};
+  const std::vector<double> sigma{0.02, 0.012, 0.01, 0.007, 0.005};
+  std::vector<double> pulls;
+  for (int trial = 0; trial < 4000; ++trial) {
+    std::vector<double> y;
+    for (std::size_t k = 0; k < x.size(); ++k) y.push_back(0.8 - 3.0 * x[k] + sigma[k] * gauss(rng));
+    const auto f = weighted_linear_fit(x, y, sigma);
+    pulls.push_back((f.intercept - 0.8) / f.intercept_se);
+  }
+  // the Birge ratio only widens, so the spread is at most 1 and not far below it
+  const double spread = std::sqrt(sample_variance(pulls));
+  CHECK(spread < 1.02);
+  CHECK(spread > 0.85);
+  CHECK(std::abs(mean(pulls)) < 0.05);
+}
+
 TEST_CASE("fit through the origin matches the hand-worked slope, residuals and uncentred R²") {
   // y = 2x + (0.1, −0.1, 0.1): Σxy = 1·2.1 + 2·3.9 + 3·6.1 = 28.2, Σx² = 14 → slope = 28.2/14.
   const std::vector<double> x{1, 2, 3}, y{2.1, 3.9, 6.1};

@@ -63,6 +63,19 @@ struct LinearFit {
 // Throws std::invalid_argument for mismatched sizes, n < 2 or all x equal.
 LinearFit linear_fit(std::span<const double> x, std::span<const double> y);
 
+// Weighted least squares y = intercept + slope x with known standard errors σ_k of the y_k (weights
+// 1/σ_k²): the fit of measured means, each with its own error bar. The parameter errors come from
+// (XᵀWX)⁻¹ scaled by the Birge ratio max(1, χ²/dof) — error bars that the scatter contradicts are
+// widened, never narrowed; with dof = 0 (two points) they are the propagated σ alone.
+struct WeightedFit {
+  double slope = 0, intercept = 0;
+  double slope_se = 0, intercept_se = 0;
+  double chi2 = 0;  // Σ (residual/σ)²
+  std::size_t dof = 0;
+};
+// Throws std::invalid_argument for mismatched sizes, n < 2, a σ that is not finite and > 0, or all x equal.
+WeightedFit weighted_linear_fit(std::span<const double> x, std::span<const double> y, std::span<const double> sigma);
+
 // Mean ± SE summary of a sample, the paper's error bars for means.
 struct MeanSE {
   double mean = 0, se = 0;

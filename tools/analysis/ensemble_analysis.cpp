@@ -21,6 +21,7 @@
 #include "analysis/depletion_estimators.hpp"
 #include "analysis/ensemble_records.hpp"
 #include "analysis/ensemble_tables.hpp"
+#include "analysis/finite_size.hpp"
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "io/run_data.hpp"
@@ -998,6 +999,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
     }
     J["sizes"] = sizes;
   }
+  J["finite_size"] = finite_size_json(J["groups"]);
   {
     Json br = Json::array();
     for (const auto& [L, f] : branch) {
