@@ -636,13 +636,18 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, and exits 1",
+TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, a one-line notice, and exits 1",
           "[fast]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const auto [code, out, err] =
       run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack' --json");
   CHECK(code == 1);
+  // a finding, reported as such in one line, not as an error
+  CHECK(err.rfind("budjam: moduli: ", 0) == 0);
+  CHECK(err.find("is a saddle") != std::string::npos);
+  CHECK(err.find("error") == std::string::npos);
+  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
   const io::Json j = io::Json::parse(out);
   CHECK(j["energy_minimum"] == false);
   CHECK(j["G"].is_null());

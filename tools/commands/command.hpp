@@ -28,7 +28,7 @@ namespace budjam::cli {
 // Exit codes of `budjam` (docs/files.md).
 enum ExitCode : int {
   kExitOk = 0,         // success
-  kExitRunFailed = 1,  // the run ran and failed (step limit, step underflow, ...): RunFailure
+  kExitRunFailed = 1,  // the run ran and failed (step underflow, ...): RunFailure; a saddle: Finding
   kExitBadInput = 2,   // invalid command line, scene or input file: CLI11 errors, budjam::InputError
   kExitInternal = 3,   // an output could not be written, or any other error: io::IoError, std::exception
   // 128 + N: stopped by signal N (SIGINT 130, SIGTERM 143) after writing a checkpoint: Interrupted
@@ -37,6 +37,14 @@ enum ExitCode : int {
 // Thrown by a subcommand after it has written its outputs (summary.json with the failure
 // status) to make `budjam` exit with kExitRunFailed. what() is the one-line reason.
 struct RunFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Thrown by a subcommand whose answer is not the one asked for but is a legitimate physical outcome
+// (a packing that is a saddle has no relaxed moduli), after it has written that answer. `budjam`
+// prints what() as a notice, `budjam: <what>`, not as an error, and exits with kExitRunFailed, so
+// that a pipeline can record the outcome and go on.
+struct Finding : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 

@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
     return error(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
+  } catch (const Finding& e) {
+    std::cerr << "budjam: " << budjam::io::escape_control(e.what()) << std::endl;
+    return kExitRunFailed;
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {
