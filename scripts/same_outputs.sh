@@ -7,7 +7,7 @@
 # Workload, run inside each revision's worktree so that the paths written into the outputs agree:
 #   - budjam grow data/scenes/demo.toml --out demo-run
 #   - make -f Makefile.analysis PRESET=quick SEEDS="1 2" P0S="none 1e-2" runs moduli dos analysis
-#     (override with QUICK_ARGS="..."; these four runs take ~1–2 CPU minutes)
+#     (other seeds and P0 values: SAME_SEEDS="..." SAME_P0S="..." in the environment)
 #   - ctest -L fast: both revisions must pass it (its output holds timings, so only the verdict counts)
 #
 # Left out of the comparison, because they hold wall-clock time and nothing else:
@@ -31,7 +31,8 @@ work=${3:-$(mktemp -d "${TMPDIR:-/tmp}/same_outputs.XXXXXX")}
 mkdir -p "$work"
 work=$(cd "$work" && pwd)
 jobs=${JOBS:-2}
-quick_args=${QUICK_ARGS:-SEEDS="1 2" P0S="none 1e-2"}
+seeds=${SAME_SEEDS:-1 2}
+p0s=${SAME_P0S:-none 1e-2}
 
 # Worktree and build of one revision; prints the worktree path.
 prepare() {
@@ -54,7 +55,7 @@ workload() {
     cd "$wt"
     rm -rf demo-run runs analysis
     build/budjam grow data/scenes/demo.toml --out demo-run --quiet
-    eval "make -f Makefile.analysis PRESET=quick $quick_args runs moduli dos analysis" >make.log 2>&1 ||
+    make -f Makefile.analysis PRESET=quick SEEDS="$seeds" P0S="$p0s" runs moduli dos analysis >make.log 2>&1 ||
       { echo "same_outputs: Makefile.analysis failed in $wt, see $wt/make.log" >&2; exit 2; }
   )
 }

@@ -492,7 +492,7 @@ struct GrowthDriver::Impl {
   }
 
   // Every target landed by the accepted state (in order), then φ_2 if it is the first state with at
-  // most one tagged bud unconstrained.
+  // most scene.phi2_tagged_left tagged buds unconstrained.
   void land_targets_and_depletion(const StateView& v) {
     while (next_target < scene.targets.size() &&
            std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
@@ -500,7 +500,7 @@ struct GrowthDriver::Impl {
       ++next_target;
       for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
     }
-    if (result.depletion || buds.active() > 1) return;
+    if (result.depletion || buds.active() > scene.phi2_tagged_left) return;
     DepletionRecord d;
     d.step = step;
     d.phi = phi;

@@ -299,6 +299,53 @@ TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with
   CHECK(o.back() == "finished");
 }
 
+// A run to φ_2 under the definition "at most `left` tagged buds still unconstrained", without
+// feedback (so that the last tagged buds do not arrest) and with one target below φ_2.
+struct DepletionRun {
+  Scene scene = small_scene();
+  Recorder rec;
+  std::size_t left_at_phi2 = 0;  // tagged buds unconstrained in the state the Depleted event shows
+  explicit DepletionRun(std::size_t left) {
+    scene.P0.reset();
+    scene.targets = {1e-4};
+    scene.continue_to_phi2 = true;
+    scene.phi2_tagged_left = left;
+    struct Watch : Observer {
+      std::size_t* left = nullptr;
+      std::string name() const override { return "watch"; }
+      void on_depleted(const Depleted& e) override { *left = e.state.buds->active(); }
+    } watch;
+    watch.left = &left_at_phi2;
+    GrowthDriver d(scene);
+    d.add_observer(rec);
+    d.add_observer(watch);
+    d.run();
+  }
+};
+
+TEST_CASE("phi_2 with no tagged bud left (the paper's definition) comes at or after phi_2 with one left", "[driver]") {
+  const DepletionRun one(1), none(0);
+  REQUIRE(one.rec.depleted);
+  REQUIRE(none.rec.depleted);
+  REQUIRE(one.rec.jammed);
+  REQUIRE(none.rec.jammed);
+  // Same seed: the same run up to the earlier φ_2; only which state is φ_2 differs.
+  CHECK(none.rec.jammed->phi == one.rec.jammed->phi);
+  CHECK(none.rec.depleted->step >= one.rec.depleted->step);
+  INFO("phi_2 = " << one.rec.depleted->phi << " (1 left), " << none.rec.depleted->phi << " (none left), steps "
+                  << one.rec.depleted->step << ", " << none.rec.depleted->step << ", tagged "
+                  << one.rec.jammed->tagged);
+  CHECK(one.rec.depleted->still_unconstrained <= 1);
+  CHECK(one.left_at_phi2 == one.rec.depleted->still_unconstrained);
+  CHECK(none.rec.depleted->still_unconstrained == 0);
+  CHECK(none.left_at_phi2 == 0);
+  // ... and it is the first such state: every jammed state of the episode before it had one left or more.
+  for (const auto& s : none.rec.steps)
+    if (s.phase == Phase::jammed && s.step > none.rec.jammed->step && s.step < none.rec.depleted->step)
+      CHECK(s.active >= 1);
+  if (none.rec.depleted->step == one.rec.depleted->step) CHECK(none.rec.depleted->phi == one.rec.depleted->phi);
+}
+
 TEST_CASE("the same seed gives the same run and another seed another run", "[driver]") {
   const Reference& r = reference();
   Scene s = r.scene;

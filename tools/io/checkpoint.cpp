@@ -375,7 +375,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       d.step = in.integer(w[1], "phi_2 step", 1, s.step);
       d.phi = in.positive(w[2], "phi_2"), d.P = in.real(w[3], "P_2");
       d.network = read_network(in, w, 4, cells_cap);
-      d.still_unconstrained = in.count_of(w[4 + kNetworkWords], "still unconstrained", 1);
+      d.still_unconstrained = in.count_of(w[4 + kNetworkWords], "still unconstrained", scene.phi2_tagged_left);
       d.divisions_since_jamming =
           in.integer(w[5 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
       r.depletion = d;

@@ -173,6 +173,7 @@ Json summary_json(const GrowthDriver& driver) {
   j["dZ_2"] = D ? Json(D->network.dZ) : Json(nullptr);
   j["N_div_2"] = D ? Json(D->divisions_since_jamming) : Json(nullptr);
   j["step_2"] = D ? Json(D->step) : Json(nullptr);
+  j["phi_2_tagged_left"] = sc.phi2_tagged_left;  // the definition of φ_2: at most this many tagged buds left
   Json targets = Json::array();
   for (const TargetRecord& t : r.targets) {
     Json x;
