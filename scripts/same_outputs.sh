@@ -10,8 +10,9 @@
 #     (other seeds and P0 values: SAME_SEEDS="..." SAME_P0S="..." in the environment)
 #   - ctest -L fast: both revisions must pass it (its output holds timings, so only the verdict counts)
 #
-# Left out of the comparison, because they hold wall-clock time and nothing else:
-#   - timing.json of every run (seconds and rates of the session; summary.json holds no timing)
+# Left out of the comparison, because they describe the session and not the results:
+#   - timing.json of every run (wall-clock seconds and rates; summary.json holds no timing)
+#   - .budjam-lock of every run directory ("pid host" of the process that wrote it)
 #   - *.done stamps and *.tmp files of Makefile.analysis (empty or transient)
 # Everything else — summary.json, scene.toml, steps.csv, divisions.csv, bud_events.csv, packings,
 # moduli / dos sidecars, the analysis tables and JSON — must be identical.
@@ -76,7 +77,10 @@ for wt in "$wt_a" "$wt_b"; do
 done
 
 # Every output file of either side, relative to the worktree.
-list() { (cd "$1" && find demo-run runs analysis -type f ! -name timing.json ! -name '*.done' ! -name '*.tmp' | sort); }
+list() {
+  (cd "$1" && find demo-run runs analysis -type f ! -name timing.json ! -name .budjam-lock ! -name '*.done' \
+    ! -name '*.tmp' | sort)
+}
 compared=0 differ=0
 while IFS= read -r f; do
   compared=$((compared + 1))
@@ -91,6 +95,6 @@ while IFS= read -r f; do
 done < <(sort -u <(list "$wt_a") <(list "$wt_b"))
 
 echo "same_outputs: $1 vs $2: $compared files compared, $((compared - differ)) identical, $differ differ" \
-  "(timing.json excluded); ctest -L fast $([ $status = 0 ] && echo passed || echo FAILED)"
+  "(timing.json, .budjam-lock excluded); ctest -L fast $([ $status = 0 ] && echo passed || echo FAILED)"
 [ $differ = 0 ] || status=1
 exit $status
