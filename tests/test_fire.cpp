@@ -37,7 +37,9 @@ Packing shallow_packing(std::size_t n, double phi, std::uint64_t seed, double ma
     for (int attempt = 0;; ++attempt) {
       REQUIRE(attempt < 100000);
       Packing trial = p;
-      trial.add_cell(p.box.L * u(rng), p.box.L * u(rng), std::numbers::pi * (2 * u(rng) - 1), b[i], 0.002, -1);
+      // x, y, θ drawn in this order (the order of evaluation of function arguments is unspecified)
+      const double x = p.box.L * u(rng), y = p.box.L * u(rng), theta = std::numbers::pi * (2 * u(rng) - 1);
+      trial.add_cell(x, y, theta, b[i], 0.002, -1);
       place_lobes(trial, l);
       bool ok = true;
       for (std::size_t a = 2 * i; a < 2 * i + 2 && ok; ++a)
