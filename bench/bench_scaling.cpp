@@ -216,7 +216,8 @@ int main(int argc, char** argv) {
   std::printf("status %s  N_final %zu  phi_final %.6f  P_final %.3e",
               st == RunStatus::running ? "stopped (--max-attempts / --stop-after-rejections)" : to_string(st),
               d.packing().size(), v.phi, v.P);
-  if (r.jamming) std::printf("  N_J %zu  phi_J %.6f  step_J %ld", r.jamming->N, r.jamming->phi, r.jamming->step);
+  if (r.jamming)
+    std::printf("  N_J %zu  phi_J %.6f  step_J %ld", r.jamming->network.N, r.jamming->phi, r.jamming->step);
   std::printf("  targets landed %zu  unjammings %zu\n", r.targets.size(), r.unjammings.size());
   std::printf(
       "  total    accepted %6ld  rejected %5ld  evals %10ld  evals/acc %9.1f  cpu %9.2f s  cpu/acc %9.5f s  "

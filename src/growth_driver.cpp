@@ -243,21 +243,6 @@ struct GrowthDriver::Impl {
     }
   }
 
-  // The contact-network summary shared by the jamming and target records.
-  template <class Record>
-  void copy_network_summary(Record& r) const {
-    r.N_nr = net.N_nr;
-    r.N_f = net.N_f;
-    r.N_u = net.N_u;
-    r.N_u_buds = net.N_u_buds;
-    r.N_c = net.N_c;
-    r.Z = net.Z;
-    r.Z_iso = net.Z_iso;
-    r.dZ = net.dZ;
-    r.u = net.u;
-    r.u_buds = net.u_buds;
-  }
-
   TargetRecord target_record(std::size_t k) const {
     TargetRecord t;
     t.index = k;
@@ -267,9 +252,7 @@ struct GrowthDriver::Impl {
     t.phi = phi;
     t.P = P;
     t.E_per_cell = E;
-    t.N = packing.size();
-    copy_network_summary(t);
-    t.N_f_single = net.N_f_single_pass;
+    t.network = net.summary();
     t.chi_c = chi_c;
     t.divisions_since_jamming = divisions_since_jamming;
     return t;
@@ -492,8 +475,7 @@ struct GrowthDriver::Impl {
     j.phi = phi;
     j.P = P;
     j.E_per_cell = E;
-    j.N = packing.size();
-    copy_network_summary(j);
+    j.network = net.summary();
     j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
     std::vector<BudEvent> events = buds.tag(j.episode, step, phi, packing, net);
     j.tagged = events.size();
@@ -510,7 +492,7 @@ struct GrowthDriver::Impl {
   }
 
   // Every target landed by the accepted state (in order), then φ_2 if it is the first state with at
-  // most one tagged bud unconstrained.
+  // most scene.phi2_tagged_left tagged buds unconstrained.
   void land_targets_and_depletion(const StateView& v) {
     while (next_target < scene.targets.size() &&
            std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
@@ -518,18 +500,12 @@ struct GrowthDriver::Impl {
       ++next_target;
       for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
     }
-    if (result.depletion || buds.active() > 1) return;
+    if (result.depletion || buds.active() > scene.phi2_tagged_left) return;
     DepletionRecord d;
     d.step = step;
     d.phi = phi;
     d.P = P;
-    d.N = packing.size();
-    d.N_nr = net.N_nr;
-    d.Z = net.Z;
-    d.u = net.u;
-    d.u_buds = net.u_buds;
-    d.Z_iso = net.Z_iso;
-    d.dZ = net.dZ;
+    d.network = net.summary();
     d.still_unconstrained = buds.active();
     d.divisions_since_jamming = divisions_since_jamming;
     result.depletion = d;

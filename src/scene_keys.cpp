@@ -199,6 +199,10 @@ std::vector<SceneKey> make_keys() {
   e.push_back(flag("jamming", "continue_to_phi2", "keep growing past the last target until φ_2 is found",
                    BUDJAM_FIELD(continue_to_phi2)));
   e.push_back(real("jamming", "max_dphi", "never grow beyond φ_J + max_dphi", kPositive, BUDJAM_FIELD(max_dphi)));
+  e.push_back(integer("jamming", "phi2_tagged_left",
+                      "φ_2 is the first state after jamming with at most this many tagged buds still unconstrained "
+                      "(0: the paper's definition)",
+                      kZeroOrPositive, BUDJAM_FIELD(phi2_tagged_left)));
   e.push_back(flag("jamming", "check_minimum",
                    "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                    BUDJAM_FIELD(check_minimum)));

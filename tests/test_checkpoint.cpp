@@ -126,6 +126,47 @@ TEST_CASE("a run resumed from a checkpoint text ends identical to the uninterrup
   CHECK(c.steps == snap.final_count);
 }
 
+TEST_CASE("a run under the paper's phi_2 (no tagged bud left) resumes from a checkpoint past phi_2 unchanged",
+          "[checkpoint]") {
+  Scene scene = small_scene();
+  scene.P0.reset();  // without feedback the last tagged bud is used up well before the last target
+  scene.targets = {1e-4, 3e-2};
+  scene.phi2_tagged_left = 0;
+  std::string text;
+  RunResult uninterrupted;
+  {
+    GrowthDriver d(scene);
+    d.set_checkpoint_hook([&] {
+      if (d.result().depletion && text.empty()) text = format_checkpoint(scene, d.state(), {});
+    });
+    d.run();
+    uninterrupted = d.result();
+  }
+  REQUIRE_FALSE(text.empty());
+  REQUIRE(uninterrupted.depletion);
+  CHECK(uninterrupted.depletion->still_unconstrained == 0);
+  GrowthDriver d(scene);
+  d.restore(parse_checkpoint(text, "cp", scene, 3, {}));
+  CHECK(format_checkpoint(scene, d.state(), {}) == text);
+  d.run();
+  REQUIRE(d.result().depletion);
+  CHECK(d.result().depletion->step == uninterrupted.depletion->step);
+  CHECK(d.result().depletion->network.Z == uninterrupted.depletion->network.Z);
+  CHECK(d.result().depletion->network.N_f_single_pass == uninterrupted.depletion->network.N_f_single_pass);
+  CHECK(d.result().targets.back().phi == uninterrupted.targets.back().phi);
+  // The same text under the default definition (at most one left) is another scene: refused.
+  scene.phi2_tagged_left = 1;
+  CHECK_THROWS_WITH(parse_checkpoint(text, "cp", scene, 3, {}), Contains("scene.toml has changed"));
+}
+
+TEST_CASE("a version 4 checkpoint (records without the whole network summary) is refused by name", "[checkpoint]") {
+  std::string text = snapshot().text;
+  text.replace(0, text.find('\n'), "budjam-checkpoint 4");
+  Counter c;
+  CHECK_THROWS_WITH(parse_checkpoint(text, "cp", small_scene(), 3, {&c}),
+                    Contains("cp:1:") && Contains("version 4") && Contains("start the run again"));
+}
+
 TEST_CASE("a checkpoint is refused for another scene, seed or set of observers", "[checkpoint]") {
   const Snapshot& snap = snapshot();
   Counter c;

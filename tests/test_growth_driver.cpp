@@ -119,10 +119,12 @@ bool same_result(const RunResult& a, const RunResult& b) {
       a.force_evaluations != b.force_evaluations || a.divisions != b.divisions)
     return false;
   if (a.jamming.has_value() != b.jamming.has_value() || a.targets.size() != b.targets.size()) return false;
-  if (a.jamming && (a.jamming->phi != b.jamming->phi || a.jamming->P != b.jamming->P || a.jamming->Z != b.jamming->Z))
+  if (a.jamming && (a.jamming->phi != b.jamming->phi || a.jamming->P != b.jamming->P ||
+                    a.jamming->network.Z != b.jamming->network.Z))
     return false;
   for (std::size_t k = 0; k < a.targets.size(); ++k)
-    if (a.targets[k].phi != b.targets[k].phi || a.targets[k].P != b.targets[k].P || a.targets[k].Z != b.targets[k].Z)
+    if (a.targets[k].phi != b.targets[k].phi || a.targets[k].P != b.targets[k].P ||
+        a.targets[k].network.Z != b.targets[k].network.Z)
       return false;
   if (a.depletion.has_value() != b.depletion.has_value()) return false;
   if (a.depletion && a.depletion->phi != b.depletion->phi) return false;
@@ -155,7 +157,7 @@ TEST_CASE("a small run jams in the range of random dumbbell packings and lands e
   REQUIRE(r.result.status == RunStatus::finished);
   REQUIRE(r.result.jamming);
   const JammingRecord& J = *r.result.jamming;
-  INFO("phi_J = " << J.phi << ", N_J = " << J.N << ", Z_J = " << J.Z);
+  INFO("phi_J = " << J.phi << ", N_J = " << J.network.N << ", Z_J = " << J.network.Z);
   // Jammed dumbbells with aspect ratios spread over [1.01, 2.02]: docs/growth.md measured
   // 0.802–0.837 over seeds 1–10 at L = 8 (mean 0.829); a bracket that still excludes dilute
   // colonies and heavily overlapped states.
@@ -165,14 +167,15 @@ TEST_CASE("a small run jams in the range of random dumbbell packings and lands e
   CHECK(J.E_per_cell >= r.scene.epsilon_U);
   CHECK(J.E_per_cell <= 2 * r.scene.epsilon_U);
   CHECK(J.P > 0);
-  CHECK(J.N_nr > 0);
-  CHECK(J.Z > 3.0);  // a rigid cluster of dumbbells
-  CHECK(J.n_J == Approx(J.N_nr / (r.scene.L * r.scene.L)));
+  CHECK(J.network.N_nr > 0);
+  CHECK(J.network.Z > 3.0);  // a rigid cluster of dumbbells
+  CHECK(J.n_J == Approx(J.network.N_nr / (r.scene.L * r.scene.L)));
   // At the onset of rigidity the contact count is the modified isostatic one (paper Eq. 3):
   // N_c = 6 N_nr − 2 N_u − 2, i.e. ΔZ = 0 — measured exactly at every jamming point in docs/growth.md.
   for (const JammingRecord* j : {&J, &*r.rec.first_jammed}) {
-    CHECK(static_cast<long>(j->N_c) == 6 * static_cast<long>(j->N_nr) - 2 * static_cast<long>(j->N_u) - 2);
-    CHECK(std::abs(j->dZ) < 1e-12);
+    CHECK(static_cast<long>(j->network.N_c) ==
+          6 * static_cast<long>(j->network.N_nr) - 2 * static_cast<long>(j->network.N_u) - 2);
+    CHECK(std::abs(j->network.dZ) < 1e-12);
   }
   REQUIRE(r.result.targets.size() == r.scene.targets.size());
   for (std::size_t k = 0; k < r.result.targets.size(); ++k) {
@@ -270,7 +273,7 @@ TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with
       CHECK(e.step == r.rec.jammed->step);
     }
   CHECK(r.rec.jammed->episode == r.rec.unjammed);
-  CHECK(tagged == r.rec.jammed->N_u_buds);
+  CHECK(tagged == r.rec.jammed->network.N_u_buds);
   CHECK(tagged == r.rec.jammed->tagged);
   // every tag ends exactly once: completed, divided or censored
   std::size_t ends = 0;
@@ -294,6 +297,53 @@ TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with
   REQUIRE(it != o.end());
   CHECK(*(it - 1) == "step");
   CHECK(o.back() == "finished");
+}
+
+// A run to φ_2 under the definition "at most `left` tagged buds still unconstrained", without
+// feedback (so that the last tagged buds do not arrest) and with one target below φ_2.
+struct DepletionRun {
+  Scene scene = small_scene();
+  Recorder rec;
+  std::size_t left_at_phi2 = 0;  // tagged buds unconstrained in the state the Depleted event shows
+  explicit DepletionRun(std::size_t left) {
+    scene.P0.reset();
+    scene.targets = {1e-4};
+    scene.continue_to_phi2 = true;
+    scene.phi2_tagged_left = left;
+    struct Watch : Observer {
+      std::size_t* left = nullptr;
+      std::string name() const override { return "watch"; }
+      void on_depleted(const Depleted& e) override { *left = e.state.buds->active(); }
+    } watch;
+    watch.left = &left_at_phi2;
+    GrowthDriver d(scene);
+    d.add_observer(rec);
+    d.add_observer(watch);
+    d.run();
+  }
+};
+
+TEST_CASE("phi_2 with no tagged bud left (the paper's definition) comes at or after phi_2 with one left", "[driver]") {
+  const DepletionRun one(1), none(0);
+  REQUIRE(one.rec.depleted);
+  REQUIRE(none.rec.depleted);
+  REQUIRE(one.rec.jammed);
+  REQUIRE(none.rec.jammed);
+  // Same seed: the same run up to the earlier φ_2; only which state is φ_2 differs.
+  CHECK(none.rec.jammed->phi == one.rec.jammed->phi);
+  CHECK(none.rec.depleted->step >= one.rec.depleted->step);
+  INFO("phi_2 = " << one.rec.depleted->phi << " (1 left), " << none.rec.depleted->phi << " (none left), steps "
+                  << one.rec.depleted->step << ", " << none.rec.depleted->step << ", tagged "
+                  << one.rec.jammed->tagged);
+  CHECK(one.rec.depleted->still_unconstrained <= 1);
+  CHECK(one.left_at_phi2 == one.rec.depleted->still_unconstrained);
+  CHECK(none.rec.depleted->still_unconstrained == 0);
+  CHECK(none.left_at_phi2 == 0);
+  // ... and it is the first such state: every jammed state of the episode before it had one left or more.
+  for (const auto& s : none.rec.steps)
+    if (s.phase == Phase::jammed && s.step > none.rec.jammed->step && s.step < none.rec.depleted->step)
+      CHECK(s.active >= 1);
+  if (none.rec.depleted->step == one.rec.depleted->step) CHECK(none.rec.depleted->phi == one.rec.depleted->phi);
 }
 
 TEST_CASE("the same seed gives the same run and another seed another run", "[driver]") {
@@ -727,11 +777,11 @@ TEST_CASE(
   // The energy rule alone accepts the saddle, a hypostatic state
   CHECK(d0.result().saddles_relaxed == 0);
   CHECK_FALSE(without.minimum());
-  CHECK(without.record->dZ < 0);
+  CHECK(without.record->network.dZ < 0);
   // with the check the saddle relaxes to E ≈ 0, growth goes on, and the jamming point is a minimum
   CHECK(d1.result().saddles_relaxed >= 1);
   CHECK(with.minimum());
-  CHECK(with.record->dZ >= 0);
+  CHECK(with.record->network.dZ >= 0);
   CHECK(with.record->E_per_cell >= s.epsilon_U);
   CHECK(with.record->E_per_cell <= 2 * s.epsilon_U);
   CHECK(with.record->phi > without.record->phi);

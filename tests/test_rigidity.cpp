@@ -712,7 +712,7 @@ TEST_CASE("along a real growth run above jamming: tracker = scratch at every sta
     void on_jammed(const Jammed& e) override {
       ++jammings;
       const RigidityState& r = tracker.state();
-      CHECK(r.floppy_plane == static_cast<long>(e.jamming.N_u));
+      CHECK(r.floppy_plane == static_cast<long>(e.jamming.network.N_u));
       CHECK((r.spans_x && r.spans_y));
       CHECK(r.redundant_bars >= 1);  // the pressure at jamming needs a state of self-stress
     }

@@ -67,10 +67,7 @@ struct JammingRecord {
   int episode = 0;  // 0 for the first jamming, k after the k-th unjamming
   long step = 0;    // accepted-step index of the jammed state
   double phi = 0, P = 0, E_per_cell = 0;
-  std::size_t N = 0, N_nr = 0, N_f = 0, N_u = 0, N_u_buds = 0, N_c = 0;
-  double Z = 0, Z_iso = 0, dZ = 0;
-  double u = 0;            // N_u / N_nr (contact-free lobes)
-  double u_buds = 0;       // the paper's u_J: unconstrained buds / N_nr
+  NetworkSummary network;
   double n_J = 0;          // N_nr / L²
   std::size_t tagged = 0;  // unconstrained buds tagged for the bud events and φ_2
 };
@@ -81,8 +78,7 @@ struct TargetRecord {
   double phi_target = 0;  // φ_J + Δφ
   long step = 0;
   double phi = 0, P = 0, E_per_cell = 0;
-  std::size_t N = 0, N_nr = 0, N_f = 0, N_f_single = 0, N_c = 0, N_u = 0, N_u_buds = 0;
-  double Z = 0, u = 0, u_buds = 0, Z_iso = 0, dZ = 0;
+  NetworkSummary network;
   double chi_c = 1;  // ⟨exp(−p/P0)⟩ over compressed buds (1 with P0 = none or none compressed)
   long divisions_since_jamming = 0;
 };
@@ -90,9 +86,8 @@ struct TargetRecord {
 struct DepletionRecord {  // φ_2
   long step = 0;
   double phi = 0, P = 0;
-  std::size_t N = 0, N_nr = 0;
-  double Z = 0, u = 0, u_buds = 0, Z_iso = 0, dZ = 0;
-  std::size_t still_unconstrained = 0;  // tagged buds still unconstrained (≤ 1)
+  NetworkSummary network;
+  std::size_t still_unconstrained = 0;  // tagged buds still unconstrained (≤ scene.phi2_tagged_left)
   long divisions_since_jamming = 0;
 };
 

@@ -65,6 +65,9 @@ struct Scene {
   std::vector<double> targets;     // Δφ, strictly increasing, > 0
   bool continue_to_phi2 = false;   // keep growing past the last target until φ_2 is found
   double max_dphi = 0.2;           // ... but never beyond φ_J + max_dphi
+  // φ_2 is the first accepted state after jamming with at most this many tagged buds still
+  // unconstrained: 1 is budjam's reading of u(φ_2) = ε ~ 1/N_nr,J, 0 the paper's "none left".
+  std::size_t phi2_tagged_left = 1;
   // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
   // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
   bool check_minimum = true;

@@ -204,8 +204,8 @@ class EventQueue : public Observer {
   void on_jammed(const Jammed& e) override {
     const JammingRecord& j = e.jamming;
     push("jammed", e.state,
-         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.Z, "Z_iso"_a = j.Z_iso, "dZ"_a = j.dZ,
-                  "N_nr"_a = j.N_nr, "u_J"_a = j.u_buds, "tagged"_a = j.tagged));
+         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.network.Z, "Z_iso"_a = j.network.Z_iso,
+                  "dZ"_a = j.network.dZ, "N_nr"_a = j.network.N_nr, "u_J"_a = j.network.u_buds, "tagged"_a = j.tagged));
   }
   void on_unjammed(const Unjammed& e) override {
     push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
@@ -213,11 +213,12 @@ class EventQueue : public Observer {
   void on_target_reached(const TargetReached& e) override {
     const TargetRecord& t = e.target;
     push("target", e.state,
-         py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.Z, "dZ"_a = t.dZ, "N_nr"_a = t.N_nr,
-                  "chi_c"_a = t.chi_c));
+         py::dict("index"_a = t.index, "dphi"_a = t.dphi, "Z"_a = t.network.Z, "dZ"_a = t.network.dZ,
+                  "N_nr"_a = t.network.N_nr, "chi_c"_a = t.chi_c));
   }
   void on_depleted(const Depleted& e) override {
-    push("phi2", e.state, py::dict("phi_2"_a = e.depletion.phi, "Z"_a = e.depletion.Z, "dZ"_a = e.depletion.dZ));
+    const DepletionRecord& d = e.depletion;
+    push("phi2", e.state, py::dict("phi_2"_a = d.phi, "Z"_a = d.network.Z, "dZ"_a = d.network.dZ));
   }
   void on_divided(const Divided& e) override {
     const Division& d = e.division;

@@ -129,6 +129,32 @@ struct Section {
   std::string body;
 };
 
+// The contact-network summary of a record (jamming point, target, φ_2): its numbers in the order
+// NetworkSummary declares them.
+constexpr std::size_t kNetworkWords = 12;
+
+std::string network_text(const NetworkSummary& n) {
+  std::ostringstream os;
+  os << n.N << ' ' << n.N_nr << ' ' << n.N_f << ' ' << n.N_f_single_pass << ' ' << n.N_c << ' ' << n.N_u << ' '
+     << n.N_u_buds << ' ' << num(n.Z) << ' ' << num(n.u) << ' ' << num(n.u_buds) << ' ' << num(n.Z_iso) << ' '
+     << num(n.dZ);
+  return os.str();
+}
+
+// The summary from the words w[at], ..., w[at + kNetworkWords − 1]; counts are bounded by the cells
+// (N by `cells_cap`), lobes (2N) and ordered contact pairs (4N²).
+NetworkSummary read_network(const Lines& in, const std::vector<std::string_view>& w, std::size_t at,
+                            std::size_t cells_cap) {
+  NetworkSummary n;
+  n.N = in.count_of(w[at], "N", cells_cap);
+  n.N_nr = in.count_of(w[at + 1], "N_nr", n.N), n.N_f = in.count_of(w[at + 2], "N_f", n.N);
+  n.N_f_single_pass = in.count_of(w[at + 3], "N_f_single", n.N), n.N_c = in.count_of(w[at + 4], "N_c", 4 * n.N * n.N);
+  n.N_u = in.count_of(w[at + 5], "N_u", 2 * n.N), n.N_u_buds = in.count_of(w[at + 6], "N_u_buds", n.N);
+  n.Z = in.real(w[at + 7], "Z"), n.u = in.real(w[at + 8], "u"), n.u_buds = in.real(w[at + 9], "u_buds");
+  n.Z_iso = in.real(w[at + 10], "Z_iso"), n.dZ = in.real(w[at + 11], "dZ");
+  return n;
+}
+
 }  // namespace
 
 std::uint64_t fnv1a64(std::string_view bytes) {
@@ -158,21 +184,16 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << "jamming " << (r.jamming ? 1 : 0);
   if (const auto& j = r.jamming)
     os << ' ' << j->episode << ' ' << j->step << ' ' << num(j->phi) << ' ' << num(j->P) << ' ' << num(j->E_per_cell)
-       << ' ' << j->N << ' ' << j->N_nr << ' ' << j->N_f << ' ' << j->N_u << ' ' << j->N_u_buds << ' ' << j->N_c << ' '
-       << num(j->Z) << ' ' << num(j->Z_iso) << ' ' << num(j->dZ) << ' ' << num(j->u) << ' ' << num(j->u_buds) << ' '
-       << num(j->n_J) << ' ' << j->tagged;
+       << ' ' << network_text(j->network) << ' ' << num(j->n_J) << ' ' << j->tagged;
   os << '\n';
   os << "targets " << r.targets.size() << '\n';
   for (const TargetRecord& t : r.targets)
     os << t.index << ' ' << num(t.dphi) << ' ' << num(t.phi_target) << ' ' << t.step << ' ' << num(t.phi) << ' '
-       << num(t.P) << ' ' << num(t.E_per_cell) << ' ' << t.N << ' ' << t.N_nr << ' ' << t.N_f << ' ' << t.N_f_single
-       << ' ' << t.N_c << ' ' << t.N_u << ' ' << t.N_u_buds << ' ' << num(t.Z) << ' ' << num(t.u) << ' '
-       << num(t.u_buds) << ' ' << num(t.Z_iso) << ' ' << num(t.dZ) << ' ' << num(t.chi_c) << ' '
+       << num(t.P) << ' ' << num(t.E_per_cell) << ' ' << network_text(t.network) << ' ' << num(t.chi_c) << ' '
        << t.divisions_since_jamming << '\n';
   os << "depletion " << (r.depletion ? 1 : 0);
   if (const auto& d = r.depletion)
-    os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << d->N << ' ' << d->N_nr << ' ' << num(d->Z)
-       << ' ' << num(d->u) << ' ' << num(d->u_buds) << ' ' << num(d->Z_iso) << ' ' << num(d->dZ) << ' '
+    os << ' ' << d->step << ' ' << num(d->phi) << ' ' << num(d->P) << ' ' << network_text(d->network) << ' '
        << d->still_unconstrained << ' ' << d->divisions_since_jamming;
   os << '\n';
   os << "unjammings " << r.unjammings.size() << '\n';
@@ -215,6 +236,10 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     if (version == 2 || version == 3)
       in.fail("checkpoint version " + std::to_string(version) +
               " was written before the secant jamming search (jamming.search); start the run again");
+    if (version == 4)
+      in.fail(
+          "checkpoint version 4 was written before every record (jamming point, targets, phi_2) held the whole "
+          "contact-network summary; start the run again");
     if (version != kCheckpointVersion)
       in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
               std::to_string(kCheckpointVersion) + "); start the run again");
@@ -302,18 +327,16 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     const bool has = in.flag(w[0], "jamming");
     if (has != (s.phase == Phase::jammed)) in.fail("jamming: a record is present if and only if the phase is jammed");
     if (has) {
-      if (w.size() != 19) in.fail("jamming: expected 19 values, found " + std::to_string(w.size()));
+      if (w.size() != 8 + kNetworkWords)
+        in.fail("jamming: expected " + std::to_string(8 + kNetworkWords) + " values, found " +
+                std::to_string(w.size()));
       JammingRecord j;
       j.episode = static_cast<int>(in.integer(w[1], "jamming episode", s.episodes - 1, s.episodes - 1));
       j.step = in.integer(w[2], "jamming step", 1, s.step);
       j.phi = in.positive(w[3], "phi_J"), j.P = in.real(w[4], "P_J"), j.E_per_cell = in.real(w[5], "E_J");
-      j.N = in.count_of(w[6], "N_J", cells_cap);
-      j.N_nr = in.count_of(w[7], "N_nr", j.N), j.N_f = in.count_of(w[8], "N_f", j.N);
-      j.N_u = in.count_of(w[9], "N_u", 2 * j.N), j.N_u_buds = in.count_of(w[10], "N_u_buds", j.N);
-      j.N_c = in.count_of(w[11], "N_c", 4 * j.N * j.N);
-      j.Z = in.real(w[12], "Z"), j.Z_iso = in.real(w[13], "Z_iso"), j.dZ = in.real(w[14], "dZ");
-      j.u = in.real(w[15], "u"), j.u_buds = in.real(w[16], "u_buds"), j.n_J = in.real(w[17], "n_J");
-      j.tagged = in.count_of(w[18], "tagged", j.N);
+      j.network = read_network(in, w, 6, cells_cap);
+      j.n_J = in.real(w[6 + kNetworkWords], "n_J");
+      j.tagged = in.count_of(w[7 + kNetworkWords], "tagged", j.network.N);
       r.jamming = j;
     } else if (w.size() != 1) {
       in.fail("jamming: expected no values after 0");
@@ -324,7 +347,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     if (n != s.next_target)
       in.fail("targets: " + std::to_string(n) + " landed, but the next target is " + std::to_string(s.next_target));
     for (std::size_t k = 0; k < n; ++k) {
-      const auto w = in.next("", 21);
+      const auto w = in.next("", 9 + kNetworkWords);
       TargetRecord t;
       t.index = in.count_of(w[0], "target index", k);
       if (t.index != k) in.fail("target index: expected " + std::to_string(k));
@@ -333,13 +356,10 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       t.phi_target = in.positive(w[2], "phi_target");
       t.step = in.integer(w[3], "target step", 1, s.step);
       t.phi = in.positive(w[4], "phi"), t.P = in.real(w[5], "P"), t.E_per_cell = in.real(w[6], "E_per_cell");
-      t.N = in.count_of(w[7], "N", cells_cap);
-      t.N_nr = in.count_of(w[8], "N_nr", t.N), t.N_f = in.count_of(w[9], "N_f", t.N);
-      t.N_f_single = in.count_of(w[10], "N_f_single", t.N), t.N_c = in.count_of(w[11], "N_c", 4 * t.N * t.N);
-      t.N_u = in.count_of(w[12], "N_u", 2 * t.N), t.N_u_buds = in.count_of(w[13], "N_u_buds", t.N);
-      t.Z = in.real(w[14], "Z"), t.u = in.real(w[15], "u"), t.u_buds = in.real(w[16], "u_buds");
-      t.Z_iso = in.real(w[17], "Z_iso"), t.dZ = in.real(w[18], "dZ"), t.chi_c = in.real(w[19], "chi_c");
-      t.divisions_since_jamming = in.integer(w[20], "divisions since jamming", 0, s.divisions_since_jamming);
+      t.network = read_network(in, w, 7, cells_cap);
+      t.chi_c = in.real(w[7 + kNetworkWords], "chi_c");
+      t.divisions_since_jamming =
+          in.integer(w[8 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
       r.targets.push_back(t);
     }
   }
@@ -348,15 +368,16 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     if (w.empty()) in.fail("depletion: expected 0 or 1");
     if (in.flag(w[0], "depletion")) {
       if (s.phase != Phase::jammed) in.fail("depletion: recorded while unjammed");
-      if (w.size() != 13) in.fail("depletion: expected 13 values, found " + std::to_string(w.size()));
+      if (w.size() != 6 + kNetworkWords)
+        in.fail("depletion: expected " + std::to_string(6 + kNetworkWords) + " values, found " +
+                std::to_string(w.size()));
       DepletionRecord d;
       d.step = in.integer(w[1], "phi_2 step", 1, s.step);
       d.phi = in.positive(w[2], "phi_2"), d.P = in.real(w[3], "P_2");
-      d.N = in.count_of(w[4], "N_2", cells_cap), d.N_nr = in.count_of(w[5], "N_nr", d.N);
-      d.Z = in.real(w[6], "Z"), d.u = in.real(w[7], "u"), d.u_buds = in.real(w[8], "u_buds");
-      d.Z_iso = in.real(w[9], "Z_iso"), d.dZ = in.real(w[10], "dZ");
-      d.still_unconstrained = in.count_of(w[11], "still unconstrained", 1);
-      d.divisions_since_jamming = in.integer(w[12], "divisions since jamming", 0, s.divisions_since_jamming);
+      d.network = read_network(in, w, 4, cells_cap);
+      d.still_unconstrained = in.count_of(w[4 + kNetworkWords], "still unconstrained", scene.phi2_tagged_left);
+      d.divisions_since_jamming =
+          in.integer(w[5 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
       r.depletion = d;
     } else if (w.size() != 1) {
       in.fail("depletion: expected no values after 0");
