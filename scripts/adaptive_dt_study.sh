@@ -5,7 +5,8 @@
 #   scripts/adaptive_dt_study.sh OUT_DIR [L] [SEEDS] [NOMINAL_MAX_STEPS]
 # e.g. scripts/adaptive_dt_study.sh runs/adaptive-study 8 "$(seq 1 20)" 40000; then
 #   python3 scripts/adaptive_dt_table.py runs/adaptive-study
-# Two runs at a time (JOBS=2), each under nice. BUDJAM (default build/budjam) is the executable.
+# Two runs at a time (JOBS=2), each under nice. BUDJAM (default build/budjam) is the executable;
+# P0S (default "1e-2 1e-3 1e-4 1e-5") the feedback strengths.
 set -euo pipefail
 out=${1:?usage: adaptive_dt_study.sh OUT_DIR [L] [SEEDS] [NOMINAL_MAX_STEPS]}
 L=${2:-8}
@@ -14,8 +15,8 @@ nominal_max=${4:-40000}
 budjam=${BUDJAM:-build/budjam}
 jobs=${JOBS:-2}
 scene=data/scenes/paper-L15.toml
-# The paper's grid per P0: Δφ up to 0.06 at P0 = 1e-3 and 1e-4, 0.03 at 1e-5.
-declare -A targets=([1e-3]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2,6e-2]' [1e-4]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2,6e-2]'
+# The paper's grid per P0: Δφ up to 0.12 at P0 = 1e-2, 0.06 at 1e-3 and 1e-4, 0.03 at 1e-5.
+declare -A targets=([1e-2]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2,6e-2,0.1,0.12]' [1e-3]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2,6e-2]' [1e-4]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2,6e-2]'
                     [1e-5]='[1e-4,3e-4,1e-3,3e-3,1e-2,3e-2]')
 minimiser=(--set minimiser.newton_force=1e-6)
 
@@ -34,7 +35,7 @@ one_run() {  # protocol P0 seed
   done
 }
 for protocol in adaptive nominal; do
-  for P0 in 1e-3 1e-4 1e-5; do
+  for P0 in ${P0S:-1e-2 1e-3 1e-4 1e-5}; do
     for s in $seeds; do echo "$protocol $P0 $s"; done
   done
 done | {
