@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace budjam {
 
@@ -47,7 +48,7 @@ double force_resolution(const Packing& p) {
   return 16.0 * std::numeric_limits<double>::epsilon() * kSpring * extent;
 }
 
-FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
+FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, NewtonWorkspace* newton_workspace) {
   FireResult res;
   const std::size_t n = p.size();
   if (n == 0) {
@@ -108,11 +109,15 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm) {
   double alpha = prm.alpha_start;
   long n_positive = 0;
   double newton_below = prm.newton_force;  // Newton is tried when fmax falls below this
-  const NewtonParams newton{tol, floor_total};
+  NewtonParams newton{tol, floor_total};
+  newton.reuse_factor = prm.newton_reuse;
+  std::optional<NewtonWorkspace> own_workspace;
   for (long it = 1; !stopped(U, fmax); ++it) {
     if (fmax < newton_below) {
-      const NewtonResult nr = newton_finish(p, field, newton);
+      if (!newton_workspace) newton_workspace = &own_workspace.emplace();
+      const NewtonResult nr = newton_finish(p, field, newton, *newton_workspace);
       res.newton_iterations += nr.iterations;
+      res.newton_chord_steps += nr.chord_steps;
       res.evaluations += nr.evaluations;
       U = nr.energy;
       if (nr.stop == NewtonStop::converged) {

@@ -94,6 +94,9 @@ struct GrowthDriver::Impl {
   std::vector<double> rates;  // γ_i of the next step, frozen from the accepted state
 
   ForceField field;
+  // The Newton factor kept from one minimisation to the next (arrested regime). Forgotten at every
+  // checkpointed step, where a resumed run starts without one, so that it repeats the uninterrupted run.
+  NewtonWorkspace newton;
   Eigen::VectorXd force;
   bool final_emitted = false;
   std::function<void()> checkpoint_hook;
@@ -117,7 +120,7 @@ struct GrowthDriver::Impl {
   // FIRE on a trial, counted; false (and the run failed) if it did not converge.
   bool relax(Packing& p, const FireParams& params, const std::string& where) {
     field.invalidate();
-    const FireResult fr = minimise(p, field, params);
+    const FireResult fr = minimise(p, field, params, &newton);
     result.force_evaluations += fr.evaluations + 1;
     result.fire_iterations += fr.iterations;
     if (!fr.converged)
@@ -561,6 +564,7 @@ struct GrowthDriver::Impl {
       finish_events();
       return result.status;
     }
+    if (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) newton.clear();
     if (checkpoint_hook) checkpoint_hook();
     return result.status;
   }
@@ -607,6 +611,7 @@ struct GrowthDriver::Impl {
     bracket_width = s.search.bracket_width;
     started = true;
     final_emitted = false;
+    newton.clear();
     E = fresh_energy_per_cell(packing);
     derive();
   }

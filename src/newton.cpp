@@ -44,45 +44,63 @@ double max_scaled_force(const Packing& p, const Eigen::VectorXd& F) {
   return fmax;
 }
 
-NewtonResult newton_finish(Packing& p, ForceField& field, const NewtonParams& prm) {
+void NewtonWorkspace::clear() {
+  solver = CholmodSolver();
+  network.clear();
+  factored = false;
+}
+
+NewtonResult newton_finish(Packing& p, ForceField& field, const NewtonParams& prm, NewtonWorkspace& ws) {
   NewtonResult res;
   Eigen::VectorXd F, F_trial;
   double U = field.evaluate(p, F);
   ++res.evaluations;
   double fmax = max_scaled_force(p, F);
   double norm = scaled_force_norm(p, F);
-  CholmodSolver solver;
   const auto finish = [&](NewtonStop stop) {
     res.stop = stop;
     res.energy = U;
     res.max_force = fmax;
     return res;
   };
+  // Moves p to q0 + h·step; keeps it (true) if the force norm falls below `bound`.
+  const auto try_step = [&](const Eigen::VectorXd& q0, const Eigen::VectorXd& step, double h, double bound) {
+    p.q = q0 + h * step;
+    const double U_trial = field.evaluate(p, F_trial);
+    ++res.evaluations;
+    const double norm_trial = scaled_force_norm(p, F_trial);
+    if (!(norm_trial < bound)) return false;
+    U = U_trial;
+    F.swap(F_trial);
+    norm = norm_trial;
+    fmax = max_scaled_force(p, F);
+    return true;
+  };
   for (long it = 0;; ++it) {
     if (fmax < prm.force_tol || U < prm.energy_floor) return finish(NewtonStop::converged);
     if (it == prm.max_iterations) return finish(NewtonStop::iteration_cap);
-    ++res.iterations;
     // The field is current for p: its neighbour list holds every contact of this configuration.
     const std::vector<Contact> contacts = find_contacts(p, field.lobes(), field.neighbours());
-    const double mu = prm.shift * fmax;
-    if (!solver.factor(hessian(p, contacts), -mu, Eigen::VectorXd())) return finish(NewtonStop::indefinite);
-    const Eigen::VectorXd step = solver.solve(F);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> network(contacts.size());
+    std::transform(contacts.begin(), contacts.end(), network.begin(),
+                   [](const Contact& c) { return std::make_pair(c.i, c.j); });
     const Eigen::VectorXd q0 = p.q;
+    if (prm.reuse_factor && ws.factored && ws.solver.rows() == F.size() && network == ws.network) {
+      if (try_step(q0, ws.solver.solve(F), 1.0, prm.chord_contraction * norm)) {
+        ++res.chord_steps;
+        continue;
+      }
+      p.q = q0;  // too slow a contraction: refactor here (F, U and the contacts are still those of q0)
+    }
+    ++res.iterations;
+    const double mu = prm.shift * fmax;
+    ws.factored = ws.solver.factor(hessian(p, contacts), -mu, Eigen::VectorXd());
+    ws.network = std::move(network);
+    if (!ws.factored) return finish(NewtonStop::indefinite);
+    const Eigen::VectorXd step = ws.solver.solve(F);
     bool accepted = false;
     double h = 1.0;
-    for (int k = 0; k <= kMaxHalvings && !accepted; ++k, h *= 0.5) {
-      p.q = q0 + h * step;
-      const double U_trial = field.evaluate(p, F_trial);
-      ++res.evaluations;
-      const double norm_trial = scaled_force_norm(p, F_trial);
-      if (norm_trial < norm) {
-        accepted = true;
-        U = U_trial;
-        F.swap(F_trial);
-        norm = norm_trial;
-        fmax = max_scaled_force(p, F);
-      }
-    }
+    for (int k = 0; k <= kMaxHalvings && !accepted; ++k, h *= 0.5) accepted = try_step(q0, step, h, norm);
     if (!accepted) {
       p.q = q0;
       U = field.evaluate(p, F);
@@ -90,6 +108,11 @@ NewtonResult newton_finish(Packing& p, ForceField& field, const NewtonParams& pr
       return finish(NewtonStop::line_search);
     }
   }
+}
+
+NewtonResult newton_finish(Packing& p, ForceField& field, const NewtonParams& prm) {
+  NewtonWorkspace fresh;
+  return newton_finish(p, field, prm, fresh);
 }
 
 }  // namespace budjam

@@ -233,6 +233,10 @@ std::vector<SceneKey> make_keys() {
                    "above jamming, Newton steps (analytic Hessian) finish a minimisation once the largest force is "
                    "below this; 0 = off",
                    kZeroOrPositive, BUDJAM_FIELD(fire.newton_force)));
+  e.push_back(flag("minimiser", "newton_reuse",
+                   "keep a Newton factorisation while the contacts are unchanged (also from one growth step to the "
+                   "next), refactoring when its steps contract the force too slowly",
+                   BUDJAM_FIELD(fire.newton_reuse)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));
 

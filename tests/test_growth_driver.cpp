@@ -385,6 +385,33 @@ TEST_CASE("a run restored from a checkpoint ends identical to the uninterrupted 
   CHECK_THROWS_AS(wrong.restore(checkpoints.front()), InputError);
 }
 
+TEST_CASE("with a kept Newton factor a run restored from a checkpoint still ends identical", "[driver][newton]") {
+  // The factor carried from step to step is forgotten at every checkpointed step, where a resumed
+  // run starts without one.
+  Scene s = small_scene();
+  s.P0 = 1e-4;  // strong feedback: past φ_2 the steps are tiny, the contacts persist, the factor is kept
+  s.targets = {1e-3, 1e-2};
+  s.max_steps = 2000;  // ends arrested, well before Δφ = 1e-2
+  s.fire.newton_force = 1e-6;
+  s.checkpoint_every = 50;
+  std::vector<GrowthState> checkpoints;
+  GrowthDriver first(s);
+  first.set_checkpoint_hook([&] {
+    if (first.view().step % s.checkpoint_every == 0) checkpoints.push_back(first.state());
+  });
+  REQUIRE(first.run() == RunStatus::step_limit);
+  REQUIRE(checkpoints.size() > 2);
+  for (const GrowthState& c : {checkpoints[checkpoints.size() - 3], checkpoints[checkpoints.size() - 2]}) {
+    REQUIRE(c.phase == Phase::jammed);
+    GrowthDriver resumed(s);
+    resumed.restore(c);
+    resumed.run();
+    INFO("resumed from step " << c.step << " of " << first.result().accepted);
+    CHECK(same_result(resumed.result(), first.result()));
+    CHECK(same_packing(resumed.packing(), first.packing()));
+  }
+}
+
 TEST_CASE("a run restored in the middle of the secant search (overshoots remembered) ends identical", "[driver]") {
   const Reference& r = reference();
   std::vector<GrowthState> states;

@@ -107,3 +107,41 @@ TEST_CASE("with the Newton finish on, an unjammed packing still relaxes to E/N b
   CHECK(r.converged);
   CHECK(r.energy / static_cast<double>(p.size()) < 1e-16);  // below the jamming threshold ε_U
 }
+
+TEST_CASE("a kept Newton factor relaxes a sequence of slowly grown packings to FIRE's minima with fewer factorisations",
+          "[newton]") {
+  // The arrested regime in miniature: each packing is the last one grown by 1e-6 (and relaxed), so
+  // consecutive Hessians barely differ and a factor kept from the previous minimisation is a good
+  // approximation of the current one.
+  FireParams fire_only, reuse, no_reuse;
+  reuse.newton_force = no_reuse.newton_force = 1e-5;
+  no_reuse.newton_reuse = false;
+  NewtonWorkspace kept;
+  Packing fire_state = swollen(jammed().packing), reuse_state = fire_state, no_reuse_state = fire_state;
+  ForceField f1, f2, f3;
+  long chord_steps = 0, factorisations_reuse = 0, factorisations_no_reuse = 0;
+  for (int step = 0; step < 6; ++step) {
+    const FireResult a = minimise(fire_state, f1, fire_only);
+    const FireResult b = minimise(reuse_state, f2, reuse, &kept);
+    const FireResult c = minimise(no_reuse_state, f3, no_reuse);
+    REQUIRE(a.converged);
+    REQUIRE(b.converged);
+    REQUIRE(c.converged);
+    CHECK(b.max_force < reuse.force_tol);  // the same stopping test as FIRE's
+    CHECK(b.energy == Approx(a.energy).epsilon(1e-8));
+    Eigen::VectorXd F;
+    f1.evaluate(fire_state, F);
+    const std::vector<Contact> contacts = find_contacts(fire_state, f1.lobes(), f1.neighbours());
+    CHECK(largest_difference(fire_state, reuse_state, analyse_network(fire_state.size(), contacts)) < 1e-7);
+    chord_steps += b.newton_chord_steps;
+    factorisations_reuse += b.newton_iterations;
+    factorisations_no_reuse += c.newton_iterations;
+    CHECK(c.newton_chord_steps == 0);
+    for (Packing* p : {&fire_state, &reuse_state, &no_reuse_state})
+      for (double& bud : p->b) bud *= 1.0 + 1e-6;
+  }
+  INFO("factorisations with reuse " << factorisations_reuse << " (+" << chord_steps << " chord steps), without "
+                                    << factorisations_no_reuse);
+  CHECK(chord_steps > 0);
+  CHECK(factorisations_reuse < factorisations_no_reuse);
+}

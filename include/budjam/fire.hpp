@@ -3,6 +3,7 @@
 // (x, y, θ̃) with θ̃ = r_g θ, so every coordinate is a length. docs/minimiser.md explains the
 // stopping rule and the choice of parameters.
 #include "budjam/energy.hpp"
+#include "budjam/newton.hpp"
 #include "budjam/packing.hpp"
 
 namespace budjam {
@@ -27,6 +28,9 @@ struct FireParams {
   // steps with the analytic Hessian take over; FIRE resumes if they give up (and Newton is tried
   // again only after FIRE has lowered the force tenfold). 0 = FIRE alone.
   double newton_force = 0.0;
+  // Keep a Newton factor as a modified-Newton approximation of H while the contacts do not change
+  // (newton.hpp), across minimisations when the caller passes a NewtonWorkspace.
+  bool newton_reuse = true;
 };
 
 // Why a minimisation stopped.
@@ -42,6 +46,7 @@ struct FireResult {
   bool converged = false;      // stop != iteration_cap
   long iterations = 0;         // FIRE iterations
   long newton_iterations = 0;  // Newton steps (one Hessian factorisation each)
+  long newton_chord_steps = 0;  // Newton steps with a reused factor
   long evaluations = 0;        // force evaluations made by this call
   double energy = 0.0;         // U at the end
   double max_force = 0.0;      // largest |F| component at the end (θ component as F_θ / r_g)
@@ -49,7 +54,8 @@ struct FireResult {
 
 // Relaxes p in place. A centroid lying more than L/2 outside the box is first moved back by whole
 // periods (a deterministic relabelling of images that leaves U unchanged); no other wrapping.
-FireResult minimise(Packing& p, ForceField& field, const FireParams& params = {});
+// `newton` (optional) carries the Newton factor from one minimisation to the next.
+FireResult minimise(Packing& p, ForceField& field, const FireParams& params = {}, NewtonWorkspace* newton = nullptr);
 
 // The smallest force FIRE can resolve in double precision: 16 ε k × (the larger of L and the
 // largest |coordinate|), since lobe positions, hence overlaps, carry rounding errors of a few
