@@ -19,7 +19,7 @@ struct NetworkSummary {
   std::size_t N_u_buds = 0;         // contact-free buds of non-rattlers
   double Z = 0.0;                   // mean contact number N_c / N_nr
   double u = 0.0;                   // N_u / N_nr
-  double u_buds = 0.0;              // N_u_buds / N_nr (the paper's u_J at jamming)
+  double u_buds = 0.0;              // N_u_buds / N_nr (budjam's u_J at jamming; the paper's u_J ≃ 0.23 is u)
   double Z_iso = 0.0;               // isostatic contact number 6 − 2u − 2/N_nr      (Eq. 4)
   double dZ = 0.0;                  // excess contact number Z − Z_iso               (Eq. 5)
 };
