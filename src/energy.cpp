@@ -41,6 +41,7 @@ void ForceField::refresh(const Packing& p) {
   const std::size_t n = p.size();
   if (b_cached_.size() != n) {
     b_cached_.assign(n, -1.0);  // never a bud size: forces recomputation below
+    theta_cached_.resize(n);
     mother_offset_.resize(n);
     bud_offset_.resize(n);
   }
@@ -49,8 +50,13 @@ void ForceField::refresh(const Packing& p) {
   lobes_.R.resize(2 * n);
   ox_.resize(2 * n);
   oy_.resize(2 * n);
+  // The neighbour list's displacement test is gathered here, in the pass that places the lobes.
+  const bool tracked = list_.tracks(2 * n);
+  NeighbourList::Drift drift;
   for (std::size_t i = 0; i < n; ++i) {
-    if (p.b[i] != b_cached_[i]) {
+    const double th = p.q[3 * i + 2];
+    const bool resized = p.b[i] != b_cached_[i];
+    if (resized) {
       const Dumbbell d = Dumbbell::of(p.b[i]);
       b_cached_[i] = p.b[i];
       mother_offset_[i] = d.mother_offset;
@@ -58,19 +64,25 @@ void ForceField::refresh(const Packing& p) {
       lobes_.R[2 * i] = 0.5 * d.D;
       lobes_.R[2 * i + 1] = 0.5 * d.b;
     }
-    const double x = p.q[3 * i], y = p.q[3 * i + 1], th = p.q[3 * i + 2];
-    const double c = std::cos(th), s = std::sin(th);
-    // Same arithmetic as place_lobes(), so lobes() equals what place_lobes would give.
-    ox_[2 * i] = -mother_offset_[i] * c;
-    oy_[2 * i] = -mother_offset_[i] * s;
-    ox_[2 * i + 1] = bud_offset_[i] * c;
-    oy_[2 * i + 1] = bud_offset_[i] * s;
-    lobes_.x[2 * i] = x - mother_offset_[i] * c;
-    lobes_.y[2 * i] = y - mother_offset_[i] * s;
-    lobes_.x[2 * i + 1] = x + bud_offset_[i] * c;
-    lobes_.y[2 * i + 1] = y + bud_offset_[i] * s;
+    // The lever arms depend on θ alone: a cell that has not turned (free cells and rattlers in
+    // FIRE, whose velocity stays zero) costs no sincos.
+    if (resized || th != theta_cached_[i]) {
+      theta_cached_[i] = th;
+      const double c = std::cos(th), s = std::sin(th);
+      ox_[2 * i] = -mother_offset_[i] * c;
+      oy_[2 * i] = -mother_offset_[i] * s;
+      ox_[2 * i + 1] = bud_offset_[i] * c;
+      oy_[2 * i + 1] = bud_offset_[i] * s;
+    }
+    // x + (−ℓc) rounds exactly as x − ℓc: the same lobes as place_lobes() gives.
+    const double x = p.q[3 * i], y = p.q[3 * i + 1];
+    for (std::size_t a = 2 * i; a < 2 * i + 2; ++a) {
+      lobes_.x[a] = x + ox_[a];
+      lobes_.y[a] = y + oy_[a];
+      if (tracked) list_.add_drift(a, lobes_.x[a], lobes_.y[a], lobes_.R[a], drift);
+    }
   }
-  list_.update(lobes_, p.box);
+  list_.update(lobes_, p.box, drift);
 }
 
 double ForceField::evaluate(const Packing& p, Eigen::VectorXd& force) {

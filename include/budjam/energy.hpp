@@ -43,8 +43,9 @@ class ForceField {
   long evaluations_ = 0;
   // Per-cell dumbbell geometry, recomputed only when a bud size changes.
   std::vector<double> b_cached_, mother_offset_, bud_offset_;
-  // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques.
-  std::vector<double> ox_, oy_;
+  // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
+  // recomputed only when the cell's θ (theta_cached_) or bud size changes.
+  std::vector<double> ox_, oy_, theta_cached_;
 };
 
 }  // namespace budjam
