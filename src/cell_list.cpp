@@ -27,19 +27,29 @@ inline int wrap_index(long c, int n) {
 
 }  // namespace
 
+void NeighbourList::Drift::count(double d2_lobe) {
+  if (d2_lobe > d2) {
+    if (d2_lobe > d1) {
+      d2 = d1;
+      d1 = d2_lobe;
+    } else {
+      d2 = d2_lobe;
+    }
+  }
+  finite &= std::isfinite(d2_lobe);  // a NaN fails every comparison above
+}
+
+void NeighbourList::Drift::merge(const Drift& other) {
+  count(other.d1);
+  count(other.d2);
+  radii_changed |= other.radii_changed;
+  finite &= other.finite;
+}
+
 void NeighbourList::add_drift(std::size_t a, double x, double y, double R, Drift& drift) const {
   drift.radii_changed |= R != R0_[a];
   const double dx = x - x0_[a], dy = y - y0_[a];
-  const double d2 = dx * dx + dy * dy;
-  if (d2 > drift.d2) {
-    if (d2 > drift.d1) {
-      drift.d2 = drift.d1;
-      drift.d1 = d2;
-    } else {
-      drift.d2 = d2;
-    }
-  }
-  drift.finite &= std::isfinite(d2);  // a NaN fails every comparison above
+  drift.count(dx * dx + dy * dy);
 }
 
 bool NeighbourList::update(const Lobes& lobes, const Box& box) {

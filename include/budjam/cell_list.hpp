@@ -19,6 +19,10 @@ class NeighbourList {
     double d1 = 0.0, d2 = 0.0;  // the two largest squared displacements
     bool radii_changed = false;
     bool finite = true;
+    // Counts a squared displacement. The two largest of a set do not depend on the order in
+    // which it is counted, so drifts gathered in parts and merged equal the serial one.
+    void count(double d2_lobe);
+    void merge(const Drift& other);
   };
   // True when the last build was for n lobes and the list has not been invalidated since: only
   // then does add_drift() have a reference position for every lobe.

@@ -1,0 +1,155 @@
+// Threaded force evaluations (energy.hpp, docs/minimiser.md "Threads"): results are bit-identical
+// for every thread count, and to one thread, from a single evaluation to a whole growth run.
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+#include "budjam/growth_driver.hpp"
+#include "io/scene_file.hpp"
+#include "support/random_packing.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+using namespace budjam;
+
+namespace {
+
+constexpr int kThreadCounts[] = {2, 3, 4};
+
+// The threads the field really uses (1 in a build without OpenMP, where the test is trivial).
+int expected_threads(int requested) {
+#ifdef _OPENMP
+  return requested == 0 ? omp_get_num_procs() : requested;
+#else
+  (void)requested;
+  return 1;
+#endif
+}
+
+struct Evaluation {
+  double U = 0.0;
+  Eigen::VectorXd F;
+  Eigen::Matrix2d stress;
+};
+
+// Three evaluations with `threads` threads: the packing as given, after a small move (the
+// neighbour list is reused: the drift test decides) and after a large one (rebuilt).
+std::vector<Evaluation> evaluate_moving(Packing p, int threads) {
+  ForceField field(0.3, threads);
+  CHECK(field.threads() == expected_threads(threads));
+  std::vector<Evaluation> out;
+  for (double shift : {0.0, 0.01, 0.4}) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      p.q[3 * i] += shift * std::sin(static_cast<double>(i));
+      p.q[3 * i + 2] += shift * std::cos(static_cast<double>(i));
+    }
+    Evaluation e;
+    e.U = field.evaluate(p, e.F);
+    CHECK(e.U == field.energy(p));
+    e.stress = stress_tensor(find_contacts(p, field.lobes(), field.neighbours()), p.box);
+    out.push_back(e);
+  }
+  return out;
+}
+
+bool same_packing(const Packing& a, const Packing& b) {
+  return a.q == b.q && a.b == b.b && a.gamma0 == b.gamma0 && a.id == b.id && a.parent == b.parent;
+}
+
+}  // namespace
+
+TEST_CASE("energy, forces, torques and stress are bit-identical for 1, 2, 3 and 4 threads", "[fast]") {
+  const Packing p = testing::random_packing(2 * ForceField::kThreadedCells, 0.85, 11, 0.01, 1.02, 1);
+  const std::vector<Evaluation> serial = evaluate_moving(p, 1);
+  REQUIRE(serial.front().U > 0.0);
+  for (int threads : kThreadCounts) {
+    INFO("threads = " << threads);
+    const std::vector<Evaluation> threaded = evaluate_moving(p, threads);
+    for (std::size_t k = 0; k < serial.size(); ++k) {
+      CHECK(threaded[k].U == serial[k].U);
+      CHECK(threaded[k].F == serial[k].F);
+      CHECK(threaded[k].stress == serial[k].stress);
+    }
+  }
+}
+
+TEST_CASE("threads = 0 means one thread per core, with the same forces", "[fast]") {
+  const Packing p = testing::random_packing(ForceField::kThreadedCells, 0.8, 5);
+  ForceField all(0.3, 0), one(0.3, 1);
+  CHECK(all.threads() == expected_threads(0));
+  Eigen::VectorXd F_all, F_one;
+  CHECK(all.evaluate(p, F_all) == one.evaluate(p, F_one));
+  CHECK(F_all == F_one);
+}
+
+TEST_CASE("a FIRE minimisation ends in the same packing, bit for bit, on 1 to 4 threads", "[fast]") {
+  const Packing start = testing::random_packing(ForceField::kThreadedCells, 0.8, 7);
+  FireParams prm;
+  prm.max_iterations = 300;
+  auto relax = [&](int threads) {
+    Packing p = start;
+    ForceField field(0.3, threads);
+    const FireResult r = minimise(p, field, prm);
+    return std::pair{p, r};
+  };
+  const auto [p1, r1] = relax(1);
+  for (int threads : kThreadCounts) {
+    INFO("threads = " << threads);
+    const auto [p, r] = relax(threads);
+    CHECK(p.q == p1.q);
+    CHECK(r.iterations == r1.iterations);
+    CHECK(r.evaluations == r1.evaluations);
+    CHECK(r.energy == r1.energy);
+    CHECK(r.max_force == r1.max_force);
+  }
+}
+
+TEST_CASE("a growth run of 600 cells is bit-identical on 1, 2, 3 and 4 threads", "[.slow]") {
+  Scene s;
+  s.name = "threads";
+  s.init = InitialState::random_seeds;
+  s.n_seeds = 600;
+  s.L = 35.0;
+  s.seed = 2;
+  s.P0 = 1e-3;
+  s.targets = {1e-2};
+  s.max_steps = 60;  // the run stops at the step limit: the state there is compared
+  auto grow = [&](int threads) {
+    Scene t = s;
+    t.threads = threads;
+    GrowthDriver d(t);
+    d.run();
+    return std::pair{d.result(), d.packing()};
+  };
+  const auto [r1, p1] = grow(1);
+  REQUIRE(p1.size() >= ForceField::kThreadedCells);
+  for (int threads : kThreadCounts) {
+    INFO("threads = " << threads);
+    const auto [r, p] = grow(threads);
+    CHECK(r.status == r1.status);
+    CHECK(r.accepted == r1.accepted);
+    CHECK(r.rejected == r1.rejected);
+    CHECK(r.force_evaluations == r1.force_evaluations);
+    CHECK(same_packing(p, p1));
+  }
+}
+
+TEST_CASE("minimiser.threads accepts 0 and positive counts and rejects negative ones", "[fast]") {
+  CHECK(io::parse_scene("[minimiser]\nthreads = 4\n").threads == 4);
+  CHECK(io::parse_scene("[minimiser]\nthreads = 0\n").threads == 0);
+  CHECK(io::parse_scene("[run]\n").threads == 1);
+  try {
+    io::parse_scene("[minimiser]\nthreads = -1\n", "t.toml");
+    FAIL("threads = -1 accepted");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("minimiser.threads") != std::string::npos);
+  }
+}
