@@ -60,6 +60,16 @@ std::vector<Evaluation> evaluate_moving(Packing p, int threads) {
   return out;
 }
 
+// Runs `run` on one thread and on 2, 3 and 4, and checks each result against one thread's.
+template <class Run, class Check>
+void compare_with_one_thread(Run run, Check check) {
+  const auto one = run(1);
+  for (int threads : kThreadCounts) {
+    INFO("threads = " << threads);
+    check(run(threads), one);
+  }
+}
+
 bool same_packing(const Packing& a, const Packing& b) {
   return a.q == b.q && a.b == b.b && a.gamma0 == b.gamma0 && a.id == b.id && a.parent == b.parent;
 }
@@ -68,17 +78,15 @@ bool same_packing(const Packing& a, const Packing& b) {
 
 TEST_CASE("energy, forces, torques and stress are bit-identical for 1, 2, 3 and 4 threads", "[fast]") {
   const Packing p = testing::random_packing(2 * ForceField::kThreadedCells, 0.85, 11, 0.01, 1.02, 1);
-  const std::vector<Evaluation> serial = evaluate_moving(p, 1);
-  REQUIRE(serial.front().U > 0.0);
-  for (int threads : kThreadCounts) {
-    INFO("threads = " << threads);
-    const std::vector<Evaluation> threaded = evaluate_moving(p, threads);
-    for (std::size_t k = 0; k < serial.size(); ++k) {
-      CHECK(threaded[k].U == serial[k].U);
-      CHECK(threaded[k].F == serial[k].F);
-      CHECK(threaded[k].stress == serial[k].stress);
-    }
-  }
+  compare_with_one_thread([&](int threads) { return evaluate_moving(p, threads); },
+                          [](const std::vector<Evaluation>& threaded, const std::vector<Evaluation>& serial) {
+                            REQUIRE(serial.front().U > 0.0);
+                            for (std::size_t k = 0; k < serial.size(); ++k) {
+                              CHECK(threaded[k].U == serial[k].U);
+                              CHECK(threaded[k].F == serial[k].F);
+                              CHECK(threaded[k].stress == serial[k].stress);
+                            }
+                          });
 }
 
 TEST_CASE("threads = 0 means one thread per core, with the same forces", "[fast]") {
@@ -100,16 +108,14 @@ TEST_CASE("a FIRE minimisation ends in the same packing, bit for bit, on 1 to 4 
     const FireResult r = minimise(p, field, prm);
     return std::pair{p, r};
   };
-  const auto [p1, r1] = relax(1);
-  for (int threads : kThreadCounts) {
-    INFO("threads = " << threads);
-    const auto [p, r] = relax(threads);
-    CHECK(p.q == p1.q);
-    CHECK(r.iterations == r1.iterations);
-    CHECK(r.evaluations == r1.evaluations);
-    CHECK(r.energy == r1.energy);
-    CHECK(r.max_force == r1.max_force);
-  }
+  using Relaxed = std::pair<Packing, FireResult>;
+  compare_with_one_thread(relax, [](const Relaxed& threaded, const Relaxed& serial) {
+    CHECK(threaded.first.q == serial.first.q);
+    CHECK(threaded.second.iterations == serial.second.iterations);
+    CHECK(threaded.second.evaluations == serial.second.evaluations);
+    CHECK(threaded.second.energy == serial.second.energy);
+    CHECK(threaded.second.max_force == serial.second.max_force);
+  });
 }
 
 TEST_CASE("a growth run of 600 cells is bit-identical on 1, 2, 3 and 4 threads", "[.slow]") {
@@ -127,19 +133,17 @@ TEST_CASE("a growth run of 600 cells is bit-identical on 1, 2, 3 and 4 threads",
     t.threads = threads;
     GrowthDriver d(t);
     d.run();
+    CHECK(d.packing().size() >= ForceField::kThreadedCells);
     return std::pair{d.result(), d.packing()};
   };
-  const auto [r1, p1] = grow(1);
-  REQUIRE(p1.size() >= ForceField::kThreadedCells);
-  for (int threads : kThreadCounts) {
-    INFO("threads = " << threads);
-    const auto [r, p] = grow(threads);
-    CHECK(r.status == r1.status);
-    CHECK(r.accepted == r1.accepted);
-    CHECK(r.rejected == r1.rejected);
-    CHECK(r.force_evaluations == r1.force_evaluations);
-    CHECK(same_packing(p, p1));
-  }
+  using Grown = std::pair<RunResult, Packing>;
+  compare_with_one_thread(grow, [](const Grown& threaded, const Grown& serial) {
+    CHECK(threaded.first.status == serial.first.status);
+    CHECK(threaded.first.accepted == serial.first.accepted);
+    CHECK(threaded.first.rejected == serial.first.rejected);
+    CHECK(threaded.first.force_evaluations == serial.first.force_evaluations);
+    CHECK(same_packing(threaded.second, serial.second));
+  });
 }
 
 TEST_CASE("minimiser.threads accepts 0 and positive counts and rejects negative ones", "[fast]") {
