@@ -27,43 +27,30 @@ inline int wrap_index(long c, int n) {
 
 }  // namespace
 
-void NeighbourList::Drift::count(double d2_lobe) {
-  if (d2_lobe > d2) {
-    if (d2_lobe > d1) {
-      d2 = d1;
-      d1 = d2_lobe;
-    } else {
-      d2 = d2_lobe;
-    }
-  }
-  finite &= std::isfinite(d2_lobe);  // a NaN fails every comparison above
-}
-
-void NeighbourList::Drift::merge(const Drift& other) {
-  count(other.d1);
-  count(other.d2);
-  radii_changed |= other.radii_changed;
-  finite &= other.finite;
-}
-
-void NeighbourList::add_drift(std::size_t a, double x, double y, double R, Drift& drift) const {
-  drift.radii_changed |= R != R0_[a];
-  const double dx = x - x0_[a], dy = y - y0_[a];
-  drift.count(dx * dx + dy * dy);
-}
-
 bool NeighbourList::update(const Lobes& lobes, const Box& box) {
-  Drift drift;
-  if (tracks(lobes.size()))
-    for (std::size_t a = 0; a < lobes.size(); ++a) add_drift(a, lobes.x[a], lobes.y[a], lobes.R[a], drift);
-  return update(lobes, box, drift);
-}
-
-bool NeighbourList::update(const Lobes& lobes, const Box& box, const Drift& drift) {
-  // A pair's distance can shrink by at most the sum of the two largest displacements. A
-  // non-finite displacement forces a rebuild, which then throws.
-  const bool rebuild = !tracks(lobes.size()) || box.L != box_.L || box.shear != box_.shear ||
-                       drift.radii_changed || !drift.finite || !(std::sqrt(drift.d1) + std::sqrt(drift.d2) < skin_);
+  const std::size_t n = lobes.size();
+  bool rebuild = !valid_ || n != x0_.size() || box.L != box_.L || box.shear != box_.shear;
+  if (!rebuild) {
+    // Two largest squared displacements; a pair's distance can shrink by at most d1 + d2.
+    double m1 = 0.0, m2 = 0.0;
+    bool radii_changed = false, finite = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      radii_changed |= lobes.R[i] != R0_[i];
+      const double dx = lobes.x[i] - x0_[i], dy = lobes.y[i] - y0_[i];
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > m2) {
+        if (d2 > m1) {
+          m2 = m1;
+          m1 = d2;
+        } else {
+          m2 = d2;
+        }
+      }
+      finite &= std::isfinite(d2);  // a NaN fails every comparison above
+    }
+    // A non-finite displacement forces a rebuild, which then throws.
+    rebuild = radii_changed || !finite || !(std::sqrt(m1) + std::sqrt(m2) < skin_);
+  }
   if (rebuild) build(lobes, box);
   return rebuild;
 }

@@ -80,39 +80,8 @@ ForceField::ForceField(double skin, int threads) : threads_(resolve_threads(thre
 
 void ForceField::invalidate() { list_.invalidate(); }
 
-void ForceField::refresh(const Packing& p) {
-  const std::size_t n = p.size();
-  if (b_cached_.size() != n) {
-    b_cached_.assign(n, -1.0);  // never a bud size: forces recomputation below
-    theta_cached_.resize(n);
-    mother_offset_.resize(n);
-    bud_offset_.resize(n);
-  }
-  lobes_.x.resize(2 * n);
-  lobes_.y.resize(2 * n);
-  lobes_.R.resize(2 * n);
-  ox_.resize(2 * n);
-  oy_.resize(2 * n);
-  // The neighbour list's displacement test is gathered here, in the pass that places the lobes.
-  const bool tracked = list_.tracks(2 * n);
-  NeighbourList::Drift drift;
-  if (threaded(n)) {
-    const long cells = static_cast<long>(n);
-#pragma omp parallel num_threads(threads_)
-    {
-      NeighbourList::Drift mine;
-#pragma omp for schedule(static)
-      for (long i = 0; i < cells; ++i) place_cell(p, static_cast<std::size_t>(i), tracked, mine);
-#pragma omp critical
-      drift.merge(mine);
-    }
-  } else {
-    for (std::size_t i = 0; i < n; ++i) place_cell(p, i, tracked, drift);
-  }
-  list_.update(lobes_, p.box, drift);
-}
-
-void ForceField::place_cell(const Packing& p, std::size_t i, bool tracked, NeighbourList::Drift& drift) {
+// Defined first so that the serial loop in refresh() inlines it.
+inline void ForceField::place_cell(const Packing& p, std::size_t i) {
   const double th = p.q[3 * i + 2];
   const bool resized = p.b[i] != b_cached_[i];
   if (resized) {
@@ -138,8 +107,31 @@ void ForceField::place_cell(const Packing& p, std::size_t i, bool tracked, Neigh
   for (std::size_t a = 2 * i; a < 2 * i + 2; ++a) {
     lobes_.x[a] = x + ox_[a];
     lobes_.y[a] = y + oy_[a];
-    if (tracked) list_.add_drift(a, lobes_.x[a], lobes_.y[a], lobes_.R[a], drift);
   }
+}
+
+void ForceField::refresh(const Packing& p) {
+  const std::size_t n = p.size();
+  if (b_cached_.size() != n) {
+    b_cached_.assign(n, -1.0);  // never a bud size: forces recomputation below
+    theta_cached_.resize(n);
+    mother_offset_.resize(n);
+    bud_offset_.resize(n);
+  }
+  lobes_.x.resize(2 * n);
+  lobes_.y.resize(2 * n);
+  lobes_.R.resize(2 * n);
+  ox_.resize(2 * n);
+  oy_.resize(2 * n);
+  if (threaded(n)) {
+    const long cells = static_cast<long>(n);
+#pragma omp parallel for num_threads(threads_) schedule(static)
+    for (long i = 0; i < cells; ++i) place_cell(p, static_cast<std::size_t>(i));
+  } else {
+    for (std::size_t i = 0; i < n; ++i) place_cell(p, i);
+  }
+  // The displacement test stays a pass of its own: folded into the loop above it was slower.
+  list_.update(lobes_, p.box);
 }
 
 double ForceField::evaluate(const Packing& p, Eigen::VectorXd& force) {

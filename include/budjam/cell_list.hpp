@@ -13,31 +13,11 @@ class NeighbourList {
  public:
   explicit NeighbourList(double skin = 0.3) : skin_(skin) {}
 
-  // How far the lobes have moved since the last build, accumulated lobe by lobe (in lobe order)
-  // so that a caller placing the lobes can gather it in the same pass.
-  struct Drift {
-    double d1 = 0.0, d2 = 0.0;  // the two largest squared displacements
-    bool radii_changed = false;
-    bool finite = true;
-    // Counts a squared displacement. The two largest of a set do not depend on the order in
-    // which it is counted, so drifts gathered in parts and merged equal the serial one.
-    void count(double d2_lobe);
-    void merge(const Drift& other);
-  };
-  // True when the last build was for n lobes and the list has not been invalidated since: only
-  // then does add_drift() have a reference position for every lobe.
-  bool tracks(std::size_t n) const { return valid_ && n == x0_.size(); }
-  // Adds the drift of lobe a, now at (x, y) with radius R. Requires tracks().
-  void add_drift(std::size_t a, double x, double y, double R, Drift& drift) const;
-
   // Rebuilds if the two largest lobe displacements since the last build add up to the skin or
   // more, if the number of lobes or any radius changed (buds grow between minimisations), or if
   // the box (L or Lees–Edwards shear) changed; returns true when it rebuilt. Throws
   // std::domain_error if a lobe position is not finite.
   bool update(const Lobes& lobes, const Box& box);
-  // The same with the drift already gathered by add_drift() over every lobe in order (ignored
-  // when !tracks(lobes.size()): the list is then rebuilt).
-  bool update(const Lobes& lobes, const Box& box, const Drift& drift);
   void invalidate() { valid_ = false; }
 
   // Pairs (a, b), a < b, of lobes on different cells with r < R_a + R_b + skin at build time,

@@ -51,7 +51,7 @@ class ForceField {
 
  private:
   void refresh(const Packing& p);
-  void place_cell(const Packing& p, std::size_t i, bool tracked, NeighbourList::Drift& drift);
+  void place_cell(const Packing& p, std::size_t i);
   double pair_loop(const Packing& p, double* F) const;
   double threaded_pair_loop(const Packing& p, double* F);
   void index_pairs_by_cell(std::size_t n);
