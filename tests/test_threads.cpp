@@ -41,7 +41,7 @@ struct Evaluation {
 };
 
 // Three evaluations with `threads` threads: the packing as given, after a small move (the
-// neighbour list is reused: the drift test decides) and after a large one (rebuilt).
+// neighbour list is reused) and after a large one (rebuilt).
 std::vector<Evaluation> evaluate_moving(Packing p, int threads) {
   ForceField field(0.3, threads);
   CHECK(field.threads() == expected_threads(threads));
