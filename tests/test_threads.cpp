@@ -4,6 +4,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/growth_driver.hpp"
+#include "io/checkpoint.hpp"
 #include "io/scene_file.hpp"
 #include "support/random_packing.hpp"
 
@@ -156,4 +157,22 @@ TEST_CASE("minimiser.threads accepts 0 and positive counts and rejects negative 
   } catch (const InputError& e) {
     CHECK(std::string(e.what()).find("minimiser.threads") != std::string::npos);
   }
+}
+
+TEST_CASE("a checkpoint of a run on 4 threads resumes under any thread count, not under other physics", "[fast]") {
+  Scene s;
+  s.name = "threads";
+  s.L = 5.0;
+  s.seed = 3;
+  s.targets = {1e-3};
+  s.max_steps = 30;
+  s.threads = 4;
+  GrowthDriver d(s);
+  d.run();
+  const std::string text = io::format_checkpoint(s, d.state(), {});
+  Scene resumed = s;
+  resumed.threads = 1;
+  CHECK_NOTHROW(io::parse_checkpoint(text, "checkpoint.txt", resumed, s.seed, {}));
+  resumed.P0 = 2e-3;  // other physics
+  CHECK_THROWS_AS(io::parse_checkpoint(text, "checkpoint.txt", resumed, s.seed, {}), InputError);
 }
