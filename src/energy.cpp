@@ -3,7 +3,12 @@
 
 #include "budjam/contacts.hpp"
 
+#include <algorithm>
 #include <cmath>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace budjam {
 
@@ -31,16 +36,85 @@ struct FastImage {
   }
 };
 
+// One pair's contribution: the force (fx, fy) on lobe a (−(fx, fy) on lobe b) and its energy.
+struct PairForce {
+  double U = 0.0, fx = 0.0, fy = 0.0;
+};
+
+// The contact law on the pair (a, b); false (and a zero PairForce) when the lobes do not overlap.
+inline bool pair_force(const Packing& p, const FastImage& image, const Lobes& lobes, std::uint32_t a, std::uint32_t b,
+                       PairForce& out) {
+  double dx = lobes.x[a] - lobes.x[b], dy = lobes.y[a] - lobes.y[b];
+  image.apply(dx, dy);
+  const double r2 = dx * dx + dy * dy;
+  const double sigma = lobes.R[a] + lobes.R[b];
+  if (!(r2 < sigma * sigma)) return false;  // r ≥ σ: no contact (r = σ exactly included)
+  const double r = std::sqrt(r2);
+  const double overlap = sigma - r;
+  out.U = 0.5 * kSpring * overlap * overlap;
+  if (r > 0.0) {
+    const double f_over_r = kSpring * overlap / r;  // one division: f n = (f/r) (dx, dy)
+    out.fx = f_over_r * dx;
+    out.fy = f_over_r * dy;
+  } else {
+    double nx, ny;
+    coincident_normal(p, a, b, nx, ny);
+    out.fx = kSpring * overlap * nx;
+    out.fy = kSpring * overlap * ny;
+  }
+  return true;
+}
+
+int resolve_threads(int requested) {
+#ifdef _OPENMP
+  return requested == 0 ? omp_get_num_procs() : std::max(requested, 1);
+#else
+  (void)requested;
+  return 1;
+#endif
+}
+
 }  // namespace
 
-ForceField::ForceField(double skin) : list_(skin) {}
+ForceField::ForceField(double skin, int threads) : threads_(resolve_threads(threads)), list_(skin) {}
 
 void ForceField::invalidate() { list_.invalidate(); }
+
+// Defined first so that the serial loop in refresh() inlines it.
+inline void ForceField::place_cell(const Packing& p, std::size_t i) {
+  const double th = p.q[3 * i + 2];
+  const bool resized = p.b[i] != b_cached_[i];
+  if (resized) {
+    const Dumbbell d = Dumbbell::of(p.b[i]);
+    b_cached_[i] = p.b[i];
+    mother_offset_[i] = d.mother_offset;
+    bud_offset_[i] = d.bud_offset;
+    lobes_.R[2 * i] = 0.5 * d.D;
+    lobes_.R[2 * i + 1] = 0.5 * d.b;
+  }
+  // The lever arms depend on θ alone: a cell that has not turned (free cells and rattlers in
+  // FIRE, whose velocity stays zero) costs no sincos.
+  if (resized || th != theta_cached_[i]) {
+    theta_cached_[i] = th;
+    const double c = std::cos(th), s = std::sin(th);
+    ox_[2 * i] = -mother_offset_[i] * c;
+    oy_[2 * i] = -mother_offset_[i] * s;
+    ox_[2 * i + 1] = bud_offset_[i] * c;
+    oy_[2 * i + 1] = bud_offset_[i] * s;
+  }
+  // x + (−ℓc) rounds exactly as x − ℓc: the same lobes as place_lobes() gives.
+  const double x = p.q[3 * i], y = p.q[3 * i + 1];
+  for (std::size_t a = 2 * i; a < 2 * i + 2; ++a) {
+    lobes_.x[a] = x + ox_[a];
+    lobes_.y[a] = y + oy_[a];
+  }
+}
 
 void ForceField::refresh(const Packing& p) {
   const std::size_t n = p.size();
   if (b_cached_.size() != n) {
     b_cached_.assign(n, -1.0);  // never a bud size: forces recomputation below
+    theta_cached_.resize(n);
     mother_offset_.resize(n);
     bud_offset_.resize(n);
   }
@@ -49,27 +123,14 @@ void ForceField::refresh(const Packing& p) {
   lobes_.R.resize(2 * n);
   ox_.resize(2 * n);
   oy_.resize(2 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (p.b[i] != b_cached_[i]) {
-      const Dumbbell d = Dumbbell::of(p.b[i]);
-      b_cached_[i] = p.b[i];
-      mother_offset_[i] = d.mother_offset;
-      bud_offset_[i] = d.bud_offset;
-      lobes_.R[2 * i] = 0.5 * d.D;
-      lobes_.R[2 * i + 1] = 0.5 * d.b;
-    }
-    const double x = p.q[3 * i], y = p.q[3 * i + 1], th = p.q[3 * i + 2];
-    const double c = std::cos(th), s = std::sin(th);
-    // Same arithmetic as place_lobes(), so lobes() equals what place_lobes would give.
-    ox_[2 * i] = -mother_offset_[i] * c;
-    oy_[2 * i] = -mother_offset_[i] * s;
-    ox_[2 * i + 1] = bud_offset_[i] * c;
-    oy_[2 * i + 1] = bud_offset_[i] * s;
-    lobes_.x[2 * i] = x - mother_offset_[i] * c;
-    lobes_.y[2 * i] = y - mother_offset_[i] * s;
-    lobes_.x[2 * i + 1] = x + bud_offset_[i] * c;
-    lobes_.y[2 * i + 1] = y + bud_offset_[i] * s;
+  if (threaded(n)) {
+    const long cells = static_cast<long>(n);
+#pragma omp parallel for num_threads(threads_) schedule(static)
+    for (long i = 0; i < cells; ++i) place_cell(p, static_cast<std::size_t>(i));
+  } else {
+    for (std::size_t i = 0; i < n; ++i) place_cell(p, i);
   }
+  // The displacement test stays a pass of its own: folded into the loop above it was slower.
   list_.update(lobes_, p.box);
 }
 
@@ -79,42 +140,97 @@ double ForceField::evaluate(const Packing& p, Eigen::VectorXd& force) {
   const std::size_t n = p.size();
   if (force.size() != static_cast<Eigen::Index>(3 * n)) force.resize(3 * n);
   force.setZero();
-  double* F = force.data();
-  const double* X = lobes_.x.data();
-  const double* Y = lobes_.y.data();
-  const double* R = lobes_.R.data();
+  return threaded(n) ? threaded_pair_loop(p, force.data()) : pair_loop(p, force.data());
+}
+
+// Force f n̂ on lobe a, −f n̂ on lobe b; torque = lever arm × force (z component).
+double ForceField::pair_loop(const Packing& p, double* F) const {
   const double* OX = ox_.data();
   const double* OY = oy_.data();
   const FastImage image(p.box);
   double U = 0.0;
+  PairForce f;
   for (const auto& [a, b] : list_.pairs()) {
-    double dx = X[a] - X[b], dy = Y[a] - Y[b];
-    image.apply(dx, dy);
-    const double r2 = dx * dx + dy * dy;
-    const double sigma = R[a] + R[b];
-    if (!(r2 < sigma * sigma)) continue;  // r ≥ σ: no contact (r = σ exactly included)
-    const double r = std::sqrt(r2);
-    const double overlap = sigma - r;
-    U += 0.5 * kSpring * overlap * overlap;
-    double fx, fy;
-    if (r > 0.0) {
-      const double f_over_r = kSpring * overlap / r;  // one division: f n = (f/r) (dx, dy)
-      fx = f_over_r * dx;
-      fy = f_over_r * dy;
-    } else {
-      double nx, ny;
-      coincident_normal(p, a, b, nx, ny);
-      fx = kSpring * overlap * nx;
-      fy = kSpring * overlap * ny;
-    }
+    if (!pair_force(p, image, lobes_, a, b, f)) continue;
+    U += f.U;
     const std::size_t i = 3 * cell_of(a), j = 3 * cell_of(b);
-    // Force f n on lobe a, −f n on lobe b; torque = lever arm × force (z component).
-    F[i] += fx;
-    F[i + 1] += fy;
-    F[i + 2] += OX[a] * fy - OY[a] * fx;
-    F[j] -= fx;
-    F[j + 1] -= fy;
-    F[j + 2] -= OX[b] * fy - OY[b] * fx;
+    F[i] += f.fx;
+    F[i + 1] += f.fy;
+    F[i + 2] += OX[a] * f.fy - OY[a] * f.fx;
+    F[j] -= f.fx;
+    F[j + 1] -= f.fy;
+    F[j + 2] -= OX[b] * f.fy - OY[b] * f.fx;
+  }
+  return U;
+}
+
+void ForceField::index_pairs_by_cell(std::size_t n) {
+  if (indexed_rebuild_ == list_.rebuilds() && cell_pairs_start_.size() == n + 1) return;
+  const auto& pairs = list_.pairs();
+  cell_pairs_start_.assign(n + 1, 0);
+  for (const auto& [a, b] : pairs) {
+    ++cell_pairs_start_[cell_of(a) + 1];
+    ++cell_pairs_start_[cell_of(b) + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) cell_pairs_start_[i + 1] += cell_pairs_start_[i];
+  cell_pairs_.resize(2 * pairs.size());
+  std::vector<std::uint32_t> fill(cell_pairs_start_.begin(), cell_pairs_start_.end() - 1);
+  for (std::uint32_t k = 0; k < pairs.size(); ++k) {  // in pair order: each cell's entries ascend
+    cell_pairs_[fill[cell_of(pairs[k].first)]++] = 2 * k;
+    cell_pairs_[fill[cell_of(pairs[k].second)]++] = 2 * k + 1;
+  }
+  indexed_rebuild_ = list_.rebuilds();
+}
+
+// The serial loop's sums in the serial loop's order: pair forces in parallel (a zero force where
+// there is no contact adds nothing: sums that start at +0 never reach −0), then each cell adds
+// its pairs' in pair order, and U its pairs' energies in pair order.
+double ForceField::threaded_pair_loop(const Packing& p, double* F) {
+  const auto& pairs = list_.pairs();
+  const std::size_t n = p.size();
+  const long n_pairs = static_cast<long>(pairs.size()), cells = static_cast<long>(n);
+  index_pairs_by_cell(n);
+  pair_U_.resize(pairs.size());
+  pair_f_.resize(2 * pairs.size());
+  const double* OX = ox_.data();
+  const double* OY = oy_.data();
+  const FastImage image(p.box);
+  double U = 0.0;
+#pragma omp parallel num_threads(threads_)
+  {
+#pragma omp for schedule(static)
+    for (long k = 0; k < n_pairs; ++k) {
+      PairForce f;
+      pair_force(p, image, lobes_, pairs[k].first, pairs[k].second, f);
+      pair_U_[k] = f.U;
+      pair_f_[2 * k] = f.fx;
+      pair_f_[2 * k + 1] = f.fy;
+    }
+#pragma omp single nowait
+    for (double u : pair_U_) U += u;
+#pragma omp for schedule(dynamic, 64)
+    for (long ci = 0; ci < cells; ++ci) {
+      const auto i = static_cast<std::size_t>(ci);
+      double fx = 0.0, fy = 0.0, tau = 0.0;
+      for (std::uint32_t t = cell_pairs_start_[i]; t < cell_pairs_start_[i + 1]; ++t) {
+        const std::uint32_t e = cell_pairs_[t], k = e / 2;
+        const double pfx = pair_f_[2 * k], pfy = pair_f_[2 * k + 1];
+        if (e % 2 == 0) {
+          const std::uint32_t a = pairs[k].first;
+          fx += pfx;
+          fy += pfy;
+          tau += OX[a] * pfy - OY[a] * pfx;
+        } else {
+          const std::uint32_t b = pairs[k].second;
+          fx -= pfx;
+          fy -= pfy;
+          tau -= OX[b] * pfy - OY[b] * pfx;
+        }
+      }
+      F[3 * i] = fx;
+      F[3 * i + 1] = fy;
+      F[3 * i + 2] = tau;
+    }
   }
   return U;
 }

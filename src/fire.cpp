@@ -89,6 +89,18 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
       q[3 * i + 2] += h * vel[3 * i + 2] * inv_rg[i];
     }
   };
+  // v ← a v + c F, then the move by h, in one pass over the cells (element by element the same
+  // arithmetic as the two passes).
+  auto mix_and_move = [&](double a, double c, double h) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = 3 * i; k < 3 * i + 2; ++k) {
+        vel[k] = a * vel[k] + c * f[k];
+        q[k] += h * vel[k];
+      }
+      vel[3 * i + 2] = a * vel[3 * i + 2] + c * f[3 * i + 2];
+      q[3 * i + 2] += h * vel[3 * i + 2] * inv_rg[i];
+    }
+  };
   // A NaN force never satisfies a tolerance: the run then ends at max_iterations, not converged.
   auto stopped = [&](double U, double fmax) {
     if (U < floor_total)
@@ -157,10 +169,14 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
       }
     }
     // Semi-implicit Euler with FIRE mixing: v ← v + dt F; v ← (1−α) v + α |v| F̂; x ← x + dt v.
+    // The norms stay Eigen reductions (their summation order is Eigen's); the mixing and the
+    // move share one pass.
     v += dt * F;
     const double vn = v.norm(), fn = F.norm();
-    if (fn > 0.0) v = (1.0 - alpha) * v + (alpha * vn / fn) * F;
-    move(dt);
+    if (fn > 0.0)
+      mix_and_move(1.0 - alpha, alpha * vn / fn, dt);
+    else
+      move(dt);
 
     U = field.evaluate(p, F);
     ++res.evaluations;

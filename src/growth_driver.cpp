@@ -101,7 +101,7 @@ struct GrowthDriver::Impl {
   bool final_emitted = false;
   std::function<void()> checkpoint_hook;
 
-  Impl(const Scene& s, const DriverOptions& o) : scene(s), field(s.skin) {
+  Impl(const Scene& s, const DriverOptions& o) : scene(s), field(s.skin, s.threads) {
     validate(scene);
     seed = o.seed ? *o.seed : scene.seed;
     rng.seed(seed);

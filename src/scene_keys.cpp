@@ -239,6 +239,9 @@ std::vector<SceneKey> make_keys() {
                    BUDJAM_FIELD(fire.newton_reuse)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));
+  e.push_back(integer("minimiser", "threads",
+                      "threads of a force evaluation (N ≥ 512 cells), 0 = one per core; results do not depend on it",
+                      kZeroOrPositive, BUDJAM_FIELD(threads)));
 
   e.push_back(flag("observe", "bud_events", "track unconstrained buds from jamming on (bud_events.csv)",
                    BUDJAM_FIELD(bud_events)));

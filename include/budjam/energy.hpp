@@ -9,6 +9,7 @@
 //   the centroids coincide too. Every direction is a one-sided derivative of U there; this
 //   choice is finite, deterministic and separates the cells.
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 #include "budjam/cell_list.hpp"
 #include "budjam/packing.hpp"
@@ -18,9 +19,22 @@ namespace budjam {
 // Keeps the lobe positions and the Verlet neighbour list current for a packing whose
 // coordinates move (FIRE) or whose cells change (growth, division). Invariant: after
 // evaluate(), `lobes()` and `neighbours()` describe the packing that was passed in.
+//
+// Threads (OpenMP): lobe placement and the pair loop of evaluate() run on `threads` threads
+// for packings of at least kThreadedCells cells. The results are bit-identical for every thread
+// count, and to the serial loop: each pair's force is computed once, into its own slot, and each
+// cell then sums its pairs' forces in pair-list order, as the serial loop does; U is summed over
+// the pairs in order (docs/minimiser.md, "Threads").
 class ForceField {
  public:
-  explicit ForceField(double skin = 0.3);
+  // threads: 1 = serial, 0 = one per core. Without OpenMP every count means one thread.
+  explicit ForceField(double skin = 0.3, int threads = 1);
+
+  // Smaller packings always use one thread: their evaluation (≈ 40 µs at 512 cells) is too short
+  // to pay for the synchronisation of the threads.
+  static constexpr std::size_t kThreadedCells = 512;
+  // The thread count evaluations use (≥ 1).
+  int threads() const { return threads_; }
 
   // U, and F = −∂U/∂q (size 3N) for the packing as it is now. O(N); allocates nothing once
   // `force` and the internal buffers have their size.
@@ -38,13 +52,26 @@ class ForceField {
 
  private:
   void refresh(const Packing& p);
+  void place_cell(const Packing& p, std::size_t i);
+  double pair_loop(const Packing& p, double* F) const;
+  double threaded_pair_loop(const Packing& p, double* F);
+  void index_pairs_by_cell(std::size_t n);
+  bool threaded(std::size_t n) const { return threads_ > 1 && n >= kThreadedCells; }
+  int threads_;
   Lobes lobes_;
   NeighbourList list_;
   long evaluations_ = 0;
   // Per-cell dumbbell geometry, recomputed only when a bud size changes.
   std::vector<double> b_cached_, mother_offset_, bud_offset_;
-  // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques.
-  std::vector<double> ox_, oy_;
+  // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
+  // recomputed only when the cell's θ (theta_cached_) or bud size changes.
+  std::vector<double> ox_, oy_, theta_cached_;
+  // Threaded path: each pair's (U, fx, fy), and for each cell its pairs in pair-list order
+  // (entry 2k + s: pair k, the cell holding its first lobe if s = 0, its second if s = 1),
+  // rebuilt with the neighbour list.
+  std::vector<double> pair_U_, pair_f_;
+  std::vector<std::uint32_t> cell_pairs_start_, cell_pairs_;
+  long indexed_rebuild_ = -1;
 };
 
 }  // namespace budjam

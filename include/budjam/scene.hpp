@@ -76,6 +76,7 @@ struct Scene {
   // [minimiser]
   FireParams fire;
   double skin = 0.3;
+  int threads = 1;  // of each force evaluation (ForceField); 0 = one per core. Not physics: results are identical.
 
   // [observe]
   bool bud_events = true;

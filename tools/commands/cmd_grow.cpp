@@ -1,5 +1,5 @@
 // `budjam grow SCENE [--seed N] [--out DIR] [--overwrite] [--quiet] [--set KEY=VALUE]...`
-// `budjam grow --resume DIR [--quiet]`
+// `budjam grow --resume DIR [--quiet]`   (both: [--threads N])
 // Grows a packing as the scene says (docs/growth.md) and writes the run directory
 // (io/run_directory.hpp: claimed with a marker and a lock): scene.toml (the effective scene, seed
 // included), steps.csv, divisions.csv, bud_events.csv, packings/*.pack, checkpoint.txt while
@@ -35,6 +35,7 @@ namespace run_files = io::run_files;
 struct Options {
   std::string scene;
   std::optional<std::uint64_t> seed;
+  std::optional<int> threads;
   std::string out;
   std::string resume;
   bool quiet = false;
@@ -77,10 +78,12 @@ void run(const Options& o) {
     if (!fs::exists(d / run_files::checkpoint))
       throw InputError("--resume: no " + std::string(run_files::checkpoint) + " in " + d.path().string());
     scene = io::load_scene(d / run_files::scene);
+    if (o.threads) scene.threads = *o.threads;  // not in the checkpoint's scene hash: results do not change
   } else {
     if (o.scene.empty()) throw InputError("SCENE: a scene file is required (or --resume DIR)");
     scene = io::load_scene(o.scene, o.overrides);
     if (o.seed) scene.seed = *o.seed;
+    if (o.threads) scene.threads = *o.threads;
     const fs::path out = o.out.empty()
                              ? fs::path("runs") / (safe_name(scene.name) + "-seed" + std::to_string(scene.seed))
                              : fs::path(o.out);
@@ -135,6 +138,8 @@ const bool registered = budjam::cli::register_command(
        auto o = std::make_shared<Options>();
        sub.add_option("SCENE", o->scene, "scene file (.toml)");
        sub.add_option("--seed", o->seed, "random seed (overrides the scene's run.seed)");
+       sub.add_option("--threads", o->threads, "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
+           ->check(CLI::NonNegativeNumber);
        sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)");
        sub.add_option("--resume", o->resume, "continue the interrupted run in DIR from its checkpoint")
            ->type_name("DIR");

@@ -30,7 +30,12 @@ std::string hex64(std::uint64_t v) {
   return buf;
 }
 
-std::uint64_t scene_hash(const Scene& scene) { return fnv1a64(scene_to_toml(scene)); }
+// The thread count is left out: a run resumed on another number of threads continues identically.
+std::uint64_t scene_hash(const Scene& scene) {
+  Scene physics = scene;
+  physics.threads = Scene{}.threads;
+  return fnv1a64(scene_to_toml(physics));
+}
 
 constexpr std::string_view kMagic = "budjam-checkpoint";
 constexpr std::string_view kChecksum = "checksum ";
