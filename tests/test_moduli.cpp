@@ -636,8 +636,10 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, a one-line notice, and exits 1",
-          "[fast]") {
+TEST_CASE(
+    "budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, a one-line notice, "
+    "and exits 1",
+    "[fast]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const auto [code, out, err] =

@@ -43,13 +43,13 @@ const char* to_string(MinimiserStop stop);
 
 struct FireResult {
   MinimiserStop stop = MinimiserStop::iteration_cap;
-  bool converged = false;      // stop != iteration_cap
-  long iterations = 0;         // FIRE iterations
-  long newton_iterations = 0;  // Newton steps (one Hessian factorisation each)
+  bool converged = false;       // stop != iteration_cap
+  long iterations = 0;          // FIRE iterations
+  long newton_iterations = 0;   // Newton steps (one Hessian factorisation each)
   long newton_chord_steps = 0;  // Newton steps with a reused factor
-  long evaluations = 0;        // force evaluations made by this call
-  double energy = 0.0;         // U at the end
-  double max_force = 0.0;      // largest |F| component at the end (θ component as F_θ / r_g)
+  long evaluations = 0;         // force evaluations made by this call
+  double energy = 0.0;          // U at the end
+  double max_force = 0.0;       // largest |F| component at the end (θ component as F_θ / r_g)
 };
 
 // Relaxes p in place. A centroid lying more than L/2 outside the box is first moved back by whole

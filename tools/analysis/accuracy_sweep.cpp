@@ -33,11 +33,12 @@ const std::map<std::string, std::vector<std::string>> kFamilyQuantities{
     {"growth", {"phi_J", "u_J", "Z_J", "phi_2", "P", "B", "G", "omega_star"}},
     {"moduli", {"B", "G"}},
     {"spectrum", {"omega_star", "band"}}};
-const std::map<std::string, std::string> kKnobLabel{{"ftol", "minimiser.force_tol"},     {"epsU", "jamming.epsilon_U"},
-                                                    {"tol", "jamming.target_tolerance"}, {"dt", "growth.dt"},
-                                                    {"solver", "moduli linear solver"},  {"arpack_tol", "ARPACK tol"},
-                                                    {"arpack_ncv", "ARPACK ncv"},        {"search", "jamming.search"},
-                                                    {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"}};
+const std::map<std::string, std::string> kKnobLabel{
+    {"ftol", "minimiser.force_tol"},      {"epsU", "jamming.epsilon_U"},
+    {"tol", "jamming.target_tolerance"},  {"dt", "growth.dt"},
+    {"solver", "moduli linear solver"},   {"arpack_tol", "ARPACK tol"},
+    {"arpack_ncv", "ARPACK ncv"},         {"search", "jamming.search"},
+    {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -141,9 +142,9 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     row.is_default = name == "default";
     row.knob = is_ref ? "reference" : row.is_default ? "default" : name.substr(0, name.find('_'));
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
-      throw InputError(
-          dir.string() +
-          ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, newton or adaptive, or default");
+      throw InputError(dir.string() +
+                       ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, newton or "
+                       "adaptive, or default");
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals;
     for (const auto& [s, d] : seeds_of(dir)) {

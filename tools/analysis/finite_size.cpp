@@ -26,12 +26,12 @@ struct Quantity {
   const char* value_field;
 };
 constexpr Quantity kQuantities[] = {
-    {"u_J", "u_J", "mean"},                          // contact-free buds at jamming over N_nr
-    {"u_J_lobes", "u_J_lobes", "mean"},              // the paper's count: contact-free lobes
-    {"n_J", "n_J", "mean"},                          // buds per non-rattler cell at jamming
-    {"phi_J", "phi_J", "mean"},                      // packing fraction at jamming
-    {"dphi_2", "dphi_2", "mean"},                    // φ_2 − φ_J, at most one tagged bud left
-    {"dphi_2_paper", "dphi_2_paper", "mean"},        // φ_2 − φ_J, none left, the paper's selection
+    {"u_J", "u_J", "mean"},                              // contact-free buds at jamming over N_nr
+    {"u_J_lobes", "u_J_lobes", "mean"},                  // the paper's count: contact-free lobes
+    {"n_J", "n_J", "mean"},                              // buds per non-rattler cell at jamming
+    {"phi_J", "phi_J", "mean"},                          // packing fraction at jamming
+    {"dphi_2", "dphi_2", "mean"},                        // φ_2 − φ_J, at most one tagged bud left
+    {"dphi_2_paper", "dphi_2_paper", "mean"},            // φ_2 − φ_J, none left, the paper's selection
     {"N_div_2_over_N_J", "N_div_2_over_N_J", "median"},  // divisions by φ_2 per cell at jamming
     {"G_2_over_Pmax", "G_2_over_Pmax", "median"},        // shear modulus at φ_2 over P_max
 };
@@ -99,8 +99,9 @@ Json finite_size_json(const Json& groups) {
       extrapolation[q.name] = extrapolation_json(N, value, se);
     }
     entry["sizes"] = sizes;
-    entry["model"] = "q(N_J) = q_inf + c/N_J, weighted least squares (weights 1/SE^2), errors scaled by "
-                     "max(1, sqrt(chi2/dof))";
+    entry["model"] =
+        "q(N_J) = q_inf + c/N_J, weighted least squares (weights 1/SE^2), errors scaled by "
+        "max(1, sqrt(chi2/dof))";
     entry["extrapolation"] = extrapolation;
     out.push_back(entry);
   }

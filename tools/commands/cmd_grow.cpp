@@ -138,7 +138,8 @@ const bool registered = budjam::cli::register_command(
        auto o = std::make_shared<Options>();
        sub.add_option("SCENE", o->scene, "scene file (.toml)");
        sub.add_option("--seed", o->seed, "random seed (overrides the scene's run.seed)");
-       sub.add_option("--threads", o->threads, "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
+       sub.add_option("--threads", o->threads,
+                      "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
            ->check(CLI::NonNegativeNumber);
        sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)");
        sub.add_option("--resume", o->resume, "continue the interrupted run in DIR from its checkpoint")

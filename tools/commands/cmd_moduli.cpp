@@ -96,8 +96,8 @@ void run(const Options& o) {
   io::emit(o.output, {j, {}, summary_line(e)}, std::cout);
   if (!e.energy_minimum())
     throw cli::Finding("moduli: " + o.packing + " is a saddle, not an energy minimum (" +
-                          std::to_string(e.kernel.unstable_modes) +
-                          " unstable modes): no relaxed response; its JSON has the affine moduli");
+                       std::to_string(e.kernel.unstable_modes) +
+                       " unstable modes): no relaxed response; its JSON has the affine moduli");
 }
 
 const bool registered = budjam::cli::register_command(
