@@ -71,7 +71,7 @@ def finite_size_rows(entries):
             if x.get("limit") is None:
                 limits.append("—")
             else:
-                limits.append(f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ²/dof {fmt(x['chi2'], 2)}/{x['dof']})")
+                limits.append(f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ² {fmt(x['chi2'], 2)}, {x['dof']} dof)")
         rows += [f"| N → ∞ | | | " + " | ".join(limits) + " |", ""]
     return rows
 
