@@ -438,8 +438,11 @@ def main():
         "percentile interval. Quantities fixed at jamming count each distinct jamming state once (runs of one seed "
         "share their growth up to jamming in every P0 group), with a bootstrap that resamples seeds beside it; "
         "per-P0 statistics have one run per seed. The paper's selection keeps runs with ≤ 10 divisions after φ_J at "
-        "their end and G_2 > 0, then Tukey's 1.5·IQR fences per P0. A run ends at budjam's φ_2 once its targets are "
-        "done, so only runs whose targets lie beyond it reach the paper's φ_2 (no tagged bud left): n says how many. "
+        "their end and G_2 > 0, then Tukey's 1.5·IQR fences per P0. A run ends at the φ_2 of its own definition "
+        "(jamming.phi2_tagged_left: at most one tagged bud left by default, none in the paper) once its targets are "
+        "done and saves that packing; the other definition's φ_2 is read from its log, so only runs whose targets "
+        "lie beyond budjam's φ_2 reach the paper's (n says how many), and G_2 under the paper's definition is at the "
+        "paper's φ_2 only in runs that saved it there (analysis.json G_2_at_paper_phi2), else at budjam's. "
         "A '≃ x' claim is confirmed when the measured "
         "value lies within 2 SE plus half the paper's last digit. " + scope,
         "",

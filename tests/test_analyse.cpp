@@ -214,6 +214,42 @@ TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] 
   }
 }
 
+TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the log, G_2 of the paper's φ_2 packing",
+          "[analyse]") {
+  // Seed 4 of the runs above, grown on to the paper's φ_2 (no tagged bud left), which it saves.
+  const fs::path dir = work_dir() / "runs_paper_phi2" / "P0_1e-3" / "seed4";
+  REQUIRE(run_budjam("grow " + q(work_dir() / "small.toml") + " --quiet --out " + q(dir) +
+                     " --seed 4 --set jamming.phi2_tagged_left=0")
+              .code == 0);
+  const fs::path phi2 = dir / "packings" / "phi2.pack";
+  REQUIRE(run_budjam("moduli " + q(phi2) + " --quiet --out " + q(fs::path(phi2).replace_extension(".moduli"))).code ==
+          0);
+  const fs::path out = work_dir() / "t_phi2_definition", out_budjam = work_dir() / "t_phi2_definition_budjam";
+  REQUIRE(run_budjam("analyse " + q(dir) + " --out " + q(out) + " --main-L 6").code == 0);
+  REQUIRE(run_budjam("analyse " + q(runs()[2]) + " --out " + q(out_budjam) + " --main-L 6").code == 0);
+  const auto paper = read_csv(out / "runs.csv").at(0), budjam_def = read_csv(out_budjam / "runs.csv").at(0);
+  const auto s = budjam::io::read_json(dir / "summary.json");
+  REQUIRE(s.at("phi_2_tagged_left") == 0);
+  CHECK(number(paper.at("phi_2_tagged_left")) == 0);
+  CHECK(number(budjam_def.at("phi_2_tagged_left")) == 1);
+  // The two runs are one trajectory up to budjam's φ_2: the log gives the state the other run saved.
+  CHECK(paper.at("phi_2") == budjam_def.at("phi_2"));
+  CHECK(paper.at("P_2") == budjam_def.at("P_2"));
+  CHECK(paper.at("N_div_2") == budjam_def.at("N_div_2"));
+  CHECK(paper.at("chi_bar") == budjam_def.at("chi_bar"));
+  // This seed's two definitions fall on different states: the saved packing is the paper's only.
+  CHECK(number(paper.at("phi_2_paper")) == s.at("phi_2").get<double>());
+  CHECK(number(paper.at("phi_2_paper")) > number(paper.at("phi_2")));
+  const auto moduli = budjam::io::read_json(dir / "packings" / "phi2.moduli.json");
+  CHECK(number(paper.at("G_2_paper")) == Approx(moduli.at("G").get<double>()).epsilon(1e-12));
+  CHECK(paper.at("G_2").empty());
+  CHECK(budjam_def.at("G_2_paper").empty());  // it stopped before the paper's φ_2
+  CHECK(number(budjam_def.at("G_2")) == Approx(budjam::io::read_json(runs()[2] / "packings" / "phi2.moduli.json")
+                                                    .at("G")
+                                                    .get<double>())
+                                             .epsilon(1e-12));
+}
+
 TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[analyse]") {
   const fs::path pool = work_dir() / "with_copies";
   fs::create_directories(pool);

@@ -133,22 +133,25 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   for (const auto& c : kRunColumns)
     if (std::find(std::begin(kSummaryKeys), std::end(kSummaryKeys), std::string_view(c.name)) != std::end(kSummaryKeys))
       x.*c.field = r.get(c.name);
-  x.depleted = std::isfinite(x.phi_2);
-  const double step_2 = r.get("step_2");
-  if (x.depleted) x.dphi_2 = x.phi_2 - x.phi_J;
+  if (const double left = r.get("phi_2_tagged_left"); std::isfinite(left)) x.phi2_tagged_left = left;
+  const double saved_step_2 = r.get("step_2");  // the φ_2 packing the run saved, under its definition
+  double step_2 = saved_step_2;
 
   // steps.csv from jamming on (the current episode starts at step_J)
   const auto& S = r.steps;
   const std::size_t c_step = S.column("step"), c_phi = S.column("phi"), c_P = S.column("P"), c_N = S.column("N"),
                     c_Nf = S.column("N_f"), c_Nub = S.column("N_u_buds"), c_chi = S.column("chi_c"),
-                    c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming");
-  std::vector<double> st, phi, P, u, chi, lambda, active, divisions;
+                    c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming"),
+                    c_Z = S.column("Z"), c_dZ = S.column("dZ");
+  std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, active, divisions;
   for (std::size_t k = 0; k < S.size(); ++k) {
     const double s = S.number(k, c_step);
     if (s < x.step_J) continue;
     st.push_back(s);
     phi.push_back(S.number(k, c_phi));
     P.push_back(S.number(k, c_P));
+    Z.push_back(S.number(k, c_Z));
+    dZ.push_back(S.number(k, c_dZ));
     const double N = S.number(k, c_N), Nf = S.number(k, c_Nf);
     u.push_back(S.number(k, c_Nub) / (N - Nf));
     chi.push_back(S.number(k, c_chi));
@@ -157,6 +160,21 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     divisions.push_back(S.number(k, c_div));
   }
   if (!divisions.empty()) x.N_div_end = divisions.back();
+  // A run that saved another definition's φ_2 (jamming.phi2_tagged_left) has budjam's in its log only.
+  if (x.phi2_tagged_left != kBudjamTaggedLeft) {
+    x.phi_2 = x.P_2 = x.Z_2 = x.dZ_2 = x.N_div_2 = step_2 = kNaN;
+    if (const auto k = depletion_state(active, 1, kBudjamTaggedLeft)) {
+      x.phi_2 = phi[*k];
+      x.P_2 = P[*k];
+      x.Z_2 = Z[*k];
+      x.dZ_2 = dZ[*k];
+      x.N_div_2 = divisions[*k];
+      step_2 = st[*k];
+    }
+  }
+  x.depleted = std::isfinite(x.phi_2);
+  if (x.depleted) x.dphi_2 = x.phi_2 - x.phi_J;
+  double step_2_paper = kNaN;
   if (x.depleted) {
     const auto k2 = static_cast<std::size_t>(std::find(st.begin(), st.end(), step_2) - st.begin());
     if (k2 < st.size()) {
@@ -165,7 +183,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
     }
   }
-  if (const auto k2 = depletion_state(active, 1, 0)) {
+  if (const auto k2 = depletion_state(active, 1, kPaperTaggedLeft)) {
+    step_2_paper = st[*k2];
     x.phi_2_paper = phi[*k2];
     x.dphi_2_paper = phi[*k2] - x.phi_J;
     x.P_2_paper = P[*k2];
@@ -239,13 +258,17 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.h_gamma = growth_heterogeneity(x.g);
     }
   }
-  if (x.depleted) {
+  // The saved φ_2 packing serves each definition whose φ_2 it is (both where they fall on one state).
+  if (std::isfinite(saved_step_2)) {
     const SidecarModuli sm =
         read_moduli(r.dir / io::run_files::packing(io::run_files::phi2), need_moduli, moduli_found);
-    x.B_2 = sm.B;
-    x.G_2 = sm.G;
-    x.G_2_energy = sm.G_energy;
-    x.G_min_2 = sm.G_min;
+    if (saved_step_2 == step_2) {
+      x.B_2 = sm.B;
+      x.G_2 = sm.G;
+      x.G_2_energy = sm.G_energy;
+      x.G_min_2 = sm.G_min;
+    }
+    if (saved_step_2 == step_2_paper) x.G_2_paper = sm.G;
   }
   {
     const fs::path jam = r.dir / io::run_files::packing(io::run_files::jammed);
@@ -501,7 +524,7 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
 template <class F>
 Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
   const auto admitted =
-      paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, [](auto& r) { return r.G_2; }));
+      paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, G_for_paper_phi2));
   const auto kept = tukey_inliers(collect(rs, f), admitted);
   Json j = mean_se_json(kept);
   const Json m = median_json(kept, bo);
@@ -559,20 +582,21 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
   // The paper's definitions and selection: φ_2 = first state with no tagged bud left; χ̄ and λ̄_c
   // over [φ_J, that φ_2]; runs with ≤ 10 divisions at their end and G_2 > 0, Tukey fences per P0.
-  // G_2, and so G_2/P_2, are those of the packing saved at budjam's φ_2 (the only one saved near the
-  // depletion point).
+  // G_2 is that of the packing saved at the paper's φ_2 in runs that saved it there
+  // (jamming.phi2_tagged_left = 0; G_2_at_paper_phi2 counts them), else at budjam's φ_2.
   g["dphi_2_paper"] = paper_selected_json(
       rs, [](auto& r) { return r.dphi_2_paper; }, bo);
   g["P_2_paper"] = paper_selected_json(
       rs, [](auto& r) { return r.P_2_paper; }, bo);
   g["P_2_over_Pmax_paper"] = paper_selected_json(
       rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
-  g["G_2_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.G_2; }, bo);
+  g["G_2_paper"] = paper_selected_json(rs, G_for_paper_phi2, bo);
   g["G_2_over_Pmax_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.G_2 / kPmax; }, bo);
+      rs, [](auto& r) { return G_for_paper_phi2(r) / kPmax; }, bo);
   g["G_2_over_P_2_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.G_2 / r.P_2; }, bo);  // one packing
+      rs, [](auto& r) { return std::isfinite(r.G_2_paper) ? r.G_2_paper / r.P_2_paper : r.G_2 / r.P_2; },
+      bo);  // one packing
+  g["G_2_at_paper_phi2"] = std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->G_2_paper); });
   g["chi_bar_paper"] = paper_selected_json(
       rs, [](auto& r) { return r.chi_bar_paper; }, bo);
   g["lambda_bar_paper"] = paper_selected_json(

@@ -6,6 +6,7 @@
 // in runs.csv and targets.csv, for the writer and the tables reader alike.
 #include "budjam/survival.hpp"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -28,6 +29,10 @@ struct TargetRow {
   bool below_phi2 = false;
 };
 
+// φ_2 is the first state after jamming with at most this many tagged buds still unconstrained:
+// budjam's definition (ε ~ 1/N_nr,J) and the paper's (none left).
+inline constexpr double kBudjamTaggedLeft = 1, kPaperTaggedLeft = 0;
+
 struct RunRow {
   std::filesystem::path dir;
   double L = kNaN;
@@ -48,8 +53,13 @@ struct RunRow {
   double phi_2_paper = kNaN, dphi_2_paper = kNaN, P_2_paper = kNaN, N_div_2_paper = kNaN;
   double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
   double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
+  // The definition of the φ_2 the run saved (packings/phi2.pack, summary.json phi_2): at most this
+  // many tagged buds left (jamming.phi2_tagged_left; 1 in runs from before that key). The other
+  // definition's φ_2 comes from steps.csv, without a packing.
+  double phi2_tagged_left = kBudjamTaggedLeft;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;  // at budjam's φ_2, if saved there
+  double G_2_paper = kNaN;  // at the paper's φ_2, if saved there
   double h_gamma = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
@@ -58,6 +68,10 @@ struct RunRow {
   std::vector<double> remaining;  // tagged_active / tagged (NaN beyond the run)
   std::vector<double> divisions;  // cumulative divisions after φ_J
 };
+
+// G at the paper's φ_2 where the run saved that packing, else at budjam's φ_2 (the nearest saved
+// packing: runs that stop at budjam's φ_2 never reach the paper's).
+inline double G_for_paper_phi2(const RunRow& r) { return std::isfinite(r.G_2_paper) ? r.G_2_paper : r.G_2; }
 
 struct DosRow {
   std::string run, packing;
@@ -139,6 +153,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"chi_bar_paper", &RunRow::chi_bar_paper},
                                             {"lambda_bar_paper", &RunRow::lambda_bar_paper},
                                             {"N_div_end", &RunRow::N_div_end},
+                                            {"phi_2_tagged_left", &RunRow::phi2_tagged_left},
                                             {"a_eps", &RunRow::a_eps},
                                             {"integral_S", &RunRow::int_S},
                                             {"dphi_2_pred_area", &RunRow::pred_area},
@@ -147,6 +162,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"G_2", &RunRow::G_2},
                                             {"G_2_energy", &RunRow::G_2_energy},
                                             {"G_min_2", &RunRow::G_min_2},
+                                            {"G_2_paper", &RunRow::G_2_paper},
                                             {"h_gamma", &RunRow::h_gamma},
                                             {"lc2_J", &RunRow::lc2_J},
                                             {"P_J", &RunRow::P_J},

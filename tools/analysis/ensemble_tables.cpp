@@ -46,8 +46,9 @@ double number_or_nan(const CsvTable& t, const char* name, std::size_t row) {
 }
 
 void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t>& index) {
+  // Tables from before jamming.phi2_tagged_left hold budjam's φ_2 only, which is what the default says.
   for (const auto& c : kRunColumns)
-    if (!R.has_column(c.name))
+    if (!R.has_column(c.name) && c.field != &RunRow::phi2_tagged_left)
       e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + needs(c.name) + " of each run)";
   const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
                     c_status = R.column("status");
@@ -59,7 +60,8 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     if (x.P0_label != "none") x.P0 = R.number(k, c_P0);
     x.seed = static_cast<std::uint64_t>(R.integer(k, c_seed, 0, std::numeric_limits<long long>::max()));
     x.status = R.text(k, c_status);
-    for (const auto& c : kRunColumns) x.*c.field = number_or_nan(R, c.name, k);
+    for (const auto& c : kRunColumns)
+      if (R.has_column(c.name)) x.*c.field = R.number(k, R.column(c.name));
     x.depleted = std::isfinite(x.phi_2);
     if (!index.emplace(x.dir.string(), e.rows.size()).second)
       throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " listed twice");
