@@ -336,10 +336,19 @@ def figB1(T):
     dz_identity(axes[0], targets, lambda r: col[float(r["L"])], lambda r: f"L = {float(r['L']):g}")
     panel(axes[0], "A")
     ax = axes[1]
+    # budjam's φ_2 (filled), the paper's definition and selection (open), Eq. 14 with a as area (dashed)
     for L in Ls:
-        gs = [g for g in T.groups(L) if g["dphi_2"]["mean"] is not None]
-        ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g["dphi_2"]["mean"] for g in gs],
-                    yerr=[g["dphi_2"]["se"] or 0 for g in gs], fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
+        for key, fmt, lab in (("dphi_2", "o-", f"L = {L:g}"), ("dphi_2_paper", "o:", None)):
+            gs = [g for g in T.groups(L) if g[key]["mean"] is not None]
+            ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g[key]["mean"] for g in gs],
+                        yerr=[g[key]["se"] or 0 for g in gs], fmt=fmt, color=col[L], capsize=3, label=lab,
+                        mfc=col[L] if key == "dphi_2" else "none")
+        gs = [g for g in T.groups(L) if g["dphi_2_pred_area"]["mean"] is not None]
+        ax.plot([p0_value(g["P0_label"]) for g in gs], [g["dphi_2_pred_area"]["mean"] for g in gs], "--",
+                color=col[L], lw=1)
+    ax.plot([], [], "ko-", label="at most one tagged bud left")
+    ax.plot([], [], "o:", color="k", mfc="none", label="none left, paper's selection")
+    ax.plot([], [], "k--", lw=1, label="Eq. (14), $a$ as area")
     p0_axis(ax, [g["P0_label"] for g in T.groups()])
     ax.set_yscale("log")
     ax.set_ylabel(r"$\phi_2-\phi_J$")
