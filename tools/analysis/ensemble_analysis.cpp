@@ -842,12 +842,24 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
       m, [](auto& r) { return r.N_J; }, bo);
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m);
-  std::vector<double> rel_b;
+  std::vector<double> b_grow, lambda, b_ext;
   for (const auto* r : m)
-    for (const auto& t : r->targets)
-      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0)
-        rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
-  h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
+    for (const auto& t : r->targets) {
+      b_grow.push_back(t.B_grow);
+      lambda.push_back(t.lambda);
+      b_ext.push_back(t.B);
+    }
+  Json& bg = h["B_grow_over_lambda_B_log10"];  // log₁₀ of the median ratio over the targets
+  bg["n"] = 0;
+  bg["median"] = nullptr;
+  if (const auto c = growth_bulk_check(b_grow, lambda, b_ext, bo)) {
+    const auto& b = c->log10_median;
+    bg["n"] = b.n;
+    bg["median"] = io::number_or_null(b.estimate);
+    bg["se"] = io::number_or_null(b.se);
+    bg["ci95"] = Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)});
+    bg["nonpositive_B_grow"] = c->nonpositive;
+  }
   return h;
 }
 
@@ -968,7 +980,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
 
   Json J;
   J["format"] = "budjam-analysis";
-  J["version"] = 2;
+  J["version"] = 3;  // 3: B_grow = λ_c B_ext as the median ratio
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
