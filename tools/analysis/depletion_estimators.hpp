@@ -1,7 +1,8 @@
 #pragma once
 // Per-run and per-group estimators of the depletion of the buds unconstrained at jamming (paper
-// Eqs. 12–16 and appendix D), each under budjam's definition and under the one the paper's own
-// analysis used where the two differ (docs/analysis.md, "Definitions").
+// Eqs. 12–16 and appendix D) and of how the growth they leave to the compressed sector loads it
+// (Eq. 20), each under budjam's definition and under the one the paper's own analysis used where
+// the two differ (docs/analysis.md, "Definitions").
 #include "budjam/statistics.hpp"
 
 #include <cstddef>
