@@ -223,13 +223,26 @@ def figS(T):
 
 # ---- Fig. 3: mechanics -------------------------------------------------------------------------------
 
+# Below this λ_c the compressed buds take no measurable part of the growth (arrested growth: their
+# exp(−p/P0) down to 1e-159) and B_grow is zero within its fit error: on log axes such a target would
+# sit 10^100 away from the rest (docs/analysis.md, "The paper preset"), so it is counted, not drawn.
+ARRESTED_LAMBDA_C = 1e-6
+
+
 def bgrow_identity(ax, targets, colour_of, label_of):
     seen = set()
     xs, ys = [], []
+    arrested = nonpositive = 0
     for r in targets:
         x = num(r["lambda_c"]) * num(r["B"])
         y = num(r["B_grow"])
-        if not (math.isfinite(x) and math.isfinite(y) and x > 0 and y > 0):
+        if not (math.isfinite(x) and math.isfinite(y) and x > 0):
+            continue
+        if num(r["lambda_c"]) < ARRESTED_LAMBDA_C:
+            arrested += 1
+            continue
+        if y <= 0:
+            nonpositive += 1
             continue
         key = label_of(r)
         ax.plot(x, y, "o", ms=4, color=colour_of(r), alpha=0.8, label=None if key in seen else key)
@@ -239,11 +252,13 @@ def bgrow_identity(ax, targets, colour_of, label_of):
     if not xs:
         raise Missing("B_grow identity: no target with both B_grow and B")
     identity_line(ax, xs, ys, log=True)
+    ax.text(0.97, 0.03, f"not shown: {arrested} with $\\lambda_c < 10^{{-6}}$,\n{nonpositive} with $B_{{\\rm grow}} \\leq 0$",
+            transform=ax.transAxes, ha="right", va="bottom", fontsize=7)
+    ax.legend(fontsize=7, frameon=False, loc="upper left")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(r"$\lambda_c B_{\rm ext}$")
     ax.set_ylabel(r"$B_{\rm grow}=\phi\,(\partial P/\partial\phi)_{\rm grow}$")
-    ax.legend(fontsize=7, frameon=False)
 
 
 def fig3(T):

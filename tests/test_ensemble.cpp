@@ -116,6 +116,36 @@ TEST_CASE("P* = n_J (6 + 2 u_J) a_c / (8 ln 10)") {
   CHECK(crossover_pressure(0.775, 0.2, 0.01) == Approx(0.0026927).epsilon(1e-4));
 }
 
+TEST_CASE("B_grow = λ_c B_ext is tested by the median ratio: an arrested target (0 over 0) cannot move it") {
+  // Ratios B_grow/(λ_c B): 10, 1, −0.5 (B_grow ≤ 0 ranks lowest), 0.1 and 10^139 (B_grow = 10⁻¹¹
+  // fitted on a flat P against λ_c B = 10⁻¹⁵⁰); λ_c B = 0 and a NaN B_grow are left out. Sorted
+  // −0.5, 0.1, 1, 10, 10^139: median 1, log₁₀ = 0, where the mean of the four positive logs is 34.75.
+  const std::vector<double> B_grow{5, 1, -0.5, 1e-11, 0.05, 3, NAN};
+  const std::vector<double> lambda{1, 0.5, 0.5, 1e-150, 0.25, 0, 1};
+  const std::vector<double> B_ext{0.5, 2, 2, 1, 2, 0.4, 0.4};
+  const auto c = growth_bulk_check(B_grow, lambda, B_ext);
+  REQUIRE(c);
+  CHECK(c->log10_median.n == 5);
+  CHECK(c->nonpositive == 1);
+  CHECK(c->log10_median.estimate == Approx(0).margin(1e-15));
+  // without the arrested target the mean of the positive logs is 0 and the median log₁₀ 0.55 (the
+  // mean of 0.1 and 1): that target moves the mean by 34.75 decades, the median by one rank
+  CHECK(growth_bulk_check(std::vector<double>{5, 1, -0.5, 0.05}, std::vector<double>{1, 0.5, 0.5, 0.25},
+                          std::vector<double>{0.5, 2, 2, 2})
+            ->log10_median.estimate == Approx(std::log10(0.55)));
+
+  // ratios −1, −2, 2: the median −1 is ≤ 0, its log −∞; no target qualifying gives nullopt
+  const auto down =
+      growth_bulk_check(std::vector<double>{-1, -2, 2}, std::vector<double>{1, 1, 1}, std::vector<double>{1, 1, 1});
+  REQUIRE(down);
+  CHECK(down->nonpositive == 2);
+  CHECK(std::isinf(down->log10_median.estimate));
+  CHECK(down->log10_median.estimate < 0);
+  CHECK_FALSE(growth_bulk_check(std::vector<double>{1}, std::vector<double>{0}, std::vector<double>{1}));
+  CHECK_THROWS_AS(growth_bulk_check(std::vector<double>{1, 2}, std::vector<double>{1}, std::vector<double>{1, 2}),
+                  std::invalid_argument);
+}
+
 TEST_CASE("excess contacts are integers whose sign is that of ΔZ") {
   // N_nr = 10, N_u = 2: N_c,iso = 60 − 4 − 2 = 54
   CHECK(excess_contacts(54, 10, 2) == 0);

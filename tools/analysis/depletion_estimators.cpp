@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace budjam::tools {
 
@@ -39,6 +40,27 @@ std::vector<double> tukey_inliers(std::span<const double> values, const std::vec
 
 double crossover_pressure(double n_J, double u_J, double a_c_area) {
   return n_J * (6.0 + 2.0 * u_J) * a_c_area / (8.0 * std::log(10.0));
+}
+
+std::optional<GrowthBulkCheck> growth_bulk_check(std::span<const double> B_grow, std::span<const double> lambda_c,
+                                                 std::span<const double> B_ext, const BootstrapOptions& options) {
+  if (lambda_c.size() != B_grow.size() || B_ext.size() != B_grow.size())
+    throw std::invalid_argument("growth_bulk_check: B_grow, lambda_c and B_ext differ in length");
+  std::vector<double> ratio;
+  GrowthBulkCheck c;
+  for (std::size_t k = 0; k < B_grow.size(); ++k) {
+    const double predicted = lambda_c[k] * B_ext[k];
+    if (!std::isfinite(B_grow[k]) || !std::isfinite(predicted) || !(predicted > 0)) continue;
+    ratio.push_back(B_grow[k] / predicted);
+    if (B_grow[k] <= 0) ++c.nonpositive;
+  }
+  if (ratio.empty()) return std::nullopt;
+  const auto log10_median = [](std::span<const double> x) {
+    const double m = median(std::vector<double>(x.begin(), x.end()));
+    return m > 0 ? std::log10(m) : -std::numeric_limits<double>::infinity();
+  };
+  c.log10_median = bootstrap(ratio, log10_median, options);
+  return c;
 }
 
 }  // namespace budjam::tools

@@ -1,7 +1,8 @@
 #pragma once
 // Per-run and per-group estimators of the depletion of the buds unconstrained at jamming (paper
-// Eqs. 12–16 and appendix D), each under budjam's definition and under the one the paper's own
-// analysis used where the two differ (docs/analysis.md, "Definitions").
+// Eqs. 12–16 and appendix D) and of how the growth they leave to the compressed sector loads it
+// (Eq. 20), each under budjam's definition and under the one the paper's own analysis used where
+// the two differ (docs/analysis.md, "Definitions").
 #include "budjam/statistics.hpp"
 
 #include <cstddef>
@@ -33,5 +34,21 @@ std::vector<double> tukey_inliers(std::span<const double> values, const std::vec
 // Crossover pressure of the growth-rate distribution P* = n_J (6 + 2u_J) a_c / (8 ln 10)
 // (Eq. E12), with a_c the typical completion size as a true area.
 double crossover_pressure(double n_J, double u_J, double a_c_area);
+
+// The test of B_grow = λ_c B_ext (Eq. 20) over the (run, Δφ) targets: the median of the ratios
+// B_grow/(λ_c B) over the targets with a finite B_grow and λ_c B > 0, quoted as log₁₀ (bootstrap SE
+// and percentile interval of log₁₀ of the resampled medians). A median, because the ratio has no
+// scale where growth is arrested: once the compressed buds grow at exp(−p/P0) ~ 10⁻¹⁵⁰ and one free
+// bud takes all the growth, λ_c B ~ 10⁻¹⁵⁰ and the fitted B_grow is zero within its error, so
+// log₁₀ of their ratio is ±100 and one such target outweighs hundreds of others in a mean. B_grow ≤ 0
+// (slope noise larger than the slope) ranks below every positive ratio instead of being dropped; a
+// median ≤ 0 is log₁₀ = −∞.
+struct GrowthBulkCheck {
+  BootstrapResult log10_median;  // estimate, se, lo, hi of log₁₀ median(B_grow/(λ_c B)); n = targets
+  std::size_t nonpositive = 0;   // targets with B_grow ≤ 0 among them
+};
+// nullopt if no target qualifies. Throws std::invalid_argument for spans of different lengths.
+std::optional<GrowthBulkCheck> growth_bulk_check(std::span<const double> B_grow, std::span<const double> lambda_c,
+                                                 std::span<const double> B_ext, const BootstrapOptions& options = {});
 
 }  // namespace budjam::tools

@@ -535,6 +535,29 @@ Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const Bootst
   return j;
 }
 
+// The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio.
+Json growth_bulk_json(const std::vector<const RunRow*>& rs, const BootstrapOptions& bo) {
+  std::vector<double> b_grow, lambda, b_ext;
+  for (const auto* r : rs)
+    for (const auto& t : r->targets) {
+      b_grow.push_back(t.B_grow);
+      lambda.push_back(t.lambda);
+      b_ext.push_back(t.B);
+    }
+  Json j;
+  j["n"] = 0;
+  j["median"] = nullptr;
+  if (const auto c = growth_bulk_check(b_grow, lambda, b_ext, bo)) {
+    const auto& b = c->log10_median;
+    j["n"] = b.n;
+    j["median"] = io::number_or_null(b.estimate);
+    j["se"] = io::number_or_null(b.se);
+    j["ci95"] = Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)});
+    j["nonpositive_B_grow"] = c->nonpositive;
+  }
+  return j;
+}
+
 struct Tables {
   std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
 };
@@ -619,6 +642,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_paper / NJ; }), bo);
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
+  g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
 
   // pooled Kaplan–Meier and the pooled prediction
   const double uJ = mean(finite(collect(rs, [](auto& r) { return r.u_J; })));
@@ -866,12 +890,7 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
       m, [](auto& r) { return r.N_J; }, bo);
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m);
-  std::vector<double> rel_b;
-  for (const auto* r : m)
-    for (const auto& t : r->targets)
-      if (std::isfinite(t.B) && std::isfinite(t.B_grow) && t.lambda * t.B > 0)
-        rel_b.push_back(std::log10(t.B_grow / (t.lambda * t.B)));
-  h["B_grow_over_lambda_B_log10"] = mean_se_json(rel_b);
+  h["B_grow_over_lambda_B_log10"] = growth_bulk_json(m, bo);
   return h;
 }
 
@@ -992,7 +1011,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
 
   Json J;
   J["format"] = "budjam-analysis";
-  J["version"] = 2;
+  J["version"] = 3;  // 3: B_grow = λ_c B_ext as the median ratio
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
