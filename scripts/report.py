@@ -59,7 +59,9 @@ def growth_bulk(stat):
 
 FINITE_SIZE_COLUMNS = [("u_J", "u_J (buds)"), ("u_J_lobes", "u_J (lobes)"), ("n_J", "n_J"), ("phi_J", "φ_J"),
                        ("dphi_2", "Δφ_2 (≤ 1 left)"), ("dphi_2_paper", "Δφ_2 (none left, paper's selection)"),
-                       ("N_div_2_over_N_J", "N_div(φ_2)/N_J (median)"), ("G_2_over_Pmax", "G_2/P_max (median)")]
+                       ("dphi_2_paper_all", "Δφ_2 (none left, every run)"),
+                       ("N_div_2_over_N_J", "N_div(φ_2)/N_J (median)"), ("G_2_over_Pmax", "G_2/P_max (median)"),
+                       ("G_2_over_Pmax_at_paper_phi2", "G_2/P_max at none left (median)")]
 
 
 def finite_size_rows(entries):

@@ -279,6 +279,9 @@ TEST_CASE("finite-size extrapolation recovers the N → ∞ limit of q_∞ + c/N
   // a size-independent median extrapolates to itself with zero slope
   CHECK(fed["extrapolation"]["G_2_over_Pmax"]["limit"].get<double>() == Approx(0.4));
   CHECK(fed["extrapolation"]["G_2_over_Pmax"]["slope"].get<double>() == Approx(0.0).margin(1e-9));
+  // a quantity the groups lack (an older analysis.json) gives empty cells and no extrapolation
+  CHECK(fed["sizes"][0]["G_2_over_Pmax_at_paper_phi2"]["value"].is_null());
+  CHECK(fed["extrapolation"]["G_2_over_Pmax_at_paper_phi2"]["sizes"] == 0);
   // values without an error bar are not fitted
   CHECK(fed["extrapolation"]["dphi_2_paper"]["limit"].is_null());
   CHECK(fed["extrapolation"]["dphi_2_paper"]["sizes"] == 0);

@@ -619,6 +619,10 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["G_2_over_P_2_paper"] = paper_selected_json(
       rs, [](auto& r) { return std::isfinite(r.G_2_paper) ? r.G_2_paper / r.P_2_paper : r.G_2 / r.P_2; },
       bo);  // one packing
+  // The paper's φ_2 in every run that reached it, without the selection (whose absolute cut of 10
+  // divisions admits fewer runs the larger the box), and G there where the run saved it.
+  g["dphi_2_paper_all"] = mean_se_json(collect(rs, [](auto& r) { return r.dphi_2_paper; }));
+  g["G_2_over_Pmax_at_paper_phi2"] = median_json(collect(rs, [](auto& r) { return r.G_2_paper / kPmax; }), bo);
   g["G_2_at_paper_phi2"] = std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->G_2_paper); });
   g["chi_bar_paper"] = paper_selected_json(
       rs, [](auto& r) { return r.chi_bar_paper; }, bo);

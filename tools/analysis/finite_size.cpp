@@ -32,8 +32,10 @@ constexpr Quantity kQuantities[] = {
     {"phi_J", "phi_J", "mean"},                          // packing fraction at jamming
     {"dphi_2", "dphi_2", "mean"},                        // φ_2 − φ_J, at most one tagged bud left
     {"dphi_2_paper", "dphi_2_paper", "mean"},            // φ_2 − φ_J, none left, the paper's selection
+    {"dphi_2_paper_all", "dphi_2_paper_all", "mean"},    // the same, every run that reached it
     {"N_div_2_over_N_J", "N_div_2_over_N_J", "median"},  // divisions by φ_2 per cell at jamming
     {"G_2_over_Pmax", "G_2_over_Pmax", "median"},        // shear modulus at φ_2 over P_max
+    {"G_2_over_Pmax_at_paper_phi2", "G_2_over_Pmax_at_paper_phi2", "median"},  // the same at none left
 };
 
 double number(const Json& j, const char* key) {
@@ -80,8 +82,9 @@ Json finite_size_json(const Json& groups) {
       row["runs"] = (*g)["runs"];
       row["N_J"] = Json{{"mean", (*g)["N_J"]["mean"]}, {"se", (*g)["N_J"]["se"]}};
       for (const auto& q : kQuantities) {
-        const Json& v = (*g)[q.group_key];
-        row[q.name] = Json{{"value", v[q.value_field]}, {"se", v["se"]}, {"n", v["n"]}};
+        // a key an older analysis.json lacks gives an empty cell
+        const Json v = g->contains(q.group_key) ? (*g)[q.group_key] : Json::object();
+        row[q.name] = Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
       }
       sizes.push_back(row);
     }
