@@ -612,21 +612,10 @@ struct GrowthDriver::Impl {
   // ---- checkpoints ---------------------------------------------------------------------------
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
-    return GrowthState{seed,
-                       rng,
-                       phase,
-                       dt,
-                       last_dt,
-                       last_log_scale,
-                       step,
-                       attempts,
-                       next_target,
-                       divisions_since_jamming,
-                       episodes,
-                       result,
-                       buds,
-                       packing,
-                       JammingSearchState{overshoots, slow_trials, bracket_width}};
+    return GrowthState{
+        seed,           rng,    phase,    dt,          last_dt,
+        last_log_scale, step,   attempts, next_target, divisions_since_jamming,
+        episodes,       result, buds,     packing,     JammingSearchState{overshoots, slow_trials, bracket_width}};
   }
 
   void restore(GrowthState s) {

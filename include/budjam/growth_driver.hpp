@@ -230,8 +230,8 @@ struct GrowthState {
   // the accepted state (like the rates), the last step's is kept.
   double dt = 0;                           // the next attempt
   double last_dt = 0, last_log_scale = 0;  // the step that produced the accepted state
-  long step = 0, attempts = 0;  // accepted steps; growth steps tried
-  std::size_t next_target = 0;  // index in scene.targets of the next target to land
+  long step = 0, attempts = 0;             // accepted steps; growth steps tried
+  std::size_t next_target = 0;             // index in scene.targets of the next target to land
   long divisions_since_jamming = 0;
   int episodes = 0;  // jamming episodes begun
   RunResult result;  // status `running`

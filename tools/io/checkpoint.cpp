@@ -179,8 +179,8 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << "seed " << s.seed << '\n';
   os << "rng " << s.rng << '\n';
   os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << num(s.last_log_scale)
-     << ' ' << s.step << ' '
-     << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' ' << s.episodes << '\n';
+     << ' ' << s.step << ' ' << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' '
+     << s.episodes << '\n';
   os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations << ' '
      << r.divisions << ' ' << r.saddles_relaxed << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
