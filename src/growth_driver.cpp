@@ -69,8 +69,7 @@ struct GrowthDriver::Impl {
   Rng rng;
   Phase phase = Phase::unjammed;
   // Steps are stored scaled: an attempt of `dt` with `rates` grows as Δt = dt·e^{log_scale} with the
-  // plain rates γ_i (docs/growth.md, "Adaptive growth step"); log_scale = 0 but in the adaptive step
-  // out of the double range.
+  // plain rates γ_i (StepStart; log_scale ≠ 0 only for an adaptive step out of the double range).
   double dt = 1.0;              // scaled Δt of the next attempt
   double last_dt = 0.0;         // scaled Δt of the step that produced the accepted state ...
   double last_log_scale = 0.0;  // ... and the log_scale it was taken with
@@ -175,8 +174,12 @@ struct GrowthDriver::Impl {
   void mean_compressed_factor() {
     double sum = 0, log_top = -std::numeric_limits<double>::infinity();
     std::size_t n = 0;
-    for (double p : pressures)
-      if (p > 0) sum += growth_factor(p, scene.P0), ++n, log_top = std::max(log_top, log_growth_factor(p, scene.P0));
+    for (double p : pressures) {
+      if (!(p > 0)) continue;
+      sum += growth_factor(p, scene.P0);
+      log_top = std::max(log_top, log_growth_factor(p, scene.P0));
+      ++n;
+    }
     if (!n) return;
     chi_c = sum / static_cast<double>(n);
     double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
@@ -613,9 +616,22 @@ struct GrowthDriver::Impl {
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
     return GrowthState{
-        seed,           rng,    phase,    dt,          last_dt,
-        last_log_scale, step,   attempts, next_target, divisions_since_jamming,
-        episodes,       result, buds,     packing,     JammingSearchState{overshoots, slow_trials, bracket_width}};
+        .seed = seed,
+        .rng = rng,
+        .phase = phase,
+        .dt = dt,
+        .last_dt = last_dt,
+        .last_log_scale = last_log_scale,
+        .step = step,
+        .attempts = attempts,
+        .next_target = next_target,
+        .divisions_since_jamming = divisions_since_jamming,
+        .episodes = episodes,
+        .result = result,
+        .buds = buds,
+        .packing = packing,
+        .search = JammingSearchState{overshoots, slow_trials, bracket_width},
+    };
   }
 
   void restore(GrowthState s) {
