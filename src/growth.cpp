@@ -37,24 +37,33 @@ double grown_bud(double b, double gamma, double dt) {
   return std::sqrt(b2 + gamma * dt * (D2 + b2));
 }
 
-double growth_factor(double bud_pressure, std::optional<double> P0) {
-  if (!P0) return 1.0;
+double log_growth_factor(double bud_pressure, std::optional<double> P0) {
+  if (!P0) return 0.0;
   if (!(*P0 > 0.0)) throw InputError("growth.P0: must be positive (got " + std::to_string(*P0) + ")");
   if (std::isnan(bud_pressure)) throw std::domain_error("growth_factor: bud pressure is NaN");
-  if (bud_pressure <= 0.0) return 1.0;
-  const double x = bud_pressure / *P0;
-  // Below DBL_MIN the factor is an underflow: make it exactly 0 (no denormals, no NaN for p = ∞).
-  static const double x_max = -std::log(DBL_MIN);
-  if (!(x < x_max)) return 0.0;
-  return std::exp(-x);
+  if (bud_pressure <= 0.0) return 0.0;
+  return -(bud_pressure / *P0);
 }
 
-std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0) {
+double factor_from_log(double log_factor) {
+  // Below DBL_MIN the factor is an underflow: make it exactly 0 (no denormals, no NaN for −∞).
+  static const double log_min = std::log(DBL_MIN);
+  if (!(log_factor > log_min)) return 0.0;
+  return std::exp(log_factor);
+}
+
+double growth_factor(double bud_pressure, std::optional<double> P0) {
+  return factor_from_log(log_growth_factor(bud_pressure, P0));
+}
+
+std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0,
+                                 double log_scale) {
   std::vector<double> rates(p.gamma0);
   if (bud_pressures && P0) {
     if (bud_pressures->size() != p.size())
       throw std::invalid_argument("growth_rates: one bud pressure per cell expected");
-    for (std::size_t i = 0; i < rates.size(); ++i) rates[i] *= growth_factor((*bud_pressures)[i], P0);
+    for (std::size_t i = 0; i < rates.size(); ++i)
+      rates[i] *= factor_from_log(log_scale + log_growth_factor((*bud_pressures)[i], P0));
   }
   return rates;
 }

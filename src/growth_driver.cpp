@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -67,8 +68,11 @@ struct GrowthDriver::Impl {
   Packing packing;
   Rng rng;
   Phase phase = Phase::unjammed;
-  double dt = 1.0;       // Δt of the next attempt
-  double last_dt = 0.0;  // Δt of the step that produced the accepted state
+  // Steps are stored scaled: an attempt of `dt` with `rates` grows as Δt = dt·e^{log_scale} with the
+  // plain rates γ_i (StepStart; log_scale ≠ 0 only for an adaptive step out of the double range).
+  double dt = 1.0;              // scaled Δt of the next attempt
+  double last_dt = 0.0;         // scaled Δt of the step that produced the accepted state ...
+  double last_log_scale = 0.0;  // ... and the log_scale it was taken with
   long step = 0, attempts = 0;
   bool started = false;
   RunResult result;
@@ -90,8 +94,9 @@ struct GrowthDriver::Impl {
   std::vector<double> pressures;
   bool have_pressures = false;
   std::size_t compressed = 0;
-  double chi_c = 1.0;
-  std::vector<double> rates;  // γ_i of the next step, frozen from the accepted state
+  double chi_c = 1.0, log_chi_c = 0.0;
+  std::vector<double> rates;  // γ_i·e^{log_scale} of the next step, frozen from the accepted state
+  StepStart next;             // where the next step starts, from the accepted state
 
   ForceField field;
   // The Newton factor kept from one minimisation to the next (arrested regime). Forgotten at every
@@ -158,33 +163,67 @@ struct GrowthDriver::Impl {
     }
     for (char t : touched) compressed += t ? 1 : 0;
     chi_c = 1.0;
-    if (have_pressures && scene.P0) {
-      double sum = 0;
-      std::size_t n = 0;
-      for (double p : pressures)
-        if (p > 0) sum += growth_factor(p, scene.P0), ++n;
-      if (n) chi_c = sum / static_cast<double>(n);
+    log_chi_c = 0.0;
+    if (have_pressures && scene.P0) mean_compressed_factor();
+    next = step_start();
+    rates = growth_rates(packing, feedback ? &pressures : nullptr, scene.P0, next.log_scale);
+  }
+
+  // χ_c = ⟨exp(−p/P0)⟩ over compressed buds, and ln χ_c by log-sum-exp about the largest factor, which
+  // survives when every factor underflows.
+  void mean_compressed_factor() {
+    double sum = 0, log_top = -std::numeric_limits<double>::infinity();
+    std::size_t n = 0;
+    for (double p : pressures) {
+      if (!(p > 0)) continue;
+      sum += growth_factor(p, scene.P0);
+      log_top = std::max(log_top, log_growth_factor(p, scene.P0));
+      ++n;
     }
-    rates = growth_rates(packing, feedback ? &pressures : nullptr, scene.P0);
+    if (!n) return;
+    chi_c = sum / static_cast<double>(n);
+    double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
+    for (double p : pressures)
+      if (p > 0) relative += std::exp(log_growth_factor(p, scene.P0) - log_top);
+    log_chi_c = log_top + std::log(relative / static_cast<double>(n));
   }
 
   // Δt that the next step starts from (before any bisection halving), from the accepted state.
   // The nominal growth.dt (docs/model.md, "Growth protocol"). With growth.adaptive_dt, above jamming with feedback:
   // dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0) = the factor of the least
   // compressed bud, so that the fastest-growing cell gains γ0_i·dt of relative area, as in a
-  // nominal step. Depends on the accepted state only (a checkpoint restores it with Δt anyway).
-  double start_dt() const {
-    if (!(scene.adaptive_dt && phase == Phase::jammed && scene.P0 && have_pressures)) return scene.dt;
-    double g_max = 0.0;
-    for (double p : pressures) g_max = std::max(g_max, growth_factor(p, scene.P0));
-    return scene.dt / std::max(g_max, scene.adaptive_floor);
+  // nominal step. While every factor and that Δt are doubles it is stored as it is (log_scale 0);
+  // else the step is stored as dt, log_scale = −ln max(g_max, floor) and the rates are scaled by
+  // e^{log_scale}: the growth γ0_i·dt·exp(−p_i/P0)/max(g_max, floor) is then exact at any p/P0.
+  StepStart step_start() const {
+    if (!(scene.adaptive_dt && phase == Phase::jammed && scene.P0 && have_pressures) || pressures.empty())
+      return {scene.dt, 0.0};
+    double g_max = 0.0, log_g_max = -std::numeric_limits<double>::infinity();
+    bool underflow = false;  // the plain form would lose some bud's growth
+    for (double p : pressures) {
+      const double log_g = log_growth_factor(p, scene.P0);
+      const double g = factor_from_log(log_g);
+      underflow = underflow || g == 0.0;
+      g_max = std::max(g_max, g);
+      log_g_max = std::max(log_g_max, log_g);
+    }
+    const double top = std::max(g_max, scene.adaptive_floor);
+    if (!underflow && std::isfinite(scene.dt / top)) return {scene.dt / top, 0.0};
+    return {scene.dt, -std::max(log_g_max, std::log(scene.adaptive_floor))};  // floor 0: log = −∞
   }
+
+  // Δt of a step stored as `scaled` with `log_scale`, and its logarithm.
+  static double unscaled_dt(double scaled, double log_scale) {
+    return log_scale == 0.0 ? scaled : scaled * std::exp(log_scale);
+  }
+  static double log_dt(double scaled, double log_scale) { return std::log(scaled) + log_scale; }
 
   StateView view() const {
     StateView v;
     v.step = step;
     v.attempts = attempts;
-    v.dt = last_dt;
+    v.dt = unscaled_dt(last_dt, last_log_scale);
+    v.log_dt = log_dt(last_dt, last_log_scale);
     v.phi = phi;
     v.P = P;
     v.E_per_cell = E;
@@ -199,6 +238,7 @@ struct GrowthDriver::Impl {
     v.divisions_since_jamming = phase == Phase::jammed ? divisions_since_jamming : 0;
     v.compressed_buds = compressed;
     v.chi_c = chi_c;
+    v.log_chi_c = log_chi_c;
     return v;
   }
 
@@ -351,8 +391,9 @@ struct GrowthDriver::Impl {
                                           pressure(c, trial.box), trial.box.L)});
   }
 
+  // `step` is scaled (a trial's dt): Δt < dt_min ⇔ step < dt_min·e^{−log_scale}.
   bool fail_below_dt_min(double step) {
-    if (step >= scene.dt_min) return false;
+    if (step >= scene.dt_min * std::exp(-next.log_scale)) return false;
     fail(RunStatus::dt_underflow, "growth step dt fell below growth.dt_min = " + num(scene.dt_min) + " (phase " +
                                       to_string(phase) + ", phi = " + num(phi) + ")");
     return true;
@@ -380,7 +421,8 @@ struct GrowthDriver::Impl {
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
-    if (!relax(t.packing, trial_minimiser(), "growth step " + std::to_string(attempts) + ", dt = " + num(t.dt)))
+    if (!relax(t.packing, trial_minimiser(),
+               "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale))))
       return std::nullopt;
     const double eps = scene.epsilon_U;
     t.E = fresh_energy_per_cell(t.packing);
@@ -438,6 +480,7 @@ struct GrowthDriver::Impl {
     ++step;
     ++result.accepted;
     last_dt = t.dt;
+    last_log_scale = next.log_scale;
     result.divisions += static_cast<long>(t.divisions.size());
     Change change = Change::none;
     if (phase == Phase::unjammed && E >= scene.epsilon_U) {
@@ -453,7 +496,7 @@ struct GrowthDriver::Impl {
     }
     derive();
     if (phase == Phase::unjammed) prune_overshoots();
-    dt = start_dt();
+    dt = next.dt;
     return change;
   }
 
@@ -572,20 +615,23 @@ struct GrowthDriver::Impl {
   // ---- checkpoints ---------------------------------------------------------------------------
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
-    return GrowthState{seed,
-                       rng,
-                       phase,
-                       dt,
-                       last_dt,
-                       step,
-                       attempts,
-                       next_target,
-                       divisions_since_jamming,
-                       episodes,
-                       result,
-                       buds,
-                       packing,
-                       JammingSearchState{overshoots, slow_trials, bracket_width}};
+    return GrowthState{
+        .seed = seed,
+        .rng = rng,
+        .phase = phase,
+        .dt = dt,
+        .last_dt = last_dt,
+        .last_log_scale = last_log_scale,
+        .step = step,
+        .attempts = attempts,
+        .next_target = next_target,
+        .divisions_since_jamming = divisions_since_jamming,
+        .episodes = episodes,
+        .result = result,
+        .buds = buds,
+        .packing = packing,
+        .search = JammingSearchState{overshoots, slow_trials, bracket_width},
+    };
   }
 
   void restore(GrowthState s) {
@@ -597,6 +643,7 @@ struct GrowthDriver::Impl {
     phase = s.phase;
     dt = s.dt;
     last_dt = s.last_dt;
+    last_log_scale = s.last_log_scale;
     step = s.step;
     attempts = s.attempts;
     next_target = s.next_target;

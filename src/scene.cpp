@@ -62,13 +62,6 @@ void validate(const Scene& s) {
 
   // [growth]
   if (!(s.dt_min < s.dt)) fail("growth.dt_min", "must be smaller than growth.dt = " + value_text(s.dt), s.dt_min);
-  // The adaptive step is dt / max(g_max, floor): it must stay finite, or a bud whose growth factor
-  // is exactly 0 would grow by 0 · ∞ = NaN.
-  if (s.adaptive_floor < std::numeric_limits<double>::min() || !std::isfinite(s.dt / s.adaptive_floor))
-    fail("growth.adaptive_floor",
-         "must be at least " + value_text(std::numeric_limits<double>::min()) +
-             " and keep growth.dt / adaptive_floor finite",
-         s.adaptive_floor);
 
   // [jamming]
   if (!s.targets.empty()) {

@@ -183,8 +183,8 @@ std::vector<SceneKey> make_keys() {
   e.push_back(flag("growth", "adaptive_dt",
                    "above jamming with feedback, start each step from dt / max(max_i exp(-p_i/P0), adaptive_floor)",
                    BUDJAM_FIELD(adaptive_dt)));
-  e.push_back(real("growth", "adaptive_floor", "smallest growth factor used by adaptive_dt, in (0, 1]",
-                   between(0, 1, "(]"), BUDJAM_FIELD(adaptive_floor)));
+  e.push_back(real("growth", "adaptive_floor", "smallest growth factor used by adaptive_dt, in [0, 1]; 0 = no floor",
+                   between(0, 1, "[]"), BUDJAM_FIELD(adaptive_floor)));
 
   e.push_back(real("jamming", "epsilon_U", "energy per cell below which a packing is unjammed", kPositive,
                    BUDJAM_FIELD(epsilon_U)));

@@ -167,6 +167,15 @@ TEST_CASE("a version 4 checkpoint (records without the whole network summary) is
                     Contains("cp:1:") && Contains("version 4") && Contains("start the run again"));
 }
 
+TEST_CASE("a version 5 checkpoint (steps without their log scale) is refused by name", "[checkpoint]") {
+  std::string text = snapshot().text;
+  text.replace(0, text.find('\n'), "budjam-checkpoint 5");
+  Counter c;
+  CHECK_THROWS_WITH(parse_checkpoint(text, "cp", small_scene(), 3, {&c}), Contains("cp:1:") && Contains("version 5") &&
+                                                                              Contains("log scale") &&
+                                                                              Contains("start the run again"));
+}
+
 TEST_CASE("a checkpoint is refused for another scene, seed or set of observers", "[checkpoint]") {
   const Snapshot& snap = snapshot();
   Counter c;

@@ -11,12 +11,14 @@
 #include <unistd.h>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -152,6 +154,49 @@ TEST_CASE("a step-size underflow exits 1 with status dt_underflow and no jammed 
   CHECK(s["status"] == "dt_underflow");
   CHECK(s["phi_J"].is_null());
   CHECK_FALSE(fs::exists(dir / "packings/jammed.pack"));
+}
+
+// P0 = 1e-8 with the adaptive step and no floor: soon after jamming every exp(−p/P0) and Δt = dt·e^{p_min/P0}
+// leave the double range (p_min/P0 reaches ~1e5); the log lines keep them as decimal text.
+TEST_CASE("steps.csv writes dt and chi_c beyond the double range as decimal text, and analyse reads the run",
+          "[grow_cli]") {
+  const fs::path dir = work_dir() / "beyond";
+  const Result r = grow(q(small_scene("beyond")) +
+                        " --quiet --set growth.P0=1e-8 --set growth.adaptive_dt=true --set growth.adaptive_floor=0 "
+                        "--out " +
+                        q(dir));
+  REQUIRE(r.code == 0);
+  std::istringstream csv(slurp(dir / "steps.csv"));
+  std::string line;
+  std::getline(csv, line);
+  REQUIRE(line.rfind("step,attempts,dt,", 0) == 0);
+  const std::size_t chi_column = 16;  // docs/files.md, steps.csv
+  long huge_dt = 0, tiny_chi = 0;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::istringstream fields(line);
+    for (std::string x; std::getline(fields, x, ',');) f.push_back(x);
+    REQUIRE(f.size() > chi_column);
+    // Mantissa in [1, 10) and a decimal exponent beyond ±308: a double reader gets inf or 0.
+    auto beyond = [](const std::string& t, int sign) {
+      const std::size_t e = t.find('e');
+      if (e == std::string::npos) return false;
+      const double mantissa = std::stod(t.substr(0, e));
+      const long exponent = std::stol(t.substr(e + 1));
+      CHECK(mantissa >= 1.0);
+      CHECK(mantissa < 10.0);
+      return sign * exponent > 308;
+    };
+    if (beyond(f[2], +1)) {
+      ++huge_dt;
+      CHECK(std::strtod(f[2].c_str(), nullptr) == HUGE_VAL);
+    }
+    if (!f[chi_column].empty() && beyond(f[chi_column], -1)) ++tiny_chi;
+  }
+  CHECK(huge_dt > 10);
+  CHECK(tiny_chi > 10);
+  const fs::path out = work_dir() / "beyond-analysis";
+  CHECK(budjam::testing::run_budjam("analyse " + q(dir) + " --out " + q(out) + " --resamples 20").code == 0);
 }
 
 TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", "[grow_cli]") {

@@ -112,6 +112,59 @@ TEST_CASE("growth rates with P0 = 1e-5 and huge bud pressures are finite and non
   CHECK(q.b == p.b);
 }
 
+TEST_CASE("the log growth factor is -p/P0 exactly where the factor underflows, and factor_from_log flushes to 0",
+          "[growth]") {
+  CHECK(log_growth_factor(400.5, 0.5) == -801.0);
+  CHECK(log_growth_factor(-1.0, 0.5) == 0.0);
+  CHECK(log_growth_factor(1.0, std::nullopt) == 0.0);
+  CHECK(log_growth_factor(std::numeric_limits<double>::infinity(), 1e-5) == -std::numeric_limits<double>::infinity());
+  CHECK(growth_factor(400.5, 0.5) == 0.0);
+  CHECK(factor_from_log(-1.0) == std::exp(-1.0));
+  CHECK(factor_from_log(std::log(std::numeric_limits<double>::min()) + 1e-9) >= std::numeric_limits<double>::min());
+  CHECK(factor_from_log(-709.0) == 0.0);  // a bare exp(-709) is a denormal
+  CHECK(factor_from_log(std::nan("")) == 0.0);
+  CHECK_THROWS_AS(log_growth_factor(1.0, 0.0), InputError);
+  CHECK_THROWS_AS(log_growth_factor(std::nan(""), 1.0), std::domain_error);
+}
+
+// P0 = 1/2 makes p/P0 exact: 800 and 801. Both factors underflow (e^-800 < DBL_MIN), so the plain
+// rates are 0; taken relative to e^-800 the two differ by e^-1 to the last bit.
+TEST_CASE("rates scaled by e^800 keep the ratio of buds at p/P0 = 800 and 801 at exactly e^-1", "[growth]") {
+  Scene s = base_scene();
+  Rng rng(5);
+  Packing p = two_cell_start(s, rng);
+  const std::vector<double> pressures{400.0, 400.5};
+  CHECK(growth_rates(p, &pressures, 0.5) == std::vector<double>{0.0, 0.0});
+  const std::vector<double> rates = growth_rates(p, &pressures, 0.5, 800.0);
+  CHECK(rates[0] == p.gamma0[0]);
+  CHECK(rates[1] == p.gamma0[1] * std::exp(-1.0));
+  CHECK((rates[1] / p.gamma0[1]) / (rates[0] / p.gamma0[0]) == Approx(std::exp(-1.0)).epsilon(1e-15));
+  // Log scale 0 is the plain rates bit for bit.
+  const std::vector<double> mild{2e-4, 0.0};
+  CHECK(growth_rates(p, &mild, 1e-3, 0.0) == std::vector<double>{p.gamma0[0] * growth_factor(2e-4, 1e-3), p.gamma0[1]});
+}
+
+// The adaptive step's growth of bud i is γ0_i dt exp(−(p_i − p_min)/P0) of its area: at p/P0 = 5000
+// and p_min/P0 = 4999.5 no factor nor Δt = dt e^{4999.5} is a double, the product is e^{−1/2}.
+TEST_CASE("a bud at p/P0 = 5000 grows by the log-space value gamma0 dt exp(-(p - p_min)/P0)", "[growth]") {
+  Scene s = base_scene();
+  Rng rng(7);
+  Packing p = two_cell_start(s, rng);
+  const std::vector<double> pressures{2500.0, 2499.75};  // P0 = 1/2: p/P0 = 5000, 4999.5
+  const double log_scale = 4999.5, dt = 0.75;
+  const std::vector<double> rates = growth_rates(p, &pressures, 0.5, log_scale);
+  Packing q = p;
+  grow_step(q, rates, dt, s, rng);
+  const double D2 = kMotherDiameter * kMotherDiameter;
+  for (std::size_t i = 0; i < 2; ++i) {
+    const double gain = p.gamma0[i] * dt * std::exp(log_scale - pressures[i] / 0.5);  // γ0 Δt e^{−p/P0}, in logs
+    const double area = D2 + p.b[i] * p.b[i];
+    CHECK(q.b[i] * q.b[i] + D2 == Approx((1.0 + gain) * area).epsilon(1e-15));
+    CHECK(q.b[i] > p.b[i]);
+  }
+  CHECK(rates[1] == p.gamma0[1]);  // the least compressed bud grows as in a nominal step
+}
+
 TEST_CASE("division places two newborns at (x,y) -/+ (alpha0/2) n and keeps the identity on the mother side",
           "[growth]") {
   Scene s = base_scene();

@@ -5,6 +5,7 @@
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/stability.hpp"
+#include "io/checkpoint.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -40,7 +41,7 @@ struct Recorder : Observer {
   struct Step {
     long step;
     Phase phase;
-    double phi, E, dt;
+    double phi, E, dt, log_dt;
     Packing packing;
     std::vector<double> pressures;  // empty if not computed
     bool had_network;
@@ -61,7 +62,7 @@ struct Recorder : Observer {
 
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
-    steps.push_back({s.step, s.phase, s.phi, s.E_per_cell, s.dt, *s.packing,
+    steps.push_back({s.step, s.phase, s.phi, s.E_per_cell, s.dt, s.log_dt, *s.packing,
                      s.bud_pressures ? *s.bud_pressures : std::vector<double>{}, s.network != nullptr,
                      s.buds ? s.buds->active() : 0});
     order.push_back("step");
@@ -481,6 +482,32 @@ TEST_CASE("a bisection whose step falls below growth.dt_min fails with status dt
 // Measured: Δφ = 1e-2 is reached ~100 accepted steps (≈ 500 attempts with the landings) after
 // jamming in the CLI run with targets [1e-3, 1e-2, 3e-2] (growth time Σ Δt ≈ 3·10⁷: a nominal step
 // advances the time by at most dt = 1). With these two targets the run ends after 1762 steps.
+namespace {
+
+// A run of `s` to its end with every accepted state (and its bud pressures) recorded; it must finish
+// with every target landed within the tolerance.
+struct RecordedRun {
+  Recorder rec{Needs{false, false, true, false}};
+  RunResult result;
+  Packing packing;
+};
+
+RecordedRun run_recorded(const Scene& s) {
+  RecordedRun r;
+  GrowthDriver d(s);
+  d.add_observer(r.rec);
+  REQUIRE(d.run() == RunStatus::finished);
+  r.result = d.result();
+  r.packing = d.packing();
+  REQUIRE(r.result.jamming);
+  REQUIRE(r.result.targets.size() == s.targets.size());
+  for (const TargetRecord& t : r.result.targets)
+    CHECK(std::abs(t.phi - (r.result.jamming->phi + t.dphi)) <= s.target_tolerance);
+  return r;
+}
+
+}  // namespace
+
 TEST_CASE("adaptive_dt lands strong-feedback targets in far fewer steps, each starting from dt / max(g_max, floor)",
           "[driver][adaptive]") {
   Scene s = small_scene();
@@ -488,14 +515,9 @@ TEST_CASE("adaptive_dt lands strong-feedback targets in far fewer steps, each st
   s.P0 = 1e-4;
   s.adaptive_dt = true;
   s.targets = {1e-3, 1e-2};
-  Recorder rec{Needs{false, false, true, false}};
-  GrowthDriver d(s);
-  d.add_observer(rec);
-  REQUIRE(d.run() == RunStatus::finished);
-  const RunResult& res = d.result();
-  REQUIRE(res.jamming);
-  REQUIRE(res.targets.size() == 2);
-  for (std::size_t k = 0; k < 2; ++k) CHECK(std::abs(res.targets[k].phi - (res.jamming->phi + s.targets[k])) <= 5e-9);
+  const RecordedRun run = run_recorded(s);
+  const RunResult& res = run.result;
+  const Recorder& rec = run.rec;
 
   // Every accepted step above jamming started from dt / max(g_max, floor) of the previous accepted
   // state and was halved a whole number of times (the bisection restarts from the adaptive Δt).
@@ -528,7 +550,92 @@ TEST_CASE("adaptive_dt lands strong-feedback targets in far fewer steps, each st
   GrowthDriver again(s);
   again.run();
   CHECK(same_result(again.result(), res));
-  CHECK(same_packing(again.packing(), d.packing()));
+  CHECK(same_packing(again.packing(), run.packing));
+}
+
+// Strong feedback without a floor: L = 6, seed 3, P0 = 1e-8, adaptive_dt with adaptive_floor = 0.
+// Soon after jamming every bud has p/P0 > 745 (every exp(−p/P0), also the least compressed bud's,
+// is 0 in doubles: with the plain factors the run stalls) and the steps are taken in log space;
+// p_min/P0 reaches ~1e5 at Δφ = 1e-2. Bisection, so that every step is the adaptive start halved
+// a whole number of times.
+Scene log_space_scene() {
+  Scene s = small_scene();
+  s.search = JammingSearch::bisection;
+  s.P0 = 1e-8;
+  s.adaptive_dt = true;
+  s.adaptive_floor = 0;
+  s.targets = {1e-3, 1e-2};
+  return s;
+}
+
+TEST_CASE(
+    "adaptive_dt beyond the double range: every bud grows by gamma0 exp(ln dt - p/P0) and each step starts from "
+    "dt exp(p_min/P0)",
+    "[driver][adaptive]") {
+  const Scene s = log_space_scene();
+  const RecordedRun run = run_recorded(s);
+  const RunResult& res = run.result;
+  const Recorder& rec = run.rec;
+
+  const double D2 = kMotherDiameter * kMotherDiameter;
+  double max_ratio = 0;    // largest p/P0 of a bud whose growth was checked
+  long beyond = 0;         // steps from states in which every factor exp(−p/P0) is 0 in doubles
+  long beyond_whole = 0;   // ... of them, not halved: the least compressed bud gains γ0·dt
+  double beyond_dphi = 0;  // φ gained in those steps
+  for (std::size_t k = 1; k < rec.steps.size(); ++k) {
+    const auto& a = rec.steps[k - 1];
+    const auto& b = rec.steps[k];
+    if (b.step <= res.jamming->step || a.packing.size() != b.packing.size()) continue;  // divisions: skip
+    REQUIRE(a.pressures.size() == a.packing.size());
+    double x_min = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < a.packing.size(); ++i) {
+      const double x = a.pressures[i] / *s.P0;
+      x_min = std::min(x_min, x);
+      // The area gain γ0_i Δt exp(−x_i), its exponent summed in logs: exact at any size.
+      const double gain = a.packing.gamma0[i] * std::exp(b.log_dt - x);
+      const double b0 = a.packing.b[i];
+      CHECK(b.packing.b[i] == Approx(std::sqrt(b0 * b0 + gain * (D2 + b0 * b0))).epsilon(1e-12));
+      max_ratio = std::max(max_ratio, x);
+    }
+    // Δt = dt·e^{x_min}·2^{−halvings}.
+    const double halvings = (std::log(s.dt) + x_min - b.log_dt) / std::log(2.0);
+    CHECK(halvings == Approx(std::round(halvings)).margin(1e-9));
+    CHECK(halvings > -1e-9);
+    if (x_min > 745.2) {
+      ++beyond;
+      beyond_dphi += b.phi - a.phi;
+      if (std::round(halvings) == 0) ++beyond_whole;
+      CHECK(b.phi > a.phi);
+      CHECK_FALSE(std::isfinite(b.dt));  // Δt = e^{>745}: no double, only its log
+    }
+  }
+  INFO("accepted " << res.accepted << ", rejected " << res.rejected << ", max p/P0 = " << max_ratio << ", " << beyond
+                   << " steps beyond the double range (" << beyond_whole << " whole), dphi " << beyond_dphi);
+  CHECK(max_ratio > 5000);
+  CHECK(beyond_whole > 10);
+  // In the plain form these steps gained nothing (Δφ ~ 1e-11 per step where the floor held, 0 here).
+  CHECK(beyond_dphi / static_cast<double>(beyond) > 1e-6);
+}
+
+TEST_CASE("a checkpoint taken while the adaptive step is beyond the double range resumes the same run bit for bit",
+          "[driver][adaptive][checkpoint]") {
+  const Scene s = log_space_scene();
+  GrowthDriver uninterrupted(s);
+  uninterrupted.run();
+  REQUIRE(uninterrupted.result().status == RunStatus::finished);
+
+  GrowthDriver first(s);
+  while (first.advance() == RunStatus::running && !(first.view().log_dt > 800.0)) {}
+  REQUIRE(first.result().status == RunStatus::running);
+  CHECK_FALSE(std::isfinite(first.view().dt));
+  const std::string text = io::format_checkpoint(s, first.state(), {});
+  GrowthDriver resumed(s);
+  resumed.restore(io::parse_checkpoint(text, "cp", s, s.seed, {}));
+  CHECK(io::format_checkpoint(s, resumed.state(), {}) == text);
+  CHECK(resumed.view().log_dt == first.view().log_dt);
+  resumed.run();
+  CHECK(same_result(resumed.result(), uninterrupted.result()));
+  CHECK(same_packing(resumed.packing(), uninterrupted.packing()));
 }
 
 TEST_CASE("adaptive_dt off keeps the nominal step above jamming", "[driver]") {
@@ -597,7 +704,8 @@ struct Audit : Observer {
 };
 
 // With feedback: every growth factor exp(−p/P0) of every accepted state, and the buds whose factor
-// underflowed, which the next accepted step must leave bit for bit as they are.
+// underflows even relative to the adaptive step (exp(−p/P0) Δt/dt < DBL_MIN, taken in logs), which
+// the next accepted step must leave bit for bit as they are.
 struct FactorAudit : Audit {
   FactorAudit() : Audit(Needs{false, false, true, true}) {}
   long factors = 0, underflows = 0, frozen_checked = 0;
@@ -621,6 +729,10 @@ struct FactorAudit : Audit {
     REQUIRE(s.bud_pressures);
     REQUIRE(s.bud_pressures->size() == p.size());
     const double P0 = *s.scene->P0;
+    double x_min = std::numeric_limits<double>::infinity();
+    for (double pi : *s.bud_pressures) x_min = std::max(0.0, std::min(x_min, pi / P0));
+    // ln(Δt/dt) of the next step before halvings: min(p_min/P0, −ln floor).
+    const double log_step = std::min(x_min, -std::log(s.scene->adaptive_floor));
     for (std::size_t i = 0; i < p.size(); ++i) {
       const double pi = (*s.bud_pressures)[i];
       REQUIRE(std::isfinite(pi));
@@ -641,8 +753,10 @@ struct FactorAudit : Audit {
         CHECK(g == Approx(e).epsilon(1e-15));
       if (g == 0.0) {
         CHECK(e < 2 * std::numeric_limits<double>::min());  // only a genuine underflow is zeroed
-        if (s.phase == Phase::jammed) {                     // feedback on: the next step grows this bud at γ0·0
-          ++underflows;
+        ++underflows;
+        // Feedback on and the factor 0 also relative to the step (with a margin of e^-1 off the edge):
+        // the next step grows this bud by exactly nothing.
+        if (s.phase == Phase::jammed && log_step - x < std::log(std::numeric_limits<double>::min()) - 1.0) {
           frozen.push_back(i);
           frozen_b.push_back(p.b[i]);
         }
@@ -661,8 +775,8 @@ struct FactorAudit : Audit {
 // defaults of 2026-11-23): ~1900 accepted and ~230 rejected steps, the first underflow at
 // Δφ ≈ 0.02, max p/P0 ≈ 1460, ~470 underflowed factors (~60 where a bare exp() is a denormal).
 TEST_CASE(
-    "with P0 = 1e-5 through a run above jamming every growth factor is finite in [0, 1] and an underflowed one is "
-    "exactly 0 and freezes its bud",
+    "with P0 = 1e-5 through a run above jamming every growth factor is finite in [0, 1], an underflowed one is "
+    "exactly 0, and a bud whose factor underflows relative to the adaptive step keeps its size",
     "[.hard][driver]") {
   Scene s = small_scene();
   s.seed = 2;

@@ -28,14 +28,25 @@ inline bool ready_to_divide(double b, double alpha0) { return 1.0 + b / kMotherD
 // b after a step: b² ← (1 + γΔt)(D² + b²) − D² (all new area goes into the bud).
 double grown_bud(double b, double gamma, double dt);
 
+// ln exp(−p/P0) = −p/P0, exact far beyond where the factor itself underflows: 0 without feedback
+// (nullopt) or for p ≤ 0, −∞ for p = +∞. Throws InputError for P0 ≤ 0, std::domain_error for a NaN
+// pressure.
+double log_growth_factor(double bud_pressure, std::optional<double> P0);
+
+// exp(log_factor), exactly 0 when it would fall below DBL_MIN (never a denormal, never NaN).
+double factor_from_log(double log_factor);
+
 // exp(−p/P0): 1 without feedback (nullopt) or for p ≤ 0; exactly 0 when it would fall below DBL_MIN
-// (never a denormal, never NaN, also for p = +∞). Throws InputError for P0 ≤ 0, std::domain_error
-// for a NaN pressure.
+// (never a denormal, never NaN, also for p = +∞). Errors as log_growth_factor.
 double growth_factor(double bud_pressure, std::optional<double> P0);
 
-// γ_i for the next step: γ0_i, times exp(−p_i/P0) when `bud_pressures` is given (feedback on:
-// above jamming and P0 set). `bud_pressures` must then have one entry per cell.
-std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0);
+// γ_i·e^{log_scale} for the next step: γ0_i, times exp(−p_i/P0) when `bud_pressures` is given
+// (feedback on: above jamming and P0 set; one entry per cell), each factor taken in log space as
+// exp(log_scale − p_i/P0). A step of Δt·e^{−log_scale} with these rates grows every cell as Δt with
+// the plain rates; log_scale > 0 keeps the factors of strongly compressed buds in the double range
+// (docs/growth.md, "Adaptive growth step"). log_scale = 0: the plain rates, bit for bit.
+std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0,
+                                 double log_scale = 0.0);
 
 // One division as it happened (cell indices refer to the packing after the step).
 struct Division {

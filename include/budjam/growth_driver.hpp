@@ -116,7 +116,8 @@ struct RunResult {
 struct StateView {
   long step = 0;      // accepted steps so far; 0 = the initial state
   long attempts = 0;  // growth steps tried so far (accepted + rejected)
-  double dt = 0;      // Δt of the step that produced this state
+  double dt = 0;      // Δt of the step that produced this state (+∞ beyond the double range) ...
+  double log_dt = 0;  // ... and ln Δt, exact at any size (−∞ for the initial state)
   double phi = 0, P = 0, E_per_cell = 0;
   Phase phase = Phase::unjammed;
   const Scene* scene = nullptr;
@@ -128,7 +129,8 @@ struct StateView {
   const BudTracker* buds = nullptr;        // tags of the current jamming episode
   long divisions_since_jamming = 0;        // 0 in the unjammed phase
   std::size_t compressed_buds = 0;         // buds with ≥ 1 contact (valid when contacts != null)
-  double chi_c = 1;                        // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known)
+  double chi_c = 1;                        // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known) ...
+  double log_chi_c = 0;                    // ... and ln χ_c, exact when every factor underflows
 };
 
 struct StepAccepted {
@@ -212,14 +214,24 @@ struct JammingSearchState {
   double bracket_width = 0;                  // φ from the accepted state to the lowest overshoot at the last trial
 };
 
+// Where a growth step starts from the accepted state: Δt = dt·e^{log_scale}, with the rates scaled
+// by e^{log_scale} to match. log_scale is 0 except for an adaptive step out of the double range
+// (docs/growth.md, "Adaptive growth step").
+struct StepStart {
+  double dt = 1;
+  double log_scale = 0;
+};
+
 struct GrowthState {
   std::uint64_t seed = 0;
   Rng rng;
   Phase phase = Phase::unjammed;
-  double dt = 0;                // Δt of the next attempt
-  double last_dt = 0;           // Δt of the step that produced the accepted state
-  long step = 0, attempts = 0;  // accepted steps; growth steps tried
-  std::size_t next_target = 0;  // index in scene.targets of the next target to land
+  // Steps as the driver stores them, scaled (StepStart): the next attempt's log_scale follows from
+  // the accepted state (like the rates), the last step's is kept.
+  double dt = 0;                           // the next attempt
+  double last_dt = 0, last_log_scale = 0;  // the step that produced the accepted state
+  long step = 0, attempts = 0;             // accepted steps; growth steps tried
+  std::size_t next_target = 0;             // index in scene.targets of the next target to land
   long divisions_since_jamming = 0;
   int episodes = 0;  // jamming episodes begun
   RunResult result;  // status `running`
@@ -264,7 +276,7 @@ class GrowthDriver {
   const Packing& packing() const;
   const RunResult& result() const;
   Phase phase() const;
-  double dt() const;
+  double dt() const;  // scaled Δt of the next attempt (StepStart)
   // View of the current (last accepted) state.
   StateView view() const;
 

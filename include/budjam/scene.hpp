@@ -55,9 +55,10 @@ struct Scene {
   // jamming with feedback, strongly compressed buds grow at γ0·exp(−p/P0) ≪ γ0, so Δt = 1 barely
   // moves φ. With adaptive_dt every step (before any bisection halving) starts from
   // Δt = dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0): the fastest-growing cell
-  // then gains the same relative area γ0_i·dt as in a nominal step. The floor keeps Δt finite.
+  // then gains the same relative area γ0_i·dt as in a nominal step. The floor bounds Δt by
+  // dt / adaptive_floor; 0 = no bound (the step is taken in log space beyond the double range).
   bool adaptive_dt = false;
-  double adaptive_floor = 1e-6;  // in (0, 1]
+  double adaptive_floor = 1e-6;  // in [0, 1]
 
   // [jamming]
   double epsilon_U = 1e-16;        // E/N below this: unjammed

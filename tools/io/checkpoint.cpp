@@ -178,8 +178,9 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << "scene " << hex64(scene_hash(scene)) << '\n';
   os << "seed " << s.seed << '\n';
   os << "rng " << s.rng << '\n';
-  os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << s.step << ' '
-     << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' ' << s.episodes << '\n';
+  os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << num(s.last_log_scale)
+     << ' ' << s.step << ' ' << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' '
+     << s.episodes << '\n';
   os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations << ' '
      << r.divisions << ' ' << r.saddles_relaxed << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
@@ -245,6 +246,10 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       in.fail(
           "checkpoint version 4 was written before every record (jamming point, targets, phi_2) held the whole "
           "contact-network summary; start the run again");
+    if (version == 5)
+      in.fail(
+          "checkpoint version 5 was written before growth steps were stored with their log scale (the adaptive "
+          "step out of the double range); start the run again");
     if (version != kCheckpointVersion)
       in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
               std::to_string(kCheckpointVersion) + "); start the run again");
@@ -279,21 +284,24 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
 
   const std::int64_t max_steps = scene.max_steps;
   {
-    const auto w = in.next("state", 8);
+    const auto w = in.next("state", 9);
     if (w[0] == "jammed")
       s.phase = Phase::jammed;
     else if (w[0] == "unjammed")
       s.phase = Phase::unjammed;
     else
       in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
+    // Steps are stored scaled (StepStart): the next one's scale follows from the state, so a dt
+    // below growth.dt_min is left to the driver's next attempt (status dt_underflow).
     s.dt = in.positive(w[1], "dt");
-    if (s.dt < scene.dt_min) in.fail("dt: below growth.dt_min");
     s.last_dt = in.positive(w[2], "last dt");
-    s.attempts = in.integer(w[4], "attempts", 1, max_steps);
-    s.step = in.integer(w[3], "step", 1, s.attempts);
-    s.next_target = in.count_of(w[5], "next target", scene.targets.size());
-    s.divisions_since_jamming = in.integer(w[6], "divisions since jamming", 0, kLongMax);
-    s.episodes = static_cast<int>(in.integer(w[7], "episodes", 0, s.step));
+    s.last_log_scale = in.real(w[3], "last dt log scale");
+    if (!(s.last_log_scale >= 0)) in.fail("last dt log scale: must be >= 0");
+    s.attempts = in.integer(w[5], "attempts", 1, max_steps);
+    s.step = in.integer(w[4], "step", 1, s.attempts);
+    s.next_target = in.count_of(w[6], "next target", scene.targets.size());
+    s.divisions_since_jamming = in.integer(w[7], "divisions since jamming", 0, kLongMax);
+    s.episodes = static_cast<int>(in.integer(w[8], "episodes", 0, s.step));
   }
   RunResult& r = s.result;
   {

@@ -6,7 +6,9 @@
 #include "io/run_directory.hpp"
 #include "io/text.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 namespace budjam::tools {
@@ -29,6 +31,11 @@ double CsvTable::number(std::size_t row, std::size_t col) const {
   const std::string& t = rows.at(row).at(col);
   if (t.empty()) return std::numeric_limits<double>::quiet_NaN();
   if (auto v = io::parse_double(t)) return *v;
+  // A number beyond the double range (steps.csv writes Δt and χ_c exactly at any size): ±∞ or 0.
+  errno = 0;
+  char* end = nullptr;
+  const double beyond = std::strtod(t.c_str(), &end);
+  if (errno == ERANGE && end == t.c_str() + t.size()) return beyond;
   // line numbers: header is line 1
   throw InputError(source + ":" + std::to_string(row + 2) + ": " + columns[col] + ": not a number (got \"" + t + "\")");
 }
