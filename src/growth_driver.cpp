@@ -684,6 +684,7 @@ RunStatus GrowthDriver::run() {
 
 void GrowthDriver::set_checkpoint_hook(std::function<void()> hook) { impl_->checkpoint_hook = std::move(hook); }
 GrowthState GrowthDriver::state() const { return impl_->state(); }
+bool GrowthDriver::state_is_complete() const { return !impl_->newton.factored; }
 void GrowthDriver::restore(GrowthState state) { impl_->restore(std::move(state)); }
 
 const Scene& GrowthDriver::scene() const { return impl_->scene; }

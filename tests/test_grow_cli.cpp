@@ -308,11 +308,12 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
 namespace {
 
 // Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR`, lets it run `delay` seconds after
-// its first row, sends `sig` and returns the exit status.
-int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig) {
+// the file `after` (in DIR) appears, sends `sig` and returns the exit status.
+int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig,
+                    const char* after = "steps.csv.partial") {
   const pid_t pid = start_grow(scene, dir);
   const auto t0 = std::chrono::steady_clock::now();
-  while (!fs::exists(dir / "steps.csv.partial") && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+  while (!fs::exists(dir / after) && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   std::this_thread::sleep_for(std::chrono::duration<double>(delay));
   ::kill(pid, sig);
@@ -345,6 +346,39 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
                           "packings/target_0.pack", "packings/target_1.pack", "scene.toml"})
       CHECK(slurp(dir / f) == slurp(ref / f));
   }
+}
+
+TEST_CASE("a signal while a Newton factor is kept keeps the last periodic checkpoint; the resumed run is byte-identical",
+          "[grow_cli][.slow]") {
+  // Strong feedback, arrested growth past jamming: the Newton finish keeps its factor from step to
+  // step (chord steps) and drops it every 4th step.
+  const fs::path scene = work_dir() / "newton.toml";
+  std::ofstream(scene) << "[run]\nname = \"newton\"\nseed = 8\n[box]\nL = 12.0\n"
+                       << "[growth]\nP0 = 1e-5\nadaptive_dt = true\nadaptive_floor = 0\n"
+                       << "[jamming]\ntargets = [1e-3, 1e-2, 3e-2]\n[minimiser]\nnewton_force = 1e-6\n"
+                       << "[observe]\ncheckpoint_every = 4\n";
+  const fs::path ref = work_dir() / "newton_ref";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
+  bool kept = false;
+  for (int attempt = 0; attempt < 12 && !kept; ++attempt) {
+    const fs::path dir = work_dir() / ("newton_" + std::to_string(attempt));
+    const int status = grow_and_signal(scene, dir, 0.05 + 0.1 * attempt, SIGTERM, "packings/jammed.pack");
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) continue;  // finished before the signal
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 143);
+    const std::string err = slurp(dir.string() + ".stderr");
+    INFO(err);
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    kept = err.find("is kept (a Newton factor kept in memory is not saved") != std::string::npos;
+    CHECK((kept || err.find("checkpoint written") != std::string::npos));
+    const Result r = grow("--resume " + q(dir) + " --quiet");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    for (const char* f : {"summary.json", "steps.csv", "divisions.csv", "packings/jammed.pack",
+                          "packings/target_0.pack", "packings/target_1.pack", "packings/target_2.pack"})
+      CHECK(slurp(dir / f) == slurp(ref / f));
+  }
+  CHECK(kept);  // the case this test is for arose
 }
 
 TEST_CASE("resume refuses every damaged checkpoint line and an edited scene, changing nothing", "[grow_cli][.slow]") {

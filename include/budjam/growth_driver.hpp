@@ -267,6 +267,11 @@ class GrowthDriver {
   void set_checkpoint_hook(std::function<void()> hook);
   // The state a checkpoint holds (after the first advance()).
   GrowthState state() const;
+  // Whether state() holds everything the rest of the run depends on. Not while a Newton factor is
+  // kept from an earlier minimisation (minimiser.newton_reuse): the checkpoint does not hold it, and
+  // the run goes on with chord steps where a resumed one would factor afresh. It is dropped at
+  // every step that is a multiple of observe.checkpoint_every, so periodic checkpoints always are.
+  bool state_is_complete() const;
   // Continues from `state` (taken from a driver of the same scene and seed). Throws InputError
   // if the seed or the box differs; everything else is the checkpoint reader's to check.
   void restore(GrowthState state);

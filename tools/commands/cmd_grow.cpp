@@ -3,7 +3,8 @@
 // Grows a packing as the scene says (docs/growth.md) and writes the run directory
 // (io/run_directory.hpp: claimed with a marker and a lock): scene.toml (the effective scene, seed
 // included), steps.csv, divisions.csv, bud_events.csv, packings/*.pack, checkpoint.txt while
-// running (io/checkpoint.hpp), summary.json last. SIGTERM/SIGINT: checkpoint, exit 128 + signal.
+// running (io/checkpoint.hpp), summary.json last. SIGTERM/SIGINT: checkpoint (or the last one
+// kept), exit 128 + signal.
 // A run that reaches growth.max_steps is an expected stop (status step_limit, a notice, exit 0);
 // the other failures (step-size underflow, minimiser failure) exit 1.
 #include "commands/command.hpp"
@@ -102,17 +103,30 @@ void run(const Options& o) {
   if (resuming) driver.restore(io::read_checkpoint(dir / run_files::checkpoint, scene, scene.seed, observers));
 
   // Checkpoints every observe.checkpoint_every accepted steps, and at the first accepted state
-  // after SIGTERM or SIGINT, which then ends the run (resumable).
+  // after SIGTERM or SIGINT, which then ends the run (resumable). A state that holds less than the
+  // run depends on (a kept Newton factor) is not saved: the run then resumes, exactly, from its last
+  // checkpoint.
   const cli::StopSignals stop;
+  std::optional<long> last_checkpoint;
+  if (resuming) last_checkpoint = driver.view().step;
   driver.set_checkpoint_hook([&] {
     const long step = driver.view().step;
     const int signal = cli::StopSignals::received();
-    if (signal || (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0))
+    if ((scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) || (signal && driver.state_is_complete())) {
       io::write_checkpoint(dir / run_files::checkpoint, scene, driver.state(), observers);
-    if (signal)
-      throw cli::Interrupted(signal, "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
-                                         " at step " + std::to_string(step) + ", checkpoint written; resume with: " +
-                                         "budjam grow --resume " + dir.string());
+      last_checkpoint = step;
+    }
+    if (!signal) return;
+    const std::string stopped =
+        "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") + " at step " + std::to_string(step);
+    if (last_checkpoint == step)
+      throw cli::Interrupted(signal, stopped + ", checkpoint written; resume with: budjam grow --resume " + dir.string());
+    const std::string why = " (a Newton factor kept in memory is not saved, so that state would not resume exactly)";
+    if (last_checkpoint)
+      throw cli::Interrupted(signal, stopped + "; the checkpoint of step " + std::to_string(*last_checkpoint) +
+                                         " is kept" + why + "; resume from it with: budjam grow --resume " +
+                                         dir.string());
+    throw cli::Interrupted(signal, stopped + "; no checkpoint yet" + why + "; start the run again with --overwrite");
   });
 
   tools::SessionTiming timing;
