@@ -835,6 +835,14 @@ std::vector<const Recorder::Step*> settled_brackets(const Recorder& rec, const S
   return settled;
 }
 
+// A run's jamming point: recorded, E/N in the jamming window, a minimum of U.
+void check_jamming_point(const JammingPoint& j, const Scene& s) {
+  REQUIRE(j.record);
+  CHECK(j.record->E_per_cell >= s.epsilon_U);
+  CHECK(j.record->E_per_cell <= 2 * s.epsilon_U);
+  CHECK(j.minimum());
+}
+
 }  // namespace
 
 TEST_CASE("the bracket search finds a jamming point in the window that is a minimum of U and lands every target",
@@ -845,10 +853,7 @@ TEST_CASE("the bracket search finds a jamming point in the window that is a mini
     GrowthDriver d(s);
     d.add_observer(j);
     REQUIRE(d.run() == RunStatus::finished);
-    REQUIRE(j.record);
-    CHECK(j.record->E_per_cell >= s.epsilon_U);
-    CHECK(j.record->E_per_cell <= 2 * s.epsilon_U);
-    CHECK(j.minimum());
+    check_jamming_point(j, s);
     REQUIRE(d.result().targets.size() == s.targets.size());
     for (const TargetRecord& t : d.result().targets)
       CHECK(std::abs(t.phi - (d.result().jamming->phi + t.dphi)) <= s.target_tolerance);
@@ -885,10 +890,7 @@ TEST_CASE("a collapsed bracket settles its highest unjammed trial, and the searc
     CHECK(step->E < s.fire.energy_floor);  // relaxed on from the early stop at ε_U
     CHECK(step->dt > 0);
   }
-  REQUIRE(j.record);
-  CHECK(j.record->E_per_cell >= s.epsilon_U);
-  CHECK(j.record->E_per_cell <= 2 * s.epsilon_U);
-  CHECK(j.minimum());
+  check_jamming_point(j, s);
 }
 
 TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the uninterrupted run", "[driver]") {
