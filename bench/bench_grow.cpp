@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <numbers>
 #include <string>
+#include <utility>
 
 using namespace budjam;
 using Clock = std::chrono::steady_clock;
@@ -112,16 +113,18 @@ int main(int argc, char** argv) {
   }
   if (runs) {
     std::printf("== whole runs (two-cell start), each jamming search ==\n");
-    for (JammingSearch search : {JammingSearch::bisection, JammingSearch::secant}) {
-      const std::string tag = search == JammingSearch::bisection ? " bisection" : " secant";
+    const std::pair<JammingSearch, const char*> searches[] = {{JammingSearch::bisection, " bisection"},
+                                                              {JammingSearch::secant, " secant"},
+                                                              {JammingSearch::bracket, " bracket"}};
+    for (const auto& [search, tag] : searches) {
       Scene demo = io::load_scene(std::filesystem::path(dir) / "demo.toml");
       demo.search = search;
-      whole_run(("demo.toml" + tag).c_str(), demo);
+      whole_run((std::string("demo.toml") + tag).c_str(), demo);
       Scene l15 = io::load_scene(std::filesystem::path(dir) / "paper-L15.toml");
       l15.targets = {1e-4, 1e-3, 1e-2};  // and on to φ_2
       l15.checkpoint_every = 0;
       l15.search = search;
-      whole_run(("paper-L15 to phi_2" + tag).c_str(), l15);
+      whole_run((std::string("paper-L15 to phi_2") + tag).c_str(), l15);
     }
   }
   if (steps) {

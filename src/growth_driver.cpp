@@ -311,11 +311,11 @@ struct GrowthDriver::Impl {
     return p.packing_fraction();
   }
 
-  // A Δt in (0, dt_max] with |φ(Δt) − goal| ≤ tol, by bisection from φ(0) < goal < φ(dt_max). φ
-  // rises continuously with Δt except at divisions, where it drops, so the bracket always closes
+  // A Δt in (dt_lo, dt_hi] with |φ(Δt) − goal| ≤ tol, by bisection from φ(dt_lo) < goal < φ(dt_hi).
+  // φ rises continuously with Δt except at divisions, where it drops, so the bracket always closes
   // on a continuous crossing. Returns the lower end if the bracket shrinks to nothing first.
-  double dt_for_phi(double goal, double dt_max, double tol) const {
-    double lo = 0, hi = dt_max;
+  double dt_for_phi(double goal, double dt_lo, double dt_hi, double tol) const {
+    double lo = dt_lo, hi = dt_hi;
     while (true) {
       const double mid = 0.5 * (lo + hi);
       if (!(mid > lo && mid < hi)) return lo;
@@ -370,25 +370,26 @@ struct GrowthDriver::Impl {
   // reaches the search's goal below jamming or lands the next target exactly above it.
   double trial_dt() {
     if (scene.search == JammingSearch::bisection) return dt;
+    if (phase == Phase::unjammed && scene.search == JammingSearch::bracket) return bracket ? bracket_dt() : dt;
     if (phase == Phase::unjammed) {
       const std::optional<double> goal = search_goal();
-      return goal ? dt_for_phi(*goal, dt, 1e-3 * bracket_width) : dt;
+      return goal ? dt_for_phi(*goal, 0, dt, 1e-3 * bracket_width) : dt;
     }
     if (next_target < scene.targets.size()) {
       const double goal = result.jamming->phi + scene.targets[next_target];
-      if (phi_after(dt) > goal + scene.target_tolerance) return dt_for_phi(goal, dt, 0.5 * scene.target_tolerance);
+      if (phi_after(dt) > goal + scene.target_tolerance) return dt_for_phi(goal, 0, dt, 0.5 * scene.target_tolerance);
     }
     return dt;
   }
 
-  // Remembers a relaxed trial above the jamming window for the secant search. Requires the field
-  // to be current for `trial`.
-  void record_overshoot(const Packing& trial, double E_trial) {
+  // (φ, s, slope) of a relaxed trial above the jamming window. Requires the field to be current for
+  // `trial`.
+  Overshoot overshoot_of(const Packing& trial, double E_trial) const {
     const std::vector<Contact> c = find_contacts(trial, field.lobes(), field.neighbours());
     const double s = std::sqrt(E_trial), phi_trial = trial.packing_fraction();
-    overshoots.push_back({phi_trial, s,
-                          overshoot_slope(phi_trial, s, E_trial * static_cast<double>(trial.size()),
-                                          pressure(c, trial.box), trial.box.L)});
+    return {phi_trial, s,
+            overshoot_slope(phi_trial, s, E_trial * static_cast<double>(trial.size()), pressure(c, trial.box),
+                            trial.box.L)};
   }
 
   // `step` is scaled (a trial's dt): Δt < dt_min ⇔ step < dt_min·e^{−log_scale}.
@@ -403,6 +404,7 @@ struct GrowthDriver::Impl {
     overshoots.clear();
     slow_trials = 0;
     bracket_width = 0;
+    bracket.reset();
   }
 
   // ---- one growth attempt -------------------------------------------------------------------
@@ -412,15 +414,115 @@ struct GrowthDriver::Impl {
     Rng rng;
     std::vector<Division> divisions;
     double dt = 0, E = 0;
+    bool from_overshoot = false;  // relaxed from the positions of the bracket's lowest overshoot
   };
+
+  // ---- bracket search (jamming.search = bracket) ---------------------------------------------
+  // From the fixed accepted state, φ_J lies between the largest Δt whose trial relaxed below the
+  // jamming window and the smallest whose trial overshot it. Opened by the first overshoot, closed
+  // by the next accepted state: never open at a checkpoint.
+  struct BracketEnd {
+    Trial trial;     // relaxed
+    Overshoot line;  // its (φ, s = √(E/N), slope)
+  };
+  struct Bracket {
+    std::optional<Trial> below;     // the highest trial below the window, relaxed only to E/N < ε_U
+    std::vector<BracketEnd> above;  // the two overshoots of smallest Δt, smallest first
+    int slow_trials = 0;            // consecutive trials that did not halve the bracket
+    double width = 0;               // Δt width of the bracket at the last trial
+  };
+  std::optional<Bracket> bracket;
+
+  double bracket_lo() const { return bracket->below ? bracket->below->dt : 0.0; }
+  double bracket_phi_lo() const { return bracket->below ? bracket->below->packing.packing_fraction() : phi; }
+
+  // ds/dφ of the line through the lowest overshoot: the secant through the two lowest (same base,
+  // so the same function s(Δt)), or the virial slope of the lowest alone.
+  double bracket_slope() const {
+    const std::vector<BracketEnd>& above = bracket->above;
+    const Overshoot& a = above[0].line;
+    if (above.size() >= 2 && above[1].line.s > a.s && above[1].line.phi > a.phi)
+      return (above[1].line.s - a.s) / (above[1].line.phi - a.phi);
+    return a.slope;
+  }
+
+  // Δt of the next trial in the bracket: where the line through the lowest overshoot reaches the
+  // middle of the window (φ(Δt) solved for between the ends), at least 1/32 of the bracket from
+  // either end; after two trials that did not halve the bracket, its middle.
+  double bracket_dt() {
+    Bracket& b = *bracket;
+    const Overshoot& a = b.above[0].line;
+    const double lo = bracket_lo(), hi = b.above[0].trial.dt, width = hi - lo;
+    b.slow_trials = (b.width > 0 && width > 0.5 * b.width) ? b.slow_trials + 1 : 0;
+    b.width = width;
+    double step = lo + 0.5 * width;
+    const double slope = bracket_slope();
+    if (b.slow_trials >= 2) {
+      b.slow_trials = 0;
+    } else if (slope > 0) {
+      const double goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope, phi_lo = bracket_phi_lo();
+      if (goal > phi_lo && goal < a.phi) step = dt_for_phi(goal, lo, hi, 1e-3 * (a.phi - phi_lo));
+    }
+    return std::clamp(step, lo + width / 32, hi - width / 32);
+  }
+
+  // Whether no trial can land in the window: the bracket, from a trial below it, has shrunk to an
+  // eighth of the distance the line puts between its upper end and the middle of the window (or
+  // below growth.dt_min), so s jumps across the window (a division, or the relaxation falling into
+  // another basin). Without a trial below, the search goes on (to dt_underflow at worst).
+  bool bracket_collapsed() const {
+    if (!bracket->below) return false;
+    const Overshoot& a = bracket->above[0].line;
+    const double slope = bracket_slope();
+    const double reach = slope > 0 ? (a.s - window_centre(scene.epsilon_U)) / slope : 0.0;
+    return a.phi - bracket_phi_lo() < reach / 8 || bracket->above[0].trial.dt - bracket_lo() < scene.dt_min;
+  }
+
+  // The fallback of a collapsed bracket: its highest trial below the window, relaxed on to the
+  // ordinary stopping rule, is the next accepted (unjammed) state. nullopt if the run failed.
+  std::optional<Trial> settle_below() {
+    Trial t = std::move(*bracket->below);
+    bracket.reset();
+    if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
+      return std::nullopt;
+    t.E = fresh_energy_per_cell(t.packing);
+    return t;
+  }
+
+  // A trial inside the bracket starts from the relaxed positions of the lowest overshoot when it
+  // holds the same cells (the same divisions happened): they lie next to the jammed configuration.
+  // Shrunk back towards the accepted state's sizes, an overshoot's configuration may however stay
+  // jammed where the accepted state's is not: until a trial has relaxed below the window, an
+  // overshoot that was itself started so is not started from again (the next trial starts from the
+  // accepted state), so that the bracket always closes.
+  void start_from_overshoot(Trial& t) const {
+    const Trial& top = bracket->above[0].trial;
+    if (!bracket->below && top.from_overshoot) return;
+    const auto same = [](const Division& a, const Division& b) { return a.mother_index == b.mother_index; };
+    if (!std::ranges::equal(t.divisions, top.divisions, same)) return;
+    t.packing.q = top.packing.q;
+    t.from_overshoot = true;
+  }
+
+  // An overshoot is the new upper end of the bracket (trials lie inside it), opening it if needed.
+  // Requires the field to be current for the trial.
+  void lower_bracket_top(Trial&& t) {
+    const Overshoot line = overshoot_of(t.packing, t.E);
+    if (!bracket) bracket.emplace();
+    std::vector<BracketEnd>& above = bracket->above;
+    above.insert(above.begin(), BracketEnd{std::move(t), line});
+    if (above.size() > 2) above.pop_back();
+  }
 
   // Grows and relaxes a trial from the accepted state; a jamming candidate that is a saddle is
   // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
   std::optional<Trial> make_trial() {
-    Trial t{packing, rng, {}, trial_dt(), 0};
+    if (bracket && bracket_collapsed()) return settle_below();
+    Trial t{packing, rng, {}, trial_dt(), 0, false};
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
+    if (bracket) start_from_overshoot(t);
     if (!relax(t.packing, trial_minimiser(),
                "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale))))
       return std::nullopt;
@@ -439,17 +541,21 @@ struct GrowthDriver::Impl {
 
   // The Newton finish only above jamming: below it the trials are unjammed or marginal, their
   // Hessian is indefinite and Newton would cost a factorisation for nothing (docs/minimiser.md).
+  // Inside an open bracket a trial is only classified, so its relaxation stops as soon as E/N < ε_U:
+  // the energy only falls, so it is certainly below the window.
   FireParams trial_minimiser() const {
     FireParams params = scene.fire;
     if (phase == Phase::unjammed) params.newton_force = 0;
+    if (bracket) params.energy_floor = std::max(params.energy_floor, scene.epsilon_U);
     return params;
   }
 
-  enum class Verdict { accept, reject, stop };
+  enum class Verdict { accept, reject, narrow, stop };
 
   // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
   Verdict judge(const Trial& t) const {
     const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
+    if (bracket && t.E < eps) return Verdict::narrow;  // below the window: the bracket's new lower end
     if (phase == Phase::unjammed) return t.E > 2.0 * eps ? Verdict::reject : Verdict::accept;  // overshot jamming
     if (t.E < eps) return Verdict::accept;                                                     // unjamming
     if (next_target < scene.targets.size())
@@ -461,10 +567,14 @@ struct GrowthDriver::Impl {
     return Verdict::accept;
   }
 
-  void reject(const Trial& t) {
+  void reject(Trial&& t) {
     ++result.rejected;
     if (phase == Phase::unjammed && scene.search == JammingSearch::secant) {
-      record_overshoot(t.packing, t.E);
+      overshoots.push_back(overshoot_of(t.packing, t.E));
+      return;
+    }
+    if (phase == Phase::unjammed && scene.search == JammingSearch::bracket) {
+      lower_bracket_top(std::move(t));
       return;
     }
     dt *= 0.5;
@@ -572,7 +682,11 @@ struct GrowthDriver::Impl {
     std::optional<Trial> trial = make_trial();
     if (!trial) return result.status;
     switch (judge(*trial)) {
-      case Verdict::reject: reject(*trial); return result.status;
+      case Verdict::reject: reject(std::move(*trial)); return result.status;
+      case Verdict::narrow:
+        ++result.rejected;
+        bracket->below = std::move(*trial);
+        return result.status;
       case Verdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;

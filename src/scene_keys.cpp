@@ -207,8 +207,9 @@ std::vector<SceneKey> make_keys() {
                    "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                    BUDJAM_FIELD(check_minimum)));
   e.push_back(choice("jamming", "search",
-                     "step choice near φ_J and the targets: \"secant\" or \"bisection\" (the paper's halving)",
-                     {"bisection", "secant"}, BUDJAM_FIELD(search)));
+                     "step choice near φ_J and the targets: \"secant\", \"bracket\" (secant in Δt from a fixed "
+                     "state) or \"bisection\" (the paper's halving)",
+                     {"bisection", "secant", "bracket"}, BUDJAM_FIELD(search)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

@@ -928,3 +928,102 @@ TEST_CASE(
   CHECK(with.record->phi > without.record->phi);
   CHECK(with.record->phi - without.record->phi < 1e-5);
 }
+
+namespace {
+
+Scene bracket_scene(std::uint64_t seed) {
+  Scene s = small_scene();
+  s.seed = seed;
+  s.search = JammingSearch::bracket;
+  return s;
+}
+
+// Accepted unjammed states that settle a collapsed bracket: below jamming, the bracket search
+// accepts only the nominal step or, when no trial can land in the window, its highest unjammed
+// trial, whose Δt is below the nominal one (an unjamming is accepted from the jammed phase).
+std::vector<const Recorder::Step*> settled_brackets(const Recorder& rec, const Scene& s) {
+  std::vector<const Recorder::Step*> settled;
+  for (std::size_t k = 1; k < rec.steps.size(); ++k)
+    if (rec.steps[k].phase == Phase::unjammed && rec.steps[k - 1].phase == Phase::unjammed && rec.steps[k].dt < s.dt)
+      settled.push_back(&rec.steps[k]);
+  return settled;
+}
+
+// A run's jamming point: recorded, E/N in the jamming window, a minimum of U.
+void check_jamming_point(const JammingPoint& j, const Scene& s) {
+  REQUIRE(j.record);
+  CHECK(j.record->E_per_cell >= s.epsilon_U);
+  CHECK(j.record->E_per_cell <= 2 * s.epsilon_U);
+  CHECK(j.minimum());
+}
+
+}  // namespace
+
+TEST_CASE("the bracket search finds a jamming point in the window that is a minimum of U and lands every target",
+          "[driver]") {
+  for (std::uint64_t seed : {3u, 4u}) {
+    const Scene s = bracket_scene(seed);
+    JammingPoint j;
+    GrowthDriver d(s);
+    d.add_observer(j);
+    REQUIRE(d.run() == RunStatus::finished);
+    check_jamming_point(j, s);
+    REQUIRE(d.result().targets.size() == s.targets.size());
+    for (const TargetRecord& t : d.result().targets)
+      CHECK(std::abs(t.phi - (d.result().jamming->phi + t.dphi)) <= s.target_tolerance);
+  }
+}
+
+TEST_CASE("with the bracket search every accepted state below jamming is relaxed to the energy floor", "[driver]") {
+  // Trials inside the bracket stop at E/N < ε_U, but none of them is accepted as such.
+  const Scene s = bracket_scene(4);
+  Recorder rec;
+  GrowthDriver d(s);
+  d.add_observer(rec);
+  REQUIRE(d.run() == RunStatus::finished);
+  for (std::size_t k = 1; k < rec.steps.size(); ++k)
+    if (rec.steps[k].phase == Phase::unjammed && rec.steps[k - 1].phase == Phase::unjammed)
+      CHECK(rec.steps[k].E < s.fire.energy_floor);
+  CHECK(d.result().rejected > 0);
+}
+
+TEST_CASE("a collapsed bracket settles its highest unjammed trial, and the search goes on to a jamming point",
+          "[driver]") {
+  // Seed 23: s(Δt) jumps across the window (a division, or the relaxation changing basin) between
+  // an unjammed trial and an overshoot.
+  const Scene s = bracket_scene(23);
+  Recorder rec;
+  JammingPoint j;
+  GrowthDriver d(s);
+  d.add_observer(rec);
+  d.add_observer(j);
+  REQUIRE(d.run() == RunStatus::finished);
+  const std::vector<const Recorder::Step*> settled = settled_brackets(rec, s);
+  REQUIRE_FALSE(settled.empty());
+  for (const Recorder::Step* step : settled) {
+    CHECK(step->E < s.fire.energy_floor);  // relaxed on from the early stop at ε_U
+    CHECK(step->dt > 0);
+  }
+  check_jamming_point(j, s);
+}
+
+TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the uninterrupted run", "[driver]") {
+  // The bracket is closed at every accepted state, so a checkpoint needs nothing of it; restored
+  // from the last state before jamming, the resumed run repeats the whole search.
+  const Scene s = bracket_scene(3);
+  std::vector<GrowthState> states;
+  GrowthDriver first(s);
+  first.set_checkpoint_hook([&] { states.push_back(first.state()); });
+  REQUIRE(first.run() == RunStatus::finished);
+  const auto last_unjammed =
+      std::find_if(states.rbegin(), states.rend(), [](const GrowthState& g) { return g.phase == Phase::unjammed; });
+  REQUIRE(last_unjammed != states.rend());
+  for (const GrowthState* c : {&states[states.size() / 2], &*last_unjammed, &states.back()}) {
+    GrowthDriver resumed(s);
+    resumed.restore(*c);
+    resumed.run();
+    INFO("resumed from step " << c->step);
+    CHECK(same_result(resumed.result(), first.result()));
+    CHECK(same_packing(resumed.packing(), first.packing()));
+  }
+}

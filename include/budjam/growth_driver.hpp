@@ -1,8 +1,9 @@
 #pragma once
 // The quasistatic growth loop (docs/model.md, "Growth protocol"):
 //   growth step Δt → FIRE → classify E/N → accept / reject → emit events. After a rejection the
-//   next Δt is half the last (jamming.search = bisection) or aimed by the secant search; the
-//   secant search also solves for the Δt that lands a target before relaxing (docs/growth.md).
+//   next Δt is half the last (jamming.search = bisection) or aimed by the secant search (with
+//   `bracket`, from a fixed accepted state); both also solve for the Δt that lands a target before
+//   relaxing (docs/growth.md).
 // Everything optional (logs, packings, moduli, spectra, rigidity) is an Observer that receives a
 // read-only view of each accepted state. The driver computes contacts, the contact network and the
 // bud pressures only when the protocol (feedback, depletion) or an observer needs them.

@@ -18,7 +18,9 @@ enum class InitialState { two_cells, random_seeds };
 // bisection: the paper's protocol, halve Δt after every overshoot, restart from the nominal Δt.
 // secant: aim each trial at the middle of the jamming window by extrapolating √(E/N), which grows
 // linearly in φ − φ_J, and land a target by solving φ(Δt) = φ_J + Δφ before relaxing.
-enum class JammingSearch { bisection, secant };
+// bracket: as secant, but φ_J is bracketed in Δt from a fixed accepted state: a trial below the
+// jamming window only raises the lower end (its relaxation stops at E/N < ε_U) and is not accepted.
+enum class JammingSearch { bisection, secant, bracket };
 
 // Where an on-demand computation (moduli, DOS) is made along a run.
 struct Schedule {
