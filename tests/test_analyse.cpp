@@ -244,10 +244,9 @@ TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the
   CHECK(number(paper.at("G_2_paper")) == Approx(moduli.at("G").get<double>()).epsilon(1e-12));
   CHECK(paper.at("G_2").empty());
   CHECK(budjam_def.at("G_2_paper").empty());  // it stopped before the paper's φ_2
-  CHECK(number(budjam_def.at("G_2")) == Approx(budjam::io::read_json(runs()[2] / "packings" / "phi2.moduli.json")
-                                                    .at("G")
-                                                    .get<double>())
-                                             .epsilon(1e-12));
+  CHECK(
+      number(budjam_def.at("G_2")) ==
+      Approx(budjam::io::read_json(runs()[2] / "packings" / "phi2.moduli.json").at("G").get<double>()).epsilon(1e-12));
 }
 
 TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[analyse]") {

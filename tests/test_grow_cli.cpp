@@ -348,8 +348,9 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
   }
 }
 
-TEST_CASE("a signal while a Newton factor is kept keeps the last periodic checkpoint; the resumed run is byte-identical",
-          "[grow_cli][.slow]") {
+TEST_CASE(
+    "a signal while a Newton factor is kept keeps the last periodic checkpoint; the resumed run is byte-identical",
+    "[grow_cli][.slow]") {
   // Strong feedback, arrested growth past jamming: the Newton finish keeps its factor from step to
   // step (chord steps) and drops it every 4th step.
   const fs::path scene = work_dir() / "newton.toml";

@@ -145,7 +145,8 @@ fs::path tables_with_P0_none(const fs::path& tables, const fs::path& copy) {
 TEST_CASE("analyse --tables reads the P0 \"none\" of earlier tables and writes it as an empty field", "[cli]") {
   const fs::path old = tables_with_P0_none(source_file("data/reference/quick/tables"), work_dir() / "old_tables");
   const fs::path out = work_dir() / "reanalysed";
-  REQUIRE(run_budjam("analyse --tables " + shell_quoted(old) + " --out " + shell_quoted(out) + " --main-L 8").code == 0);
+  REQUIRE(run_budjam("analyse --tables " + shell_quoted(old) + " --out " + shell_quoted(out) + " --main-L 8").code ==
+          0);
   CHECK(slurp(old / "runs.csv").find(",8,none,1,") != std::string::npos);
   CHECK(slurp(out / "runs.csv").find(",8,,1,") != std::string::npos);
   CHECK(slurp(out / "runs.csv").find(",none,") == std::string::npos);

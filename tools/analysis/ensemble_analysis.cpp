@@ -141,8 +141,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   const auto& S = r.steps;
   const std::size_t c_step = S.column("step"), c_phi = S.column("phi"), c_P = S.column("P"), c_N = S.column("N"),
                     c_Nf = S.column("N_f"), c_Nub = S.column("N_u_buds"), c_chi = S.column("chi_c"),
-                    c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming"),
-                    c_Z = S.column("Z"), c_dZ = S.column("dZ");
+                    c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming"), c_Z = S.column("Z"),
+                    c_dZ = S.column("dZ");
   std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, active, divisions;
   for (std::size_t k = 0; k < S.size(); ++k) {
     const double s = S.number(k, c_step);
@@ -523,8 +523,7 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
 // G_2 > 0, then Tukey's 1.5·IQR fences on the quantity itself.
 template <class F>
 Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
-  const auto admitted =
-      paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, G_for_paper_phi2));
+  const auto admitted = paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, G_for_paper_phi2));
   const auto kept = tukey_inliers(collect(rs, f), admitted);
   Json j = mean_se_json(kept);
   const Json m = median_json(kept, bo);

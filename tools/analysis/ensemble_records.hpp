@@ -58,8 +58,8 @@ struct RunRow {
   // definition's φ_2 comes from steps.csv, without a packing.
   double phi2_tagged_left = kBudjamTaggedLeft;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;  // at budjam's φ_2, if saved there
-  double G_2_paper = kNaN;  // at the paper's φ_2, if saved there
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;     // at budjam's φ_2, if saved there
+  double G_2_paper = kNaN;                                              // at the paper's φ_2, if saved there
   double h_gamma = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;

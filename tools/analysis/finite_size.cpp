@@ -84,7 +84,8 @@ Json finite_size_json(const Json& groups) {
       for (const auto& q : kQuantities) {
         // a key an older analysis.json lacks gives an empty cell
         const Json v = g->contains(q.group_key) ? (*g)[q.group_key] : Json::object();
-        row[q.name] = Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
+        row[q.name] =
+            Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
       }
       sizes.push_back(row);
     }

@@ -120,7 +120,8 @@ void run(const Options& o) {
     const std::string stopped =
         "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") + " at step " + std::to_string(step);
     if (last_checkpoint == step)
-      throw cli::Interrupted(signal, stopped + ", checkpoint written; resume with: budjam grow --resume " + dir.string());
+      throw cli::Interrupted(signal,
+                             stopped + ", checkpoint written; resume with: budjam grow --resume " + dir.string());
     const std::string why = " (a Newton factor kept in memory is not saved, so that state would not resume exactly)";
     if (last_checkpoint)
       throw cli::Interrupted(signal, stopped + "; the checkpoint of step " + std::to_string(*last_checkpoint) +
