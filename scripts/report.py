@@ -178,6 +178,13 @@ def main():
 
     def rerun(verdict, *keys):
         return verdict if lacking(*keys) is None else "awaits a re-run"
+
+    def untestable(stat, verdict):
+        """The verdict, unless the paper's selection admitted no run: then why the claim cannot be tested."""
+        if verdict == "awaits data" and stat and stat.get("runs") and stat.get("admitted") == 0:
+            return (f"not testable: the paper's selection admits none of {stat['runs']} runs "
+                    "(each has more than 10 divisions after φ_J by its end)")
+        return verdict
     L = A["main_L"]
     M = A["main"]
     C = A["constants"]
@@ -265,7 +272,7 @@ def main():
         claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14 (a as true area)", "theory slightly overestimates",
               f"{pm(x['dphi_2'])} vs {avail(pm(pred), 'dphi_2_pred_area')}; φ_2 at ≤ 1 tagged bud left, every run",
               avail(f"{sel(sim)} vs {pm(pred)}; φ_2 at no tagged bud left, paper's selection", "dphi_2_paper", "N_div_end"),
-              rerun(verdict, "dphi_2_paper", "N_div_end"), fig("fig2"))
+              rerun(untestable(sim, verdict), "dphi_2_paper", "N_div_end"), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
           avail(", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order), "dphi_2_paper", "N_div_end"),
@@ -313,7 +320,8 @@ def main():
             verdict = "confirmed" if 0.2 <= s_["median"] <= 1.0 else "not confirmed"
         claim(f"G_2/P_max, {p0_name(lab)} (median ± bootstrap SE)", "≈ 0.2 – 1",
               needs(have_moduli, pm(x["G_2_over_Pmax"], "median") + ", every run", "moduli"),
-              avail(needs(have_moduli, sel(s_, "median"), "moduli"), "N_div_end"), rerun(verdict, "N_div_end"), fig("fig3"))
+              avail(needs(have_moduli, sel(s_, "median"), "moduli"), "N_div_end"),
+              rerun(untestable(s_, verdict) if have_moduli else verdict, "N_div_end"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
           f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={M.get('plateau_P0')}, ℓ_c² = {fmt(M.get('lc2_J'))})",
           "same", "—", fig("fig4"))
