@@ -508,7 +508,7 @@ struct GrowthDriver::Impl {
   // Requires the field to be current for the trial.
   void lower_bracket_top(Trial&& t) {
     const Overshoot line = overshoot_of(t.packing, t.E);
-    if (!bracket) bracket.emplace();
+    if (!bracket) bracket = Bracket{};
     std::vector<BracketEnd>& above = bracket->above;
     above.insert(above.begin(), BracketEnd{std::move(t), line});
     if (above.size() > 2) above.pop_back();
