@@ -279,6 +279,15 @@ TEST_CASE("finite-size extrapolation recovers the N → ∞ limit of q_∞ + c/N
   // a size-independent median extrapolates to itself with zero slope
   CHECK(fed["extrapolation"]["G_2_over_Pmax"]["limit"].get<double>() == Approx(0.4));
   CHECK(fed["extrapolation"]["G_2_over_Pmax"]["slope"].get<double>() == Approx(0.0).margin(1e-9));
+  // a median of one run has a rounding-level bootstrap SE, not an error bar: that size is not fitted
+  {
+    io::Json single = groups;
+    for (auto& g : single)
+      if (g["P0_label"] == "0.001") g["G_2_over_Pmax"] = {{"n", g["L"] == 20 ? 1 : 20}, {"median", 0.4}, {"se", 1e-16}};
+    const auto fs1 = finite_size_json(single);
+    const auto& f = fs1[0]["P0_label"] == "0.001" ? fs1[0] : fs1[1];
+    CHECK(f["extrapolation"]["G_2_over_Pmax"]["sizes"] == 2);
+  }
   // a quantity the groups lack (an older analysis.json) gives empty cells and no extrapolation
   CHECK(fed["sizes"][0]["G_2_over_Pmax_at_paper_phi2"]["value"].is_null());
   CHECK(fed["extrapolation"]["G_2_over_Pmax_at_paper_phi2"]["sizes"] == 0);
