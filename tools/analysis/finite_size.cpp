@@ -95,7 +95,8 @@ Json finite_size_json(const Json& groups) {
       for (const auto& row : sizes) {
         const double n = number(row["N_J"], "mean"), v = number(row[q.name], "value"), s = number(row[q.name], "se");
         // one run's value has no error bar (a bootstrap of one value gives a rounding-level "SE")
-        if (std::isfinite(n) && n > 0 && std::isfinite(v) && std::isfinite(s) && s > 0 && number(row[q.name], "n") >= 2) {
+        if (std::isfinite(n) && n > 0 && std::isfinite(v) && std::isfinite(s) && s > 0 &&
+            number(row[q.name], "n") >= 2) {
           N.push_back(n);
           value.push_back(v);
           se.push_back(s);
