@@ -479,10 +479,13 @@ struct GrowthDriver::Impl {
   }
 
   // The fallback of a collapsed bracket: its highest trial below the window, relaxed on to the
-  // ordinary stopping rule, is the next accepted (unjammed) state. nullopt if the run failed.
+  // ordinary stopping rule, is the next accepted (unjammed) state. nullopt if the run failed. The
+  // trial was counted rejected when it narrowed the bracket; it is one attempt, now accepted
+  // (accepted + rejected = attempts, which a checkpoint is checked against).
   std::optional<Trial> settle_below() {
     Trial t = std::move(*bracket->below);
     bracket.reset();
+    --result.rejected;
     if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
       return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);

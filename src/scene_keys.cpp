@@ -207,8 +207,8 @@ std::vector<SceneKey> make_keys() {
                    "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                    BUDJAM_FIELD(check_minimum)));
   e.push_back(choice("jamming", "search",
-                     "step choice near φ_J and the targets: \"secant\", \"bracket\" (secant in Δt from a fixed "
-                     "state) or \"bisection\" (the paper's halving)",
+                     "step choice near φ_J and the targets: \"bracket\" (secant in Δt from a fixed state), "
+                     "\"secant\" (from each accepted state) or \"bisection\" (the paper's halving)",
                      {"bisection", "secant", "bracket"}, BUDJAM_FIELD(search)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).

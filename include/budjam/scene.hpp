@@ -74,7 +74,7 @@ struct Scene {
   // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
   // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
   bool check_minimum = true;
-  JammingSearch search = JammingSearch::secant;
+  JammingSearch search = JammingSearch::bracket;
 
   // [minimiser]
   FireParams fire;
