@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Ensemble of the jamming searches (docs/growth.md, "Jamming search"): the same seeds grown with
-two values of jamming.search, and the mean ± standard error over seeds of φ_J, u_J, Z_J, P and Z at
-every target, φ_2, with whether each difference is within the combined standard error
+two values of jamming.search, and the mean ± standard error over seeds of φ_J, u_J, Z_J, P, Z and G
+(`budjam moduli` on the packing saved there) at every target, φ_2, with whether each difference is within the combined standard error
 |Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the search changes).
 
 Usage: python3 bench/search_ensemble.py OUT [--L 8] [--seeds 20] [--P0 1e-3]
@@ -25,7 +25,12 @@ def grow(args, search, seed):
                         f"growth.P0={args.P0}", "--set", f"jamming.targets={args.targets}", "--set",
                         "jamming.continue_to_phi2=true", "--set", f"jamming.search={search}", "--set",
                         "observe.checkpoint_every=0"], check=True)
-    return json.loads((out / "summary.json").read_text())
+    summary = json.loads((out / "summary.json").read_text())
+    for t in summary["targets"]:
+        moduli = subprocess.run([args.budjam, "moduli", str(out / "packings" / f"target_{t['index']}.pack"), "--json"],
+                                check=True, capture_output=True, text=True).stdout
+        t["G"] = json.loads(moduli)["G"]
+    return summary
 
 
 def quantities(summary):
@@ -33,6 +38,7 @@ def quantities(summary):
     for t in summary["targets"]:
         q[f"P at {t['dphi']:g}"] = t["P"]
         q[f"Z at {t['dphi']:g}"] = t["Z"]
+        q[f"G at {t['dphi']:g}"] = t["G"]
     return q
 
 
