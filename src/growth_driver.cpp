@@ -485,9 +485,9 @@ struct GrowthDriver::Impl {
   std::optional<Trial> settle_below() {
     Trial t = std::move(*bracket->below);
     bracket.reset();
-    --result.rejected;
     if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
       return std::nullopt;
+    --result.rejected;
     t.E = fresh_energy_per_cell(t.packing);
     return t;
   }
