@@ -6,11 +6,18 @@
 
 namespace budjam {
 
-int compare_errors(double e_a, double e_b, const ParetoTolerance& tol) {
+namespace {
+double resolution_of(const CostErrors& c, std::size_t q) {
+  return q < c.resolution.size() && !std::isnan(c.resolution[q]) ? c.resolution[q] : 0.0;
+}
+}  // namespace
+
+int compare_errors(double e_a, double e_b, const ParetoTolerance& tol, double r_a, double r_b) {
   if (std::isnan(e_a) || std::isnan(e_b)) return 0;
-  const double lo = std::min(e_a, e_b), hi = std::max(e_a, e_b);
-  if (hi <= tol.error_floor || hi <= tol.error_ratio * lo) return 0;
-  return e_a < e_b ? -1 : 1;
+  if (std::max(e_a, e_b) <= tol.error_floor) return 0;
+  if (std::max(0.0, e_a - r_a) > tol.error_ratio * (e_b + r_b)) return 1;
+  if (std::max(0.0, e_b - r_b) > tol.error_ratio * (e_a + r_a)) return -1;
+  return 0;
 }
 
 bool dominates(const CostErrors& a, const CostErrors& b, const ParetoTolerance& tol) {
@@ -18,7 +25,7 @@ bool dominates(const CostErrors& a, const CostErrors& b, const ParetoTolerance& 
   if (a.cost > b.cost * tol.cost_ratio) return false;  // dearer beyond noise
   bool better = a.cost * tol.cost_ratio < b.cost;
   for (std::size_t q = 0; q < a.errors.size(); ++q) {
-    const int c = compare_errors(a.errors[q], b.errors[q], tol);
+    const int c = compare_errors(a.errors[q], b.errors[q], tol, resolution_of(a, q), resolution_of(b, q));
     if (c > 0) return false;
     better = better || c < 0;
   }

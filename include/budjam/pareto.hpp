@@ -6,6 +6,10 @@
 //   cost:  a is cheaper than b when a.cost · cost_ratio < b.cost; not dearer when a.cost ≤ b.cost · cost_ratio
 //   error: e_a and e_b tie when both are ≤ error_floor, or when the larger is ≤ error_ratio × the smaller;
 //          otherwise the smaller one is better
+// An error may carry a statistical resolution r (an ensemble quantity measured on a few seeds: the
+// error is a difference of means, r its uncertainty): it is then known only to lie in
+// [max(0, e − r), e + r], and a is worse than b only when a's lower end exceeds error_ratio × b's
+// upper end. With r = 0 this is the rule above.
 // Errors that are NaN (not measured, or a quantity the knob cannot change) take no part.
 // With tolerances, dominance is not transitive; the front is the set of settings that no other
 // setting dominates. A default is "on the front" of its knob when no other setting of that knob
@@ -16,8 +20,9 @@
 namespace budjam {
 
 struct CostErrors {
-  double cost = 0;             // seconds (or any cost), finite
-  std::vector<double> errors;  // one per quantity, ≥ 0 or NaN
+  double cost = 0;                 // seconds (or any cost), finite
+  std::vector<double> errors;      // one per quantity, ≥ 0 or NaN
+  std::vector<double> resolution;  // one per quantity (≥ 0; NaN = 0), or empty: every error exact
 };
 
 struct ParetoTolerance {
@@ -26,8 +31,9 @@ struct ParetoTolerance {
   double error_floor = 1e-9;  // errors both at or below this are a tie (rounding level)
 };
 
-// −1: e_a better than e_b, 0: tie, +1: worse (NaN on either side: tie).
-int compare_errors(double e_a, double e_b, const ParetoTolerance& tol);
+// −1: e_a better than e_b, 0: tie, +1: worse (NaN on either side: tie). r_a, r_b: the errors'
+// statistical resolutions.
+int compare_errors(double e_a, double e_b, const ParetoTolerance& tol, double r_a = 0, double r_b = 0);
 // a dominates b: not dearer and no error worse (beyond the tolerances), and cheaper or some error better.
 bool dominates(const CostErrors& a, const CostErrors& b, const ParetoTolerance& tol);
 // Indices of the settings that no other setting dominates, ascending.

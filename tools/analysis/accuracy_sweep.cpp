@@ -52,9 +52,17 @@ double family_error_floor(const std::string& family, double floor) {
 const std::map<std::string, std::string> kPinnedByModel{
     {"epsU", "the model fixes epsilon_U = 1e-16 (the jamming criterion the paper's numbers came from)"}};
 
+// Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp).
+const std::set<std::string> kEnsembleQuantities{"phi_2"};
+
 double error_of(const SweepRow& r, const std::string& q) {
   const auto it = r.err.find(q);
   return it == r.err.end() ? kNaN : it->second;
+}
+
+double resolution_of(const SweepRow& r, const std::string& q) {
+  const auto it = r.resolution.find(q);
+  return it == r.resolution.end() ? kNaN : it->second;
 }
 
 // ---- growth knobs ---------------------------------------------------------------------------
@@ -159,7 +167,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
       per["phi_J"].push_back(std::abs(m.phi_J - R.phi_J));
       per["u_J"].push_back(std::abs(m.u_J - R.u_J));
       per["Z_J"].push_back(std::abs(m.Z_J - R.Z_J));
-      per["phi_2"].push_back(std::abs(m.phi_2 - R.phi_2));
+      per["phi_2"].push_back(m.phi_2 - R.phi_2);  // signed: an ensemble quantity
       per["P"].push_back(rel_error(m.P, R.P));
       per["B"].push_back(rel_error(m.B, R.B));
       per["G"].push_back(rel_error(m.G, R.G));
@@ -168,7 +176,14 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     row.wall_seconds = finite_mean(wall);
     row.force_evaluations = finite_mean(evals);
     row.seconds = std::isfinite(finite_mean(cpu)) ? finite_mean(cpu) : row.wall_seconds;
-    for (const auto& [q, v] : per) row.err[q] = finite_mean(v);
+    for (const auto& [q, v] : per) {
+      row.err[q] = std::abs(finite_mean(v));
+      if (!kEnsembleQuantities.count(q)) continue;
+      std::vector<double> d;
+      for (double x : v)
+        if (std::isfinite(x)) d.push_back(x);
+      row.resolution[q] = d.size() > 1 ? 2 * standard_error(d) : kNaN;
+    }
     rows.push_back(row);
   };
   for (const auto& v : o.variants) add(fs::path(v).filename().string(), v, false);
@@ -265,8 +280,11 @@ std::vector<Group> groups_of(const std::vector<SweepRow>& rows) {
 }
 
 CostErrors cost_errors(const SweepRow& r, const std::vector<std::string>& quantities) {
-  CostErrors c{r.cost, {}};
-  for (const auto& q : quantities) c.errors.push_back(error_of(r, q));
+  CostErrors c{r.cost, {}, {}};
+  for (const auto& q : quantities) {
+    c.errors.push_back(error_of(r, q));
+    c.resolution.push_back(resolution_of(r, q));
+  }
   return c;
 }
 
@@ -287,7 +305,7 @@ Json joint_fronts(const std::vector<SweepRow>& rows, const std::vector<Group>& g
     tol.error_floor = family_error_floor(family, tol.error_floor);
     // settings by name: per set, (relative cost, errors); the default is member 0 of every set
     std::vector<std::string> names;
-    std::map<std::string, std::vector<std::pair<double, std::vector<double>>>> per;
+    std::map<std::string, std::vector<std::pair<double, CostErrors>>> per;
     for (const Group* g : sets) {
       tol.cost_ratio = std::max(tol.cost_ratio, cost_tie_of_set.at(family + "\n" + g->set + "\n" + knob));
       const double c0 = rows[g->members[0]].cost;
@@ -295,7 +313,7 @@ Json joint_fronts(const std::vector<SweepRow>& rows, const std::vector<Group>& g
         const SweepRow& r = rows[g->members[m]];
         const std::string name = m == 0 ? std::string("default") : r.variant;
         if (g == sets.front()) names.push_back(name);
-        per[name].emplace_back(r.cost / c0, cost_errors(r, qs).errors);
+        per[name].emplace_back(r.cost / c0, cost_errors(r, qs));
       }
     }
     std::vector<CostErrors> ce;
@@ -303,11 +321,14 @@ Json joint_fronts(const std::vector<SweepRow>& rows, const std::vector<Group>& g
     for (const auto& name : names) {
       const auto& v = per[name];
       if (v.size() != sets.size()) continue;
-      CostErrors c{0.0, std::vector<double>(qs.size(), kNaN)};
-      for (const auto& [rc, errs] : v) {
+      CostErrors c{0.0, std::vector<double>(qs.size(), kNaN), std::vector<double>(qs.size(), kNaN)};
+      for (const auto& [rc, one] : v) {
         c.cost += std::log(rc) / static_cast<double>(v.size());
         for (std::size_t q = 0; q < qs.size(); ++q)
-          if (!std::isnan(errs[q])) c.errors[q] = std::isnan(c.errors[q]) ? errs[q] : std::max(c.errors[q], errs[q]);
+          if (!std::isnan(one.errors[q]) && !(one.errors[q] <= c.errors[q])) {
+            c.errors[q] = one.errors[q];
+            c.resolution[q] = one.resolution[q];
+          }
       }
       c.cost = std::exp(c.cost);
       ce.push_back(c);
@@ -418,7 +439,7 @@ Json knob_front(std::vector<SweepRow>& rows, const Group& g, const ParetoToleran
   Json per = Json::object();
   for (std::size_t q = 0; q < qs.size(); ++q) {
     std::vector<CostErrors> one;
-    for (const auto& c : ce) one.push_back(CostErrors{c.cost, {c.errors[q]}});
+    for (const auto& c : ce) one.push_back(CostErrors{c.cost, {c.errors[q]}, {c.resolution[q]}});
     Json fq = Json::array();
     for (std::size_t f : pareto_front(one, tol)) fq.push_back(rows[g.members[f]].variant);
     per[qs[q]] = fq;
@@ -494,6 +515,7 @@ Json row_json(const SweepRow& r) {
   for (const auto& q : kQuantities) {
     x["err_" + q] = io::number_or_null(error_of(r, q));
     if (r.max_err.count(q)) x["max_err_" + q] = io::number_or_null(r.max_err.at(q));
+    if (r.resolution.count(q)) x["res_" + q] = io::number_or_null(r.resolution.at(q));
   }
   if (r.family == "growth") {
     x["wall_seconds"] = io::number_or_null(r.wall_seconds);
@@ -515,11 +537,13 @@ void write_csv(const fs::path& file, const std::vector<SweepRow>& rows) {
   io::write_atomically(file, [&](std::ostream& os) {
     for (const auto& h : head) os << h << ',';
     for (const auto& q : kQuantities) os << "err_" << q << ',';
+    for (const auto& q : kEnsembleQuantities) os << "res_" << q << ',';
     os << "on_front\n";
     for (const SweepRow& r : rows) {
       os << r.family << ',' << r.knob << ',' << r.set << ',' << r.variant << ',' << (r.is_default ? "true" : "false")
          << ',' << r.unit << ',' << r.n << ',' << number(r.seconds) << ',' << number(r.cost);
       for (const auto& q : kQuantities) os << ',' << number(error_of(r, q));
+      for (const auto& q : kEnsembleQuantities) os << ',' << number(resolution_of(r, q));
       os << ',' << (!judged(r) ? "" : r.on_front ? "true" : "false") << '\n';
     }
   });
@@ -538,6 +562,7 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
     for (const auto& q : kQuantities) {
       const double e = error_of(r, q);
       md << " | " << (r.err.count(q) ? (std::isnan(e) ? "n/a" : fmt(e)) : "");
+      if (const double res = resolution_of(r, q); !std::isnan(res)) md << " ± " << fmt(res);
     }
     md << " | "
        << (r.is_reference       ? "reference"
@@ -569,8 +594,10 @@ void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std
   io::write_json(dir / "accuracy.json",
                  Json{{"note",
                        "errors: mean over seeds (growth) or packings (moduli, spectrum) of |variant - reference| "
-                       "(phi_J, u_J, Z_J, phi_2) or of the relative error (P, B, G, omega_star averaged over the "
+                       "(phi_J, u_J, Z_J) or of the relative error (P, B, G, omega_star averaged over the "
                        "targets; band = the largest relative error of the n_band eigenvalues omega* averages); "
+                       "phi_2 (a trajectory property): |mean over seeds of variant - reference|, res_phi_2 = 2 "
+                       "standard errors of that mean, within which it ties; "
                        "seconds: CPU seconds per run (growth) or per computation (best of interleaved repeats); "
                        "cost (what the front compares): the seconds, except for growth: force evaluations per run "
                        "times the sweep's mean CPU seconds per evaluation (deterministic); "

@@ -7,8 +7,11 @@
 // per run (CPU seconds from cpu_time.json when the Makefile wrote it, else wall seconds from
 // timing.json; the front compares force evaluations at the mean CPU time per evaluation, which does
 // not depend on the machine's load) and the mean over seeds of the error against the same seed of the
-// reference: |Δ| of φ_J, u_J, Z_J, φ_2; relative error, averaged over the targets, of P, B, G, ω* (B,
-// G, ω* from the .moduli.json / .dos.json beside the target packings).
+// reference: |Δ| of φ_J, u_J, Z_J; relative error, averaged over the targets, of P, B, G, ω* (B,
+// G, ω* from the .moduli.json / .dos.json beside the target packings). φ_2 is a property of the whole
+// trajectory (which tagged bud completes last), which a perturbation at any step may switch to
+// another branch, tighter settings included: it is judged as an ensemble quantity, by the mean over
+// seeds of the signed difference and that mean's resolution of 2 standard errors (budjam/pareto.hpp).
 //
 // Post-processing knobs (packing sets NAME=DIR): the moduli's linear solver and ARPACK's tol and ncv,
 // measured on every packings/*.pack below DIR (analysis/accuracy_post.hpp).
@@ -53,6 +56,9 @@ struct SweepRow {
   double wall_seconds = kNaN, force_evaluations = kNaN;
   std::map<std::string, double> err;      // by quantity; absent = n/a
   std::map<std::string, double> max_err;  // post-processing: the worst packing
+  // Ensemble quantities (φ_2): err is |mean over seeds of the signed difference|, and this its
+  // resolution, 2 standard errors of that mean (absent with one seed).
+  std::map<std::string, double> resolution;
   double max_residual = kNaN;
   bool well_posed = true;
   bool on_front = true;  // of its knob (a default: of every knob of its family and set)
