@@ -33,7 +33,7 @@ TEST_CASE("A setting dominates another only if nowhere worse beyond noise and so
   CHECK_FALSE(dominates(CostErrors{1.2, {1e-7, 1e-3}, {}}, base, tol));  // more accurate but dearer
   CHECK_FALSE(dominates(CostErrors{0.5, {1e-6, 1e-2}, {}}, base, tol));  // cheaper but worse in one quantity
   CHECK(dominates(CostErrors{0.5, {kNaN, 1e-3}, {}}, base, tol));        // an unmeasured quantity does not count
-  CHECK_FALSE(dominates(base, base, tol));                           // nothing dominates itself
+  CHECK_FALSE(dominates(base, base, tol));                               // nothing dominates itself
   CHECK_THROWS_AS(dominates(CostErrors{1.0, {0.0}, {}}, base, tol), std::invalid_argument);
 }
 
@@ -41,20 +41,22 @@ TEST_CASE("The front of a knob: a tolerance sweep keeps the cheap-loose and dear
           "[fast]") {
   const ParetoTolerance tol;
   // Error falls with cost, except "wasteful", which costs more than "tight" for the same error.
-  const std::vector<CostErrors> s{{0.1, {1e-3}, {}},    // 0 loose
-                                  {0.2, {1e-6}, {}},    // 1 medium
-                                  {0.4, {1e-10}, {}},   // 2 tight (at the floor)
-                                  {1.0, {1e-12}, {}},   // 3 wasteful: no better than tight (both ≤ floor), dearer
-                                  {0.21, {5e-3}, {}}};  // 4 dominated by medium (same cost within noise, worse) and loose
+  const std::vector<CostErrors> s{
+      {0.1, {1e-3}, {}},    // 0 loose
+      {0.2, {1e-6}, {}},    // 1 medium
+      {0.4, {1e-10}, {}},   // 2 tight (at the floor)
+      {1.0, {1e-12}, {}},   // 3 wasteful: no better than tight (both ≤ floor), dearer
+      {0.21, {5e-3}, {}}};  // 4 dominated by medium (same cost within noise, worse) and loose
   CHECK(pareto_front(s, tol) == std::vector<std::size_t>{0, 1, 2});
   CHECK(dominated_by(s, 3, tol) == std::vector<std::size_t>{2});
   CHECK(dominated_by(s, 4, tol) == std::vector<std::size_t>{0, 1});  // loose: cheaper and more accurate too
   CHECK(dominated_by(s, 1, tol).empty());
 }
 
-TEST_CASE("An error within its statistical resolution is worse than none: a is worse only if its lower end exceeds "
-          "error_ratio times b's upper end",
-          "[fast]") {
+TEST_CASE(
+    "An error within its statistical resolution is worse than none: a is worse only if its lower end exceeds "
+    "error_ratio times b's upper end",
+    "[fast]") {
   const ParetoTolerance tol{.cost_ratio = 1.15, .error_ratio = 2.0, .error_floor = 1e-9};
   // One of three seeds switched branch: mean 3.7e-3, 2 SE = 7.4e-3. Not resolved from zero.
   CHECK(compare_errors(3.7e-3, 2e-8, tol, 7.4e-3, 0.0) == 0);
