@@ -16,8 +16,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
+#include <vector>
 
 using namespace budjam;
 using budjam::testing::compress_to_pressure;
@@ -25,6 +27,8 @@ using budjam::testing::CompressionResult;
 using budjam::testing::random_dumbbells;
 namespace fs = std::filesystem;
 using budjam::testing::run_budjam;
+using budjam::testing::shell_quoted;
+using budjam::testing::source_file;
 using budjam::testing::work_dir;
 
 namespace {
@@ -157,4 +161,70 @@ TEST_CASE("a knob measured on two packing sets is judged on its joint front: geo
   CHECK(knobs == std::set<std::string>{"solver", "arpack_tol", "arpack_ncv"});
   // With every knob measured on both sets, the verdict is that of the joint fronts alone.
   CHECK(acc["defaults_on_front"].get<bool>() == all);
+}
+
+namespace {
+
+// Copies every seed of `from` to `to`, adding shift[k] to φ_2 of the k-th seed's summary.json.
+void copy_with_phi2_shift(const fs::path& from, const fs::path& to, const std::vector<double>& shift) {
+  for (std::size_t k = 0; k < shift.size(); ++k) {
+    const std::string seed = "seed" + std::to_string(k + 1);
+    fs::create_directories(to);
+    fs::copy(from / seed, to / seed, fs::copy_options::recursive);
+    io::Json s = io::read_json(to / seed / "summary.json");
+    s["phi_2"] = s["phi_2"].get<double>() + shift[k];
+    io::write_json(to / seed / "summary.json", s);
+  }
+}
+
+}  // namespace
+
+TEST_CASE(
+    "phi_2 is judged over the seeds: one switched branch is within its resolution (a tie), a shift of every seed is "
+    "resolved",
+    "[fast]") {
+  const fs::path dir = work_dir() / "acc_phi2";
+  const fs::path ref = dir / "reference";
+  for (int seed = 1; seed <= 3; ++seed)
+    REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --seed " +
+                       std::to_string(seed) + " --out " + shell_quoted(ref / ("seed" + std::to_string(seed))) +
+                       " --set box.L=6 --set 'jamming.targets=[1e-3]' --set jamming.continue_to_phi2=true")
+                .code == 0);
+  copy_with_phi2_shift(ref, dir / "default", {0, 0, 0});
+  copy_with_phi2_shift(ref, dir / "ftol_1e-11", {0, 0, 0.01});          // one seed on another branch
+  copy_with_phi2_shift(ref, dir / "ftol_1e-10", {0.01, 0.011, 0.009});  // every seed moved alike
+  REQUIRE(run_budjam("accuracy --reference " + shell_quoted(ref) + " " + shell_quoted(dir / "default") + " " +
+                     shell_quoted(dir / "ftol_1e-11") + " " + shell_quoted(dir / "ftol_1e-10") + " --out " +
+                     shell_quoted(dir / "out"))
+              .code == 0);
+  const io::Json acc = io::read_json(dir / "out" / "accuracy.json");
+  const io::Json* one = row(acc, "growth", "ftol_1e-11");
+  const io::Json* all = row(acc, "growth", "ftol_1e-10");
+  const io::Json* def = row(acc, "growth", "default");
+  REQUIRE(one);
+  REQUIRE(all);
+  REQUIRE(def);
+  // |mean| of the signed differences, and 2 standard errors of that mean
+  CHECK((*one)["err_phi_2"].get<double>() == Approx(0.01 / 3).epsilon(1e-9));
+  CHECK((*one)["res_phi_2"].get<double>() == Approx(2 * 0.01 / 3).epsilon(1e-9));
+  CHECK((*all)["err_phi_2"].get<double>() == Approx(0.01).epsilon(1e-9));
+  CHECK((*all)["res_phi_2"].get<double>() == Approx(2 * 0.001 / std::sqrt(3.0)).epsilon(1e-9));
+  CHECK((*def)["err_phi_2"].get<double>() == 0.0);
+  // Same runs, same cost: the switched branch ties with the default; the resolved shift is worse.
+  const auto front_of = [&](const std::string& knob) {
+    for (const auto& g : acc["groups"])
+      if (g["knob"] == knob) return g["front_by_quantity"]["phi_2"];
+    FAIL("no group " << knob);
+    return io::Json();
+  };
+  const io::Json front = front_of("ftol");
+  std::set<std::string> names;
+  for (const auto& n : front) names.insert(n.get<std::string>());
+  CHECK(names == std::set<std::string>{"default", "ftol_1e-11"});
+  CHECK(acc["defaults_on_front"].get<bool>());
+  // The CSV carries the resolution column that docs/files.md documents.
+  std::ifstream csv(dir / "out" / "accuracy.csv");
+  std::string head;
+  std::getline(csv, head);
+  CHECK(head.find(",res_phi_2,") != std::string::npos);
 }

@@ -54,8 +54,8 @@ TEST_CASE("The front of a knob: a tolerance sweep keeps the cheap-loose and dear
 }
 
 TEST_CASE(
-    "An error within its statistical resolution is worse than none: a is worse only if its lower end exceeds "
-    "error_ratio times b's upper end",
+    "An error known within a statistical resolution is worse than another only if its lower end exceeds error_ratio "
+    "times the other's upper end",
     "[fast]") {
   const ParetoTolerance tol{.cost_ratio = 1.15, .error_ratio = 2.0, .error_floor = 1e-9};
   // One of three seeds switched branch: mean 3.7e-3, 2 SE = 7.4e-3. Not resolved from zero.

@@ -21,7 +21,7 @@ struct FireParams {
   // force component (x, y, and τ/r_g) is below max(force_tol, force_resolution(p)), or when E/N is
   // below energy_floor (then it is certainly unjammed: the minimum lies below the jamming
   // threshold ε_U > energy_floor).
-  double force_tol = 1e-12;  // FIRE alone; growth scenes finish with Newton to 1e-14 (scene.hpp)
+  double force_tol = 1e-12;  // the library's default; growth scenes use 1e-14 (scene.hpp)
   double energy_floor = 1e-20;
   long max_iterations = 1000000;
   // Second-order finish (newton.hpp): once the largest force falls below newton_force, Newton
