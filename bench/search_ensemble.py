@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
-"""Ensemble of the jamming searches (docs/growth.md, "Jamming search"): the same seeds grown with
-two values of jamming.search, and the mean ± standard error over seeds of φ_J, u_J, Z_J, P, Z and G
+"""Ensemble of two protocols (docs/growth.md, "Jamming search"): the same seeds grown with two values
+of one scene key (jamming.search unless --key says otherwise), and the mean ± standard error over seeds of φ_J, u_J, Z_J, P, Z and G
 (`budjam moduli` on the packing saved there) at every target, φ_2, with whether each difference is within the combined standard error
-|Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the search changes).
+|Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the protocol changes).
 
 Usage: python3 bench/search_ensemble.py OUT [--L 8] [--seeds 20] [--P0 1e-3]
-           [--targets '[1e-3,1e-2]'] [--searches secant,bracket] [--budjam build/budjam]
-Runs are made two at a time under nice (an existing OUT/<search>/seed<S>/summary.json is kept).
+           [--targets '[1e-3,1e-2]'] [--key jamming.search] [--values secant,bracket] [--budjam build/budjam]
+e.g. --key minimiser.energy_floor --values 1e-20,0.5e-16. Runs are made two at a time under nice (an
+existing OUT/<value>/seed<S>/summary.json is kept).
 """
 import argparse
 import concurrent.futures
@@ -17,13 +18,13 @@ import statistics
 import subprocess
 
 
-def grow(args, search, seed):
-    out = pathlib.Path(args.out) / search / f"seed{seed}"
+def grow(args, value, seed):
+    out = pathlib.Path(args.out) / value / f"seed{seed}"
     if not (out / "summary.json").exists():
         subprocess.run(["nice", "-n", "5", args.budjam, "grow", "data/scenes/paper-L15.toml", "--out", str(out),
                         "--overwrite", "--quiet", "--seed", str(seed), "--set", f"box.L={args.L}", "--set",
                         f"growth.P0={args.P0}", "--set", f"jamming.targets={args.targets}", "--set",
-                        "jamming.continue_to_phi2=true", "--set", f"jamming.search={search}", "--set",
+                        "jamming.continue_to_phi2=true", "--set", f"{args.key}={value}", "--set",
                         "observe.checkpoint_every=0"], check=True)
     summary = json.loads((out / "summary.json").read_text())
     for t in summary["targets"]:
@@ -56,22 +57,23 @@ def main():
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--P0", default="1e-3")
     ap.add_argument("--targets", default="[1e-3,1e-2]")
-    ap.add_argument("--searches", default="secant,bracket")
+    ap.add_argument("--key", default="jamming.search")
+    ap.add_argument("--values", "--searches", dest="values", default="secant,bracket")
     ap.add_argument("--budjam", default="build/budjam")
     args = ap.parse_args()
-    searches = args.searches.split(",")
+    values = args.values.split(",")
     seeds = range(1, args.seeds + 1)
     with concurrent.futures.ThreadPoolExecutor(2) as pool:
-        jobs = {(s, k): pool.submit(grow, args, s, k) for s in searches for k in seeds}
+        jobs = {(s, k): pool.submit(grow, args, s, k) for s in values for k in seeds}
         runs = {key: job.result() for key, job in jobs.items()}
-    table = {s: [quantities(runs[(s, k)]) for k in seeds if runs[(s, k)]["status"] == "finished"] for s in searches}
-    names = list(table[searches[0]][0].keys())
+    table = {s: [quantities(runs[(s, k)]) for k in seeds if runs[(s, k)]["status"] == "finished"] for s in values}
+    names = list(table[values[0]][0].keys())
     print(f"L = {args.L}, P0 = {args.P0}, seeds 1-{args.seeds}; finished: " +
-          ", ".join(f"{s} {len(table[s])}" for s in searches))
-    print("| quantity | " + " | ".join(searches) + " | within SE |")
-    print("|---" * (len(searches) + 2) + "|")
+          ", ".join(f"{s} {len(table[s])}" for s in values))
+    print("| quantity | " + " | ".join(values) + " | within SE |")
+    print("|---" * (len(values) + 2) + "|")
     for name in names:
-        stats = [mean_se([q.get(name) for q in table[s]]) for s in searches]
+        stats = [mean_se([q.get(name) for q in table[s]]) for s in values]
         (ma, sa, _), (mb, sb, _) = stats[0], stats[-1]
         ok = abs(ma - mb) <= math.hypot(sa, sb)
         cells = " | ".join(f"{m:.6g} ± {se:.2g} (n={n})" for m, se, n in stats)
