@@ -246,8 +246,8 @@ TEST_CASE("format_packing refuses packings that could not be read back", "[packi
 TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[packing_file]") {
   const std::vector<std::pair<std::string, std::string>> cases{
       {replace(kValid, "L 8\n", "L 1e-300\n"), "t.pack:2: box side L = 1e-300 must exceed"},
-      {replace(kValid, "L 8\n", "L 2.5\n"),
-       "t.pack:2: box side L = 2.5 must exceed 2 (largest lobe diameter + skin) = 2.6"},
+      {replace(kValid, "L 8\n", "L 2.25\n"),
+       "t.pack:2: box side L = 2.25 must exceed 2 (largest lobe diameter + skin) = 2.3"},
       {replace(kValid, "shear 0\n", "shear 1e308\n"),
        "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
       {replace(kValid, "0 -1 4 3.5", "0 -1 1e300 3.5"), "t.pack:8: cell 0: position more than"},

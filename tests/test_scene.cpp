@@ -239,7 +239,7 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[growth]\nP0 = nan\n", "growth.P0: must be a finite number (got nan)"},
       {"[growth]\nP0 = inf\n", "growth.P0: must be a finite number (got inf)"},
       {"[box]\nL = nan\n", "box.L: must be a finite number (got nan)"},
-      {"[box]\nL = 2\n", "box.L: must exceed 2 (largest lobe diameter + minimiser.skin) = 2.64"},
+      {"[box]\nL = 2\n", "box.L: must exceed 2 (largest lobe diameter + minimiser.skin) = 2.34"},
       {"[box]\nL = -8\n", "box.L: must exceed"},
       {"[jamming]\ntargets = [1e-2, 1e-3]\n", "jamming.targets: must be strictly increasing (got [0.01, 0.001])"},
       {"[jamming]\ntargets = [1e-3, 1e-3]\n", "jamming.targets: must be strictly increasing"},

@@ -11,7 +11,7 @@ namespace budjam {
 
 class NeighbourList {
  public:
-  explicit NeighbourList(double skin = 0.3) : skin_(skin) {}
+  explicit NeighbourList(double skin = 0.15) : skin_(skin) {}
 
   // Rebuilds if the two largest lobe displacements since the last build add up to the skin or
   // more, if the number of lobes or any radius changed (buds grow between minimisations), or if

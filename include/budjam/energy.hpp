@@ -28,7 +28,7 @@ namespace budjam {
 class ForceField {
  public:
   // threads: 1 = serial, 0 = one per core. Without OpenMP every count means one thread.
-  explicit ForceField(double skin = 0.3, int threads = 1);
+  explicit ForceField(double skin = 0.15, int threads = 1);
 
   // Smaller packings always use one thread: their evaluation (≈ 40 µs at 512 cells) is too short
   // to pay for the synchronisation of the threads.

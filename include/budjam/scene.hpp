@@ -86,7 +86,9 @@ struct Scene {
     f.force_tol = 1e-14;
     return f;
   }();
-  double skin = 0.3;
+  // Verlet skin: the results do not depend on it (pairs are sorted); 0.15 is the cheapest of
+  // 0.1–0.3 in whole runs (docs/minimiser.md, "Neighbour list").
+  double skin = 0.15;
   int threads = 1;  // of each force evaluation (ForceField); 0 = one per core. Not physics: results are identical.
 
   // [observe]
