@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Ensemble of two protocols (docs/growth.md, "Jamming search"): the same seeds grown with two values
-of one scene key (jamming.search unless --key says otherwise), and the mean ± standard error over seeds of φ_J, u_J, Z_J, P, Z and G
-(`budjam moduli` on the packing saved there) at every target, φ_2, with whether each difference is within the combined standard error
-|Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the protocol changes).
+of one scene key (jamming.search unless --key says otherwise), and the mean ± standard error over
+seeds of φ_J, u_J, Z_J, P, Z and G (`budjam moduli` on the packing saved there) at every target, φ_2,
+with whether each difference is within the combined standard error |Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the protocol changes).
 
 Usage: python3 bench/search_ensemble.py OUT [--L 8] [--seeds 20] [--P0 1e-3]
            [--targets '[1e-3,1e-2]'] [--key jamming.search] [--values secant,bracket] [--budjam build/budjam]
