@@ -670,6 +670,56 @@ TEST_CASE("budjam dos reproduces the run's spectrum byte for byte and ARPACK agr
   }
 }
 
+TEST_CASE("the 1e5-cell scene at 500 cells jams at its epsilon_U, rigid and stable by two methods each",
+          "[spectrum][cli]") {
+  // data/scenes/jammed-1e5.toml with 1/200 of its seeds in 1/200 of its area (the same φ at
+  // seeding). One thread: the result is the same for any count, and ctest may run other tests on
+  // the other core.
+  const fs::path dir = work_dir() / "jammed-500";
+  auto r = run_budjam("grow '" + scene("jammed-1e5.toml").string() + "' --quiet --out '" + dir.string() +
+                      "' --set box.L=25 --set init.cells=250 --set minimiser.threads=1");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const io::Json s = io::read_json(dir / "summary.json");
+  REQUIRE(s["status"] == "finished");
+  CHECK(s["N_J"].get<long>() >= 250);
+  // The jamming point of this scene: a minimum with E/N in (ε_U, 2ε_U], ε_U = 1e-6.
+  CHECK(s["E_J"].get<double>() > 1e-6);
+  CHECK(s["E_J"].get<double>() <= 2e-6);
+  CHECK(s["P_J"].get<double>() > 0);
+  const fs::path pack = dir / "packings" / "jammed.pack";
+
+  // Rigid: linear response and finite strain give the same positive B and G.
+  r = run_budjam("moduli '" + pack.string() + "' --check --json");
+  REQUIRE(r.code == 0);
+  const io::Json m = io::Json::parse(r.out);
+  CHECK(m["energy_minimum"].get<bool>());
+  CHECK(m["B"].get<double>() > 0);
+  CHECK(m["G"].get<double>() > 0);
+  CHECK(m["check"]["agree_within_1_percent"].get<bool>());
+  CHECK(m["check"]["agree_within_1_percent_energy"].get<bool>());
+
+  // Stable: the lowest modes by ARPACK equal the dense spectrum's, and none is negative.
+  const fs::path dense = work_dir() / "jammed-500-dense", lanczos = work_dir() / "jammed-500-arpack";
+  REQUIRE(run_budjam("dos '" + pack.string() + "' --method dense --quiet --out '" + dense.string() + "'").code == 0);
+  REQUIRE(run_budjam("dos '" + pack.string() + "' --method arpack --modes 20 --quiet --out '" + lanczos.string() + "'")
+              .code == 0);
+  const auto lambda_dense = csv_column(dense.string() + ".csv", "lambda");
+  const auto lambda_arpack = csv_column(lanczos.string() + ".csv", "lambda");
+  REQUIRE(lambda_arpack.size() >= 20);
+  for (std::size_t k = 0; k < lambda_arpack.size(); ++k) {
+    INFO("mode " << k);
+    if (lambda_dense[k] > 1e-6)
+      CHECK(std::abs(lambda_arpack[k] - lambda_dense[k]) <= 1e-8 * lambda_dense[k]);
+    else
+      CHECK(std::abs(lambda_arpack[k]) < 1e-10);
+  }
+  CHECK(lambda_dense.front() > -1e-10);
+  // The quasi-zero modes are the pebble game's floppy modes.
+  const io::Json d = io::read_json(dense.string() + ".json");
+  CHECK(d["N_zero"].get<long>() == d["floppy_modes"].get<long>());
+}
+
 TEST_CASE("budjam dos refuses bad options with one line naming the option", "[spectrum][cli]") {
   const fs::path pack = grown_demo(1) / "packings" / "jammed.pack";
   auto r = run_budjam("dos '" + pack.string() + "' --method lanczos");
