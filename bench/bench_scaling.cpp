@@ -14,8 +14,10 @@
 //                           stop after the R-th rejected trial (a deterministic window that ends
 //                           inside the bisection onto φ_J, for boxes too large to bisect to the end)
 //     --report-every S      print a window line every S accepted steps (0 = never; default 0)
-//     --csv FILE            one row per growth attempt (counters, N, φ, P, E/N, CPU, wall),
-//                           flushed per row so that long runs can be watched
+//     --csv FILE            one row per growth attempt (counters, N, φ, P, E/N of the accepted
+//                           state, CPU, wall, and the attempt's own trial: Δt, N, φ, E/N, where its
+//                           relaxation started, its verdict, FIRE iterations), flushed per row so
+//                           that long runs can be watched
 //
 // Tables and log–log fits over sizes: scripts/scaling_fit.py DIR/NAME.csv ... (reads NAME.csv and
 // this program's standard output saved as NAME.txt); the measured set is in data/reference/scaling/.
@@ -43,13 +45,22 @@
 #include <ctime>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace budjam;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+// The trial of the latest attempt, for its CSV row.
+struct TrialLog : Observer {
+  std::optional<TrialRelaxed> last;
+  std::string name() const override { return "trial_log"; }
+  void on_trial(const TrialRelaxed& t) override { last = t; }
+};
 
 double cpu_seconds() {
   timespec ts{};
@@ -151,7 +162,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_scaling: cannot write %s\n", csv_path.c_str());
       return 3;
     }
-    std::fprintf(csv.get(), "attempt,accepted,step,phase,N,phi,P,E_per_cell,dt,evals,cpu_s,wall_s\n");
+    std::fprintf(csv.get(),
+                 "attempt,accepted,step,phase,N,phi,P,E_per_cell,dt,evals,cpu_s,wall_s,"
+                 "trial_dt,trial_N,trial_phi,trial_E_per_cell,trial_start,trial_verdict,trial_iterations\n");
   }
 
   std::printf("bench_scaling: %s, L = %g, init = %s (%zu seeds), P0 = %s, seed %llu, targets %s%s%s\n",
@@ -163,6 +176,8 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   GrowthDriver d(scene);
+  TrialLog trials;
+  d.add_observer(trials);
   const auto t0 = Clock::now();
   const double c0 = cpu_seconds();
   Stage approach, bisect, above, window;
@@ -189,8 +204,13 @@ int main(int argc, char** argv) {
     seen_rejection |= rej > 0;
     if (csv) {
       const StateView v = d.view();
-      std::fprintf(csv.get(), "%ld,%ld,%ld,%s,%zu,%.10g,%.6g,%.6g,%.6g,%ld,%.6f,%.6f\n", attempt, acc, v.step,
+      std::fprintf(csv.get(), "%ld,%ld,%ld,%s,%zu,%.10g,%.6g,%.6g,%.6g,%ld,%.6f,%.6f,", attempt, acc, v.step,
                    to_string(v.phase), d.packing().size(), v.phi, v.P, v.E_per_cell, v.dt, ev, c - c0, w);
+      if (const std::optional<TrialRelaxed> t = std::exchange(trials.last, std::nullopt))
+        std::fprintf(csv.get(), "%.10g,%zu,%.10g,%.6g,%s,%s,%ld\n", t->dt, t->N, t->phi, t->E_per_cell,
+                     to_string(t->start), to_string(t->verdict), t->fire_iterations);
+      else
+        std::fprintf(csv.get(), ",,,,,,\n");  // the first advance() relaxes the initial state: no trial
       std::fflush(csv.get());
     }
     if (report_every > 0 && acc > 0 && r.accepted % report_every == 0) {

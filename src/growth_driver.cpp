@@ -22,6 +22,25 @@ const char* to_string(Phase phase) {
   return "?";
 }
 
+const char* to_string(TrialStart start) {
+  switch (start) {
+    case TrialStart::accepted_state: return "accepted_state";
+    case TrialStart::lowest_overshoot: return "lowest_overshoot";
+    case TrialStart::settled: return "settled";
+  }
+  return "?";
+}
+
+const char* to_string(TrialVerdict verdict) {
+  switch (verdict) {
+    case TrialVerdict::accepted: return "accepted";
+    case TrialVerdict::rejected: return "rejected";
+    case TrialVerdict::below_window: return "below_window";
+    case TrialVerdict::stop: return "stop";
+  }
+  return "?";
+}
+
 const char* to_string(RunStatus status) {
   switch (status) {
     case RunStatus::running: return "running";
@@ -414,7 +433,7 @@ struct GrowthDriver::Impl {
     Rng rng;
     std::vector<Division> divisions;
     double dt = 0, E = 0;
-    bool from_overshoot = false;  // relaxed from the positions of the bracket's lowest overshoot
+    TrialStart start = TrialStart::accepted_state;
   };
 
   // ---- bracket search (jamming.search = bracket) ---------------------------------------------
@@ -489,6 +508,7 @@ struct GrowthDriver::Impl {
       return std::nullopt;
     --result.rejected;
     t.E = fresh_energy_per_cell(t.packing);
+    t.start = TrialStart::settled;
     return t;
   }
 
@@ -500,11 +520,11 @@ struct GrowthDriver::Impl {
   // accepted state), so that the bracket always closes.
   void start_from_overshoot(Trial& t) const {
     const Trial& top = bracket->above[0].trial;
-    if (!bracket->below && top.from_overshoot) return;
+    if (!bracket->below && top.start == TrialStart::lowest_overshoot) return;
     const auto same = [](const Division& a, const Division& b) { return a.mother_index == b.mother_index; };
     if (!std::ranges::equal(t.divisions, top.divisions, same)) return;
     t.packing.q = top.packing.q;
-    t.from_overshoot = true;
+    t.start = TrialStart::lowest_overshoot;
   }
 
   // An overshoot is the new upper end of the bracket (trials lie inside it), opening it if needed.
@@ -521,7 +541,7 @@ struct GrowthDriver::Impl {
   // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
   std::optional<Trial> make_trial() {
     if (bracket && bracket_collapsed()) return settle_below();
-    Trial t{packing, rng, {}, trial_dt(), 0, false};
+    Trial t{packing, rng, {}, trial_dt(), 0};
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
@@ -553,21 +573,21 @@ struct GrowthDriver::Impl {
     return params;
   }
 
-  enum class Verdict { accept, reject, narrow, stop };
-
   // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
-  Verdict judge(const Trial& t) const {
+  TrialVerdict judge(const Trial& t) const {
     const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
-    if (bracket && t.E < eps) return Verdict::narrow;  // below the window: the bracket's new lower end
-    if (phase == Phase::unjammed) return t.E > 2.0 * eps ? Verdict::reject : Verdict::accept;  // overshot jamming
-    if (t.E < eps) return Verdict::accept;                                                     // unjamming
+    if (bracket && t.E < eps) return TrialVerdict::below_window;  // below the window: the bracket's new lower end
+    if (phase == Phase::unjammed)
+      return t.E > 2.0 * eps ? TrialVerdict::rejected : TrialVerdict::accepted;  // overshot jamming
+    if (t.E < eps) return TrialVerdict::accepted;                                // unjamming
     if (next_target < scene.targets.size())
-      return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance ? Verdict::reject
-                                                                                                   : Verdict::accept;
+      return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance
+                 ? TrialVerdict::rejected
+                 : TrialVerdict::accepted;
     // φ_2 not found before φ_J + max_dphi: the run ends at the last accepted state.
     if (scene.continue_to_phi2 && !result.depletion && phi_trial > result.jamming->phi + scene.max_dphi)
-      return Verdict::stop;
-    return Verdict::accept;
+      return TrialVerdict::stop;
+    return TrialVerdict::accepted;
   }
 
   void reject(Trial&& t) {
@@ -682,20 +702,35 @@ struct GrowthDriver::Impl {
                                       " growth steps without reaching the end of the run");
       return result.status;
     }
+    const long evaluations = result.force_evaluations, iterations = result.fire_iterations;
     std::optional<Trial> trial = make_trial();
     if (!trial) return result.status;
-    switch (judge(*trial)) {
-      case Verdict::reject: reject(std::move(*trial)); return result.status;
-      case Verdict::narrow:
+    const TrialVerdict verdict = judge(*trial);
+    if (!observers.empty()) {
+      const TrialRelaxed relaxed{attempts,
+                                 unscaled_dt(trial->dt, next.log_scale),
+                                 log_dt(trial->dt, next.log_scale),
+                                 trial->packing.size(),
+                                 trial->packing.packing_fraction(),
+                                 trial->E,
+                                 trial->start,
+                                 verdict,
+                                 result.fire_iterations - iterations,
+                                 result.force_evaluations - evaluations};
+      for (Observer* o : observers) o->on_trial(relaxed);
+    }
+    switch (verdict) {
+      case TrialVerdict::rejected: reject(std::move(*trial)); return result.status;
+      case TrialVerdict::below_window:
         ++result.rejected;
         bracket->below = std::move(*trial);
         return result.status;
-      case Verdict::stop:
+      case TrialVerdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;
         finish_events();
         return result.status;
-      case Verdict::accept: break;
+      case TrialVerdict::accepted: break;
     }
     const std::vector<Division> divisions = trial->divisions;
     const Change change = accept(std::move(*trial));

@@ -248,6 +248,9 @@ std::vector<SceneKey> make_keys() {
                    BUDJAM_FIELD(bud_events)));
   e.push_back(
       flag("observe", "rigidity_events", "log rigidity (pebble game) along the run", BUDJAM_FIELD(rigidity_events)));
+  e.push_back(flag("observe", "trials",
+                   "log every relaxed growth attempt, accepted or not: the search onto phi_J (trials.csv)",
+                   BUDJAM_FIELD(trials)));
   e.push_back(integer("observe", "checkpoint_every",
                       "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT still write one)", kZeroOrPositive,
                       BUDJAM_FIELD(checkpoint_every)));

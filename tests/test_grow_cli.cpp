@@ -268,7 +268,7 @@ TEST_CASE("a second writer of the same run directory is refused with the holder'
 }
 
 TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrupted run", "[grow_cli][.slow]") {
-  const std::string extra = "[observe]\ncheckpoint_every = 25\n";
+  const std::string extra = "[observe]\ncheckpoint_every = 25\ntrials = true\n";
   const fs::path scene = small_scene("kill", extra);
   const fs::path ref = work_dir() / "kill_ref", dir = work_dir() / "kill_run";
   REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
@@ -296,7 +296,7 @@ TEST_CASE("a run killed with SIGKILL and resumed ends identical to an uninterrup
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(slurp(dir / "summary.json") == slurp(ref / "summary.json"));
-    for (const char* f : {"steps.csv", "divisions.csv", "bud_events.csv", "packings/jammed.pack",
+    for (const char* f : {"steps.csv", "divisions.csv", "bud_events.csv", "trials.csv", "packings/jammed.pack",
                           "packings/target_0.pack", "packings/target_1.pack", "scene.toml"})
       CHECK(slurp(dir / f) == slurp(ref / f));
     CHECK_FALSE(fs::exists(dir / "checkpoint.txt"));

@@ -1027,6 +1027,77 @@ TEST_CASE("a collapsed bracket settles its highest unjammed trial, and the searc
   CHECK(d.result().accepted + d.result().rejected == d.state().attempts);
 }
 
+namespace {
+
+// Every relaxed trial, every accepted state after the initial one (φ, E/N), in order, and the first φ_J.
+struct TrialAudit : Observer {
+  std::vector<TrialRelaxed> trials;
+  std::vector<std::pair<double, double>> accepted;
+  std::optional<double> first_phi_J;
+  std::string name() const override { return "trial_audit"; }
+  void on_trial(const TrialRelaxed& t) override { trials.push_back(t); }
+  void on_jammed(const Jammed& e) override {
+    if (!first_phi_J) first_phi_J = e.jamming.phi;
+  }
+  void on_step_accepted(const StepAccepted& e) override {
+    if (e.state.step > 0) accepted.emplace_back(e.state.phi, e.state.E_per_cell);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("every attempt is announced once as a relaxed trial, judged by the jamming table, its costs adding up",
+          "[driver]") {
+  // Seed 23 settles a collapsed bracket (test above); bisection and secant make other kinds of search.
+  for (const JammingSearch search : {JammingSearch::bracket, JammingSearch::secant, JammingSearch::bisection}) {
+    Scene s = bracket_scene(23);
+    s.search = search;
+    TrialAudit audit;
+    GrowthDriver d(s);
+    d.add_observer(audit);
+    REQUIRE(d.advance() == RunStatus::running);  // the initial relaxation, which is no trial
+    const long evaluations0 = d.result().force_evaluations, iterations0 = d.result().fire_iterations;
+    REQUIRE(d.run() == RunStatus::finished);
+    const RunResult& r = d.result();
+
+    long evaluations = 0, iterations = 0, attempt = 0;
+    std::size_t settles = 0;
+    std::vector<std::pair<double, double>> accepted;
+    for (const TrialRelaxed& t : audit.trials) {
+      if (t.start == TrialStart::settled) {
+        ++settles;
+        CHECK(t.attempt == attempt);  // continues the attempt that narrowed the bracket
+        CHECK(t.verdict == TrialVerdict::accepted);
+      } else {
+        CHECK(t.attempt == ++attempt);
+      }
+      if (search != JammingSearch::bracket) CHECK(t.start == TrialStart::accepted_state);
+      evaluations += t.force_evaluations;
+      iterations += t.fire_iterations;
+      if (t.verdict == TrialVerdict::accepted) accepted.emplace_back(t.phi, t.E_per_cell);
+    }
+    CHECK(attempt == d.state().attempts);
+    CHECK(evaluations == r.force_evaluations - evaluations0);
+    CHECK(iterations == r.fire_iterations - iterations0);
+    CHECK(accepted == audit.accepted);  // the accepted trials are the accepted states, bit for bit
+    if (search == JammingSearch::bracket) CHECK(settles > 0);
+
+    // The jamming table, up to the first jamming point (the first accepted trial in the window).
+    const double eps = s.epsilon_U;
+    for (const TrialRelaxed& t : audit.trials) {
+      INFO("attempt " << t.attempt << ", " << to_string(t.start) << ", E/N = " << t.E_per_cell);
+      if (t.verdict == TrialVerdict::rejected) CHECK(t.E_per_cell > 2 * eps);
+      if (t.verdict == TrialVerdict::below_window) CHECK(t.E_per_cell < eps);
+      if (t.verdict != TrialVerdict::accepted) continue;
+      CHECK(t.E_per_cell <= 2 * eps);
+      if (t.E_per_cell >= eps) {
+        CHECK(t.phi == audit.first_phi_J);
+        break;
+      }
+    }
+  }
+}
+
 TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the uninterrupted run", "[driver]") {
   // The bracket is closed at every accepted state, so a checkpoint needs nothing of it; restored
   // from the last state before jamming, the resumed run repeats the whole search.

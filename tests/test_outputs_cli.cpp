@@ -30,7 +30,7 @@ using budjam::testing::source_file;
 using budjam::testing::work_dir;
 
 // A demo run without feedback, with every observer that writes a table: the logs, moduli,
-// spectra, rigidity events.
+// spectra, rigidity events, trials.
 const fs::path& demo_run() {
   static const fs::path dir = [] {
     const fs::path d = work_dir() / "run";
@@ -38,7 +38,8 @@ const fs::path& demo_run() {
                               shell_quoted(d) + " --set growth.P0=none" +
                               " --set 'jamming.targets=[1e-3]' --set jamming.continue_to_phi2=true"
                               " --set observe.rigidity_events=true --set observe.moduli.at_jamming=true"
-                              " --set observe.moduli.at_targets=true --set observe.dos.at_targets=true");
+                              " --set observe.moduli.at_targets=true --set observe.dos.at_targets=true"
+                              " --set observe.trials=true");
     REQUIRE(r.code == 0);
     return d;
   }();
@@ -69,6 +70,7 @@ TEST_CASE("every column of every table budjam writes is in docs/files.md, and ev
                                                {"`RUN/moduli.csv`", run / "moduli.csv"},
                                                {"`RUN/dos.csv`", run / "dos.csv"},
                                                {"`RUN/rigidity_events.csv`", run / "rigidity_events.csv"},
+                                               {"`RUN/trials.csv`", run / "trials.csv"},
                                                {"`RUN/packings/<name>.dos.csv`", run / "packings/target_0.dos.csv"},
                                                {"`BASE.csv` of `budjam dos`", out / "phi2.dos.csv"},
                                                {"`BASE.csv` of `budjam survival`", out / "survival.csv"},

@@ -69,8 +69,8 @@ TEST_CASE("an existing run is replaced only with overwrite, and only budjam's en
   { RunDirectory::create(d, false); }
   for (const char* f :
        {"scene.toml", "summary.json", "timing.json", "checkpoint.txt", "steps.csv", "divisions.csv.partial",
-        "bud_events.csv", "moduli.csv", "dos.csv.partial", "rigidity_events.csv", "packings/jammed.pack",
-        "packings/target_12.pack", "packings/target_1.moduli.json", "packings/phi2.dos.csv",
+        "bud_events.csv", "moduli.csv", "dos.csv.partial", "rigidity_events.csv", "trials.csv.partial",
+        "packings/jammed.pack", "packings/target_12.pack", "packings/target_1.moduli.json", "packings/phi2.dos.csv",
         "packings/.target_1.pack.tmp-abc123", "spectra/step_40.dos.json", ".summary.json.tmp-XyZ123"})
     put(d / f, "old");
   for (const char* f :

@@ -9,12 +9,12 @@
 // bud pressures only when the protocol (feedback, depletion) or an observer needs them.
 //
 // Order of events for one accepted step (all see the same StateView, with the records of this
-// state already in place):
+// state already in place), after the TrialRelaxed of the attempt that produced it:
 //   Divided (one per division in the step) → BudEvent* (updates; `tagged` at a jamming state,
 //   `censored_unjam` at an unjamming) → StepAccepted → Unjammed | Jammed → TargetReached* →
 //   Depleted → then, at the end of the run, BudEvent* (censored_end) → Finished | Failed.
 // The initial relaxed state is announced as StepAccepted with step 0.
-// A rejected step emits nothing (it is undone exactly, RNG included).
+// A rejected step emits only its TrialRelaxed (it is undone exactly, RNG included).
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -134,6 +134,33 @@ struct StateView {
   double log_chi_c = 0;                    // ... and ln χ_c, exact when every factor underflows
 };
 
+// Where a trial's relaxation started (docs/growth.md, "Jamming search"): the accepted state grown
+// by Δt, the relaxed positions of the bracket's lowest overshoot with the trial's sizes, or (a
+// collapsed bracket's settle) the highest trial below the window, relaxed on.
+enum class TrialStart { accepted_state, lowest_overshoot, settled };
+const char* to_string(TrialStart start);
+
+// What the decision table made of a relaxed trial: accepted; rejected (an overshoot of the jamming
+// window, or a target passed); below the window, the bracket's new lower end; or the end of the run
+// (φ_2 not found before φ_J + max_dphi).
+enum class TrialVerdict { accepted, rejected, below_window, stop };
+const char* to_string(TrialVerdict verdict);
+
+// Every relaxed growth attempt, whatever its verdict: the log of the search onto φ_J and of the
+// landing on targets, which the accepted states alone do not show. A settle continues the attempt
+// of the trial it relaxes on (same `attempt`); its cost is its own.
+struct TrialRelaxed {
+  long attempt = 0;       // growth steps tried so far, this one included
+  double dt = 0;          // Δt of the trial (+∞ beyond the double range) ...
+  double log_dt = 0;      // ... and ln Δt, exact at any size
+  std::size_t N = 0;      // cells after the trial's divisions
+  double phi = 0;         // φ of the trial
+  double E_per_cell = 0;  // E/N after its relaxation
+  TrialStart start = TrialStart::accepted_state;
+  TrialVerdict verdict = TrialVerdict::accepted;
+  long fire_iterations = 0, force_evaluations = 0;  // spent on this trial (saddle relaxation included)
+};
+
 struct StepAccepted {
   const StateView& state;
 };
@@ -177,6 +204,8 @@ class Observer {
   virtual std::string name() const = 0;
   virtual Needs needs() const { return {}; }
 
+  // Every relaxed attempt, before the events of the state it produces (if accepted).
+  virtual void on_trial(const TrialRelaxed&) {}
   virtual void on_step_accepted(const StepAccepted&) {}
   virtual void on_jammed(const Jammed&) {}
   virtual void on_unjammed(const Unjammed&) {}

@@ -94,6 +94,7 @@ struct Scene {
   // [observe]
   bool bud_events = true;
   bool rigidity_events = false;
+  bool trials = false;  // trials.csv: every relaxed growth attempt, accepted or not
   Schedule moduli;
   Schedule dos;
   long checkpoint_every = 100;  // accepted steps between checkpoints; 0 = none (a signal still writes one)

@@ -32,9 +32,9 @@ __all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "con
 class Run:
     """A finished growth-run directory (`budjam grow`): summary.json as a dict and every CSV table
     of the directory as a pandas DataFrame, by file stem: run.steps, run.divisions, run.bud_events,
-    run.moduli, run.dos, run.rigidity_events (those the scene asked for). Empty fields (e.g. a P0
-    of "no feedback", a quantity not reached) are NaN; numbers are read back bit-identically
-    (float_precision="round_trip"). Packing files are listed in run.packings."""
+    run.moduli, run.dos, run.rigidity_events, run.trials (those the scene asked for). Empty fields
+    (e.g. a P0 of "no feedback", a quantity not reached) are NaN; numbers are read back
+    bit-identically (float_precision="round_trip"). Packing files are listed in run.packings."""
 
     def __init__(self, directory):
         import pandas

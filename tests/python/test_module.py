@@ -14,10 +14,11 @@ from conftest import PACKING, SOURCE_DIR, rigidity_json
 
 @pytest.fixture(scope="session")
 def run_dir(run_budjam, tmp_path_factory):
-    """A small growth run (L = 8, to the Δφ targets and φ_2) with moduli and rigidity events."""
+    """A small growth run (L = 8, to the Δφ targets and φ_2) with moduli, rigidity events and trials."""
     out = tmp_path_factory.mktemp("run") / "demo"
     run_budjam("grow", SOURCE_DIR / "data" / "scenes" / "demo.toml", "--out", out, "--quiet",
-               "--set", "observe.moduli.at_targets=true", "--set", "observe.rigidity_events=true")
+               "--set", "observe.moduli.at_targets=true", "--set", "observe.rigidity_events=true",
+               "--set", "observe.trials=true")
     return out
 
 
@@ -153,6 +154,28 @@ def test_load_run_gives_every_table_as_a_dataframe(run_dir):
     assert [p.name for p in run.packings] == sorted(p.name for p in (run_dir / "packings").glob("*.pack"))
     with pytest.raises(AttributeError, match="no table"):
         run.nonexistent
+
+
+def test_trials_csv_reads_back_with_pandas_and_its_accepted_trials_are_the_accepted_steps(run_dir):
+    trials = pandas.read_csv(run_dir / "trials.csv", float_precision="round_trip")
+    steps = pandas.read_csv(run_dir / "steps.csv", float_precision="round_trip")
+    summary = json.loads((run_dir / "summary.json").read_text())
+    accepted = trials[trials["verdict"] == "accepted"]
+    assert len(accepted) == len(steps) - 1 == summary["accepted_steps"]
+    np.testing.assert_array_equal(accepted["phi"].to_numpy(), steps["phi"].to_numpy()[1:])
+    np.testing.assert_array_equal(accepted["E_per_cell"].to_numpy(), steps["E_per_cell"].to_numpy()[1:])
+    np.testing.assert_array_equal(accepted["attempt"].to_numpy(), steps["attempts"].to_numpy()[1:])
+    # Each attempt once, in order (a settle repeats the attempt it relaxes on).
+    first = trials[trials["start"] != "settled"]["attempt"].to_numpy()
+    np.testing.assert_array_equal(first, np.arange(1, len(first) + 1))
+    verdicts = trials["verdict"].value_counts()
+    settles = (trials["start"] == "settled").sum()  # each turns a rejected attempt into an accepted one
+    assert verdicts.get("rejected", 0) + verdicts.get("below_window", 0) - settles == summary["rejected_steps"]
+    # The costs of the trials and of the initial relaxation (of two cells) are the run's.
+    assert 0 < summary["force_evaluations"] - trials["evaluations"].sum() < 10
+    # The jamming table: a rejected trial is above the window, a lower end of the bracket below it.
+    assert (trials[trials["verdict"] == "rejected"]["E_per_cell"] > 2e-16).all()
+    assert (trials[trials["verdict"] == "below_window"]["E_per_cell"] < 1e-16).all()
 
 
 def test_load_run_refuses_an_unfinished_run(tmp_path):

@@ -43,8 +43,8 @@ constexpr std::string_view kMarkerText = "budjam-run 1\n";
 // The top-level files a run writes (logs also as NAME.partial).
 const std::vector<std::string_view>& owned_files() {
   using namespace run_files;
-  static const std::vector<std::string_view> names{scene,     checkpoint, summary, timing, steps,
-                                                   divisions, bud_events, moduli,  dos,    rigidity};
+  static const std::vector<std::string_view> names{scene,      checkpoint, summary, timing,   steps, divisions,
+                                                   bud_events, moduli,     dos,     rigidity, trials};
   return names;
 }
 

@@ -35,6 +35,7 @@ inline constexpr std::string_view bud_events = "bud_events.csv";
 inline constexpr std::string_view moduli = "moduli.csv";
 inline constexpr std::string_view dos = "dos.csv";
 inline constexpr std::string_view rigidity = "rigidity_events.csv";
+inline constexpr std::string_view trials = "trials.csv";
 inline constexpr std::string_view packings = "packings";  // <name>.pack and their sidecars
 inline constexpr std::string_view spectra = "spectra";    // step_<n>.dos.{json,csv}
 inline constexpr std::string_view jammed = "jammed";      // packings/jammed.pack

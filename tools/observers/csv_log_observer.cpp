@@ -2,6 +2,8 @@
 
 #include "budjam/scene.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
@@ -45,6 +47,17 @@ bool due_every(const Schedule& schedule, const StateView& s) {
   if (schedule.every <= 0 || s.phase != Phase::jammed || s.jamming == nullptr) return false;
   const long since = s.step - s.jamming->step;
   return since > 0 && since % schedule.every == 0;
+}
+
+io::CsvField beyond_double_range(double value, double log_value) {
+  if (std::isnormal(value) || (value == 0.0 && log_value == -HUGE_VAL)) return io::CsvField(value);
+  const double log10_value = log_value / std::log(10.0);
+  double exponent = std::floor(log10_value);
+  double mantissa = std::pow(10.0, log10_value - exponent);
+  if (mantissa >= 9.9999999999995) mantissa /= 10.0, exponent += 1.0;  // would print as 10
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.13ge%+.0f", mantissa, exponent);
+  return io::CsvField(std::string_view(buf));
 }
 
 }  // namespace budjam::tools

@@ -43,6 +43,11 @@ class CsvLogObserver : public Observer {
   std::vector<std::optional<io::CsvLog>> logs_;
 };
 
+// A non-negative quantity known also by its natural log (Δt, χ_c): the double's round-trip text
+// while it is a normal double (or 0 with ln = −∞), else decimal text from the log at any size,
+// e.g. `4.2e-400` or `1.7e+347` (13 significant digits: the log's own rounding limits them).
+io::CsvField beyond_double_range(double value, double log_value);
+
 // Whether `s` is one of the states of an "every k accepted steps above jamming" schedule
 // (k = schedule.every > 0): jammed, and k, 2k, ... steps past the jamming point.
 bool due_every(const Schedule& schedule, const StateView& s);

@@ -18,24 +18,6 @@ namespace run_files = io::run_files;
 
 // ---- RunLog -------------------------------------------------------------------------------------
 
-namespace {
-
-// A non-negative quantity known also by its natural log (Δt, χ_c): the double's round-trip text
-// while it is a normal double (or 0 with ln = −∞), else decimal text from the log at any size,
-// e.g. `4.2e-400` or `1.7e+347` (13 significant digits: the log's own rounding limits them).
-CsvField beyond_double_range(double value, double log_value) {
-  if (std::isnormal(value) || (value == 0.0 && log_value == -HUGE_VAL)) return CsvField(value);
-  const double log10_value = log_value / std::log(10.0);
-  double exponent = std::floor(log10_value);
-  double mantissa = std::pow(10.0, log10_value - exponent);
-  if (mantissa >= 9.9999999999995) mantissa /= 10.0, exponent += 1.0;  // would print as 10
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.13ge%+.0f", mantissa, exponent);
-  return CsvField(std::string_view(buf));
-}
-
-}  // namespace
-
 const std::vector<std::string>& RunLog::step_columns() {
   static const std::vector<std::string> c{"step",
                                           "attempts",
