@@ -11,16 +11,17 @@ namespace {
 using namespace budjam;
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kTrialColumns{"attempt", "dt",      "N",          "phi",       "E_per_cell",
+const std::vector<std::string> kTrialColumns{"attempt", "dt",      "N",          "phi",        "E_per_cell",
                                              "start",   "verdict", "iterations", "evaluations"};
 
 class TrialLog : public tools::CsvLogObserver {
  public:
-  TrialLog(const fs::path& dir, bool resuming) : CsvLogObserver({{dir / io::run_files::trials, kTrialColumns}}, resuming) {}
+  TrialLog(const fs::path& dir, bool resuming)
+      : CsvLogObserver({{dir / io::run_files::trials, kTrialColumns}}, resuming) {}
   std::string name() const override { return "trials"; }
   void on_trial(const TrialRelaxed& t) override {
-    log().row({t.attempt, tools::beyond_double_range(t.dt, t.log_dt), t.N, t.phi, t.E_per_cell, to_string(t.start), to_string(t.verdict), t.fire_iterations,
-               t.force_evaluations});
+    log().row({t.attempt, tools::beyond_double_range(t.dt, t.log_dt), t.N, t.phi, t.E_per_cell, to_string(t.start),
+               to_string(t.verdict), t.fire_iterations, t.force_evaluations});
   }
 };
 
