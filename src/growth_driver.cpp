@@ -488,13 +488,35 @@ struct GrowthDriver::Impl {
   // Whether no trial can land in the window: the bracket, from a trial below it, has shrunk to an
   // eighth of the distance the line puts between its upper end and the middle of the window (or
   // below growth.dt_min), so s jumps across the window (a division, or the relaxation falling into
-  // another basin). Without a trial below, the search goes on (to dt_underflow at worst).
+  // another basin); or s visibly jumps at the lower end (jumps_at_lower_end). Without a trial below,
+  // the search goes on (to dt_underflow at worst).
   bool bracket_collapsed() const {
     if (!bracket->below) return false;
     const Overshoot& a = bracket->above[0].line;
     const double slope = bracket_slope();
     const double reach = slope > 0 ? (a.s - window_centre(scene.epsilon_U)) / slope : 0.0;
-    return a.phi - bracket_phi_lo() < reach / 8 || bracket->above[0].trial.dt - bracket_lo() < scene.dt_min;
+    return a.phi - bracket_phi_lo() < reach / 8 || bracket->above[0].trial.dt - bracket_lo() < scene.dt_min ||
+           jumps_at_lower_end();
+  }
+
+  // Overshoots relaxed from the lowest one form one branch of minima, on which s = √(E/N) is nearly
+  // linear in φ. When the two lowest lie on it close to the lower end (the farther at most
+  // kNearLowerEnd times as far from it as the nearer, so the line is a local one) and their line
+  // meets the lower end far above the window, the branch does not come down to the window before
+  // the lower end: s jumps there. Without this test the bracket would halve towards the lower end
+  // with overshoots whose E/N levels off above the window, each a marginal relaxation, until its
+  // width decides (docs/growth.md, "Jamming search").
+  bool jumps_at_lower_end() const {
+    constexpr double kNearLowerEnd = 4.0;
+    const std::vector<BracketEnd>& above = bracket->above;
+    if (scene.jump_factor <= 0 || above.size() < 2) return false;
+    if (above[0].trial.start != TrialStart::lowest_overshoot || above[1].trial.start != TrialStart::lowest_overshoot)
+      return false;
+    const Overshoot &a = above[0].line, &b = above[1].line;
+    const double lo = bracket_phi_lo();
+    if (!(b.phi > a.phi && a.phi > lo) || b.phi - lo > kNearLowerEnd * (a.phi - lo)) return false;
+    const double s_at_lo = a.s - (b.s - a.s) / (b.phi - a.phi) * (a.phi - lo);
+    return s_at_lo > scene.jump_factor * std::sqrt(2.0 * scene.epsilon_U);
   }
 
   // The fallback of a collapsed bracket: its highest trial below the window, relaxed on to the

@@ -210,6 +210,10 @@ std::vector<SceneKey> make_keys() {
                      "step choice near φ_J and the targets: \"bracket\" (secant in Δt from a fixed state), "
                      "\"secant\" (from each accepted state) or \"bisection\" (the paper's halving)",
                      {"bisection", "secant", "bracket"}, BUDJAM_FIELD(search)));
+  e.push_back(real("jamming", "jump_factor",
+                   "bracket search: collapse the bracket when its two lowest overshoots, near its lower end, "
+                   "extrapolate there to √(E/N) above this many times √(2ε_U) (0 = never)",
+                   kZeroOrPositive, BUDJAM_FIELD(jump_factor)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

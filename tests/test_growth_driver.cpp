@@ -1118,3 +1118,42 @@ TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the
     CHECK(same_packing(resumed.packing(), first.packing()));
   }
 }
+
+TEST_CASE(
+    "a bracket whose overshoots level off above the window at its lower end collapses at once, "
+    "the same search until then, and finds the same jamming point for fewer force evaluations",
+    "[driver]") {
+  // Seed 3: the overshoots relaxed from the lowest one level off far above the window as the bracket
+  // closes in on its lower end (s jumps there). Without the early collapse the bracket goes on
+  // halving onto that end; with it the run settles earlier, on a lower unjammed trial, and grows on
+  // to the same jamming point.
+  const auto run = [](double jump_factor) {
+    Scene s = bracket_scene(3);
+    s.jump_factor = jump_factor;
+    TrialAudit audit;
+    GrowthDriver d(s);
+    d.add_observer(audit);
+    REQUIRE(d.run() == RunStatus::finished);
+    return std::make_pair(audit, d.result());
+  };
+  const auto [early, early_result] = run(3.0);
+  const auto [late, late_result] = run(0.0);
+  // The first settled trial: before it the runs made the same trials, the early one fewer of them.
+  // (Which trial settles may differ: the trials skipped include unjammed ones.)
+  const auto first_settle = [](const TrialAudit& a) {
+    return std::ranges::find_if(a.trials, [](const TrialRelaxed& t) { return t.start == TrialStart::settled; });
+  };
+  const auto e = first_settle(early), l = first_settle(late);
+  REQUIRE(e != early.trials.end());
+  REQUIRE(l != late.trials.end());
+  const auto skipped = std::distance(late.trials.begin(), l) - std::distance(early.trials.begin(), e);
+  CHECK(skipped > 0);
+  for (auto t = early.trials.begin(), u = late.trials.begin(); t != e; ++t, ++u) {
+    CHECK(t->dt == u->dt);
+    CHECK(t->E_per_cell == u->E_per_cell);
+  }
+  REQUIRE(early_result.jamming);
+  REQUIRE(late_result.jamming);
+  CHECK(std::abs(early_result.jamming->phi - late_result.jamming->phi) < 1e-8);
+  CHECK(early_result.force_evaluations < late_result.force_evaluations);
+}

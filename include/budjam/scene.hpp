@@ -75,6 +75,11 @@ struct Scene {
   // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
   bool check_minimum = true;
   JammingSearch search = JammingSearch::bracket;
+  // Bracket search: collapse the bracket at once when the line through its two lowest overshoots,
+  // both close to its lower end, meets that end at s = √(E/N) above jump_factor × √(2ε_U): s jumps
+  // across the window there, and further trials would only creep down onto the jump
+  // (docs/growth.md, "Jamming search"). 0 = only the bracket's width decides.
+  double jump_factor = 3.0;
 
   // [minimiser]
   // The Newton finish above jamming from a largest force of 1e-8, converging to the force resolution

@@ -38,7 +38,8 @@ const std::map<std::string, std::string> kKnobLabel{
     {"tol", "jamming.target_tolerance"},  {"dt", "growth.dt"},
     {"solver", "moduli linear solver"},   {"arpack_tol", "ARPACK tol"},
     {"arpack_ncv", "ARPACK ncv"},         {"search", "jamming.search"},
-    {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"}};
+    {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"},
+    {"jump", "jamming.jump_factor"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -151,8 +152,8 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     row.knob = is_ref ? "reference" : row.is_default ? "default" : name.substr(0, name.find('_'));
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
       throw InputError(dir.string() +
-                       ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, newton or "
-                       "adaptive, or default");
+                       ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, jump, "
+                       "newton or adaptive, or default");
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals;
     for (const auto& [s, d] : seeds_of(dir)) {
