@@ -117,6 +117,34 @@ std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, do
   return divisions;
 }
 
+std::optional<Eigen::VectorXd> coordinates_before_divisions(const Packing& further,
+                                                            const std::vector<Division>& further_divisions,
+                                                            const std::vector<Division>& divisions) {
+  if (further_divisions.size() > further.size())
+    throw std::invalid_argument("coordinates_before_divisions: more divisions than cells");
+  const std::size_t n = further.size() - further_divisions.size();  // cells present before either step
+  Eigen::VectorXd q(3 * (n + divisions.size()));
+  q.head(3 * n) = further.q.head(3 * n);
+  auto next = divisions.begin();
+  for (const Division& fd : further_divisions) {
+    const std::size_t m = fd.mother_index;
+    if (next != divisions.end() && next->mother_index == m) {
+      if (next->daughter_index != n + static_cast<std::size_t>(next - divisions.begin()))
+        throw std::invalid_argument("coordinates_before_divisions: the steps did not start from the same cells");
+      q.segment<3>(3 * next->daughter_index) = further.q.segment<3>(3 * fd.daughter_index);
+      ++next;
+      continue;
+    }
+    double dx = further.x(fd.daughter_index) - further.x(m), dy = further.y(fd.daughter_index) - further.y(m);
+    further.box.minimum_image(dx, dy);
+    q[3 * m] = further.x(m) + 0.5 * dx;
+    q[3 * m + 1] = further.y(m) + 0.5 * dy;
+    q[3 * m + 2] = std::atan2(dy, dx);
+  }
+  if (next != divisions.end()) return std::nullopt;
+  return q;
+}
+
 Packing two_cell_start(const Scene& scene, Rng& rng) {
   const double a0 = scene.alpha0;
   const double arg = 2.5 * a0 - (a0 - 1.0) * (a0 - 1.0) - 2.0;

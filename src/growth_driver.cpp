@@ -534,18 +534,21 @@ struct GrowthDriver::Impl {
     return t;
   }
 
-  // A trial inside the bracket starts from the relaxed positions of the lowest overshoot when it
-  // holds the same cells (the same divisions happened): they lie next to the jammed configuration.
-  // Shrunk back towards the accepted state's sizes, an overshoot's configuration may however stay
-  // jammed where the accepted state's is not: until a trial has relaxed below the window, an
-  // overshoot that was itself started so is not started from again (the next trial starts from the
-  // accepted state), so that the bracket always closes.
+  // A trial inside the bracket starts from the relaxed positions of the lowest overshoot: they lie
+  // next to the jammed configuration. The overshoot's larger step may have divided more cells; those
+  // are put back together from their newborns (start_across_divisions; otherwise such a trial starts
+  // from the accepted state). Shrunk back towards the accepted state's sizes, an overshoot's
+  // configuration may however stay jammed where the accepted state's is not: until a trial has
+  // relaxed below the window, an overshoot that was itself started so is not started from again (the
+  // next trial starts from the accepted state), so that the bracket always closes.
   void start_from_overshoot(Trial& t) const {
     const Trial& top = bracket->above[0].trial;
     if (!bracket->below && top.start == TrialStart::lowest_overshoot) return;
     const auto same = [](const Division& a, const Division& b) { return a.mother_index == b.mother_index; };
-    if (!std::ranges::equal(t.divisions, top.divisions, same)) return;
-    t.packing.q = top.packing.q;
+    if (!scene.start_across_divisions && !std::ranges::equal(t.divisions, top.divisions, same)) return;
+    std::optional<Eigen::VectorXd> q = coordinates_before_divisions(top.packing, top.divisions, t.divisions);
+    if (!q) return;
+    t.packing.q = std::move(*q);
     t.start = TrialStart::lowest_overshoot;
   }
 

@@ -214,6 +214,10 @@ std::vector<SceneKey> make_keys() {
                    "bracket search: collapse the bracket when its two lowest overshoots, near its lower end, "
                    "extrapolate there to √(E/N) above this many times √(2ε_U) (0 = never)",
                    kZeroOrPositive, BUDJAM_FIELD(jump_factor)));
+  e.push_back(flag("jamming", "start_across_divisions",
+                   "bracket search: a trial starts from the lowest overshoot also when that overshoot divided more "
+                   "cells (false = only with the same divisions)",
+                   BUDJAM_FIELD(start_across_divisions)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

@@ -279,6 +279,54 @@ TEST_CASE("grow_step divides a cell as soon as alpha exceeds 2 alpha0; newborns 
   CHECK_THROWS(grow_step(q, {}, 1.0, s, rng));
 }
 
+TEST_CASE(
+    "coordinates before divisions: kept cells copied, a division undone restores the dividing cell's "
+    "centroid and axis across the periodic boundary",
+    "[growth]") {
+  Scene s = base_scene();
+  Packing start;
+  start.box.L = s.L;
+  // Cells 0 and 3 divide only in the larger step, cell 2 in both, cell 1 in neither (rates 0.002:
+  // b = 1.0195 reaches 1.01970 at Δt = 0.1 and 1.02150 at Δt = 1; the threshold is 1.02).
+  start.add_cell(0.2, 5.0, 3.0, 1.0195, 0.002, -1);  // its daughter lands across x = 0
+  start.add_cell(3.0, 3.0, 0.4, 0.5, 0.002, -1);
+  start.add_cell(6.0, 2.0, -1.2, 1.0199, 0.002, -1);
+  start.add_cell(8.0, 9.9, 1.4, 1.0196, 0.002, -1);  // and this one across y = L
+  const std::vector<double> rates(4, 0.002);
+  Packing small = start, large = start;
+  Rng rng_small(3), rng_large(3);
+  const auto d_small = grow_step(small, rates, 0.1, s, rng_small);
+  const auto d_large = grow_step(large, rates, 1.0, s, rng_large);
+  REQUIRE(d_small.size() == 1);
+  REQUIRE(d_small[0].mother_index == 2);
+  REQUIRE(d_large.size() == 3);
+  // Relaxation may carry a daughter into another periodic image.
+  large.q[3 * d_large[0].daughter_index] += s.L;
+  large.q[3 * d_large[2].daughter_index + 1] -= s.L;
+
+  const auto q = coordinates_before_divisions(large, d_large, d_small);
+  REQUIRE(q);
+  REQUIRE(q->size() == small.q.size());
+  for (std::size_t i : {0u, 3u}) {
+    double dx = (*q)[3 * i] - start.x(i), dy = (*q)[3 * i + 1] - start.y(i);
+    start.box.minimum_image(dx, dy);
+    CHECK(std::hypot(dx, dy) < 1e-12);
+    CHECK(angle_gap((*q)[3 * i + 2], start.theta(i)) < 1e-12);
+  }
+  CHECK(q->segment<3>(3) == large.q.segment<3>(3));
+  CHECK(q->segment<3>(6) == large.q.segment<3>(6));
+  CHECK(q->segment<3>(3 * d_small[0].daughter_index) == large.q.segment<3>(3 * d_large[1].daughter_index));
+
+  // The same divisions: exactly the further step's coordinates.
+  CHECK(*coordinates_before_divisions(large, d_large, d_large) == large.q);
+  // A division the further step did not make has nowhere to come from.
+  CHECK_FALSE(coordinates_before_divisions(small, d_small, d_large));
+  // Divisions of a different starting packing.
+  std::vector<Division> shifted = d_small;
+  shifted[0].daughter_index += 1;
+  CHECK_THROWS_AS(coordinates_before_divisions(large, d_large, shifted), std::invalid_argument);
+}
+
 TEST_CASE("the two-cell start places alpha0 and 1 + sqrt(2.5 alpha0 - (alpha0-1)^2 - 2) cells at the centre",
           "[growth]") {
   Scene s = base_scene();

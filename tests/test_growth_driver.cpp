@@ -1120,6 +1120,45 @@ TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the
 }
 
 TEST_CASE(
+    "a trial whose lowest overshoot divided more cells starts from it, the cells put back together: the "
+    "same search until then, the same jamming point, fewer force evaluations",
+    "[driver]") {
+  // L = 10, seed 28: a division lies inside the bracket, so trials below it hold one cell fewer than
+  // the lowest overshoot; without start_across_divisions they relax from the accepted state.
+  const auto run = [](bool across) {
+    Scene s = bracket_scene(28);
+    s.L = 10;
+    s.start_across_divisions = across;
+    TrialAudit audit;
+    GrowthDriver d(s);
+    d.add_observer(audit);
+    REQUIRE(d.run() == RunStatus::finished);
+    return std::make_pair(audit, d.result());
+  };
+  const auto [across, across_result] = run(true);
+  const auto [same, same_result] = run(false);
+  // Where the runs part: a trial with one cell fewer than the overshoot above it, started from that
+  // overshoot in one run and from the accepted state in the other. Before it, the same search.
+  const auto [t, u] = std::ranges::mismatch(across.trials, same.trials, {}, &TrialRelaxed::start, &TrialRelaxed::start);
+  REQUIRE(t != across.trials.end());
+  REQUIRE(u != same.trials.end());
+  CHECK(t->start == TrialStart::lowest_overshoot);
+  CHECK(u->start == TrialStart::accepted_state);
+  CHECK(t->dt == u->dt);
+  CHECK(t->N == u->N);
+  CHECK(std::prev(t)->verdict == TrialVerdict::rejected);  // the overshoot it started from
+  CHECK(std::prev(t)->N > t->N);
+  for (auto a = across.trials.begin(), b = same.trials.begin(); a != t; ++a, ++b) {
+    CHECK(a->dt == b->dt);
+    CHECK(a->E_per_cell == b->E_per_cell);
+  }
+  REQUIRE(across_result.jamming);
+  REQUIRE(same_result.jamming);
+  CHECK(std::abs(across_result.jamming->phi - same_result.jamming->phi) < 1e-8);
+  CHECK(across_result.force_evaluations < same_result.force_evaluations);
+}
+
+TEST_CASE(
     "a bracket whose overshoots level off above the window at its lower end collapses at once, "
     "the same search until then, and finds the same jamming point for fewer force evaluations",
     "[driver]") {

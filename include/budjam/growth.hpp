@@ -66,6 +66,18 @@ Division divide(Packing& p, std::size_t i, const Scene& scene, Rng& rng);
 // dividing a cell as soon as α > 2α0. Cells born in the step do not grow in it.
 // `rates` holds γ_i for the cells present at the start.
 std::vector<Division> grow_step(Packing& p, const std::vector<double>& rates, double dt, const Scene& scene, Rng& rng);
+// Coordinates for a packing grown from the same state as `further`, with the same rates and random
+// stream, by a smaller step: `divisions` is what that step divided, `further_divisions` what the
+// larger one did. The larger step divides a superset of cells, in the same index order, so every
+// cell is in `further`: a cell divided in neither or in both steps takes its coordinates (and its
+// daughter's) from there; a cell divided by the larger step only is put back together from its two
+// newborns as divide() split it, centroid midway between them and axis from the mother side to the
+// daughter. Used to start a relaxation next to `further`'s relaxed configuration. nullopt if a
+// division of the smaller step is not in `further_divisions`; throws std::invalid_argument if the
+// two do not start from the same number of cells (a daughter index out of place).
+std::optional<Eigen::VectorXd> coordinates_before_divisions(const Packing& further,
+                                                            const std::vector<Division>& further_divisions,
+                                                            const std::vector<Division>& divisions);
 
 // The paper's start: two cells at (L/2, L/2 ∓ 0.5), α = α0 and α = 1 + √(2.5α0 − (α0−1)² − 2).
 // Draw order per cell: γ0, then θ uniform in [−π, π).

@@ -80,6 +80,10 @@ struct Scene {
   // across the window there, and further trials would only creep down onto the jump
   // (docs/growth.md, "Jamming search"). 0 = only the bracket's width decides.
   double jump_factor = 3.0;
+  // Bracket search: a trial starts from the lowest overshoot's relaxed configuration also when that
+  // overshoot's larger step divided more cells (they are put back together from their newborns);
+  // false = only when both divided the same cells (docs/growth.md, "Jamming search").
+  bool start_across_divisions = true;
 
   // [minimiser]
   // The Newton finish above jamming from a largest force of 1e-8, converging to the force resolution
