@@ -1044,6 +1044,15 @@ struct TrialAudit : Observer {
   }
 };
 
+// A finished run of `s` with its log of trials.
+std::pair<TrialAudit, RunResult> audited_run(const Scene& s) {
+  TrialAudit audit;
+  GrowthDriver d(s);
+  d.add_observer(audit);
+  REQUIRE(d.run() == RunStatus::finished);
+  return {audit, d.result()};
+}
+
 }  // namespace
 
 TEST_CASE("every attempt is announced once as a relaxed trial, judged by the jamming table, its costs adding up",
@@ -1129,11 +1138,7 @@ TEST_CASE(
     Scene s = bracket_scene(28);
     s.L = 10;
     s.start_across_divisions = across;
-    TrialAudit audit;
-    GrowthDriver d(s);
-    d.add_observer(audit);
-    REQUIRE(d.run() == RunStatus::finished);
-    return std::make_pair(audit, d.result());
+    return audited_run(s);
   };
   const auto [across, across_result] = run(true);
   const auto [same, same_result] = run(false);
@@ -1169,11 +1174,7 @@ TEST_CASE(
   const auto run = [](double jump_factor) {
     Scene s = bracket_scene(3);
     s.jump_factor = jump_factor;
-    TrialAudit audit;
-    GrowthDriver d(s);
-    d.add_observer(audit);
-    REQUIRE(d.run() == RunStatus::finished);
-    return std::make_pair(audit, d.result());
+    return audited_run(s);
   };
   const auto [early, early_result] = run(3.0);
   const auto [late, late_result] = run(0.0);
