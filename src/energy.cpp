@@ -22,17 +22,23 @@ inline double round_nearest(double v) {
   return (v + magic) - magic;
 }
 
-// Minimum image with a precomputed 1/L (no division or library call per pair). Agrees with
-// Box::minimum_image except when |dy| or |dx| is within an ulp of L/2, which no pair within the
-// cut-off reaches (the scene requires L > 2 (σ_max + skin)).
-struct FastImage {
-  double L, inv_L, shift;
-  explicit FastImage(const Box& box) : L(box.L), inv_L(1.0 / box.L), shift(box.shear * box.L) {}
-  void apply(double& dx, double& dy) const {
-    const double ny = round_nearest(dy * inv_L);
-    dx -= shift * ny;
-    dy -= ny * L;
-    dx -= L * round_nearest(dx * inv_L);
+// Periods of the minimum image of (dx, dy), as Box::minimum_image finds them (with a precomputed
+// 1/L; it agrees except when |dy| or |dx| is within an ulp of L/2, which no pair within the
+// cut-off reaches).
+inline PairImage minimum_image_periods(const Box& box, double inv_L, double dx, double dy) {
+  const double ny = round_nearest(dy * inv_L);
+  dx -= box.shear * box.L * ny;
+  return {round_nearest(dx * inv_L), ny};
+}
+
+// The separation of a listed pair from its stored periods.
+struct Periodic {
+  double L, shift;
+  explicit Periodic(const Box& box) : L(box.L), shift(box.shear * box.L) {}
+  void apply(const PairImage& image, double& dx, double& dy) const {
+    dx -= shift * image.ny;
+    dy -= image.ny * L;
+    dx -= L * image.nx;
   }
 };
 
@@ -42,10 +48,10 @@ struct PairForce {
 };
 
 // The contact law on the pair (a, b); false (and a zero PairForce) when the lobes do not overlap.
-inline bool pair_force(const Packing& p, const FastImage& image, const Lobes& lobes, std::uint32_t a, std::uint32_t b,
-                       PairForce& out) {
+inline bool pair_force(const Packing& p, const Periodic& periodic, const PairImage& image, const Lobes& lobes,
+                       std::uint32_t a, std::uint32_t b, PairForce& out) {
   double dx = lobes.x[a] - lobes.x[b], dy = lobes.y[a] - lobes.y[b];
-  image.apply(dx, dy);
+  periodic.apply(image, dx, dy);
   const double r2 = dx * dx + dy * dy;
   const double sigma = lobes.R[a] + lobes.R[b];
   if (!(r2 < sigma * sigma)) return false;  // r ≥ σ: no contact (r = σ exactly included)
@@ -131,7 +137,17 @@ void ForceField::refresh(const Packing& p) {
     for (std::size_t i = 0; i < n; ++i) place_cell(p, i);
   }
   // The displacement test stays a pass of its own: folded into the loop above it was slower.
-  list_.update(lobes_, p.box);
+  if (list_.update(lobes_, p.box)) find_pair_images(p.box);
+}
+
+void ForceField::find_pair_images(const Box& box) {
+  const auto& pairs = list_.pairs();
+  const double inv_L = 1.0 / box.L;
+  images_.resize(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [a, b] = pairs[k];
+    images_[k] = minimum_image_periods(box, inv_L, lobes_.x[a] - lobes_.x[b], lobes_.y[a] - lobes_.y[b]);
+  }
 }
 
 double ForceField::evaluate(const Packing& p, Eigen::VectorXd& force) {
@@ -147,11 +163,13 @@ double ForceField::evaluate(const Packing& p, Eigen::VectorXd& force) {
 double ForceField::pair_loop(const Packing& p, double* F) const {
   const double* OX = ox_.data();
   const double* OY = oy_.data();
-  const FastImage image(p.box);
+  const Periodic periodic(p.box);
+  const auto& pairs = list_.pairs();
   double U = 0.0;
   PairForce f;
-  for (const auto& [a, b] : list_.pairs()) {
-    if (!pair_force(p, image, lobes_, a, b, f)) continue;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [a, b] = pairs[k];
+    if (!pair_force(p, periodic, images_[k], lobes_, a, b, f)) continue;
     U += f.U;
     const std::size_t i = 3 * cell_of(a), j = 3 * cell_of(b);
     F[i] += f.fx;
@@ -194,14 +212,14 @@ double ForceField::threaded_pair_loop(const Packing& p, double* F) {
   pair_f_.resize(2 * pairs.size());
   const double* OX = ox_.data();
   const double* OY = oy_.data();
-  const FastImage image(p.box);
+  const Periodic periodic(p.box);
   double U = 0.0;
 #pragma omp parallel num_threads(threads_)
   {
 #pragma omp for schedule(static)
     for (long k = 0; k < n_pairs; ++k) {
       PairForce f;
-      pair_force(p, image, lobes_, pairs[k].first, pairs[k].second, f);
+      pair_force(p, periodic, images_[k], lobes_, pairs[k].first, pairs[k].second, f);
       pair_U_[k] = f.U;
       pair_f_[2 * k] = f.fx;
       pair_f_[2 * k + 1] = f.fy;
@@ -241,11 +259,13 @@ double ForceField::energy(const Packing& p) {
   const double* X = lobes_.x.data();
   const double* Y = lobes_.y.data();
   const double* R = lobes_.R.data();
-  const FastImage image(p.box);
+  const Periodic periodic(p.box);
+  const auto& pairs = list_.pairs();
   double U = 0.0;
-  for (const auto& [a, b] : list_.pairs()) {
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [a, b] = pairs[k];
     double dx = X[a] - X[b], dy = Y[a] - Y[b];
-    image.apply(dx, dy);
+    periodic.apply(images_[k], dx, dy);
     const double r2 = dx * dx + dy * dy;
     const double sigma = R[a] + R[b];
     if (!(r2 < sigma * sigma)) continue;

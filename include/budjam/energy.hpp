@@ -16,6 +16,16 @@
 
 namespace budjam {
 
+// The minimum image of a listed pair of lobes (a, b) as whole periods: the separation is
+// r_a − r_b − (nx L + ny γL, ny L). Found once per neighbour-list rebuild. Between rebuilds no pair
+// closes in by more than the skin, and the scene requires L > 2 (σ_max + skin), so a pair in
+// contact keeps the image it had at the build, and a pair out of contact in that image is out of
+// contact in every image: U and F are bit for bit those of rounding to the minimum image afresh at
+// every evaluation, without its two roundings per pair.
+struct PairImage {
+  double nx, ny;
+};
+
 // Keeps the lobe positions and the Verlet neighbour list current for a packing whose
 // coordinates move (FIRE) or whose cells change (growth, division). Invariant: after
 // evaluate(), `lobes()` and `neighbours()` describe the packing that was passed in.
@@ -52,6 +62,7 @@ class ForceField {
 
  private:
   void refresh(const Packing& p);
+  void find_pair_images(const Box& box);
   void place_cell(const Packing& p, std::size_t i);
   double pair_loop(const Packing& p, double* F) const;
   double threaded_pair_loop(const Packing& p, double* F);
@@ -61,6 +72,9 @@ class ForceField {
   Lobes lobes_;
   NeighbourList list_;
   long evaluations_ = 0;
+  // Minimum-image periods (nx, ny) of each listed pair, found at the list's last rebuild.
+  std::vector<PairImage> images_;
+  std::vector<std::uint32_t> contacts_;
   // Per-cell dumbbell geometry, recomputed only when a bud size changes.
   std::vector<double> b_cached_, mother_offset_, bud_offset_;
   // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
