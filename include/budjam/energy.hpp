@@ -74,7 +74,6 @@ class ForceField {
   long evaluations_ = 0;
   // Minimum-image periods (nx, ny) of each listed pair, found at the list's last rebuild.
   std::vector<PairImage> images_;
-  std::vector<std::uint32_t> contacts_;
   // Per-cell dumbbell geometry, recomputed only when a bud size changes.
   std::vector<double> b_cached_, mother_offset_, bud_offset_;
   // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
