@@ -36,6 +36,7 @@ const char* to_string(TrialVerdict verdict) {
     case TrialVerdict::accepted: return "accepted";
     case TrialVerdict::rejected: return "rejected";
     case TrialVerdict::below_window: return "below_window";
+    case TrialVerdict::deferred: return "deferred";
     case TrialVerdict::stop: return "stop";
   }
   return "?";
@@ -141,16 +142,21 @@ struct GrowthDriver::Impl {
     return p.size() ? U / static_cast<double>(p.size()) : 0.0;
   }
 
-  // FIRE on a trial, counted; false (and the run failed) if it did not converge.
-  bool relax(Packing& p, const FireParams& params, const std::string& where) {
+  // FIRE on a trial, counted; false (and the run failed) if it did not converge. With a `budget`
+  // below params.max_iterations, FIRE stops there without failing the run: `*spent` tells.
+  bool relax(Packing& p, const FireParams& params, const std::string& where, long budget = 0, bool* spent = nullptr) {
     field.invalidate();
-    const FireResult fr = minimise(p, field, params, &newton);
+    FireParams run = params;
+    const bool budgeted = budget > 0 && budget < params.max_iterations;
+    if (budgeted) run.max_iterations = budget;
+    const FireResult fr = minimise(p, field, run, &newton);
     result.force_evaluations += fr.evaluations + 1;
     result.fire_iterations += fr.iterations;
-    if (!fr.converged)
+    if (spent) *spent = budgeted && !fr.converged;
+    if (!fr.converged && !budgeted)
       fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
                                             std::to_string(params.max_iterations) + " (" + where + ")");
-    return fr.converged;
+    return fr.converged || budgeted;
   }
 
   // Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires the field to be current
@@ -434,7 +440,12 @@ struct GrowthDriver::Impl {
     std::vector<Division> divisions;
     double dt = 0, E = 0;
     TrialStart start = TrialStart::accepted_state;
+    // Its relaxation spent jamming.trial_budget far above the window: an upper end of the bracket
+    // until the bracket collapses onto it; then it is relaxed on (resume_top).
+    bool deferred = false;
   };
+  // A trial is deferred only with E/N above this many times the top of the window at its budget.
+  static constexpr double kDeferAbove = 100.0;
 
   // ---- bracket search (jamming.search = bracket) ---------------------------------------------
   // From the fixed accepted state, φ_J lies between the largest Δt whose trial relaxed below the
@@ -446,7 +457,8 @@ struct GrowthDriver::Impl {
   };
   struct Bracket {
     std::optional<Trial> below;     // the highest trial below the window, relaxed only to E/N < ε_U
-    std::vector<BracketEnd> above;  // the two overshoots of smallest Δt, smallest first
+    std::vector<BracketEnd> above;  // the two relaxed overshoots of smallest Δt and the deferred trials
+                                    // beneath them, smallest Δt first
     int slow_trials = 0;            // consecutive trials that did not halve the bracket
     double width = 0;               // Δt width of the bracket at the last trial
   };
@@ -456,11 +468,13 @@ struct GrowthDriver::Impl {
   double bracket_phi_lo() const { return bracket->below ? bracket->below->packing.packing_fraction() : phi; }
 
   // ds/dφ of the line through the lowest overshoot: the secant through the two lowest (same base,
-  // so the same function s(Δt)), or the virial slope of the lowest alone.
+  // so the same function s(Δt)), or the virial slope of the lowest alone (also when either is a
+  // deferred trial, whose s is only an upper bound).
   double bracket_slope() const {
     const std::vector<BracketEnd>& above = bracket->above;
     const Overshoot& a = above[0].line;
-    if (above.size() >= 2 && above[1].line.s > a.s && above[1].line.phi > a.phi)
+    const bool relaxed = above.size() >= 2 && !above[0].trial.deferred && !above[1].trial.deferred;
+    if (relaxed && above[1].line.s > a.s && above[1].line.phi > a.phi)
       return (above[1].line.s - a.s) / (above[1].line.phi - a.phi);
     return a.slope;
   }
@@ -492,6 +506,7 @@ struct GrowthDriver::Impl {
   // the search goes on (to dt_underflow at worst).
   bool bracket_collapsed() const {
     if (!bracket->below) return false;
+    if (bracket->above.empty()) return true;  // its only upper end, resumed, relaxed below the window
     const Overshoot& a = bracket->above[0].line;
     const double slope = bracket_slope();
     const double reach = slope > 0 ? (a.s - window_centre(scene.epsilon_U)) / slope : 0.0;
@@ -512,6 +527,7 @@ struct GrowthDriver::Impl {
     if (scene.jump_factor <= 0 || above.size() < 2) return false;
     if (above[0].trial.start != TrialStart::lowest_overshoot || above[1].trial.start != TrialStart::lowest_overshoot)
       return false;
+    if (above[0].trial.deferred || above[1].trial.deferred) return false;  // their E/N is still falling
     const Overshoot &a = above[0].line, &b = above[1].line;
     const double lo = bracket_phi_lo();
     if (!(b.phi > a.phi && a.phi > lo) || b.phi - lo > kNearLowerEnd * (a.phi - lo)) return false;
@@ -552,6 +568,42 @@ struct GrowthDriver::Impl {
     t.start = TrialStart::lowest_overshoot;
   }
 
+  // A deferred upper end is worth its remaining relaxation only once the bracket has collapsed onto
+  // it: trials beneath it are cheap (they relax below the window, or overshoot it and make it moot,
+  // or land in it), its remaining creep is not.
+  bool top_to_resume() const {
+    return !bracket->above.empty() && bracket->above.front().trial.deferred && bracket_collapsed();
+  }
+
+  // The deferred upper end, relaxed on to convergence from where its budget ended, is judged again as
+  // the same attempt (counted rejected until then). Whether it overshoots, lands in the window or
+  // falls below it, the bracket stays consistent. nullopt if the run failed.
+  std::optional<Trial> resume_top() {
+    Trial t = std::move(bracket->above.front().trial);
+    bracket->above.erase(bracket->above.begin());
+    --result.rejected;
+    t.deferred = false;
+    if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, growth step " + std::to_string(attempts)))
+      return std::nullopt;
+    t.E = fresh_energy_per_cell(t.packing);
+    if (!relax_if_saddle(t)) return std::nullopt;
+    return t;
+  }
+
+  // A relaxed jamming candidate that is a saddle of U (FIRE stopped on it) is relaxed on to FIRE's
+  // force resolution; the energy usually falls to 0. false if the run failed.
+  bool relax_if_saddle(Trial& t) {
+    const double eps = scene.epsilon_U;
+    if (!scene.check_minimum || phase != Phase::unjammed || t.E < eps || t.E > 2.0 * eps || is_minimum(t.packing))
+      return true;
+    FireParams deep = scene.fire;
+    deep.force_tol = 0;
+    ++result.saddles_relaxed;
+    if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return false;
+    t.E = fresh_energy_per_cell(t.packing);
+    return true;
+  }
+
   // An overshoot is the new upper end of the bracket (trials lie inside it), opening it if needed.
   // Requires the field to be current for the trial.
   void lower_bracket_top(Trial&& t) {
@@ -559,31 +611,40 @@ struct GrowthDriver::Impl {
     if (!bracket) bracket = Bracket{};
     std::vector<BracketEnd>& above = bracket->above;
     above.insert(above.begin(), BracketEnd{std::move(t), line});
-    if (above.size() > 2) above.pop_back();
+    // The two lowest relaxed overshoots stay, and the deferred trials beneath them: a deferred trial
+    // may yet relax below the window, and the bracket then still has its relaxed upper end.
+    int relaxed = 0;
+    const auto last =
+        std::ranges::find_if(above, [&](const BracketEnd& e) { return !e.trial.deferred && ++relaxed == 2; });
+    if (last != above.end()) above.erase(std::next(last), above.end());
   }
 
   // Grows and relaxes a trial from the accepted state; a jamming candidate that is a saddle is
   // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
   std::optional<Trial> make_trial() {
+    if (bracket && top_to_resume()) return resume_top();
     if (bracket && bracket_collapsed()) return settle_below();
     Trial t{packing, rng, {}, trial_dt(), 0};
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
     if (bracket) start_from_overshoot(t);
-    if (!relax(t.packing, trial_minimiser(),
-               "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale))))
-      return std::nullopt;
-    const double eps = scene.epsilon_U;
+    // Inside an open bracket a trial only has to be placed above or below the window: one that
+    // creeps on past the budget far above the window is set aside as a deferred upper end. Near the
+    // window it is relaxed on: it may be the jamming point, and a deferred trial there would only
+    // draw the next trials onto itself (docs/growth.md, "Jamming search").
+    const std::string where =
+        "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
+    const long budget = bracket ? scene.trial_budget : 0;
+    if (!relax(t.packing, trial_minimiser(), where, budget, &t.deferred)) return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);
-    if (scene.check_minimum && phase == Phase::unjammed && t.E >= eps && t.E <= 2.0 * eps && !is_minimum(t.packing)) {
-      // FIRE stopped on a saddle: relax on to its force resolution; the energy usually falls to 0.
-      FireParams deep = scene.fire;
-      deep.force_tol = 0;
-      ++result.saddles_relaxed;
-      if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return std::nullopt;
+    if (t.deferred && t.E <= kDeferAbove * 2.0 * scene.epsilon_U) {
+      t.deferred = false;
+      if (!relax(t.packing, trial_minimiser(), where)) return std::nullopt;
       t.E = fresh_energy_per_cell(t.packing);
     }
+    if (t.deferred) return t;
+    if (!relax_if_saddle(t)) return std::nullopt;
     return t;
   }
 
@@ -601,6 +662,7 @@ struct GrowthDriver::Impl {
   // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
   TrialVerdict judge(const Trial& t) const {
     const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
+    if (t.deferred) return TrialVerdict::deferred;  // E/N ≥ ε_U (the floor did not stop it), still falling
     if (bracket && t.E < eps) return TrialVerdict::below_window;  // below the window: the bracket's new lower end
     if (phase == Phase::unjammed)
       return t.E > 2.0 * eps ? TrialVerdict::rejected : TrialVerdict::accepted;  // overshot jamming
@@ -745,7 +807,8 @@ struct GrowthDriver::Impl {
       for (Observer* o : observers) o->on_trial(relaxed);
     }
     switch (verdict) {
-      case TrialVerdict::rejected: reject(std::move(*trial)); return result.status;
+      case TrialVerdict::rejected:
+      case TrialVerdict::deferred: reject(std::move(*trial)); return result.status;
       case TrialVerdict::below_window:
         ++result.rejected;
         bracket->below = std::move(*trial);

@@ -218,6 +218,10 @@ std::vector<SceneKey> make_keys() {
                    "bracket search: a trial starts from the lowest overshoot also when that overshoot divided more "
                    "cells (false = only with the same divisions)",
                    BUDJAM_FIELD(start_across_divisions)));
+  e.push_back(integer("jamming", "trial_budget",
+                      "bracket search: FIRE iterations after which a trial still above the window becomes a "
+                      "deferred upper end, relaxed on only if the bracket closes in on it (0 = never)",
+                      kZeroOrPositive, BUDJAM_FIELD(trial_budget)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

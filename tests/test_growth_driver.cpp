@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -1105,6 +1106,66 @@ TEST_CASE("every attempt is announced once as a relaxed trial, judged by the jam
       }
     }
   }
+}
+
+TEST_CASE(
+    "a trial that spends jamming.trial_budget inside the bracket is deferred: resumed under its own attempt once the "
+    "search closes in on it, or made moot; the jamming table holds and every jamming point is a minimum in the window",
+    "[driver]") {
+  const long budget = 100;  // far below what trials near φ_J take at L = 6, so that many are deferred
+  long deferred = 0, resumed = 0, moot = 0;
+  for (std::uint64_t seed : {3u, 4u, 23u, 28u}) {
+    Scene s = bracket_scene(seed);
+    s.trial_budget = budget;
+    TrialAudit audit;
+    JammingPoint j;
+    GrowthDriver d(s);
+    d.add_observer(audit);
+    d.add_observer(j);
+    REQUIRE(d.run() == RunStatus::finished);
+    INFO("seed " << seed);
+    check_jamming_point(j, s);
+    CHECK(d.result().accepted + d.result().rejected == d.state().attempts);
+
+    const double eps = s.epsilon_U;
+    std::set<long> waiting;  // attempts deferred and not resumed (yet)
+    bool jammed = false;     // the table below is the one of the search onto φ_J
+    for (const TrialRelaxed& t : audit.trials) {
+      INFO("attempt " << t.attempt << ", " << to_string(t.verdict) << ", E/N = " << t.E_per_cell);
+      if (waiting.erase(t.attempt)) {
+        ++resumed;  // relaxed on from where its budget ended, then judged by the table
+        CHECK(t.start != TrialStart::settled);
+        CHECK(t.verdict != TrialVerdict::deferred);
+      }
+      if (t.verdict == TrialVerdict::deferred) {
+        ++deferred;
+        CHECK(t.fire_iterations == budget);
+        CHECK(t.E_per_cell >= eps);  // the early stop at ε_U did not end it
+        waiting.insert(t.attempt);
+      }
+      if (jammed) continue;
+      if (t.verdict == TrialVerdict::rejected) CHECK(t.E_per_cell > 2 * eps);
+      if (t.verdict == TrialVerdict::below_window) CHECK(t.E_per_cell < eps);
+      jammed = t.verdict == TrialVerdict::accepted && t.E_per_cell >= eps;
+    }
+    moot += static_cast<long>(waiting.size());
+  }
+  CHECK(deferred > 0);
+  CHECK(resumed > 0);
+  CHECK(moot > 0);
+}
+
+TEST_CASE("a trial budget that no trial reaches leaves the bracket search bit for bit unchanged", "[driver]") {
+  Scene s = bracket_scene(23);
+  s.trial_budget = 0;
+  const auto [audit, unlimited] = audited_run(s);
+  long longest = 0;
+  for (const TrialRelaxed& t : audit.trials) longest = std::max(longest, t.fire_iterations);
+  s.trial_budget = longest + 1;
+  const auto [same_audit, budgeted] = audited_run(s);
+  CHECK(same_result(budgeted, unlimited));
+  CHECK(same_audit.trials.size() == audit.trials.size());
+  for (const TrialRelaxed& t : same_audit.trials) CHECK(t.verdict != TrialVerdict::deferred);
 }
 
 TEST_CASE("a bracket-search run restored from a checkpoint ends identical to the uninterrupted run", "[driver]") {

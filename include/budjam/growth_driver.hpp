@@ -141,14 +141,17 @@ enum class TrialStart { accepted_state, lowest_overshoot, settled };
 const char* to_string(TrialStart start);
 
 // What the decision table made of a relaxed trial: accepted; rejected (an overshoot of the jamming
-// window, or a target passed); below the window, the bracket's new lower end; or the end of the run
-// (φ_2 not found before φ_J + max_dphi).
-enum class TrialVerdict { accepted, rejected, below_window, stop };
+// window, or a target passed); below the window, the bracket's new lower end; deferred (inside the
+// bracket, jamming.trial_budget FIRE iterations spent above the window: an upper end until it is
+// resumed, when it is judged again under the same attempt); or the end of the run (φ_2 not found
+// before φ_J + max_dphi).
+enum class TrialVerdict { accepted, rejected, below_window, deferred, stop };
 const char* to_string(TrialVerdict verdict);
 
 // Every relaxed growth attempt, whatever its verdict: the log of the search onto φ_J and of the
-// landing on targets, which the accepted states alone do not show. A settle continues the attempt
-// of the trial it relaxes on (same `attempt`); its cost is its own.
+// landing on targets, which the accepted states alone do not show. A settle, or the resumption of a
+// deferred trial, continues the attempt of the trial it relaxes on (same `attempt`); its cost is its
+// own.
 struct TrialRelaxed {
   long attempt = 0;       // growth steps tried so far, this one included
   double dt = 0;          // Δt of the trial (+∞ beyond the double range) ...

@@ -39,7 +39,8 @@ const std::map<std::string, std::string> kKnobLabel{
     {"solver", "moduli linear solver"},   {"arpack_tol", "ARPACK tol"},
     {"arpack_ncv", "ARPACK ncv"},         {"search", "jamming.search"},
     {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"},
-    {"jump", "jamming.jump_factor"},      {"across", "jamming.start_across_divisions"}};
+    {"jump", "jamming.jump_factor"},      {"across", "jamming.start_across_divisions"},
+    {"budget", "jamming.trial_budget"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -153,7 +154,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
       throw InputError(dir.string() +
                        ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, jump, "
-                       "across, newton or adaptive, or default");
+                       "across, budget, newton or adaptive, or default");
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals;
     for (const auto& [s, d] : seeds_of(dir)) {
