@@ -142,8 +142,8 @@ const char* to_string(TrialStart start);
 
 // What the decision table made of a relaxed trial: accepted; rejected (an overshoot of the jamming
 // window, or a target passed); below the window, the bracket's new lower end; deferred (inside the
-// bracket, jamming.trial_budget FIRE iterations spent above the window: an upper end until it is
-// resumed, when it is judged again under the same attempt); or the end of the run (φ_2 not found
+// bracket, jamming.trial_budget FIRE iterations spent with E/N still over 100 · 2ε_U: an upper end
+// until it is resumed, when it is judged again under the same attempt); or the end of the run (φ_2 not found
 // before φ_J + max_dphi).
 enum class TrialVerdict { accepted, rejected, below_window, deferred, stop };
 const char* to_string(TrialVerdict verdict);
