@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -25,34 +26,57 @@ inline int wrap_index(long c, int n) {
   return static_cast<int>(m < 0 ? m + n : m);
 }
 
+// d₁ + d₂, the two largest lobe displacements from (x, y); NaN if a position is not finite, or
+// if `R0` is given and a radius differs from it.
+double closing_bound(const Lobes& lobes, const std::vector<double>& x, const std::vector<double>& y,
+                     const std::vector<double>* R0 = nullptr) {
+  double m1 = 0.0, m2 = 0.0;
+  bool valid = true;
+  for (std::size_t i = 0; i < lobes.size(); ++i) {
+    if (R0) valid &= lobes.R[i] == (*R0)[i];
+    const double dx = lobes.x[i] - x[i], dy = lobes.y[i] - y[i];
+    const double d2 = dx * dx + dy * dy;
+    if (d2 > m2) {
+      if (d2 > m1) {
+        m2 = m1;
+        m1 = d2;
+      } else {
+        m2 = d2;
+      }
+    }
+    valid &= std::isfinite(d2);  // a NaN fails every comparison above
+  }
+  return valid ? std::sqrt(m1) + std::sqrt(m2) : std::numeric_limits<double>::quiet_NaN();
+}
+
 }  // namespace
 
 bool NeighbourList::update(const Lobes& lobes, const Box& box) {
   const std::size_t n = lobes.size();
   bool rebuild = !valid_ || n != x0_.size() || box.L != box_.L || box.shear != box_.shear;
   if (!rebuild) {
-    // Two largest squared displacements; a pair's distance can shrink by at most d1 + d2.
-    double m1 = 0.0, m2 = 0.0;
-    bool radii_changed = false, finite = true;
-    for (std::size_t i = 0; i < n; ++i) {
-      radii_changed |= lobes.R[i] != R0_[i];
-      const double dx = lobes.x[i] - x0_[i], dy = lobes.y[i] - y0_[i];
-      const double d2 = dx * dx + dy * dy;
-      if (d2 > m2) {
-        if (d2 > m1) {
-          m2 = m1;
-          m1 = d2;
-        } else {
-          m2 = d2;
-        }
-      }
-      finite &= std::isfinite(d2);  // a NaN fails every comparison above
-    }
-    // A non-finite displacement forces a rebuild, which then throws.
-    rebuild = radii_changed || !finite || !(std::sqrt(m1) + std::sqrt(m2) < skin_);
+    // A pair's distance shrinks by at most d₁ + d₂. A changed radius or a non-finite
+    // displacement fails both tests and forces a rebuild (which throws on the latter).
+    const double near_bound = closing_bound(lobes, x1_, y1_, &R0_);
+    if (near_bound < near_skin_) return false;
+    // A pair outside the pair list has closed in by less than this until the near list expires.
+    rebuild = std::isnan(near_bound) || !(closing_bound(lobes, x0_, y0_) + near_skin_ <= skin_);
   }
   if (rebuild) build(lobes, box);
+  build_near(lobes, box);
   return rebuild;
+}
+
+void NeighbourList::build_near(const Lobes& lobes, const Box& box) {
+  near_.clear();
+  for (std::uint32_t k = 0; k < pairs_.size(); ++k) {
+    const auto [a, b] = pairs_[k];
+    const double reach = lobes.R[a] + lobes.R[b] + near_skin_;
+    if (distance2(lobes, box, a, b) < reach * reach) near_.push_back(k);
+  }
+  x1_.assign(lobes.x.begin(), lobes.x.end());
+  y1_.assign(lobes.y.begin(), lobes.y.end());
+  ++near_rebuilds_;
 }
 
 void NeighbourList::build(const Lobes& lobes, const Box& box) {

@@ -137,7 +137,22 @@ void ForceField::refresh(const Packing& p) {
     for (std::size_t i = 0; i < n; ++i) place_cell(p, i);
   }
   // The displacement test stays a pass of its own: folded into the loop above it was slower.
+  const long near_built = list_.near_rebuilds();
   if (list_.update(lobes_, p.box)) find_pair_images(p.box);
+  if (list_.near_rebuilds() != near_built) gather_near_pairs();
+}
+
+// The force loops run over the near list's pairs, copied out in order with their images so that
+// they stream through memory: the same contacts in the same order as over the whole pair list.
+void ForceField::gather_near_pairs() {
+  const auto& pairs = list_.pairs();
+  const auto& near = list_.near();
+  near_pairs_.resize(near.size());
+  near_images_.resize(near.size());
+  for (std::size_t t = 0; t < near.size(); ++t) {
+    near_pairs_[t] = pairs[near[t]];
+    near_images_[t] = images_[near[t]];
+  }
 }
 
 void ForceField::find_pair_images(const Box& box) {
@@ -164,12 +179,12 @@ double ForceField::pair_loop(const Packing& p, double* F) const {
   const double* OX = ox_.data();
   const double* OY = oy_.data();
   const Periodic periodic(p.box);
-  const auto& pairs = list_.pairs();
+  const auto& pairs = near_pairs_;
   double U = 0.0;
   PairForce f;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const auto [a, b] = pairs[k];
-    if (!pair_force(p, periodic, images_[k], lobes_, a, b, f)) continue;
+    if (!pair_force(p, periodic, near_images_[k], lobes_, a, b, f)) continue;
     U += f.U;
     const std::size_t i = 3 * cell_of(a), j = 3 * cell_of(b);
     F[i] += f.fx;
@@ -183,8 +198,8 @@ double ForceField::pair_loop(const Packing& p, double* F) const {
 }
 
 void ForceField::index_pairs_by_cell(std::size_t n) {
-  if (indexed_rebuild_ == list_.rebuilds() && cell_pairs_start_.size() == n + 1) return;
-  const auto& pairs = list_.pairs();
+  if (indexed_rebuild_ == list_.near_rebuilds() && cell_pairs_start_.size() == n + 1) return;
+  const auto& pairs = near_pairs_;
   cell_pairs_start_.assign(n + 1, 0);
   for (const auto& [a, b] : pairs) {
     ++cell_pairs_start_[cell_of(a) + 1];
@@ -197,14 +212,14 @@ void ForceField::index_pairs_by_cell(std::size_t n) {
     cell_pairs_[fill[cell_of(pairs[k].first)]++] = 2 * k;
     cell_pairs_[fill[cell_of(pairs[k].second)]++] = 2 * k + 1;
   }
-  indexed_rebuild_ = list_.rebuilds();
+  indexed_rebuild_ = list_.near_rebuilds();
 }
 
 // The serial loop's sums in the serial loop's order: pair forces in parallel (a zero force where
 // there is no contact adds nothing: sums that start at +0 never reach −0), then each cell adds
 // its pairs' in pair order, and U its pairs' energies in pair order.
 double ForceField::threaded_pair_loop(const Packing& p, double* F) {
-  const auto& pairs = list_.pairs();
+  const auto& pairs = near_pairs_;
   const std::size_t n = p.size();
   const long n_pairs = static_cast<long>(pairs.size()), cells = static_cast<long>(n);
   index_pairs_by_cell(n);
@@ -219,7 +234,7 @@ double ForceField::threaded_pair_loop(const Packing& p, double* F) {
 #pragma omp for schedule(static)
     for (long k = 0; k < n_pairs; ++k) {
       PairForce f;
-      pair_force(p, periodic, images_[k], lobes_, pairs[k].first, pairs[k].second, f);
+      pair_force(p, periodic, near_images_[k], lobes_, pairs[k].first, pairs[k].second, f);
       pair_U_[k] = f.U;
       pair_f_[2 * k] = f.fx;
       pair_f_[2 * k + 1] = f.fy;
@@ -260,12 +275,12 @@ double ForceField::energy(const Packing& p) {
   const double* Y = lobes_.y.data();
   const double* R = lobes_.R.data();
   const Periodic periodic(p.box);
-  const auto& pairs = list_.pairs();
+  const auto& pairs = near_pairs_;
   double U = 0.0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const auto [a, b] = pairs[k];
     double dx = X[a] - X[b], dy = Y[a] - Y[b];
-    periodic.apply(images_[k], dx, dy);
+    periodic.apply(near_images_[k], dx, dy);
     const double r2 = dx * dx + dy * dy;
     const double sigma = R[a] + R[b];
     if (!(r2 < sigma * sigma)) continue;

@@ -86,38 +86,56 @@ TEST_CASE("linked-cell pairs equal brute-force pairs in boxes of one to four gri
   }
 }
 
-TEST_CASE("Verlet list keeps every contact until the skin criterion triggers a rebuild", "[fast]") {
+TEST_CASE("Verlet list and its near list keep every contact until their skin criteria trigger rebuilds", "[fast]") {
   Packing p = random_packing(200, 0.9, 31);
   const double skin = 0.3;
   NeighbourList list(skin);
+  REQUIRE(list.near_skin() > 0.0);
+  REQUIRE(list.near_skin() < skin);
   Lobes lobes;
   place_lobes(p, lobes);
   REQUIRE(list.update(lobes, p.box));
   std::mt19937_64 rng(32);
   std::normal_distribution<double> g(0.0, 1.0);
   long rebuilds = 0, steps = 0;
+  const long near_before = list.near_rebuilds();
+  std::size_t listed = 0, near = 0;
   for (int step = 0; step < 300; ++step) {
     // Small random moves of every cell (translations and rotations).
     for (std::size_t i = 0; i < p.size(); ++i) {
-      p.q[3 * i] += 0.01 * g(rng);
-      p.q[3 * i + 1] += 0.01 * g(rng);
-      p.q[3 * i + 2] += 0.02 * g(rng);
+      p.q[3 * i] += 0.002 * g(rng);
+      p.q[3 * i + 1] += 0.002 * g(rng);
+      p.q[3 * i + 2] += 0.004 * g(rng);
     }
     place_lobes(p, lobes);
     rebuilds += list.update(lobes, p.box) ? 1 : 0;
     ++steps;
-    // Every pair within σ (indeed within σ + skin − d1 − d2) must be listed.
+    // Every pair within σ must be listed, and be in the near list.
     const PairList contacts = brute_force_pairs(lobes, p.box, 0.0);
     const PairList& have = list.pairs();
-    for (const auto& c : contacts) REQUIRE(std::binary_search(have.begin(), have.end(), c));
+    std::vector<bool> is_near(have.size(), false);
+    for (std::uint32_t k : list.near()) is_near.at(k) = true;
+    REQUIRE(std::is_sorted(list.near().begin(), list.near().end()));
+    for (const auto& c : contacts) {
+      const auto it = std::lower_bound(have.begin(), have.end(), c);
+      REQUIRE(it != have.end());
+      REQUIRE(*it == c);
+      REQUIRE(is_near[static_cast<std::size_t>(it - have.begin())]);
+    }
+    listed += have.size();
+    near += list.near().size();
   }
+  const long near_rebuilds = list.near_rebuilds() - near_before;
   CHECK(rebuilds > 0);
-  CHECK(rebuilds < steps / 3);  // the skin actually saves rebuilds
+  CHECK(rebuilds < steps / 3);      // the skin actually saves rebuilds
+  CHECK(near_rebuilds > rebuilds);  // most expiries of the near list leave the pair list valid
+  CHECK(near_rebuilds < steps);     // the near skin saves near rebuilds too
+  CHECK(5 * near < 4 * listed);     // and the near list is markedly shorter (62 % here)
 }
 
 TEST_CASE("neighbour list rebuilds on changed radii, count or box, and not otherwise", "[fast]") {
   Packing p = random_packing(50, 0.8, 41);
-  NeighbourList list(0.3);
+  NeighbourList list(0.3);  // near skin 0.06
   Lobes lobes;
   place_lobes(p, lobes);
   CHECK(list.update(lobes, p.box));
@@ -133,12 +151,21 @@ TEST_CASE("neighbour list rebuilds on changed radii, count or box, and not other
   place_lobes(p, lobes);
   CHECK(list.update(lobes, p.box));
   CHECK(list.pairs() == brute_force_pairs(lobes, p.box, 0.3));
-  // Moves just below the criterion: no rebuild; a single lobe moving by a full skin: rebuild.
-  lobes.x[0] += 0.14;
-  lobes.x[5] += 0.14;
+  // Moves below the near skin rebuild nothing; moves beyond it rebuild the near list alone while
+  // they stay below the skin minus the near skin; a single lobe moving by most of a skin
+  // rebuilds both.
+  const long near_built = list.near_rebuilds();
+  lobes.x[0] += 0.02;
+  lobes.x[5] += 0.02;
   CHECK_FALSE(list.update(lobes, p.box));
-  lobes.x[9] += 0.31;
+  CHECK(list.near_rebuilds() == near_built);
+  lobes.x[0] += 0.09;
+  lobes.x[5] += 0.09;
+  CHECK_FALSE(list.update(lobes, p.box));
+  CHECK(list.near_rebuilds() == near_built + 1);
+  lobes.x[9] += 0.25;
   CHECK(list.update(lobes, p.box));
+  CHECK(list.near_rebuilds() == near_built + 2);
   list.invalidate();
   CHECK(list.update(lobes, p.box));
 }

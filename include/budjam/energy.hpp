@@ -63,6 +63,7 @@ class ForceField {
  private:
   void refresh(const Packing& p);
   void find_pair_images(const Box& box);
+  void gather_near_pairs();
   void place_cell(const Packing& p, std::size_t i);
   double pair_loop(const Packing& p, double* F) const;
   double threaded_pair_loop(const Packing& p, double* F);
@@ -74,6 +75,9 @@ class ForceField {
   long evaluations_ = 0;
   // Minimum-image periods (nx, ny) of each listed pair, found at the list's last rebuild.
   std::vector<PairImage> images_;
+  // The pairs of the near list and their images, in pair-list order.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> near_pairs_;
+  std::vector<PairImage> near_images_;
   // Per-cell dumbbell geometry, recomputed only when a bud size changes.
   std::vector<double> b_cached_, mother_offset_, bud_offset_;
   // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
