@@ -163,9 +163,15 @@ TEST_CASE("neighbour list rebuilds on changed radii, count or box, and not other
   lobes.x[5] += 0.09;
   CHECK_FALSE(list.update(lobes, p.box));
   CHECK(list.near_rebuilds() == near_built + 1);
-  lobes.x[9] += 0.25;
+  // Now d₁ + d₂ = 0.29 since the pair list's build: still below the skin, but the next near list
+  // could live until 0.29 + 0.06 > 0.3, so the pair list is rebuilt with it.
+  lobes.x[0] += 0.035;
+  lobes.x[5] += 0.035;
   CHECK(list.update(lobes, p.box));
   CHECK(list.near_rebuilds() == near_built + 2);
+  lobes.x[9] += 0.25;
+  CHECK(list.update(lobes, p.box));
+  CHECK(list.near_rebuilds() == near_built + 3);
   list.invalidate();
   CHECK(list.update(lobes, p.box));
 }
