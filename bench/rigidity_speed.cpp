@@ -11,6 +11,7 @@
 #include "budjam/fire.hpp"
 #include "budjam/rigidity.hpp"
 #include "io/packing_file.hpp"
+#include "random_packing.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -60,20 +61,9 @@ State relaxed_state(Packing& p, ForceField& field) {
   return s;
 }
 
+// Random overlapping cells with buds of 0.05–1 (the shared generator, with its θ in (−π, π]).
 Packing random_packing(std::size_t n, double phi, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<double> b(n);
-  double area = 0;
-  for (double& bi : b) {
-    bi = 0.05 + 0.95 * u(rng);
-    area += 0.25 * std::numbers::pi * (1 + bi * bi);
-  }
-  Packing p;
-  p.box.L = std::sqrt(area / phi);
-  for (std::size_t i = 0; i < n; ++i)
-    p.add_cell(p.box.L * u(rng), p.box.L * u(rng), 2 * std::numbers::pi * u(rng), b[i], 0.002, -1);
-  return p;
+  return testing::random_packing(n, phi, seed, 0.05, 1.0);
 }
 
 }  // namespace
