@@ -136,21 +136,26 @@ def panel(ax, letter):
 
 # ---- Fig. 2: structure -------------------------------------------------------------------------------
 
-def dz_identity(ax, targets, colour_of, label_of):
+def identity_scatter(ax, points, colour_of, label_of, missing, log=False):
+    """A marker per (row, x, y), each legend label once, and the line y = x; Missing if no point."""
+    if not points:
+        raise Missing(missing)
     seen = set()
-    xs, ys = [], []
-    for r in targets:
-        x, y = num(r["dZ_pred"]), num(r["dZ"])
-        if not (math.isfinite(x) and math.isfinite(y)):
-            continue
+    for r, x, y in points:
         key = label_of(r)
         ax.plot(x, y, "o", ms=4, color=colour_of(r), alpha=0.8, label=None if key in seen else key)
         seen.add(key)
-        xs.append(x)
-        ys.append(y)
-    if not xs:
-        raise Missing("ΔZ identity: no target has a ΔZ_0(P) prediction (no no-feedback runs?)")
-    identity_line(ax, xs, ys)
+    identity_line(ax, [x for _, x, _ in points], [y for _, _, y in points], log=log)
+
+
+def dz_identity(ax, targets, colour_of, label_of):
+    points = []
+    for r in targets:
+        x, y = num(r["dZ_pred"]), num(r["dZ"])
+        if math.isfinite(x) and math.isfinite(y):
+            points.append((r, x, y))
+    identity_scatter(ax, points, colour_of, label_of,
+                     "ΔZ identity: no target has a ΔZ_0(P) prediction (no no-feedback runs?)")
     ax.set_xlabel(r"$\Delta Z_0(P)+2(u_J-u)$")
     ax.set_ylabel(r"$\Delta Z$")
     ax.legend(fontsize=7, frameon=False)
@@ -230,8 +235,7 @@ ARRESTED_LAMBDA_C = 1e-6
 
 
 def bgrow_identity(ax, targets, colour_of, label_of):
-    seen = set()
-    xs, ys = [], []
+    points = []
     arrested = nonpositive = 0
     for r in targets:
         x = num(r["lambda_c"]) * num(r["B"])
@@ -244,14 +248,8 @@ def bgrow_identity(ax, targets, colour_of, label_of):
         if y <= 0:
             nonpositive += 1
             continue
-        key = label_of(r)
-        ax.plot(x, y, "o", ms=4, color=colour_of(r), alpha=0.8, label=None if key in seen else key)
-        seen.add(key)
-        xs.append(x)
-        ys.append(y)
-    if not xs:
-        raise Missing("B_grow identity: no target with both B_grow and B")
-    identity_line(ax, xs, ys, log=True)
+        points.append((r, x, y))
+    identity_scatter(ax, points, colour_of, label_of, "B_grow identity: no target with both B_grow and B", log=True)
     ax.text(0.97, 0.03, f"not shown: {arrested} with $\\lambda_c < 10^{{-6}}$,\n{nonpositive} with $B_{{\\rm grow}} \\leq 0$",
             transform=ax.transAxes, ha="right", va="bottom", fontsize=7)
     ax.legend(fontsize=7, frameon=False, loc="upper left")
