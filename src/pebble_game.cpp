@@ -33,6 +33,30 @@ inline void put(const StampedColor& m, std::size_t v, boost::default_color_type 
   m.color[v] = c;
 }
 
+// Undirected incidence of all bars (independent and redundant) in CSR form: the entries of joint
+// x are inc[start[x]] … inc[start[x + 1] − 1], each (neighbour, bar), in bar order.
+struct Incidence {
+  std::vector<std::size_t> start;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> inc;
+};
+
+Incidence incidence(std::size_t joints, const std::vector<Bar>& bars) {
+  Incidence out;
+  out.start.assign(joints + 1, 0);
+  for (const Bar& e : bars) {
+    ++out.start[e.a + 1];
+    ++out.start[e.b + 1];
+  }
+  std::partial_sum(out.start.begin(), out.start.end(), out.start.begin());
+  out.inc.resize(2 * bars.size());
+  std::vector<std::size_t> fill(out.start.begin(), out.start.end() - 1);
+  for (std::size_t k = 0; k < bars.size(); ++k) {
+    out.inc[fill[bars[k].a]++] = {bars[k].b, static_cast<std::uint32_t>(k)};
+    out.inc[fill[bars[k].b]++] = {bars[k].a, static_cast<std::uint32_t>(k)};
+  }
+  return out;
+}
+
 }  // namespace
 
 PebbleGame::PebbleGame(std::size_t joints) { reset(joints); }
@@ -298,20 +322,7 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   // breadth-first order from those ends (the likely replacements are close) and stop once `lost`
   // have been promoted.
   const std::size_t n = joints(), m = bars_.size();
-  std::vector<std::size_t> start(n + 1, 0);
-  for (const Bar& e : bars_) {
-    ++start[e.a + 1];
-    ++start[e.b + 1];
-  }
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> inc(2 * m);
-  {
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t k = 0; k < m; ++k) {
-      inc[fill[bars_[k].a]++] = {bars_[k].b, static_cast<std::uint32_t>(k)};
-      inc[fill[bars_[k].b]++] = {bars_[k].a, static_cast<std::uint32_t>(k)};
-    }
-  }
+  const auto [start, inc] = incidence(n, bars_);
   std::vector<char> seen(n, 0);
   certified_.assign(m, 0);  // re-tested: in the span again
   std::deque<std::uint32_t> frontier;
@@ -349,21 +360,7 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
 
 RigidClusters PebbleGame::rigid_clusters() {
   const std::size_t n = joints(), m = bars_.size();
-  // Undirected incidence (all bars, independent and redundant) in CSR form.
-  std::vector<std::size_t> start(n + 1, 0);
-  for (const Bar& e : bars_) {
-    ++start[e.a + 1];
-    ++start[e.b + 1];
-  }
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> inc(2 * m);  // (neighbour, bar)
-  {
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t k = 0; k < m; ++k) {
-      inc[fill[bars_[k].a]++] = {bars_[k].b, static_cast<std::uint32_t>(k)};
-      inc[fill[bars_[k].b]++] = {bars_[k].a, static_cast<std::uint32_t>(k)};
-    }
-  }
+  const auto [start, inc] = incidence(n, bars_);
   const auto degree = [&](std::uint32_t x) { return start[x + 1] - start[x]; };
 
   // Bars inside the largest known rigid region first: the big cluster is then found early and
