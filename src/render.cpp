@@ -48,7 +48,30 @@ std::vector<std::array<double, 2>> images(double x0, double x1, double y0, doubl
 
 double wrap(double v, double L) { return v - L * std::floor(v / L); }
 
+// Where the parts of the picture go, in pixels: the box (side × side) inside a margin, then the
+// legend and the caption lines below it.
+struct Layout {
+  double margin, side, legend_h, caption_h, width, height;
+  std::vector<std::string> caption_lines;
+  Layout(double L, const RenderOptions& opt)
+      : margin(opt.margin * opt.pixels_per_unit), side(L * opt.pixels_per_unit), legend_h(opt.legend ? 44.0 : 0.0) {
+    for (std::size_t a = 0; !opt.caption.empty() && a <= opt.caption.size();) {
+      const std::size_t b = std::min(opt.caption.find('\n', a), opt.caption.size());
+      caption_lines.push_back(opt.caption.substr(a, b - a));
+      a = b + 1;
+    }
+    caption_h = 16.0 * static_cast<double>(caption_lines.size()) + (caption_lines.empty() ? 0.0 : 6.0);
+    width = side + 2 * margin;
+    height = side + 2 * margin + legend_h + caption_h;
+  }
+};
+
 }  // namespace
+
+RenderSize render_size(double L, const RenderOptions& options) {
+  const Layout layout(L, options);
+  return {layout.width, layout.height};
+}
 
 std::string force_colour(double f, double f_max) {
   // Ramp through pale yellow → orange → red → dark red (YlOrRd-like), linear in f/f_max.
@@ -75,17 +98,10 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
     if (c.i >= 2 * n || c.j >= 2 * n)
       throw std::invalid_argument("render_svg: contact names a lobe that does not exist");
 
-  const double L = p.box.L, s = opt.pixels_per_unit, m = opt.margin * s;
-  const double side = L * s;
-  const double legend_h = opt.legend ? 44.0 : 0.0;
-  std::vector<std::string> caption_lines;
-  for (std::size_t a = 0; !opt.caption.empty() && a <= opt.caption.size();) {
-    const std::size_t b = std::min(opt.caption.find('\n', a), opt.caption.size());
-    caption_lines.push_back(opt.caption.substr(a, b - a));
-    a = b + 1;
-  }
-  const double caption_h = 16.0 * static_cast<double>(caption_lines.size()) + (caption_lines.empty() ? 0.0 : 6.0);
-  const double W = side + 2 * m, H = side + 2 * m + legend_h + caption_h;
+  const double L = p.box.L, s = opt.pixels_per_unit;
+  const Layout layout(L, opt);
+  const double m = layout.margin, side = layout.side, legend_h = layout.legend_h, W = layout.width, H = layout.height;
+  const std::vector<std::string>& caption_lines = layout.caption_lines;
   // Box coordinates → pixels (y up in the model, down in SVG).
   auto X = [&](double x) { return m + x * s; };
   auto Y = [&](double y) { return m + (L - y) * s; };

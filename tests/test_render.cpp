@@ -131,3 +131,26 @@ TEST_CASE("render is deterministic and refuses a network of another packing") {
   s.net.rattler.pop_back();
   CHECK_THROWS_AS(render_svg(s.p, s.contacts, s.net), std::invalid_argument);
 }
+
+TEST_CASE("render_size is the width and height the SVG declares, for any scale, legend and caption") {
+  const auto s = make();
+  for (const double scale : {1.0, 48.0, 1e4})
+    for (const bool legend : {true, false})
+      for (const std::string caption : {"", "one line", "two\nlines"}) {
+        RenderOptions o;
+        o.pixels_per_unit = scale;
+        o.legend = legend;
+        o.caption = caption;
+        const RenderSize size = render_size(s.p.box.L, o);
+        const std::string svg = render_svg(s.p, s.contacts, s.net, o);
+        const auto attribute = [&](const std::string& name) {
+          const auto at = svg.find(name + "=\"", svg.find("<svg "));
+          return std::stod(svg.substr(at + name.size() + 2));
+        };
+        INFO("scale " << scale << ", legend " << legend << ", caption '" << caption << "'");
+        CHECK(attribute("width") == Approx(size.width).margin(0.005));  // the SVG has 2 decimals
+        CHECK(attribute("height") == Approx(size.height).margin(0.005));
+        CHECK(size.width >= scale * s.p.box.L);
+        CHECK(size.height >= size.width);  // legend and caption go below the box
+      }
+}

@@ -24,6 +24,12 @@ struct RenderOptions {
 // yellow (weak) to dark red (strongest), as "#rrggbb". f ≤ 0 gives the weakest colour.
 std::string force_colour(double f, double f_max);
 
+// The picture's width and height in pixels for a box of side L.
+struct RenderSize {
+  double width, height;
+};
+RenderSize render_size(double L, const RenderOptions& options);
+
 // `contacts` and `net` are those of `packing` (find_contacts + analyse_network); contacts that
 // involve a rattler are drawn thin and grey. Throws std::invalid_argument if the network does not
 // belong to the packing (cell counts differ) or a contact names a lobe that does not exist.

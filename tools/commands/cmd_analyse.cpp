@@ -43,7 +43,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--main-L", e.main_L,
                       "system size of the main figures (default 15 if present, else the largest)");
        sub.add_option("--resamples", e.bootstrap.resamples, "bootstrap resamples (default 2000)");
-       sub.add_option("--seed", e.bootstrap.seed, "bootstrap seed (default 1)");
+       sub.add_option("--seed", e.bootstrap.seed, "bootstrap seed (default 1)")->check(budjam::cli::non_negative());
        sub.add_option("--require", o->require, "fail if these per-packing results are missing: moduli, dos")
            ->delimiter(',');
        sub.callback([o] { run(*o); });

@@ -84,9 +84,12 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--ncv", o->ncv, "ARPACK Lanczos vectors; 0 = max(2K+1, K+20)")->capture_default_str();
        sub.add_option("--sigma", o->sigma, "ARPACK shift (k/m), negative")->capture_default_str();
        sub.add_option("--lambda-tol", o->lambda_tol, "quasi-zero cutoff on λ = ω²")->capture_default_str();
-       sub.add_option("--bins", o->bins, "D(ω) histogram bins")->capture_default_str();
+       sub.add_option("--bins", o->bins, "D(ω) histogram bins")
+           ->capture_default_str()
+           ->check(budjam::cli::non_negative());
        sub.add_option("--dense-max-dof", o->dense_max_dof, "auto: largest problem solved densely")
-           ->capture_default_str();
+           ->capture_default_str()
+           ->check(budjam::cli::non_negative());
        sub.add_flag("--no-pebble", o->no_pebble, "skip the pebble-game count of floppy modes");
        budjam::cli::add_output_options(sub, o->output, "BASE.json (the observables) and BASE.csv (the eigenvalues)");
        sub.callback([o] { run(*o); });

@@ -85,6 +85,7 @@ void run(const Options& o) {
     scene = io::load_scene(o.scene, o.overrides);
     if (o.seed) scene.seed = *o.seed;
     if (o.threads) scene.threads = *o.threads;
+    validate(scene);  // with the overrides, before anything is written
     const fs::path out = o.out.empty()
                              ? fs::path("runs") / (safe_name(scene.name) + "-seed" + std::to_string(scene.seed))
                              : fs::path(o.out);
@@ -152,10 +153,11 @@ const bool registered = budjam::cli::register_command(
     {"grow", "Grow a packing from a scene to jamming, the Δφ targets and φ_2", [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("SCENE", o->scene, "scene file (.toml)");
-       sub.add_option("--seed", o->seed, "random seed (overrides the scene's run.seed)");
+       sub.add_option("--seed", o->seed, "random seed (overrides the scene's run.seed)")
+           ->check(budjam::cli::seed_range());
        sub.add_option("--threads", o->threads,
                       "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
-           ->check(CLI::NonNegativeNumber);
+           ->check(budjam::cli::non_negative());
        sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)");
        sub.add_option("--resume", o->resume, "continue the interrupted run in DIR from its checkpoint")
            ->type_name("DIR");

@@ -13,6 +13,8 @@
 
 #include "io/run_program.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -32,6 +34,9 @@ struct Options {
   bool no_images = false;
   bool no_contacts = false;
 };
+
+// The largest side of a PNG or PDF that rsvg-convert (cairo) draws.
+constexpr long kMaxConvertedPixels = 32767;
 
 // rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` is complete or untouched.
 void convert_svg(const fs::path& svg, const fs::path& to, const std::string& format) {
@@ -67,6 +72,13 @@ void run(const Options& o) {
                 m.get("kind").value_or(fs::path(o.packing).stem().string()).c_str(), f.packing.size(), f.packing.box.L,
                 f.packing.packing_fraction(), pc.P, pc.network.Z, pc.network.N_f, pc.network.N_u_buds);
   ro.caption = buf;
+  if (ext != ".svg" || o.png) {
+    const RenderSize size = render_size(f.packing.box.L, ro);
+    if (!(std::max(size.width, size.height) <= kMaxConvertedPixels))
+      throw InputError("--scale: the picture would be " + std::to_string(std::lround(size.width)) + " × " +
+                       std::to_string(std::lround(size.height)) + " pixels, and rsvg-convert draws at most " +
+                       std::to_string(kMaxConvertedPixels) + " a side: lower --scale, or write an SVG");
+  }
   fs::path svg = out;
   svg.replace_extension(".svg");
   if (ext != ".svg") svg += ".tmp";  // only the converted file is an output

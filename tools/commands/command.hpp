@@ -17,6 +17,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <charconv>
+#include <cstdint>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -71,6 +73,32 @@ inline std::vector<Command>& registry() {
 inline bool register_command(Command command) {
   registry().push_back(std::move(command));
   return true;
+}
+
+// CLI11 2.1 reads "-2" into an unsigned option as 2^64 − 2, and its own range validators print
+// their limits as full doubles. These validators run on the text before it is converted and fail
+// with budjam's one-line message, "OPTION: must be ... (got TEXT)".
+inline CLI::Validator non_negative() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        const auto first = text.find_first_not_of(" \t");
+        if (first != std::string::npos && text[first] == '-') return "must be ≥ 0 (got " + text + ")";
+        return {};
+      },
+      "NONNEGATIVE");
+}
+
+// A seed is written into scene files as a TOML integer (signed 64 bit): 0 … 2^63 − 1.
+inline CLI::Validator seed_range() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::uint64_t v = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (ec != std::errc() || end != text.data() + text.size() || v > static_cast<std::uint64_t>(INT64_MAX))
+          return "must be an integer in [0, 2^63 − 1] (got " + text + ")";
+        return {};
+      },
+      "0 ≤ N < 2^63");
 }
 
 // --out BASE, --json and --quiet of the output convention (io/result_files.hpp). `files` names
