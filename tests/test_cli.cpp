@@ -175,6 +175,7 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
            {"dos " + p + " --out " + o + " --bins -2", "--bins"},
            {"dos " + p + " --out " + o + " --dense-max-dof -1", "--dense-max-dof"},
            {"analyse " + o + " --out " + o + " --seed -5", "--seed"},
+           {"analyse " + o + " --out " + o + " --main-L -3", "--main-L"},
            {"moduli " + p + " --check --out " + o + " --strain nan", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain 1e300", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain -1", "--strain"},

@@ -988,6 +988,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
   if (!o.tables.empty() && fs::exists(o.out) && fs::equivalent(o.tables, o.out))
     throw InputError("--out: " + o.out + " is the --tables directory; its tables would be overwritten");
+  if (!(o.main_L >= 0)) throw InputError("--main-L: must be a box side > 0 (got " + num(o.main_L) + ")");
   Ensemble e = o.tables.empty() ? read_ensemble(o) : read_ensemble_tables(o.tables);
 
   std::map<GroupKey, std::vector<const RunRow*>> groups;
