@@ -66,10 +66,10 @@ def load_run(directory):
 def grow(scene, seed=None, set=(), callback=None):
     """Grow the scene (a .toml path) with the same driver as `budjam grow`, without writing files.
 
-    seed overrides run.seed; set is a list of "section.key=value" overrides. Without callback,
-    returns the Growth iterator of events (see Growth); with one, calls callback(event) for every
-    event and returns the final status ('finished', or an expected early stop such as
-    'step_limit')."""
+    seed (0 ≤ seed < 2**63) overrides run.seed; set is a list of "section.key=value" overrides.
+    Without callback, returns the Growth iterator of events (see Growth); with one, calls
+    callback(event) for every event and returns the final status ('finished', or an expected early
+    stop such as 'step_limit')."""
     growth = Growth(str(scene), seed, list(set))
     if callback is None:
         return growth

@@ -143,6 +143,7 @@ py::dict spectrum_dict(const Packing& p, const std::string& method, int modes) {
   const Analysed a(p);
   SpectrumOptions options;
   options.method = parse_spectrum_method(method);
+  if (modes < 0) throw InputError("modes: must be ≥ 0 (0 = as many as omega_star needs), got " + std::to_string(modes));
   options.modes = modes;
   const PackingSpectrum ps = packing_spectrum(p, a.pc.contacts, a.pc.network, options);
   const Spectrum& s = ps.spectrum;
@@ -251,11 +252,21 @@ class EventQueue : public Observer {
   }
 };
 
+// The scene with `seed` as its run.seed, checked as `budjam grow --seed` checks it (a seed must fit
+// a scene file, so that the run can be repeated from the command line).
+Scene seeded(Scene scene, std::optional<std::uint64_t> seed) {
+  if (seed) {
+    scene.seed = *seed;
+    validate(scene);
+  }
+  return scene;
+}
+
 // `for event in budjam.grow(...)`: advances the driver until it has something to report.
 class Growth {
  public:
   Growth(const std::filesystem::path& scene, std::optional<std::uint64_t> seed, const std::vector<std::string>& set)
-      : scene_(io::load_scene(scene, set)), driver_(scene_, DriverOptions{seed}) {
+      : scene_(seeded(io::load_scene(scene, set), seed)), driver_(scene_) {
     driver_.add_observer(queue_);
   }
   py::dict next() {

@@ -203,6 +203,17 @@ def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
             np.testing.assert_array_equal(getattr(t["packing"], name), getattr(saved, name))
 
 
+def test_grow_refuses_a_seed_a_scene_file_cannot_hold_as_budjam_grow_does():
+    with pytest.raises(budjam.InputError, match="run.seed: must be below 2\\^63"):
+        budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", seed=2**63)
+    budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", seed=2**63 - 1)  # the largest is fine
+
+
+def test_spectrum_refuses_a_negative_mode_count_as_budjam_dos_does():
+    with pytest.raises(budjam.InputError, match="modes: must be"):
+        budjam.spectrum(budjam.read_packing(PACKING), method="arpack", modes=-3)
+
+
 @pytest.mark.slow
 def test_grow_reports_an_early_stop_as_an_event_not_an_exception():
     events = []
