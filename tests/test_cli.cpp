@@ -179,6 +179,7 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
            {"moduli " + p + " --check --out " + o + " --strain nan", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain 1e300", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain -1", "--strain"},
+           {"moduli " + p + " --check --out " + o + " --strain 0", "--strain"},
            // rsvg-convert draws at most 32767 pixels a side
            {"render " + p + " -o " + quoted(out / "big.png") + " --scale 1e6", "--scale"},
            {"render " + p + " -o " + quoted(out / "big.svg") + " --png --scale 1e6", "--scale"}}) {

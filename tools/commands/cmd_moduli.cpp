@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace {
@@ -31,7 +32,7 @@ using io::Json;
 struct Options {
   std::string packing;
   bool check = false;
-  double strain = 0;  // 0: automatic
+  std::optional<double> strain;  // none: automatic
   bool relax = false;
   bool timing = false;
   std::string solver = to_string(ModuliOptions{}.solver);
@@ -71,9 +72,9 @@ constexpr double kMaxStrainStep = 1e-3;
 
 void run(const Options& o) {
   const ModuliOptions options = moduli_options(o);
-  if (!(o.strain == 0 || (o.strain > 0 && o.strain <= kMaxStrainStep)))
+  if (o.strain && !(*o.strain > 0 && *o.strain <= kMaxStrainStep))
     throw InputError("--strain: must lie in (0, " + io::format_double(kMaxStrainStep) +
-                     "]: --check strains the packing up to 32 times this step (got " + io::format_double(o.strain) +
+                     "]: --check strains the packing up to 32 times this step (got " + io::format_double(*o.strain) +
                      ")");
   io::PackingFile file = io::read_packing(o.packing);
   Packing& p = file.packing;
@@ -96,7 +97,9 @@ void run(const Options& o) {
   j["file"] = o.packing;
   const Json body = tools::elastic_response_json(e);  // named: items() of a temporary would dangle
   for (const auto& [k, v] : body.items()) j[k] = v;
-  if (o.check) j["check"] = tools::finite_strain_check_json(tools::finite_strain_check(p, contacts, net, o.strain), e);
+  if (o.check)
+    j["check"] =
+        tools::finite_strain_check_json(tools::finite_strain_check(p, contacts, net, o.strain.value_or(0.0)), e);
   if (o.timing) {
     j["seconds"] = std::chrono::duration<double>(t3 - t0).count();
     j["solve_seconds"] = std::chrono::duration<double>(t2 - t1).count();
