@@ -160,12 +160,7 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
                               "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
                               "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n");
   const fs::path out = work_dir() / "range-out";
-  const auto quoted = [](const fs::path& path) {
-    std::string q = "'";  // (built up: GCC 12 warns falsely on "'" + path + "'")
-    q += path.string();
-    q += '\'';
-    return q;
-  };
+  const auto quoted = budjam::testing::shell_quoted;
   const std::string p = quoted(pack), o = quoted(out);
   // CLI11 would read "-1" into an unsigned option as 2^64 − 1; a seed must also fit a TOML integer.
   for (const auto& [args, option] : std::vector<std::pair<std::string, std::string>>{

@@ -154,6 +154,31 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
 }
 
+TEST_CASE("budjam survival counts a run once when it is given twice or copied, as budjam analyse does") {
+  namespace fs = std::filesystem;
+  const auto dir = budjam::testing::work_dir() / "copies";
+  fs::remove_all(dir);
+  write_run(dir / "run");
+  fs::copy(dir / "run", dir / "copy", fs::copy_options::recursive);
+  const std::string run = budjam::testing::shell_quoted(dir / "run"),
+                    copy = budjam::testing::shell_quoted(dir / "copy");
+  const auto once = budjam::testing::run_budjam("survival " + run + " --json");
+  const auto thrice = budjam::testing::run_budjam("survival " + run + " " + copy + " " + run + " --json");
+  REQUIRE(once.code == 0);
+  REQUIRE(thrice.code == 0);
+  auto j1 = nlohmann::json::parse(once.out), j3 = nlohmann::json::parse(thrice.out);
+  CHECK(j3["runs"] == 1);
+  CHECK(j3["records"] == 8);
+  CHECK(j3["duplicates"] == nlohmann::json::array({nlohmann::json::array(
+                                {(dir / "run").string(), (dir / "copy").string(), (dir / "run").string()})}));
+  CHECK(j1["duplicates"].empty());
+  j1.erase("duplicates");
+  j3.erase("duplicates");
+  CHECK(j1 == j3);  // the same curve and a_eps as from the run alone
+  const auto line = budjam::testing::run_budjam("survival " + run + " " + copy);
+  CHECK(line.out.find("1 runs (1 duplicate copies left out)") != std::string::npos);
+}
+
 TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia table") {
   // Remission times of the 6-MP arm of Freireich et al. (1963), + = censored; the estimates and
   // Greenwood standard errors of Klein & Moeschberger, Survival Analysis, Table 4.1A.

@@ -4,6 +4,7 @@
 // censor. The output convention (io/result_files.hpp): BASE.csv is the curve (a in diameter squared
 // and as true area, Ŝ, Greenwood SE and a 95 % band), BASE.json the summary: a_ε with
 // u_J S(a_ε) = ε (ε = 1/⟨N_nr,J⟩ unless given) and ∫_0^{a_ε} S da, in both units (paper Eq. 14).
+#include "analysis/jamming_states.hpp"
 #include "commands/command.hpp"
 #include "io/run_data.hpp"
 
@@ -34,19 +35,41 @@ struct Options {
   std::optional<double> epsilon;
 };
 
-std::string summary_line(std::size_t runs, const KaplanMeierCurve& km, std::optional<double> a_eps) {
-  std::string line = "survival: " + std::to_string(runs) + " runs, " + std::to_string(km.records()) + " buds, " +
-                     std::to_string(km.events()) + " completed; a_eps = ";
+std::string summary_line(std::size_t runs, std::size_t copies, const KaplanMeierCurve& km,
+                         std::optional<double> a_eps) {
+  std::string line = "survival: " + std::to_string(runs) + " runs";
+  if (copies > 0) line += " (" + std::to_string(copies) + " duplicate copies left out)";
+  line += ", " + std::to_string(km.records()) + " buds, " + std::to_string(km.events()) + " completed; a_eps = ";
   line += a_eps ? io::format_double(*a_eps) + ", integral of S = " + io::format_double(km.integral(*a_eps))
                 : std::string("not reached");
   return line + " (diameter squared)";
 }
 
 void run(const Options& o) {
+  std::vector<tools::RunData> data;
+  std::vector<std::string> fingerprints;
+  for (const auto& d : o.runs) {
+    data.push_back(tools::load_run(d));
+    fingerprints.push_back(data.back().summary.dump());
+  }
+  // A run given twice, or copied into another directory, is one sample, as in `budjam analyse`:
+  // its first copy is used.
+  std::vector<bool> copy(o.runs.size(), false);
+  io::Json duplicates = io::Json::array();
+  for (const auto& group : tools::duplicate_runs(fingerprints)) {
+    io::Json names = io::Json::array();
+    for (std::size_t k : group) {
+      names.push_back(o.runs[k]);
+      copy[k] = k != group.front();
+    }
+    duplicates.push_back(names);
+  }
   std::vector<SurvivalRecord> records;
   std::vector<double> uJ, nrJ;
-  for (const auto& d : o.runs) {
-    const tools::RunData r = tools::load_run(d);
+  for (std::size_t k = 0; k < o.runs.size(); ++k) {
+    if (copy[k]) continue;
+    const std::string& d = o.runs[k];
+    const tools::RunData& r = data[k];
     if (!r.jammed()) throw InputError(d + ": the run never jammed (phi_J is null)");
     if (!r.bud_events) throw InputError(d + ": no bud_events.csv (the scene turned observe.bud_events off)");
     const auto rec = tools::survival_records(*r.bud_events);
@@ -61,7 +84,9 @@ void run(const Options& o) {
   const auto a_eps = u_J > 0 ? a_epsilon(km, u_J, eps) : std::nullopt;
 
   io::Json j;
-  j["runs"] = o.runs.size();
+  const auto used = static_cast<std::size_t>(std::count(copy.begin(), copy.end(), false));
+  j["runs"] = used;
+  j["duplicates"] = duplicates;
   j["records"] = km.records();
   j["events"] = km.events();
   j["censored"] = km.records() - km.events();
@@ -75,7 +100,7 @@ void run(const Options& o) {
   j["integral_S_area"] = a_eps ? io::Json(kDiameterSquaredToArea * km.integral(*a_eps)) : io::Json(nullptr);
   j["a_last"] = km.last_observation();
   j["note"] = "a = b^2 - b_J^2 (diameter squared); *_area = pi/4 times it (true area)";
-  io::CommandResult result{j, {}, summary_line(o.runs.size(), km, a_eps)};
+  io::CommandResult result{j, {}, summary_line(used, o.runs.size() - used, km, a_eps)};
   result.csv = [&km](std::ostream& os) {
     os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
     auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
