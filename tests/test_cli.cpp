@@ -159,7 +159,8 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
   const fs::path pack = write("two.pack",
                               "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
                               "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n");
-  const fs::path out = work_dir() / "range-out";
+  // Every output goes into `outputs`, which must stay empty: no run directory, BASE.json or picture.
+  const fs::path outputs = work_dir() / "range", out = outputs / "out";
   const auto quoted = budjam::testing::shell_quoted;
   const std::string p = quoted(pack), o = quoted(out);
   // CLI11 would read "-1" into an unsigned option as 2^64 − 1; a seed must also fit a TOML integer.
@@ -169,24 +170,23 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
            {"grow " + demo + " --out " + o + " --threads -2", "--threads"},
            {"dos " + p + " --out " + o + " --bins -2", "--bins"},
            {"dos " + p + " --out " + o + " --dense-max-dof -1", "--dense-max-dof"},
-           {"analyse " + o + " --out " + o + " --seed -5", "--seed"},
-           {"analyse " + o + " --out " + o + " --main-L -3", "--main-L"},
+           {"analyse " + p + " --out " + o + " --seed -5", "--seed"},
+           {"analyse " + p + " --out " + o + " --main-L -3", "--main-L"},
            {"moduli " + p + " --check --out " + o + " --strain nan", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain 1e300", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain -1", "--strain"},
            {"moduli " + p + " --check --out " + o + " --strain 0", "--strain"},
            // rsvg-convert draws at most 32767 pixels a side
-           {"render " + p + " -o " + quoted(out / "big.png") + " --scale 1e6", "--scale"},
-           {"render " + p + " -o " + quoted(out / "big.svg") + " --png --scale 1e6", "--scale"}}) {
-    const bool renders = args.rfind("render", 0) == 0;
-    fs::remove_all(out);
-    if (renders) fs::create_directory(out);  // render writes into it; the others must not create it
+           {"render " + p + " -o " + quoted(outputs / "big.png") + " --scale 1e6", "--scale"},
+           {"render " + p + " -o " + quoted(outputs / "big.svg") + " --png --scale 1e6", "--scale"}}) {
+    fs::remove_all(outputs);
+    fs::create_directory(outputs);
     const Result r = run_budjam(args);
     INFO(args << "\n" << r.err);
     CHECK(r.code == 2);
     require_one_error_line(r);
     CHECK_THAT(r.err, Contains(option + ": "));
     CHECK(r.err.find("internal") == std::string::npos);
-    CHECK((renders ? fs::is_empty(out) : !fs::exists(out)));
+    CHECK(fs::is_empty(outputs));
   }
 }
