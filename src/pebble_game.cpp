@@ -322,7 +322,9 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
   // breadth-first order from those ends (the likely replacements are close) and stop once `lost`
   // have been promoted.
   const std::size_t n = joints(), m = bars_.size();
-  const auto [start, inc] = incidence(n, bars_);
+  const Incidence incident = incidence(n, bars_);
+  const auto& start = incident.start;
+  const auto& inc = incident.inc;
   std::vector<char> seen(n, 0);
   certified_.assign(m, 0);  // re-tested: in the span again
   std::deque<std::uint32_t> frontier;
@@ -360,7 +362,9 @@ std::size_t PebbleGame::remove_bars(const std::vector<bool>& remove) {
 
 RigidClusters PebbleGame::rigid_clusters() {
   const std::size_t n = joints(), m = bars_.size();
-  const auto [start, inc] = incidence(n, bars_);
+  const Incidence incident = incidence(n, bars_);
+  const auto& start = incident.start;  // (not a structured binding: lambdas below capture it)
+  const auto& inc = incident.inc;
   const auto degree = [&](std::uint32_t x) { return start[x + 1] - start[x]; };
 
   // Bars inside the largest known rigid region first: the big cluster is then found early and
