@@ -2,6 +2,7 @@
 #include "budjam/contacts.hpp"
 
 #include "budjam/cell_list.hpp"
+#include "budjam/orientation.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -72,8 +73,9 @@ Eigen::Matrix2d centroid_stress_tensor(const Packing& p, const std::vector<Conta
     const std::size_t cell = cell_of(lobe);
     const Dumbbell d = p.dumbbell(cell);
     const double l = is_bud(lobe) ? d.bud_offset : -d.mother_offset;
-    ox = l * std::cos(p.theta(cell));
-    oy = l * std::sin(p.theta(cell));
+    const Axis n = axis(p.theta(cell));
+    ox = l * n.c;
+    oy = l * n.s;
   };
   for (const Contact& c : contacts) {
     double oix, oiy, ojx, ojy;

@@ -2,6 +2,7 @@
 #include "budjam/energy.hpp"
 
 #include "budjam/contacts.hpp"
+#include "budjam/orientation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -86,36 +87,6 @@ ForceField::ForceField(double skin, int threads) : threads_(resolve_threads(thre
 
 void ForceField::invalidate() { list_.invalidate(); }
 
-// Defined first so that the serial loop in refresh() inlines it.
-inline void ForceField::place_cell(const Packing& p, std::size_t i) {
-  const double th = p.q[3 * i + 2];
-  const bool resized = p.b[i] != b_cached_[i];
-  if (resized) {
-    const Dumbbell d = Dumbbell::of(p.b[i]);
-    b_cached_[i] = p.b[i];
-    mother_offset_[i] = d.mother_offset;
-    bud_offset_[i] = d.bud_offset;
-    lobes_.R[2 * i] = 0.5 * d.D;
-    lobes_.R[2 * i + 1] = 0.5 * d.b;
-  }
-  // The lever arms depend on θ alone: a cell that has not turned (free cells and rattlers in
-  // FIRE, whose velocity stays zero) costs no sincos.
-  if (resized || th != theta_cached_[i]) {
-    theta_cached_[i] = th;
-    const double c = std::cos(th), s = std::sin(th);
-    ox_[2 * i] = -mother_offset_[i] * c;
-    oy_[2 * i] = -mother_offset_[i] * s;
-    ox_[2 * i + 1] = bud_offset_[i] * c;
-    oy_[2 * i + 1] = bud_offset_[i] * s;
-  }
-  // x + (−ℓc) rounds exactly as x − ℓc: the same lobes as place_lobes() gives.
-  const double x = p.q[3 * i], y = p.q[3 * i + 1];
-  for (std::size_t a = 2 * i; a < 2 * i + 2; ++a) {
-    lobes_.x[a] = x + ox_[a];
-    lobes_.y[a] = y + oy_[a];
-  }
-}
-
 void ForceField::refresh(const Packing& p) {
   const std::size_t n = p.size();
   if (b_cached_.size() != n) {
@@ -129,12 +100,53 @@ void ForceField::refresh(const Packing& p) {
   lobes_.R.resize(2 * n);
   ox_.resize(2 * n);
   oy_.resize(2 * n);
+  // The lever arms ±ℓ n̂ change only with θ or the bud size: a cell that has not turned (free cells
+  // and rattlers in FIRE, whose velocity stays zero) keeps its own. The axes of the others are
+  // computed together, several at a time (orientation.hpp).
+  turned_.clear();
+  turned_theta_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double th = p.q[3 * i + 2];
+    const bool resized = p.b[i] != b_cached_[i];
+    if (resized) {
+      const Dumbbell d = Dumbbell::of(p.b[i]);
+      b_cached_[i] = p.b[i];
+      mother_offset_[i] = d.mother_offset;
+      bud_offset_[i] = d.bud_offset;
+      lobes_.R[2 * i] = 0.5 * d.D;
+      lobes_.R[2 * i + 1] = 0.5 * d.b;
+    }
+    if (resized || th != theta_cached_[i]) {
+      theta_cached_[i] = th;
+      turned_.push_back(static_cast<std::uint32_t>(i));
+      turned_theta_.push_back(th);
+    }
+  }
+  const std::size_t m = turned_.size();
+  turned_c_.resize(m);
+  turned_s_.resize(m);
+  axes(turned_theta_.data(), m, turned_c_.data(), turned_s_.data());
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = turned_[k];
+    ox_[2 * i] = -mother_offset_[i] * turned_c_[k];
+    oy_[2 * i] = -mother_offset_[i] * turned_s_[k];
+    ox_[2 * i + 1] = bud_offset_[i] * turned_c_[k];
+    oy_[2 * i + 1] = bud_offset_[i] * turned_s_[k];
+  }
+  // x + (−ℓc) rounds exactly as x − ℓc: the same lobes as place_lobes() gives.
+  auto place = [&](std::size_t i) {
+    const double x = p.q[3 * i], y = p.q[3 * i + 1];
+    for (std::size_t a = 2 * i; a < 2 * i + 2; ++a) {
+      lobes_.x[a] = x + ox_[a];
+      lobes_.y[a] = y + oy_[a];
+    }
+  };
   if (threaded(n)) {
     const long cells = static_cast<long>(n);
 #pragma omp parallel for num_threads(threads_) schedule(static)
-    for (long i = 0; i < cells; ++i) place_cell(p, static_cast<std::size_t>(i));
+    for (long i = 0; i < cells; ++i) place(static_cast<std::size_t>(i));
   } else {
-    for (std::size_t i = 0; i < n; ++i) place_cell(p, i);
+    for (std::size_t i = 0; i < n; ++i) place(i);
   }
   // The displacement test stays a pass of its own: folded into the loop above it was slower.
   const long near_built = list_.near_rebuilds();

@@ -1,4 +1,5 @@
 #include "budjam/growth.hpp"
+#include "budjam/orientation.hpp"
 
 #include <algorithm>
 #include <cfloat>
@@ -76,7 +77,8 @@ Division divide(Packing& p, std::size_t i, const Scene& scene, Rng& rng) {
   d.y = p.y(i);
   d.theta = p.theta(i);
   d.b = p.b[i];
-  const double c = std::cos(d.theta), s = std::sin(d.theta);
+  const Axis n = axis(d.theta);
+  const double c = n.c, s = n.s;
   const double half = 0.5 * scene.alpha0;  // centroids at (x,y) ± (α0/2) n̂
   const double b0 = newborn_bud(scene.alpha0);
 
@@ -180,7 +182,8 @@ Packing random_seeds(const Scene& scene, Rng& rng) {
   std::vector<std::vector<std::size_t>> bins(static_cast<std::size_t>(nbin) * nbin);
   auto bin_of = [&](double v) { return static_cast<int>(std::clamp(std::floor(v / bin), 0.0, nbin - 1.0)); };
   auto lobes_of = [&](double x, double y, double th, double out[2][3]) {
-    const double c = std::cos(th), s = std::sin(th);
+    const Axis n = axis(th);
+    const double c = n.c, s = n.s;
     out[0][0] = x - db.mother_offset * c, out[0][1] = y - db.mother_offset * s, out[0][2] = 0.5 * db.D;
     out[1][0] = x + db.bud_offset * c, out[1][1] = y + db.bud_offset * s, out[1][2] = 0.5 * db.b;
   };

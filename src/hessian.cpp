@@ -1,4 +1,5 @@
 #include "budjam/hessian.hpp"
+#include "budjam/orientation.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -15,17 +16,17 @@ double lobe_offset(const Packing& p, std::size_t lobe) {
 Eigen::Matrix<double, 2, 6> contact_jacobian(const Packing& p, const Contact& c) {
   const std::size_t i = cell_of(c.i), j = cell_of(c.j);
   const double sa = lobe_offset(p, c.i), sb = lobe_offset(p, c.j);
-  const double ti = p.theta(i), tj = p.theta(j);
+  const Axis ei = axis(p.theta(i)), ej = axis(p.theta(j));
   Eigen::Matrix<double, 2, 6> J = Eigen::Matrix<double, 2, 6>::Zero();
   // d = r_a − r_b, r_a = X_i + s_a (cos θ_i, sin θ_i)
   J(0, 0) = 1.0;
   J(1, 1) = 1.0;
-  J(0, 2) = -sa * std::sin(ti);
-  J(1, 2) = sa * std::cos(ti);
+  J(0, 2) = -sa * ei.s;
+  J(1, 2) = sa * ei.c;
   J(0, 3) = -1.0;
   J(1, 4) = -1.0;
-  J(0, 5) = sb * std::sin(tj);
-  J(1, 5) = -sb * std::cos(tj);
+  J(0, 5) = sb * ej.s;
+  J(1, 5) = -sb * ej.c;
   return J;
 }
 
@@ -41,8 +42,9 @@ Eigen::Matrix<double, 6, 6> contact_hessian(const Packing& p, const Contact& c, 
     // Gradient of the pair energy in d is −f n; the rigid-body map bends: ∂²r_a/∂θ_i² = −s_a ê_i.
     const std::size_t i = cell_of(c.i), j = cell_of(c.j);
     const double sa = lobe_offset(p, c.i), sb = lobe_offset(p, c.j);
-    const double ni = c.nx * std::cos(p.theta(i)) + c.ny * std::sin(p.theta(i));
-    const double nj = c.nx * std::cos(p.theta(j)) + c.ny * std::sin(p.theta(j));
+    const Axis ei = axis(p.theta(i)), ej = axis(p.theta(j));
+    const double ni = c.nx * ei.c + c.ny * ei.s;
+    const double nj = c.nx * ej.c + c.ny * ej.s;
     h(2, 2) += f * sa * ni;
     h(5, 5) -= f * sb * nj;
   }

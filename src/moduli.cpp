@@ -3,6 +3,7 @@
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/errors.hpp"
 #include "budjam/hessian.hpp"
+#include "budjam/orientation.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -23,8 +24,8 @@ Eigen::Vector2d centroid_separation(const Packing& p, const Contact& c) {
   // d = C + o_a − o_b with o = s ê(θ): the centroid separation of the same image as the contact.
   const std::size_t i = cell_of(c.i), j = cell_of(c.j);
   const double sa = lobe_offset(p, c.i), sb = lobe_offset(p, c.j);
-  const Eigen::Vector2d ei(std::cos(p.theta(i)), std::sin(p.theta(i)));
-  const Eigen::Vector2d ej(std::cos(p.theta(j)), std::sin(p.theta(j)));
+  const Axis ai = axis(p.theta(i)), aj = axis(p.theta(j));
+  const Eigen::Vector2d ei(ai.c, ai.s), ej(aj.c, aj.s);
   return c.r * Eigen::Vector2d(c.nx, c.ny) - sa * ei + sb * ej;
 }
 
@@ -297,7 +298,8 @@ Eigen::Matrix2d link_stress(const Packing& p, const std::vector<Contact>& contac
   }
   Eigen::Matrix2d W = Eigen::Matrix2d::Zero();
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const Eigen::Vector2d n(std::cos(p.theta(i)), std::sin(p.theta(i)));
+    const Axis a = axis(p.theta(i));
+    const Eigen::Vector2d n(a.c, a.s);
     const double s = lobe_offset(p, bud_lobe(i)) - lobe_offset(p, mother_lobe(i));
     const double load = -bud_force[i].dot(n);  // Λ_i
     W += s * load * n * n.transpose();
@@ -389,9 +391,9 @@ std::pair<std::vector<bool>, std::vector<KernelVector>> pin_kernel(const Packing
     if ((m == 0) == (b == 0)) continue;
     // Rotation about the centre of the loaded lobe ℓ: δX = −s_ℓ ê⊥ δθ leaves every contact unchanged.
     const double s = lobe_offset(p, m > 0 ? mother_lobe(i) : bud_lobe(i));
-    const double th = p.theta(i);
+    const Axis n = axis(p.theta(i));
     const auto b3 = static_cast<Eigen::Index>(3 * c);
-    kernel.push_back({{b3, s * std::sin(th)}, {b3 + 1, -s * std::cos(th)}, {b3 + 2, 1.0}});
+    kernel.push_back({{b3, s * n.s}, {b3 + 1, -s * n.c}, {b3 + 2, 1.0}});
     if (!pinned[3 * c + 2]) {
       pinned[3 * c + 2] = true;
       ++k.pinned_lobe_rotation;

@@ -64,7 +64,6 @@ class ForceField {
   void refresh(const Packing& p);
   void find_pair_images(const Box& box);
   void gather_near_pairs();
-  void place_cell(const Packing& p, std::size_t i);
   double pair_loop(const Packing& p, double* F) const;
   double threaded_pair_loop(const Packing& p, double* F);
   void index_pairs_by_cell(std::size_t n);
@@ -83,6 +82,9 @@ class ForceField {
   // Lobe offsets from their cell's centroid, (ox, oy) = ±ℓ n̂: the lever arms of the torques,
   // recomputed only when the cell's θ (theta_cached_) or bud size changes.
   std::vector<double> ox_, oy_, theta_cached_;
+  // The cells whose axis is recomputed at this refresh, their θ and their axes (cos θ, sin θ).
+  std::vector<std::uint32_t> turned_;
+  std::vector<double> turned_theta_, turned_c_, turned_s_;
   // Threaded path: each pair's (U, fx, fy), and for each cell its pairs in pair-list order
   // (entry 2k + s: pair k, the cell holding its first lobe if s = 0, its second if s = 1),
   // rebuilt with the neighbour list.

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <numbers>
 #include <vector>
+#include "budjam/orientation.hpp"
 
 namespace budjam {
 
@@ -114,14 +115,16 @@ inline void place_lobes(const Packing& p, Lobes& lobes) {
   lobes.x.resize(2 * n);
   lobes.y.resize(2 * n);
   lobes.R.resize(2 * n);
+  std::vector<double> theta(n), c(n), s(n);
+  for (std::size_t i = 0; i < n; ++i) theta[i] = p.theta(i);
+  axes(theta.data(), n, c.data(), s.data());  // the force field's axes, bit for bit
   for (std::size_t i = 0; i < n; ++i) {
     const Dumbbell d = p.dumbbell(i);
-    const double c = std::cos(p.theta(i)), s = std::sin(p.theta(i));
-    lobes.x[2 * i] = p.x(i) - d.mother_offset * c;
-    lobes.y[2 * i] = p.y(i) - d.mother_offset * s;
+    lobes.x[2 * i] = p.x(i) - d.mother_offset * c[i];
+    lobes.y[2 * i] = p.y(i) - d.mother_offset * s[i];
     lobes.R[2 * i] = 0.5 * d.D;
-    lobes.x[2 * i + 1] = p.x(i) + d.bud_offset * c;
-    lobes.y[2 * i + 1] = p.y(i) + d.bud_offset * s;
+    lobes.x[2 * i + 1] = p.x(i) + d.bud_offset * c[i];
+    lobes.y[2 * i + 1] = p.y(i) + d.bud_offset * s[i];
     lobes.R[2 * i + 1] = 0.5 * d.b;
   }
 }

@@ -2,6 +2,7 @@
 
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
+#include "budjam/orientation.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/run_data.hpp"
@@ -84,7 +85,8 @@ ParticleFrame particle_frame(const Packing& p, RigidityNetwork which) {
     }
   }
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const double link = -(bud_fx[i] * std::cos(p.theta(i)) + bud_fy[i] * std::sin(p.theta(i)));
+    const Axis n = axis(p.theta(i));
+    const double link = -(bud_fx[i] * n.c + bud_fy[i] * n.s);
     f.bonds.push_back({static_cast<std::uint32_t>(mother_lobe(i)), static_cast<std::uint32_t>(bud_lobe(i)),
                        BondKind::link, link, false});
   }
