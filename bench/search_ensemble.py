@@ -6,8 +6,10 @@ with whether each difference is within the combined standard error |Δ| ≤ √(
 
 Usage: python3 bench/search_ensemble.py OUT [--L 8] [--seeds 20] [--P0 1e-3]
            [--targets '[1e-3,1e-2]'] [--key jamming.search] [--values secant,bracket] [--budjam build/budjam]
-e.g. --key minimiser.energy_floor --values 1e-20,0.5e-16. Runs are made two at a time under nice (an
-existing OUT/<value>/seed<S>/summary.json is kept).
+           [--builds OLD/budjam,NEW/budjam]
+e.g. --key minimiser.energy_floor --values 1e-20,0.5e-16. With --builds the two sides are two builds,
+each with its scene defaults (for a change of the code that changes every path). Runs are made two at a
+time under nice (an existing OUT/<side>/seed<S>/summary.json is kept).
 """
 import argparse
 import concurrent.futures
@@ -18,17 +20,25 @@ import statistics
 import subprocess
 
 
-def grow(args, value, seed):
-    out = pathlib.Path(args.out) / value / f"seed{seed}"
+def sides(args):
+    """(label, budjam executable, extra scene settings) of the two sides compared."""
+    if args.builds:
+        return [(f"build{k + 1}", exe, []) for k, exe in enumerate(args.builds.split(","))]
+    return [(value, args.budjam, ["--set", f"{args.key}={value}"]) for value in args.values.split(",")]
+
+
+def grow(args, side, seed):
+    label, budjam, settings = side
+    out = pathlib.Path(args.out) / label / f"seed{seed}"
     if not (out / "summary.json").exists():
-        subprocess.run(["nice", "-n", "5", args.budjam, "grow", "data/scenes/paper-L15.toml", "--out", str(out),
+        subprocess.run(["nice", "-n", "5", budjam, "grow", "data/scenes/paper-L15.toml", "--out", str(out),
                         "--overwrite", "--quiet", "--seed", str(seed), "--set", f"box.L={args.L}", "--set",
                         f"growth.P0={args.P0}", "--set", f"jamming.targets={args.targets}", "--set",
-                        "jamming.continue_to_phi2=true", "--set", f"{args.key}={value}", "--set",
-                        "observe.checkpoint_every=0"], check=True)
+                        "jamming.continue_to_phi2=true", *settings, "--set", "observe.checkpoint_every=0"],
+                       check=True)
     summary = json.loads((out / "summary.json").read_text())
     for t in summary["targets"]:
-        moduli = subprocess.run([args.budjam, "moduli", str(out / "packings" / f"target_{t['index']}.pack"), "--json"],
+        moduli = subprocess.run([budjam, "moduli", str(out / "packings" / f"target_{t['index']}.pack"), "--json"],
                                 check=True, capture_output=True, text=True).stdout
         t["G"] = json.loads(moduli)["G"]
     return summary
@@ -60,16 +70,20 @@ def main():
     ap.add_argument("--key", default="jamming.search")
     ap.add_argument("--values", "--searches", dest="values", default="secant,bracket")
     ap.add_argument("--budjam", default="build/budjam")
+    ap.add_argument("--builds", help="two budjam executables, compared with their scene defaults")
     args = ap.parse_args()
-    values = args.values.split(",")
+    compared = sides(args)
+    values = [label for label, _, _ in compared]
     seeds = range(1, args.seeds + 1)
     with concurrent.futures.ThreadPoolExecutor(2) as pool:
-        jobs = {(s, k): pool.submit(grow, args, s, k) for s in values for k in seeds}
+        jobs = {(side[0], k): pool.submit(grow, args, side, k) for side in compared for k in seeds}
         runs = {key: job.result() for key, job in jobs.items()}
     table = {s: [quantities(runs[(s, k)]) for k in seeds if runs[(s, k)]["status"] == "finished"] for s in values}
     names = list(table[values[0]][0].keys())
     print(f"L = {args.L}, P0 = {args.P0}, seeds 1-{args.seeds}; finished: " +
           ", ".join(f"{s} {len(table[s])}" for s in values))
+    if args.builds:
+        print("; ".join(f"{label} = {exe}" for label, exe, _ in compared))
     print("| quantity | " + " | ".join(values) + " | within SE |")
     print("|---" * (len(values) + 2) + "|")
     for name in names:
