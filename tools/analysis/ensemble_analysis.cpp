@@ -409,25 +409,12 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   Ensemble e;
   const auto dirs = find_runs(o.inputs);
   e.runs = dirs.size();
-  std::vector<RunData> data;
-  std::vector<std::string> fingerprints;
-  for (const auto& d : dirs) {
-    data.push_back(load_run(d));
-    fingerprints.push_back(data.back().summary.dump());
-  }
   // A run directory copied elsewhere is one run, not two samples: keep the first copy.
-  std::vector<bool> copy(dirs.size(), false);
-  for (const auto& g : duplicate_runs(fingerprints)) {
-    std::vector<std::string> names;
-    for (std::size_t k : g) {
-      names.push_back(dirs[k].string());
-      copy[k] = k != g.front();
-    }
-    e.duplicates.push_back(names);
-  }
+  const DistinctRuns loaded = load_distinct_runs(dirs);
+  e.duplicates = loaded.copy_groups;
   for (std::size_t k = 0; k < dirs.size(); ++k) {
-    const RunData& r = data[k];
-    if (copy[k]) continue;
+    const RunData& r = loaded.runs[k];
+    if (loaded.later_copy[k]) continue;
     // A run that stopped early (step limit, say) still landed every state it recorded: its jamming
     // point, targets and φ_2 are used; it is listed so that the report can say so. One that never
     // jammed has nothing to contribute.

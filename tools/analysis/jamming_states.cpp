@@ -95,4 +95,23 @@ std::vector<std::vector<std::size_t>> duplicate_runs(std::span<const std::string
   return groups;
 }
 
+DistinctRuns load_distinct_runs(std::span<const std::filesystem::path> dirs) {
+  DistinctRuns d;
+  std::vector<std::string> fingerprints;
+  for (const auto& dir : dirs) {
+    d.runs.push_back(load_run(dir));
+    fingerprints.push_back(d.runs.back().summary.dump());
+  }
+  d.later_copy.assign(dirs.size(), false);
+  for (const auto& group : duplicate_runs(fingerprints)) {
+    std::vector<std::string> names;
+    for (std::size_t k : group) {
+      names.push_back(dirs[k].string());
+      d.later_copy[k] = k != group.front();
+    }
+    d.copy_groups.push_back(std::move(names));
+  }
+  return d;
+}
+
 }  // namespace budjam::tools

@@ -4,9 +4,11 @@
 // every P0 group: quantities fixed at jamming (φ_J, u_J, n_J, the jammed spectrum) then have as many
 // independent samples as distinct states, not as runs. And a run directory copied twice is one run.
 #include "budjam/statistics.hpp"
+#include "io/run_data.hpp"
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <span>
 #include <string>
 #include <vector>
@@ -39,5 +41,13 @@ BootstrapResult cluster_bootstrap_mean(std::span<const double> values, std::span
 // is deterministic: same scene and seed give the same bytes): one run copied into several
 // directories. Indices ascending within a group; groups in order of their first index.
 std::vector<std::vector<std::size_t>> duplicate_runs(std::span<const std::string> fingerprints);
+
+// Run directories read in order, each copy of a run after its first marked: one sample, not two.
+struct DistinctRuns {
+  std::vector<RunData> runs;
+  std::vector<bool> later_copy;                       // runs[k] repeats an earlier run
+  std::vector<std::vector<std::string>> copy_groups;  // directories of one run, the used one first
+};
+DistinctRuns load_distinct_runs(std::span<const std::filesystem::path> dirs);
 
 }  // namespace budjam::tools

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -46,30 +47,18 @@ std::string summary_line(std::size_t runs, std::size_t copies, const KaplanMeier
 }
 
 void run(const Options& o) {
-  std::vector<tools::RunData> data;
-  std::vector<std::string> fingerprints;
-  for (const auto& d : o.runs) {
-    data.push_back(tools::load_run(d));
-    fingerprints.push_back(data.back().summary.dump());
-  }
   // A run given twice, or copied into another directory, is one sample, as in `budjam analyse`:
   // its first copy is used.
-  std::vector<bool> copy(o.runs.size(), false);
+  const std::vector<std::filesystem::path> dirs(o.runs.begin(), o.runs.end());
+  const tools::DistinctRuns loaded = tools::load_distinct_runs(dirs);
   io::Json duplicates = io::Json::array();
-  for (const auto& group : tools::duplicate_runs(fingerprints)) {
-    io::Json names = io::Json::array();
-    for (std::size_t k : group) {
-      names.push_back(o.runs[k]);
-      copy[k] = k != group.front();
-    }
-    duplicates.push_back(names);
-  }
+  for (const auto& group : loaded.copy_groups) duplicates.push_back(group);
   std::vector<SurvivalRecord> records;
   std::vector<double> uJ, nrJ;
   for (std::size_t k = 0; k < o.runs.size(); ++k) {
-    if (copy[k]) continue;
+    if (loaded.later_copy[k]) continue;
     const std::string& d = o.runs[k];
-    const tools::RunData& r = data[k];
+    const tools::RunData& r = loaded.runs[k];
     if (!r.jammed()) throw InputError(d + ": the run never jammed (phi_J is null)");
     if (!r.bud_events) throw InputError(d + ": no bud_events.csv (the scene turned observe.bud_events off)");
     const auto rec = tools::survival_records(*r.bud_events);
@@ -84,7 +73,7 @@ void run(const Options& o) {
   const auto a_eps = u_J > 0 ? a_epsilon(km, u_J, eps) : std::nullopt;
 
   io::Json j;
-  const auto used = static_cast<std::size_t>(std::count(copy.begin(), copy.end(), false));
+  const auto used = static_cast<std::size_t>(std::count(loaded.later_copy.begin(), loaded.later_copy.end(), false));
   j["runs"] = used;
   j["duplicates"] = duplicates;
   j["records"] = km.records();
