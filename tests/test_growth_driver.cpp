@@ -912,41 +912,51 @@ TEST_CASE("the secant search finds a jamming point in the window that is a minim
   }
 }
 
-// L = 15, seed 3, no feedback: FIRE (|F| < 1e-12) stops on a saddle at E/N = 1.16e-16 that is one
-// contact short of isostatic (tests/data/saddle_jamming_L15_seed3.pack is that state).
+// L = 15, no feedback: FIRE (|F| < 1e-12) can stop on a saddle a hair above jamming, one contact short
+// of isostatic (tests/data/saddle_jamming_L15_seed3.pack is such a state, from an earlier build's
+// seed 3). The test takes the first seed from 3 on whose run without the check accepts one.
 TEST_CASE(
-    "a jamming candidate that is a saddle is relaxed on: the jamming point found is a minimum, isostatic, and a little "
-    "denser",
+    "a jamming candidate that is a saddle is relaxed on: the jamming point found is a minimum, isostatic, at the same "
+    "or a slightly larger phi",
     "[.slow][driver]") {
   Scene s;
   s.L = 15.0;
-  s.seed = 3;
   s.P0.reset();
   s.targets = {};
-  s.search = JammingSearch::bisection;  // the documented saddle lies on the bisection's path
-  s.fire.force_tol = 1e-12;             // where FIRE stops on it (at the default 1e-14 it relaxes past)
-  JammingPoint with, without;
+  s.search = JammingSearch::bisection;  // the search that met the documented saddle (any search can)
+  s.fire.force_tol = 1e-12;             // where FIRE stops on them (at the default 1e-14 it relaxes past)
   s.check_minimum = false;
-  GrowthDriver d0(s);
-  d0.add_observer(without);
-  REQUIRE(d0.run() == RunStatus::finished);
+  JammingPoint without;
+  RunResult result_without;
+  for (s.seed = 3; s.seed < 40; ++s.seed) {
+    without = JammingPoint{};
+    GrowthDriver d0(s);
+    d0.add_observer(without);
+    REQUIRE(d0.run() == RunStatus::finished);
+    REQUIRE(without.record);
+    result_without = d0.result();
+    if (!without.minimum()) break;
+  }
+  INFO("seed " << s.seed);
   s.check_minimum = true;
+  JammingPoint with;
   GrowthDriver d1(s);
   d1.add_observer(with);
   REQUIRE(d1.run() == RunStatus::finished);
-  REQUIRE(without.record);
   REQUIRE(with.record);
   // The energy rule alone accepts the saddle, a hypostatic state
-  CHECK(d0.result().saddles_relaxed == 0);
+  CHECK(result_without.saddles_relaxed == 0);
   CHECK_FALSE(without.minimum());
   CHECK(without.record->network.dZ < 0);
-  // with the check the saddle relaxes to E ≈ 0, growth goes on, and the jamming point is a minimum
+  // With the check the saddle is relaxed on. Below the window growth goes on; still in it, that state is
+  // the jamming point (φ depends on the sizes alone: the same step, the same φ). Either way it is a
+  // minimum, and isostatic up to the rounding of Z − Z_iso.
   CHECK(d1.result().saddles_relaxed >= 1);
   CHECK(with.minimum());
-  CHECK(with.record->network.dZ >= 0);
+  CHECK(with.record->network.dZ >= -1e-12);
   CHECK(with.record->E_per_cell >= s.epsilon_U);
   CHECK(with.record->E_per_cell <= 2 * s.epsilon_U);
-  CHECK(with.record->phi > without.record->phi);
+  CHECK(with.record->phi >= without.record->phi);
   CHECK(with.record->phi - without.record->phi < 1e-5);
 }
 

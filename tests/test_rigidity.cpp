@@ -719,6 +719,8 @@ TEST_CASE("along a real growth run above jamming: tracker = scratch at every sta
     REQUIRE(driver.run() == RunStatus::finished);
     CHECK(check.jammings >= 1);
     CHECK(check.states > 20);
-    CHECK(check.incremental == check.states - check.jammings);  // only each baseline is a full game
+    // Only the first jammed state is a full game; every later one, also the first after an unjamming,
+    // is updated from the state before (cells are never removed, so the game never has too many joints).
+    CHECK(check.states - check.incremental == 1);
   }
 }

@@ -29,7 +29,10 @@ def test_frames_at_sampled_steps_and_events(reference):
     assert steps == sorted(set(steps))  # one frame per state, in order
     summary = json.loads((reference / "summary.json").read_text())
     assert {0, 100, 200} <= set(steps)
-    assert summary["step_J"] in steps and summary["step_2"] in steps
+    # Every event state of the run has its frame: jamming, each target and φ_2 if the run reached it.
+    events = [summary["step_J"]] + [t["step"] for t in summary["targets"]]
+    events += [summary["step_2"]] if summary["step_2"] is not None else []
+    assert set(events) <= set(steps)
     assert steps[-1] == summary["accepted_steps"]  # the last state
     assert not (reference / "trajectory.xyz.partial").exists()
 
