@@ -65,6 +65,9 @@ std::string step_limit_notice(const Scene& scene, const RunResult& r, const fs::
 }
 
 void run(const Options& o) {
+  // Before any file is written: a signal that came between the first file and the handler would
+  // end the process with a run directory it cannot resume.
+  const cli::StopSignals stop;
   const bool resuming = !o.resume.empty();
   Scene scene;
   std::optional<io::RunDirectory> run_dir;
@@ -107,7 +110,6 @@ void run(const Options& o) {
   // after SIGTERM or SIGINT, which then ends the run (resumable). A state that holds less than the
   // run depends on (a kept Newton factor) is not saved: the run then resumes, exactly, from its last
   // checkpoint.
-  const cli::StopSignals stop;
   std::optional<long> last_checkpoint;
   if (resuming) last_checkpoint = driver.view().step;
   driver.set_checkpoint_hook([&] {
