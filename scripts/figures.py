@@ -349,7 +349,7 @@ def figB1(T):
     dz_identity(axes[0], targets, lambda r: col[float(r["L"])], lambda r: f"L = {float(r['L']):g}")
     panel(axes[0], "A")
     ax = axes[1]
-    # budjam's φ_2 (filled), the paper's definition and selection (open), Eq. 14 with a as area (dashed)
+    # every run (filled), the runs the paper's selection admits (open), Eq. 14 with a as area (dashed)
     for L in Ls:
         for key, fmt, lab in (("dphi_2", "o-", f"L = {L:g}"), ("dphi_2_paper", "o:", None)):
             gs = [g for g in T.groups(L) if g[key]["mean"] is not None]
@@ -359,8 +359,8 @@ def figB1(T):
         gs = [g for g in T.groups(L) if g["dphi_2_pred_area"]["mean"] is not None]
         ax.plot([p0_value(g["P0_label"]) for g in gs], [g["dphi_2_pred_area"]["mean"] for g in gs], "--",
                 color=col[L], lw=1)
-    ax.plot([], [], "ko-", label="at most one tagged bud left")
-    ax.plot([], [], "o:", color="k", mfc="none", label="none left, paper's selection")
+    ax.plot([], [], "ko-", label="every run")
+    ax.plot([], [], "o:", color="k", mfc="none", label="paper's selection")
     ax.plot([], [], "k--", lw=1, label="Eq. (14), $a$ as area")
     p0_axis(ax, [g["P0_label"] for g in T.groups()])
     ax.set_yscale("log")

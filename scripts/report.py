@@ -15,6 +15,10 @@ import datetime
 import json
 import math
 import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import verdicts  # noqa: E402
 
 
 def write_lines(path, lines):
@@ -57,60 +61,102 @@ def growth_bulk(stat):
     return "log₁₀ median B_grow/(λ_c B)", s, stat.get("median")
 
 
-FINITE_SIZE_COLUMNS = [("u_J", "u_J (buds)"), ("u_J_lobes", "u_J (lobes)"), ("n_J", "n_J"), ("phi_J", "φ_J"),
-                       ("dphi_2", "Δφ_2 (≤ 1 left)"), ("dphi_2_paper", "Δφ_2 (none left, paper's selection)"),
-                       ("dphi_2_paper_all", "Δφ_2 (none left, every run)"),
-                       ("N_div_2_over_N_J", "N_div(φ_2)/N_J (median)"), ("G_2_over_Pmax", "G_2/P_max (median)"),
-                       ("G_2_over_Pmax_at_paper_phi2", "G_2/P_max at none left (median)")]
+DEPLETION_SIZE_COLUMNS = [("dphi_2", "Δφ_2, every run"), ("dphi_2_paper", "Δφ_2, paper's selection"),
+                          ("dphi_2_none_left", "Δφ at none left"), ("N_div_2_over_N_J", "N_div(φ_2)/N_J (median)"),
+                          ("G_2_over_Pmax", "G_2/P_max (median), every run"),
+                          ("G_2_over_Pmax_paper", "G_2/P_max (median), paper's selection")]
+JAMMING_SIZE_COLUMNS = [("u_J", "u_J (buds)"), ("u_J_lobes", "u_J (lobes)"), ("phi_J", "φ_J"), ("Z_J", "Z_J"),
+                        ("rattler_fraction", "rattler fraction")]
 
 
-def finite_size_rows(entries):
-    """The finite-size table of every P0 run at several sizes, with its N → ∞ extrapolation."""
+def cell_pm(c):
+    return pm({"mean": c.get("value"), "se": c.get("se"), "n": c.get("n")})
+
+
+def limit_text(x):
+    if x.get("limit") is None:
+        return "— (" + x.get("why", "not fitted") + ")"
+    res = ", ".join(f"{r:+.1f}" for r in x.get("residuals_in_se", []))
+    return (f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ²/dof = {fmt(x['chi2'], 2)}/{x['dof']}; "
+            f"residuals/SE {res})")
+
+
+def jamming_size_rows(J, source):
+    """The finite-size table of the jamming ensembles (independent seeds per size)."""
+    if not J:
+        return []
+    head = ("| L | runs | N_J | N_J/L² | growth alone | difference/σ | n_J | " +
+            " | ".join(t for _, t in JAMMING_SIZE_COLUMNS) + " |")
+    rows = ["", "## Finite size at jamming", "",
+            f"Jamming-only runs without feedback ({source}), each size with seeds of its own, so that sizes are "
+            "independent samples; one jamming state per run. The cell density N_J/L² is compared with what the growth "
+            "and division rules alone give at the same φ (400 growth histories per size, no mechanics): N/L² at fixed "
+            "φ is not monotone in L, so it is not fitted. The other quantities are fitted by q(N) = q_∞ + c/N (weighted "
+            "least squares, errors widened by √(χ²/dof) when it exceeds 1) where five sizes or more have an error bar; "
+            "χ²/dof and the residuals per size (in SE, smallest L first) test that form. n_J,∞ is the growth-only "
+            "density in a box of side " + fmt(J["n_J_limit"]["growth_only_L"] if J.get("n_J_limit") else None) +
+            " at φ_J,∞ times the fitted non-rattler fraction 1 − r_∞.", "",
+            head, "|" + " --- |" * (len(JAMMING_SIZE_COLUMNS) + 7)]
+    for r in J["sizes"]:
+        g = r.get("growth_only_cells_per_area", {})
+        cells = [cell_pm(r[k]) for k, _ in JAMMING_SIZE_COLUMNS]
+        rows.append(f"| {r['L']:g} | {r['runs']} | {fmt(r['N_J']['mean'])} | {cell_pm(r['cells_per_area'])} | "
+                    f"{fmt(g.get('value'))} ± {fmt(g.get('se'), 2)} | {fmt(r.get('cells_per_area_minus_growth_only_in_se'), 2)} | "
+                    f"{cell_pm(r['n_J'])} | " + " | ".join(cells) + " |")
+    nl = J.get("n_J_limit")
+    rows.append("| N → ∞ | | | | | | " + (f"{fmt(nl['value'])} ± {fmt(nl['se'], 2)}" if nl else "—") + " | " +
+                " | ".join(limit_text(J["extrapolation"][k]) for k, _ in JAMMING_SIZE_COLUMNS) + " |")
+    return rows
+
+
+def depletion_size_rows(entries):
+    """Per box size and feedback strength, the depletion-point quantities of the paper's grid."""
     if not entries:
         return []
-    head = "| L | runs | N_J | " + " | ".join(t for _, t in FINITE_SIZE_COLUMNS) + " |"
-    rows = ["", "## Finite size", "",
-            "Per box size and feedback strength, and the extrapolation q(N_J) = q_∞ + c/N_J (weighted least squares on "
-            "the per-size values with their standard errors, errors widened by √(χ²/dof) when it exceeds 1); "
-            "χ²/dof ≫ 1 says the 1/N form does not describe the data.", ""]
+    head = "| L | runs | N_J | " + " | ".join(t for _, t in DEPLETION_SIZE_COLUMNS) + " |"
+    rows = ["", "## Finite size at the depletion point", "",
+            "Per box size and feedback strength. The paper's grid grows seeds 1–20 at every size, and a run's random "
+            "stream does not depend on L, so the sizes are not independent samples; q_∞ + c/N is fitted only with five "
+            "sizes or more (three leave one degree of freedom and cannot test the form).", ""]
     for e in entries:
-        rows += [f"P0 = {e['P0_label']}:", "", head, "|" + " --- |" * (len(FINITE_SIZE_COLUMNS) + 3)]
+        rows += [f"P0 = {e['P0_label']}:", "", head, "|" + " --- |" * (len(DEPLETION_SIZE_COLUMNS) + 3)]
         for r in e["sizes"]:
-            cells = [pm({"mean": r[k]["value"], "se": r[k]["se"], "n": r[k]["n"]}) for k, _ in FINITE_SIZE_COLUMNS]
+            cells = [cell_pm(r[k]) for k, _ in DEPLETION_SIZE_COLUMNS]
             rows.append(f"| {r['L']:g} | {r['runs']} | {fmt(r['N_J']['mean'])} | " + " | ".join(cells) + " |")
-        limits = []
-        for k, _ in FINITE_SIZE_COLUMNS:
-            x = e["extrapolation"][k]
-            if x.get("limit") is None:
-                limits.append("—")
-            else:
-                limits.append(f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ² {fmt(x['chi2'], 2)}, {x['dof']} dof)")
-        rows += [f"| N → ∞ | | | " + " | ".join(limits) + " |", ""]
+        rows += ["| N → ∞ | | | " + " | ".join(limit_text(e["extrapolation"][k]) for k, _ in DEPLETION_SIZE_COLUMNS)
+                 + " |", ""]
     return rows
 
 
 def ci(stat):
     if not stat or stat.get("median") is None:
         return "not measured"
-    lo, hi = stat["ci95"]
+    lo, hi = stat.get("ci95") or (None, None)
+    if lo is None:
+        return f"{fmt(stat['median'])} (n={stat['n']}, no interval below 5)"
     return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={stat['n']})"
 
 
-def near(stat, paper, half_digit, key="mean", se_key="se"):
-    """Verdict on a '≃ paper' claim: confirmed when |x − paper| ≤ 2 SE + half the paper's last digit."""
+def judged(stat, claim, key="mean", n_paper=None):
+    """The verdict of the one rule (scripts/verdicts.py) on a {mean|median, se, n} statistic."""
     if not stat or stat.get(key) is None:
-        return "awaits data"
-    tol = 2 * (stat.get(se_key) or 0) + half_digit
-    return "confirmed" if abs(stat[key] - paper) <= tol else "not confirmed"
+        return verdicts.Verdict("inconclusive", "not measured")
+    return verdicts.compare(stat[key], stat.get("se"), stat.get("n"), claim, n_paper)
 
 
-def monotone(values, increasing=False):
-    """Verdict on a trend claim over the feedback groups (weak → strong)."""
-    v = [x for x in values if x is not None]
-    if len(v) < 3:
-        return "awaits data"
-    ok = all((b >= a) if increasing else (b <= a) for a, b in zip(v, v[1:]))
-    return "confirmed" if ok else "not confirmed"
+def trend_of(stats, increasing, key="mean"):
+    return verdicts.trend([(s.get(key) if s else None, s.get("se") if s else None, s.get("n") if s else 0)
+                           for s in stats], increasing)
+
+
+def all_of(vs):
+    """One verdict for a claim tested in several groups: not confirmed if any is, confirmed if all are."""
+    words = [v.word for v in vs]
+    if "not confirmed" in words:
+        return verdicts.Verdict("not confirmed", f"{words.count('not confirmed')} of {len(vs)} groups")
+    if all(w == "confirmed" for w in words):
+        return verdicts.Verdict("confirmed", f"all {len(vs)} groups")
+    return verdicts.Verdict("inconclusive", f"{words.count('inconclusive')} of {len(vs)} groups without a verdict")
 
 
 def shear_note(bins):
@@ -156,12 +202,18 @@ def main():
     ap.add_argument("--moduli", default="1")
     ap.add_argument("--dos", default="1")
     ap.add_argument("--survival", help="`budjam survival` JSON of the main L (default: TABLES/survival_main_L.json)")
+    ap.add_argument("--jamming", help="tables of the jamming ensembles (`make -f Makefile.analysis PRESET=jamming`); "
+                                      "without them the jamming rows use the preset's own runs")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     with open(os.path.join(a.tables, "analysis.json")) as f:
         A = json.load(f)
     with open(a.survival or os.path.join(a.tables, "survival_main_L.json")) as f:
         surv = json.load(f)
+    AJ = None
+    if a.jamming and os.path.exists(os.path.join(a.jamming, "analysis.json")):
+        with open(os.path.join(a.jamming, "analysis.json")) as f:
+            AJ = json.load(f)
     U = A.get("unavailable", {})
 
     def lacking(*keys):
@@ -176,22 +228,17 @@ def main():
         need = lacking(*keys)
         return text if need is None else f"unavailable from the stored tables: {need}"
 
-    def rerun(verdict, *keys):
-        return verdict if lacking(*keys) is None else "awaits a re-run"
-
-    def untestable(stat, verdict):
-        """The verdict, unless the paper's selection admitted no run: then why the claim cannot be tested."""
-        if verdict == "awaits data" and stat and stat.get("runs") and stat.get("admitted") == 0:
-            return (f"not testable: the paper's selection admits none of {stat['runs']} runs "
-                    "(each has more than 10 divisions after φ_J by its end)")
-        return verdict
     L = A["main_L"]
     M = A["main"]
     C = A["constants"]
+
     # keyed by the label a reader expects ("none", "0.1", ..., "1e-05"), whatever budjam printed
     def label(p0):
         return "none" if p0 is None else {1e-1: "0.1", 1e-2: "0.01", 1e-3: "0.001", 1e-4: "0.0001", 1e-5: "1e-05"}.get(p0, repr(p0))
-    groups = {label(g["P0"]): g for g in A["groups"] if g["L"] == L}
+    groups_at = {}
+    for g_ in A["groups"]:
+        groups_at.setdefault(g_["L"], {})[label(g_["P0"])] = g_
+    groups = groups_at.get(L, {})
     have_moduli = a.moduli == "1" and A["inputs"]["moduli_files"] > 0
     have_dos = a.dos == "1" and A["inputs"]["dos_files"] > 0
     figdir = os.path.relpath(a.figures, os.path.dirname(os.path.abspath(a.out)) or ".")
@@ -200,114 +247,108 @@ def main():
         path = os.path.join(a.figures, name + ".png")
         return f"[{name}]({figdir}/{name}.png)" if os.path.exists(path) else f"{name} (not drawn)"
 
-    def g(label, key, kind="mean"):
-        x = groups.get(label)
-        if x is None:
-            return "no runs"
-        return ci(x[key]) if kind == "ci" else pm(x[key], kind)
-
-    def needs(flag, text, what):
-        return text if flag else f"not measured ({what} stage off or unavailable)"
-
     rows = []
+    verdict_list = []
 
     def claim(text, paper, ours, theirs, verdict, figure):
+        """A row; `verdict` is a verdicts.Verdict, or a plain text where the paper makes no claim to test."""
+        if isinstance(verdict, verdicts.Verdict):
+            verdict_list.append((text, verdict.word))
         rows.append(f"| {text} | {paper} | {ours} | {theirs} | {verdict} | {figure} |")
 
     def sel(stat, key="mean"):
         """'x ± se (n of runs)' of a statistic under the paper's selection."""
         if not stat or stat.get(key) is None:
-            return "not measured"
-        se = stat.get("se" if key == "mean" else "median_se")
+            return f"not measured ({stat.get('admitted', 0)} of {stat.get('runs', '?')} runs admitted)" if stat else \
+                "not measured"
+        se = stat.get("se")
         return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if se is not None else "") +
-                f" (n={stat['n']} of {stat['runs']} runs; {stat['admitted']} admitted)")
-
-    def states(stat):
-        if not stat or stat.get("mean") is None:
-            return "not measured"
-        return (f"{fmt(stat['mean'])} ± {fmt(stat['se'], 2)} (n={stat['n']} jamming states of {stat['runs']} runs; "
-                f"bootstrap by seed ± {fmt(stat['bootstrap_se_by_seed'], 2)})")
+                f" (n={stat['n']}; {stat['admitted']} of {stat['runs']} runs admitted)")
 
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     fed = [l for l in order if l != "none"]
-    paper_P0 = M.get("paper_P0")
-    strong = f"P0={label(paper_P0)}" if paper_P0 is not None else "strongest P0"
 
-    # ---- jamming ----
+    # ---- jamming: the jamming ensembles at the paper's L = 15 (independent seeds), else this preset ----
+    PAPER_SEEDS = 20  # the paper's samples per point (docs/model.md, "Reference parameters")
+    jam_L = 15
+    jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
+    jam_groups = {g_["L"]: g_ for g_ in (AJ or {}).get("groups", [])}
+    if jam is not None:
+        jam_src = f"jamming ensemble, L = {jam_L}, independent seeds"
+        dzj = jam_groups.get(jam_L, {}).get("dZ_J")
+    else:
+        jam, jam_L = M, L
+        jam_src = f"this preset's runs at L = {L:g} (no jamming ensemble given)"
+        dzj = groups.get("none", {}).get("dZ_J")
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
-          states(M["u_J"]) + "; contact-free buds / N_nr, every run",
-          states(M.get("u_J_paper")) + f"; contact-free lobes (mothers included) / N_nr, {strong}",
-          near(M.get("u_J_paper"), 0.23, 0.005), "—")
-    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(C["u_J_lambert_w"], 4) + " (computed)", "same",
-          "confirmed" if round(C["u_J_lambert_w"], 2) == 0.20 else "not confirmed", "—")
-    claim("Nonrattler density at jamming n_J", "≃ 0.775", states(M["n_J"]) + "; every run",
-          states(M.get("n_J_paper")) + f"; {strong}", near(M.get("n_J_paper"), 0.775, 0.0005), "—")
-    claim("Jamming packing fraction φ_J", "—", states(M["phi_J"]), "same", "—", "—")
+          f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",
+          "same: the paper's u_J counts the buds free at jamming over N_nr",
+          judged(jam["u_J"], verdicts.quoted(0.23, 0.01), n_paper=PAPER_SEEDS), "—")
+    uw = C["u_J_lambert_w"]
+    claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(uw, 4) + " (computed, exact)", "same",
+          "confirmed (rounds to 0.20)" if round(uw, 2) == 0.20 else "not confirmed (does not round to 0.20)", "—")
+    claim("Nonrattler density at jamming n_J", "≃ 0.775", f"{pm(jam['n_J'])} ({jam_src})", "same",
+          judged(jam["n_J"], verdicts.quoted(0.775, 0.001), n_paper=PAPER_SEEDS), "—")
+    claim("Cells at jamming N_J", "—", f"{pm(jam['N_J'])} ({jam_src}); N_J/L² against the growth process alone: "
+          "see \"Finite size at jamming\"", "same", "—", "—")
+    claim("Jamming packing fraction φ_J", "—", f"{pm(jam['phi_J'])} ({jam_src})", "same", "—", "—")
+    phi_J = jam["phi_J"]
+    pmax = {"mean": 2 / math.pi * (1 - phi_J["mean"]), "se": (2 / math.pi * phi_J["se"]) if phi_J.get("se") else None,
+            "n": phi_J["n"]}
     claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D25, φ_J = 0.84)", "≈ 0.1",
-          f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {fmt(M['P_max_formula_measured_phiJ'])} with the measured φ_J",
-          "same", "confirmed" if round(M["P_max_formula_measured_phiJ"], 1) == 0.1 else "not confirmed", "—")
-    dzj = groups.get("none", {}).get("dZ_J")
+          f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {pm(pmax)} with the measured φ_J", "same",
+          judged(pmax, verdicts.quoted(0.1, 0.1), n_paper=PAPER_SEEDS), "—")
     claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
-          pm(dzj) + " (no feedback)", "same",
-          "confirmed" if dzj and dzj.get("mean") is not None and abs(dzj["mean"]) < 1e-9 else "not confirmed", "—")
+          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0)), "—")
     ident = M["dZ_identity"]
-    per = ident["per_P0_feedback"]
-    worst = max((abs(x["mean"]) for x in per if x["mean"] is not None), default=None)
+    unrep = ident.get("per_P0_unrepopulated_by_run", [])
+    vs = [judged(x, verdicts.quoted(0.0, 0.0)) for x in unrep]
     claim("ΔZ = ΔZ₀(P) + 2(u_J − u) over (P0, Δφ) (Eq. 6)", "holds within finite-size scatter",
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
           f", RMS {fmt(ident['all_targets'].get('rms'))}",
-          "residual per P0, feedback runs only: " +
-          "; ".join(f"P0={label(x['P0'])} {fmt(x['mean'])} ± {fmt(x['se'], 2)} (n={x['n']}, RMS {fmt(x['rms'])})" for x in per),
-          "awaits data" if worst is None else ("confirmed" if worst < 0.1 else "not confirmed") +
-          " (|mean residual| < 0.1 at every P0)", fig("fig2"))
+          "mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
+          "repopulation), feedback runs, per P0: " +
+          "; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)),
+          all_of(vs) if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
     # ---- depletion ----
     for lab in order:
         x = groups[lab]
-        sim = x["dphi_2_paper"]
-        pred = x["dphi_2_pred_area"]
-        verdict = "awaits data"
-        if sim.get("mean") is not None and pred.get("mean") is not None:
-            ratio = pred["mean"] / sim["mean"]
-            verdict = ("confirmed" if 1.0 <= ratio <= 1.5 else "not confirmed") + f" (theory/simulation = {fmt(ratio)})"
-        claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14 (a as true area)", "theory slightly overestimates",
-              f"{pm(x['dphi_2'])} vs {avail(pm(pred), 'dphi_2_pred_area')}; φ_2 at ≤ 1 tagged bud left, every run",
-              avail(f"{sel(sim)} vs {pm(pred)}; φ_2 at no tagged bud left, paper's selection", "dphi_2_paper", "N_div_end"),
-              rerun(untestable(sim, verdict), "dphi_2_paper", "N_div_end"), fig("fig2"))
+        claim(f"φ_2 − φ_J, {p0_name(lab)}: simulation vs Eq. 14", "theory slightly overestimates",
+              f"{pm(x['dphi_2'])} vs {avail(pm(x['dphi_2_pred_area']), 'dphi_2_pred_area')} (a as true area); "
+              f"prediction − simulation run by run {avail(pm(x.get('dphi_2_pred_minus_sim_area')), 'dphi_2_pred_area')}; "
+              "every run",
+              avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure); "
+                    f"prediction − simulation {sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_diameter_sq"),
+              judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
-          avail(", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order), "dphi_2_paper", "N_div_end"),
-          rerun(monotone([groups[l]["dphi_2_paper"]["mean"] for l in fed]), "dphi_2_paper", "N_div_end"), fig("fig2"))
+          ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order),
+          trend_of([groups[l]["dphi_2_paper"] for l in fed], increasing=False), fig("fig2"))
     claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da (pooled, diameter²)", "—",
           f"a_ε = {fmt(surv.get('a_eps'))}, ∫S = {fmt(surv.get('integral_S'))}, ε = {fmt(surv.get('epsilon'))} "
           f"({surv.get('events')} completions, {surv.get('censored')} censored)", "same", "—", fig("figS"))
     # ---- mechanics ----
     bg_name, bg_text, bg = growth_bulk(M["B_grow_over_lambda_B_log10"])
-    per_p0, worst = "", bg
-    if bg is not None and all("B_grow_over_lambda_B_log10" in groups[l] for l in order):  # analysis.json v ≥ 3
-        medians = {l: groups[l]["B_grow_over_lambda_B_log10"]["median"] for l in order}
-        per_p0 = "; per P0: " + ", ".join(f"{p0_name(l)} {fmt(m)}" for l, m in medians.items())
-        worst = max([bg] + [m for m in medians.values() if m is not None], key=abs)
-    claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
-          needs(have_moduli, f"{bg_name} = {bg_text} over the targets with λ_c B > 0{per_p0}", "moduli"), "same",
-          "awaits data" if not have_moduli or bg is None else
-          ("confirmed" if abs(worst) < 0.1 else "not confirmed") +
-          (" (within 10^±0.1 pooled and at every P0)" if per_p0 else " (within 10^±0.1)"), fig("fig3"))
+    if have_moduli and bg is not None:
+        per = {l: groups[l].get("B_grow_over_lambda_B_log10", {}) for l in order}
+        vs = [judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median")] + \
+             [judged(per[l], verdicts.quoted(0.0, 0.0), key="median") for l in order]
+        claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
+              f"{bg_name} = {bg_text} over the targets with λ_c B > 0; per P0: " +
+              ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order), "same", all_of(vs), fig("fig3"))
+    else:
+        claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)", "not measured (moduli stage off or unavailable)",
+              "same", verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
     for lab in order:
         x = groups[lab]
         claim(f"P_2/P_max and λ̄_c, {p0_name(lab)}", "decrease strongly with feedback, together",
-              f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']) + ' (plain mean over [φ_J, φ_2])', 'lambda_bar')}; "
-              "every run",
-              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])}", "P_2_paper", "lambda_bar_paper",
-                    "N_div_end"), "see trend row", fig("fig3"))
-    p2 = [groups[l]["P_2_over_Pmax_paper"]["mean"] for l in fed]
-    lb = [groups[l]["lambda_bar_paper"]["mean"] for l in fed]
-    v2, vl = monotone(p2), monotone(lb)
-    claim("P_2 and λ̄_c fall together with feedback (trend over P0)", "mirrored",
-          "—", avail("P_2: " + v2 + "; λ̄_c: " + vl + " (monotone over the feedback groups)", "P_2_paper",
-                     "lambda_bar_paper", "N_div_end"),
-          rerun("confirmed" if v2 == vl == "confirmed" else ("awaits data" if "awaits data" in (v2, vl) else "not confirmed"),
-                "P_2_paper", "lambda_bar_paper", "N_div_end"),
-          fig("fig3"))
+              f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']), 'lambda_bar')}; every run",
+              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])}", "lambda_bar"),
+              "see trend row", fig("fig3"))
+    v2 = trend_of([groups[l]["P_2_over_Pmax_paper"] for l in fed], increasing=False)
+    vl = trend_of([groups[l]["lambda_bar_paper"] for l in fed], increasing=False)
+    claim("P_2 and λ̄_c fall together with feedback (trend over P0)", "mirrored", "—",
+          f"P_2: {v2}; λ̄_c: {vl} (over the feedback groups, paper's selection)", all_of([v2, vl]), fig("fig3"))
     if "P_dagger" in M:
         claim("P_2 ∝ exp(−P†/P0) (Eq. D19)", "P† = typical bud pressure",
               f"P† = {fmt(M['P_dagger'])} ± {fmt(M['P_dagger_se'], 2)} (fit over {M['P_dagger_points']} P0 ≤ 1e-2)",
@@ -315,117 +356,118 @@ def main():
     for lab in order:
         x = groups[lab]
         s_ = x["G_2_over_Pmax_paper"]
-        verdict = "awaits data"
-        if have_moduli and s_.get("median") is not None:
-            verdict = "confirmed" if 0.2 <= s_["median"] <= 1.0 else "not confirmed"
         claim(f"G_2/P_max, {p0_name(lab)} (median ± bootstrap SE)", "≈ 0.2 – 1",
-              needs(have_moduli, pm(x["G_2_over_Pmax"], "median") + ", every run", "moduli"),
-              avail(needs(have_moduli, sel(s_, "median"), "moduli"), "N_div_end"),
-              rerun(untestable(s_, verdict) if have_moduli else verdict, "N_div_end"), fig("fig3"))
+              pm(x["G_2_over_Pmax"], "median") + ", every run" if have_moduli else "not measured (moduli stage off)",
+              sel(s_, "median") + " (G_2 > 0, Tukey fences on G_2)" if have_moduli else "not measured",
+              judged(s_, verdicts.interval(0.2, 1.0), key="median") if have_moduli else
+              verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
           f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={M.get('plateau_P0')}, ℓ_c² = {fmt(M.get('lc2_J'))})",
           "same", "—", fig("fig4"))
-    gp = [groups[l]["G_2_over_P_2_paper"]["median"] for l in order]
     for lab in order:
         x = groups[lab]
         claim(f"G_2/P_2, {p0_name(lab)} (median ± bootstrap SE)", "diverges as P0 → 0",
-              needs(have_moduli, pm(x["G_2_over_P_2"], "median") + ", every run", "moduli"),
-              avail(needs(have_moduli, sel(x["G_2_over_P_2_paper"], "median"), "moduli"), "N_div_end"),
-              rerun("see trend: " + (monotone(gp, increasing=True) if have_moduli else "awaits data"), "N_div_end"),
-              fig("figD2"))
+              pm(x["G_2_over_P_2"], "median") + ", every run" if have_moduli else "not measured (moduli stage off)",
+              sel(x["G_2_over_P_2_paper"], "median") if have_moduli else "not measured", "see trend row", fig("figD2"))
+    claim("G_2/P_2 grows as feedback strengthens (trend over P0)", "diverges as P0 → 0", "—", "paper's selection",
+          trend_of([groups[l]["G_2_over_P_2_paper"] for l in order], increasing=True, key="median")
+          if have_moduli else verdicts.Verdict("inconclusive", "not measured"), fig("figD2"))
     # ---- divisions: the paper's medians are from L = 20 ----
-    paper_div = {"none": 0.081, "0.1": 0.071, "0.01": 0.053, "0.001": 0.013, "0.0001": 3e-3, "1e-05": 3e-3}
+    paper_div = {"none": (0.081, 0.001), "0.1": (0.071, 0.001), "0.01": (0.053, 0.001), "0.001": (0.013, 0.001),
+                 "0.0001": None, "1e-05": None}
+    g20 = groups_at.get(20)
     for lab in order:
-        x = groups[lab]["N_div_2_over_N_J_paper"]
         pv = paper_div.get(lab)
-        verdict = "awaits L = 20 runs"
-        if x.get("median") is not None and pv is not None and L != 20:
-            lo, hi = x["ci95"]
-            inside = x["median"] <= pv if pv == 3e-3 else lo <= pv <= hi
-            verdict += f" (at L = {L:g} the paper's value is {'inside' if inside else 'outside'} the 95 % CI)"
-        claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", ("≲ 3e-3" if pv == 3e-3 else fmt(pv)) + " (L = 20)",
-              g(lab, "N_div_2_over_N_J", "ci") + "; φ_2 at ≤ 1 tagged bud left",
-              avail(g(lab, "N_div_2_over_N_J_paper", "ci") + "; every division after φ_J up to no tagged bud left",
-                    "N_div_2_paper"), verdict, fig("figD1"))
+        bound = pv is None
+        cl = verdicts.at_most(3e-3) if bound else verdicts.quoted(*pv)
+        paper = "≲ 3e-3 (L = 20)" if bound else f"{fmt(pv[0])} (L = 20)"
+        if g20 and lab in g20:
+            x = g20[lab]
+            claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}, L = 20", paper,
+                  ci(x["N_div_2_over_N_J"]) + "; up to φ_2 (≤ 1 tagged bud left)",
+                  avail(ci(x["N_div_2_over_N_J_paper"]) + "; every division after φ_J up to no tagged bud left",
+                        "N_div_2_none_left"), judged(x["N_div_2_over_N_J_paper"], cl, key="median"), fig("figD1"))
+        else:
+            claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",
+                  verdicts.Verdict("inconclusive", "no L = 20 runs"), fig("figD1"))
     # ---- growth rates ----
-    paper_h = {"none": (0.0, 0.0), "0.1": (1.4e-4, 0.05e-4)}
-    hs = [groups[l]["h_gamma"]["median"] for l in fed]
+    paper_h = {"none": (0.0, 0.0), "0.1": (1.4e-4, 0.01e-4)}
     for lab in order:
         x = groups[lab]
         if lab in paper_h:
-            pv, half = paper_h[lab]
-            verdict = near(x["h_gamma"], pv, half, key="median")
-            paper = fmt(pv)
+            verdict = judged(x["h_gamma"], verdicts.quoted(*paper_h[lab]), key="median")
+            paper = fmt(paper_h[lab][0])
         else:
-            verdict = "see trend: " + monotone([v for l, v in zip(fed, hs) if float(l) <= 1e-2], increasing=True)
-            paper = "rises for P0 ≲ 1e-2"
+            verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
         claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)} (median ± bootstrap SE)", paper, pm(x["h_gamma"], "median"), "same",
               verdict, fig("figE1"))
+    strong = [l for l in fed if float(l) <= 1e-2]
+    claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "same",
+          trend_of([groups[l]["h_gamma"] for l in strong], increasing=True, key="median"), fig("figE1"))
     paper_w = {"0.1": 0.21, "0.01": 0.21, "0.0001": 0.16}
     paper_peak = {"0.1": 0.97, "0.01": 0.90, "0.001": 0.17}
     for lab in fed:
         x = groups[lab]
         w = x.get("g_peak_weight_at_1_paper") or {}
-        verdict = near(w, paper_w[lab], 0.005) if lab in paper_w else "—"
         peak = paper_peak.get(lab)
         quart = (x.get("g_compressed_q25"), x.get("g_compressed_median"), x.get("g_compressed_q75"))
+        peak_text = ""
         if peak is not None and None not in quart:
-            verdict += (f"; peak ≈ {peak} {'inside' if quart[0] <= peak <= quart[2] else 'outside'} the quartiles "
-                        "(a nearly flat density has no measurable peak)")
+            peak_text = (f"; the paper's peak ≈ {peak} lies {'inside' if quart[0] <= peak <= quart[2] else 'outside'} "
+                         "the quartiles (a nearly flat density has no measurable peak: not judged)")
         claim(f"Π(g) at Δφ = 3e-3, {p0_name(lab)}: weight at g = 1; compressed sector",
               f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
               f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}",
               avail(f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)", "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
               f"{pm(w)} (u at Δφ = 3e-3); g < 1: " +
               avail(f"median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
-                    "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
-              verdict, fig("figE1"))
+                    "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled") + peak_text,
+              judged(w, verdicts.quoted(paper_w[lab], 0.01)) if lab in paper_w else "—", fig("figE1"))
     if "P_star_range_paper" in M:
         lo, hi = M["P_star_range_paper"]
-        overlap = lo <= 4.3e-3 and hi >= 1.3e-3
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
               f"{fmt(M['P_star_range'][0])} – {fmt(M['P_star_range'][1])} (a_c = mean completion size "
               f"{fmt(M['a_c_range_area'][0])} – {fmt(M['a_c_range_area'][1])}, true area)",
               f"{fmt(lo)} – {fmt(hi)} (a_c = median of S, {fmt(M['a_c_median_range_area'][0])} – "
-              f"{fmt(M['a_c_median_range_area'][1])}, true area)",
-              ("confirmed" if overlap else "not confirmed") + " (ranges overlap)", fig("figE1"))
+              f"{fmt(M['a_c_median_range_area'][1])}, true area); the ranges "
+              f"{'overlap' if lo <= 4.3e-3 and hi >= 1.3e-3 else 'do not overlap'}",
+              verdicts.Verdict("inconclusive", "a range over the feedback groups has no error bar"), fig("figE1"))
     # ---- spectrum ----
     D = M.get("dos") or {}
     Dp = D.get("paper") or {}
-    claim("N_zero ≃ N_u (Eq. F4)", "tracks",
-          needs(have_dos and D, f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
-                                f"mean abs(N_zero − N_u) = {fmt(D.get('N_zero_minus_N_u_abs'))}", "dos"), "same",
-          "awaits data" if not (have_dos and D) else
-          ("confirmed" if D["N_zero_equals_N_u"] >= 0.9 else "not confirmed") + " (equal in ≥ 90 %)", fig("figF1"))
+    if have_dos and D:
+        diff = D.get("N_zero_minus_N_u")
+        claim("N_zero ≃ N_u (Eq. F4)", "tracks",
+              f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
+              f"N_zero − N_u = {pm(diff)}", "same", judged(diff, verdicts.quoted(0.0, 0.0)), fig("figF1"))
+    else:
+        claim("N_zero ≃ N_u (Eq. F4)", "tracks", "not measured (dos stage off or unavailable)", "same",
+              verdicts.Verdict("inconclusive", "not measured"), fig("figF1"))
     if have_dos and Dp:
         od, o6 = Dp["through_origin_dZ"], Dp["through_origin_Z_minus_6"]
-        ok = Dp["fraction_Z_minus_6_negative"] > 0.5 and od["rms"] < o6["rms"]
-        theirs = (f"through the origin on {Dp['packings']} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
-                  f"{fmt(o6['rms'])} for Z − 6; from integer contact counts ΔZ < 0 in {fmt(Dp['fraction_dZ_negative'])}, "
-                  f"Z − 6 < 0 in {fmt(Dp['fraction_Z_minus_6_negative'])}")
-        verdict = "confirmed" if ok else "not confirmed"
+        n = Dp["packings"]
+        p = Dp["fraction_Z_minus_6_negative"]
+        frac = {"mean": p, "se": math.sqrt(p * (1 - p) / n) if n else None, "n": n}
+        theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
+                  f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
+                  f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {pm(frac)}")
+        verdict = judged(frac, verdicts.at_least(0.5))
     else:
-        theirs, verdict = "not measured (dos stage off or unavailable)", "awaits data"
-    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5)", "collapse; > half of Z − 6 < 0",
-          needs(have_dos and D, f"free linear fits over every packing: R² {fmt(D.get('r2_dZ'))} for ΔZ, "
-                                f"{fmt(D.get('r2_Z_minus_6'))} for Z − 6 (cannot tell a shift apart)", "dos"),
+        theirs, verdict = "not measured (dos stage off or unavailable)", verdicts.Verdict("inconclusive", "not measured")
+    claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5): more than half of the packings have Z − 6 < 0",
+          "collapse; > half of Z − 6 < 0",
+          f"free linear fits over every packing: R² {fmt(D.get('r2_dZ'))} for ΔZ, "
+          f"{fmt(D.get('r2_Z_minus_6'))} for Z − 6 (cannot tell a shift apart)" if have_dos and D else "not measured",
           theirs, verdict, fig("figF1"))
 
-    # The size table: the numbers the size-effects figure compares across L.
+    # The size table: identities across L from the preset's own runs.
     size_rows = ["", "## System size", "",
-                 "Quantities fixed at jamming over distinct jamming states; identities over the targets of each size.", "",
-                 "| L | runs | jamming states | u_J (buds) | u_J (lobes) | n_J | φ_J | ΔZ identity residual (feedback runs, all P0) "
-                 "| " + growth_bulk(M["B_grow_over_lambda_B_log10"])[0] + " |",
-                 "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                 "Identities over the targets of each size of this preset (its seeds repeat across sizes).", "",
+                 "| L | runs | ΔZ identity residual (feedback runs, all P0) | " +
+                 growth_bulk(M["B_grow_over_lambda_B_log10"])[0] + " |", "| --- | --- | --- | --- |"]
     for sz in A.get("sizes", []):
-        fed_res = sz["dZ_identity"].get("feedback_targets")
-        allfed = pm(fed_res) if fed_res else "per P0 (an analysis.json without the pooled value): " + "; ".join(
-            f"{label(x['P0'])} {fmt(x['mean'])} (n={x['n']})" for x in sz["dZ_identity"]["per_P0_feedback"])
-        size_rows.append(f"| {sz['L']:g} | {sz['runs']} | {sz['jamming_states']} | {pm(sz['u_J'])} | {pm(sz['u_J_lobes'])} | "
-                         f"{pm(sz['n_J'])} | {pm(sz['phi_J'])} | {allfed} | {growth_bulk(sz['B_grow_over_lambda_B_log10'])[1]} |")
-    for Lp in (8, 15, 20):
-        if not any(sz["L"] == Lp for sz in A.get("sizes", [])):
-            size_rows.append(f"| {Lp} | not run | | | | | | | |")
+        size_rows.append(f"| {sz['L']:g} | {sz['runs']} | {pm(sz['dZ_identity'].get('feedback_targets'))} | "
+                         f"{growth_bulk(sz['B_grow_over_lambda_B_log10'])[1]} |")
 
     bins = M.get("shear_unstable_by_PN2") or []
     shear = shear_note(bins) if have_moduli and bins else []
@@ -444,6 +486,8 @@ def main():
                   f"from `budjam analyse` output ({a.tables})")
     tables = [n for n in ("analysis.json", "runs.csv", "targets.csv", "survival.csv", "remaining.csv", "division_curve.csv",
                           "growth_rates.csv", "trajectory.csv", "dos.csv") if os.path.exists(os.path.join(a.tables, n))]
+    counts = {w: sum(1 for _, x in verdict_list if x == w) for w in ("confirmed", "not confirmed", "inconclusive")}
+    tally = ", ".join(f"{n} {w}" for w, n in counts.items())
     lines = [
         "# Reproduction report",
         "",
@@ -452,35 +496,44 @@ def main():
         f"Runs: {inp['used']} of {inp['runs']} reached jamming and are used; "
         + (f"{sum(len(d) - 1 for d in inp.get('duplicates', []))} duplicate copies of a run left out "
            f"({'; '.join(' = '.join(d) for d in inp['duplicates'])}); " if inp.get("duplicates") else "")
-        + 
-        f"{len(inp['not_finished'])} stopped before their last target"
+        + f"{len(inp['not_finished'])} stopped before their last target"
         + (" (" + not_finished_text(inp["not_finished"]) + ": their recorded states are used)" if inp["not_finished"] else "")
         + ". "
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
-        f"resamples, seed {A['bootstrap']['seed']}.",
+        f"resamples, seed {A['bootstrap']['seed']}. Jamming rows: {jam_src}"
+        + (f" ({jam.get('runs')} runs)" if AJ else "") + ".",
         "",
-        "Each claim is measured twice: under budjam's own definition and under the one the paper's analysis "
-        "used (docs/analysis.md, \"Definitions\"); the verdict is for the paper's definition. Errors: ± standard "
+        f"**Verdicts: {tally}** (docs/analysis.md, \"Verdicts\"). One rule for every row: a claim is the set of values "
+        "it allows (a number quoted to its last digit, a range, a bound); z is the distance of budjam's estimate from "
+        "that set in units of σ = √(s_b² + s_p²), budjam's standard error and the paper's own sampling error, estimated "
+        "from budjam's spread and the paper's number of samples (20 seeds per point; where budjam ran the paper's grid, "
+        "the same as budjam's). Confirmed when z ≤ 2, not confirmed when z > 2, inconclusive with fewer than 5 samples "
+        "(no error bar is printed from fewer either). A trend is confirmed when its first-to-last change has z > 2 and "
+        "no step goes against it with z > 2, not confirmed when one does, and inconclusive otherwise.",
+        "",
+        "Each claim is measured twice: under budjam's definition and under the rules of the paper's own analysis "
+        "(docs/analysis.md, \"Definitions\", lists both for every quantity); the verdict is for the paper's rules. "
+        "φ_2 is the first state after jamming with at most one tagged bud left under both; the paper's selection "
+        "admits a run when its smallest Δφ target at or beyond φ_2 had at most 10 divisions after φ_J, its Eq. 14 "
+        "takes the bud size a as diameter², its G_2 statistics keep G_2 > 0 within Tukey's 1.5·IQR fences (G_2 only), "
+        "and its division figure counts divisions up to the first state with no tagged bud left. Errors: ± standard "
         "error of the mean unless the cell says median (then bootstrap SE of the median) or gives a 95 % bootstrap "
-        "percentile interval. Quantities fixed at jamming count each distinct jamming state once (runs of one seed "
-        "share their growth up to jamming in every P0 group), with a bootstrap that resamples seeds beside it; "
-        "per-P0 statistics have one run per seed. The paper's selection keeps runs with ≤ 10 divisions after φ_J at "
-        "their end and G_2 > 0, then Tukey's 1.5·IQR fences per P0. A run ends at the φ_2 of its own definition "
-        "(jamming.phi2_tagged_left: at most one tagged bud left by default, none in the paper) once its targets are "
-        "done and saves that packing; the other definition's φ_2 is read from its log, so only runs whose targets "
-        "lie beyond budjam's φ_2 reach the paper's (n says how many), and G_2 under the paper's definition is at the "
-        "paper's φ_2 only in runs that saved it there (analysis.json G_2_at_paper_phi2), else at budjam's. "
-        "A '≃ x' claim is confirmed when the measured "
-        "value lies within 2 SE plus half the paper's last digit. " + scope,
+        "percentile interval. " + scope,
         "",
         "| Claim of the paper | Paper | budjam's definition | Paper's definition | Verdict | Figure |",
         "| --- | --- | --- | --- | --- | --- |",
-    ] + rows + size_rows + finite_size_rows(A.get("finite_size")) + shear + [
+    ] + rows + jamming_size_rows((AJ or {}).get("finite_size_jamming"), jam_src.replace(f", L = {jam_L}", "")) \
+      + depletion_size_rows(A.get("finite_size")) + size_rows + shear + [
         "",
         "Per-group tables: " + ", ".join(f"`{n}`" for n in tables),
         "",
     ]
     write_lines(a.out, lines)
+    print(f"report: {a.out}: verdicts {tally}")
+    for w in ("not confirmed", "inconclusive"):
+        for text, x in verdict_list:
+            if x == w:
+                print(f"  {w}: {text}")
 
 
 if __name__ == "__main__":

@@ -184,7 +184,7 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
   CHECK(seen == 1);
 }
 
-TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] and the paper's φ_2 at no tagged bud left",
+TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] and the first state with no tagged bud left",
           "[analyse]") {
   const fs::path out = work_dir() / "t_definitions";
   REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6").code == 0);
@@ -195,28 +195,28 @@ TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] 
         *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
     const double step_J = s.at("step_J").get<double>();
     const double step_2 = s.at("step_2").is_number() ? s.at("step_2").get<double>() : INFINITY;
-    double chi_sum = 0, n = 0, phi_2_paper = NAN;
+    double chi_sum = 0, n = 0, phi_2_none_left = NAN;
     for (const auto& row : read_csv(dir / "steps.csv")) {
       const double step = number(row.at("step"));
       if (step < step_J) continue;
       if (step <= step_2) chi_sum += number(row.at("chi_c")), ++n;
-      if (step > step_J && std::isnan(phi_2_paper) && number(row.at("tagged_active")) == 0)
-        phi_2_paper = number(row.at("phi"));
+      if (step > step_J && std::isnan(phi_2_none_left) && number(row.at("tagged_active")) == 0)
+        phi_2_none_left = number(row.at("phi"));
     }
     INFO(dir.string());
     if (std::isfinite(step_2)) CHECK(number(r.at("chi_bar")) == Approx(chi_sum / n).epsilon(1e-12));
-    if (std::isfinite(phi_2_paper)) {
-      CHECK(number(r.at("phi_2_paper")) == Approx(phi_2_paper).epsilon(1e-14));
-      CHECK(number(r.at("phi_2_paper")) >= number(r.at("phi_2")));  // none left comes no earlier than one left
+    if (std::isfinite(phi_2_none_left)) {
+      CHECK(number(r.at("phi_2_none_left")) == Approx(phi_2_none_left).epsilon(1e-14));
+      CHECK(number(r.at("phi_2_none_left")) >= number(r.at("phi_2")));  // none left comes no earlier than one left
     } else {
-      CHECK(r.at("dphi_2_paper").empty());
+      CHECK(r.at("dphi_2_none_left").empty());
     }
   }
 }
 
-TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the log, G_2 of the paper's φ_2 packing",
+TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the log, G of the none-left packing",
           "[analyse]") {
-  // Seed 4 of the runs above, grown on to the paper's φ_2 (no tagged bud left), which it saves.
+  // Seed 4 of the runs above, grown on to the first state with no tagged bud left, which it saves.
   const fs::path dir = work_dir() / "runs_paper_phi2" / "P0_1e-3" / "seed4";
   REQUIRE(run_budjam("grow " + q(work_dir() / "small.toml") + " --quiet --out " + q(dir) +
                      " --seed 4 --set jamming.phi2_tagged_left=0")
@@ -227,23 +227,23 @@ TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the
   const fs::path out = work_dir() / "t_phi2_definition", out_budjam = work_dir() / "t_phi2_definition_budjam";
   REQUIRE(run_budjam("analyse " + q(dir) + " --out " + q(out) + " --main-L 6").code == 0);
   REQUIRE(run_budjam("analyse " + q(runs()[2]) + " --out " + q(out_budjam) + " --main-L 6").code == 0);
-  const auto paper = read_csv(out / "runs.csv").at(0), budjam_def = read_csv(out_budjam / "runs.csv").at(0);
+  const auto none_left = read_csv(out / "runs.csv").at(0), budjam_def = read_csv(out_budjam / "runs.csv").at(0);
   const auto s = budjam::io::read_json(dir / "summary.json");
   REQUIRE(s.at("phi_2_tagged_left") == 0);
-  CHECK(number(paper.at("phi_2_tagged_left")) == 0);
+  CHECK(number(none_left.at("phi_2_tagged_left")) == 0);
   CHECK(number(budjam_def.at("phi_2_tagged_left")) == 1);
   // The two runs are one trajectory up to budjam's φ_2: the log gives the state the other run saved.
-  CHECK(paper.at("phi_2") == budjam_def.at("phi_2"));
-  CHECK(paper.at("P_2") == budjam_def.at("P_2"));
-  CHECK(paper.at("N_div_2") == budjam_def.at("N_div_2"));
-  CHECK(paper.at("chi_bar") == budjam_def.at("chi_bar"));
-  // This seed's two definitions fall on different states: the saved packing is the paper's only.
-  CHECK(number(paper.at("phi_2_paper")) == s.at("phi_2").get<double>());
-  CHECK(number(paper.at("phi_2_paper")) > number(paper.at("phi_2")));
+  CHECK(none_left.at("phi_2") == budjam_def.at("phi_2"));
+  CHECK(none_left.at("P_2") == budjam_def.at("P_2"));
+  CHECK(none_left.at("N_div_2") == budjam_def.at("N_div_2"));
+  CHECK(none_left.at("chi_bar") == budjam_def.at("chi_bar"));
+  // This seed's two definitions fall on different states: the saved packing is the none-left one only.
+  CHECK(number(none_left.at("phi_2_none_left")) == s.at("phi_2").get<double>());
+  CHECK(number(none_left.at("phi_2_none_left")) > number(none_left.at("phi_2")));
   const auto moduli = budjam::io::read_json(dir / "packings" / "phi2.moduli.json");
-  CHECK(number(paper.at("G_2_paper")) == Approx(moduli.at("G").get<double>()).epsilon(1e-12));
-  CHECK(paper.at("G_2").empty());
-  CHECK(budjam_def.at("G_2_paper").empty());  // it stopped before the paper's φ_2
+  CHECK(number(none_left.at("G_2_none_left")) == Approx(moduli.at("G").get<double>()).epsilon(1e-12));
+  CHECK(none_left.at("G_2").empty());
+  CHECK(budjam_def.at("G_2_none_left").empty());  // it stopped before that state
   CHECK(
       number(budjam_def.at("G_2")) ==
       Approx(budjam::io::read_json(runs()[2] / "packings" / "phi2.moduli.json").at("G").get<double>()).epsilon(1e-12));
@@ -351,7 +351,7 @@ TEST_CASE(
   fs::create_directories(old);
   fs::copy(a / "targets.csv", old / "targets.csv");
   fs::copy(a / "survival.csv", old / "survival.csv");
-  {  // runs.csv without the paper's φ_2 (an earlier format)
+  {  // runs.csv without the first state with none left (an earlier format)
     std::istringstream in(slurp(a / "runs.csv"));
     std::ofstream out(old / "runs.csv");
     std::size_t drop = 0;
@@ -360,7 +360,7 @@ TEST_CASE(
       std::stringstream ss(line);
       for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
       if (!line.empty() && line.back() == ',') f.emplace_back();
-      if (drop == 0) drop = static_cast<std::size_t>(std::find(f.begin(), f.end(), "dphi_2_paper") - f.begin());
+      if (drop == 0) drop = static_cast<std::size_t>(std::find(f.begin(), f.end(), "dphi_2_none_left") - f.begin());
       REQUIRE(drop < f.size());
       f.erase(f.begin() + static_cast<long>(drop));
       for (std::size_t k = 0; k < f.size(); ++k) out << (k ? "," : "") << f[k];
@@ -376,11 +376,29 @@ TEST_CASE(
     CHECK(j["unavailable"].contains(c));
     for (const auto& r : read_csv(b / "runs.csv")) CHECK(r.at(c).empty());
   }
-  REQUIRE(j["unavailable"].contains("dphi_2_paper"));
-  CHECK(j["unavailable"]["dphi_2_paper"].get<std::string>().find("steps.csv") != std::string::npos);
+  REQUIRE(j["unavailable"].contains("dphi_2_none_left"));
+  CHECK(j["unavailable"]["dphi_2_none_left"].get<std::string>().find("steps.csv") != std::string::npos);
   CHECK(j["unavailable"].contains("dos.csv"));
-  for (const auto& g : j["groups"]) CHECK(g["dphi_2_paper"]["n"] == 0);
-  for (const auto& r : read_csv(b / "runs.csv")) CHECK(r.at("dphi_2_paper").empty());
+  for (const auto& g : j["groups"]) CHECK(g["dphi_2_none_left"]["n"] == 0);
+  for (const auto& r : read_csv(b / "runs.csv")) CHECK(r.at("dphi_2_none_left").empty());
+}
+
+TEST_CASE("analyse --tables reads a column under the name an earlier version gave it", "[analyse]") {
+  runs();
+  const fs::path a = work_dir() / "legacy_runs", b = work_dir() / "legacy_out";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  std::string t = slurp(a / "runs.csv");
+  const auto at = t.find("dphi_2_none_left");
+  REQUIRE(at < t.find('\n'));
+  t.replace(at, std::string("dphi_2_none_left").size(), "dphi_2_paper");  // its name before it was renamed
+  std::ofstream(a / "runs.csv") << t;
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6").code == 0);
+  const auto j = budjam::io::read_json(b / "analysis.json");
+  CHECK(!j["unavailable"].contains("dphi_2_none_left"));
+  const auto before = read_csv(a / "runs.csv"), after = read_csv(b / "runs.csv");
+  REQUIRE(before.size() == after.size());
+  for (std::size_t k = 0; k < before.size(); ++k)
+    CHECK(after[k].at("dphi_2_none_left") == before[k].at("dphi_2_paper"));
 }
 
 TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: exit 2, one line naming file and line",
@@ -406,4 +424,58 @@ TEST_CASE("analyse takes run directories or --tables, not both and not neither: 
   CHECK(
       run_budjam("analyse " + all_runs() + "--tables " + q(work_dir()) + " --out " + q(work_dir() / "both_out")).code ==
       2);
+}
+
+TEST_CASE(
+    "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
+    "fences on G_2 alone",
+    "[analyse]") {
+  // Six runs of one group. Targets at Δφ = 10⁻³ (before every φ_2) and 3·10⁻² (beyond it), with the
+  // divisions after φ_J counted there. Run 6 has 2 divisions at the first target but 12 at the one
+  // that decides (the smallest at or beyond φ_2): not admitted. Run 5's G_2 is an outlier of the
+  // admitted G_2 (fences [0.8, 1.6] from 1.0, 1.1, 1.2, 1.3, 50): out of the G_2 statistics only.
+  const fs::path dir = work_dir() / "hand_tables", out = work_dir() / "hand_tables_out";
+  fs::create_directories(dir);
+  const std::vector<double> dphi_2{0.010, 0.012, 0.014, 0.016, 0.018, 0.020};
+  const std::vector<double> G_2{1.0, 1.1, 1.2, 1.3, 50, 1.15}, P_2{0.01, 0.011, 0.012, 0.013, 0.014, 0.015};
+  const std::vector<double> div_far{3, 4, 5, 6, 10, 12};
+  {
+    std::ofstream r(dir / "runs.csv");
+    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
+         "dphi_2_pred_diameter_sq,G_2\n";
+    std::ofstream t(dir / "targets.csv");
+    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2\n";
+    for (int k = 0; k < 6; ++k) {
+      const std::string run = "hand/seed" + std::to_string(k + 1);
+      const double phi_J = 0.84;
+      r << run << ",15,0.001," << k + 1 << ",finished," << k << "," << phi_J << ",0.2,0.76,172,170,"
+        << phi_J + dphi_2[k] << "," << dphi_2[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.75 * dphi_2[k]
+        << "," << dphi_2[k] + 0.001 * k << "," << G_2[k] << "\n";
+      t << run << ",15,0.001," << k + 1 << ",0.001," << phi_J + 0.001 << ",2,true\n";
+      t << run << ",15,0.001," << k + 1 << ",0.03," << phi_J + 0.03 << "," << div_far[k] << ",false\n";
+    }
+  }
+  REQUIRE(run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15").code == 0);
+  const auto j = budjam::io::read_json(out / "analysis.json");
+  REQUIRE(j["groups"].size() == 1);
+  const auto& g = j["groups"][0];
+  // admitted: runs 1–5
+  CHECK(g["dphi_2_paper"]["admitted"] == 5);
+  CHECK(g["dphi_2_paper"]["runs"] == 6);
+  CHECK(g["dphi_2_paper"]["n"] == 5);
+  CHECK(g["dphi_2_paper"]["mean"].get<double>() == Approx(0.014));
+  CHECK(g["P_2_over_Pmax_paper"]["mean"].get<double>() == Approx(0.12));
+  CHECK(g["lambda_bar_paper"]["mean"].get<double>() == Approx(0.52));
+  // Eq. 14 with a as diameter², paired with the same runs: prediction − simulation = 0.001 k, k = 0…4
+  CHECK(g["dphi_2_pred_paper"]["mean"].get<double>() == Approx(0.016));
+  CHECK(g["dphi_2_pred_minus_sim_paper"]["mean"].get<double>() == Approx(0.002));
+  // budjam's column: every run, a as true area
+  CHECK(g["dphi_2"]["n"] == 6);
+  CHECK(g["dphi_2_pred_minus_sim_area"]["mean"].get<double>() == Approx(-0.25 * 0.015));
+  // G_2: the outlier is fenced out; four values left, median of 1.0, 1.1, 1.2, 1.3 over P_max = 0.1
+  CHECK(g["G_2_over_Pmax_paper"]["n"] == 4);
+  CHECK(g["G_2_over_Pmax_paper"]["median"].get<double>() == Approx(11.5));
+  // fewer than five values: no error bar
+  CHECK(g["G_2_over_Pmax_paper"]["se"].is_null());
+  CHECK(g["G_2_over_P_2_paper"]["n"] == 4);
 }

@@ -99,16 +99,34 @@ TEST_CASE("χ̄ is the plain mean over the accepted states, not a trapezoid in �
   CHECK(std::isnan(growth_coordinate_average(chi, 5, 6)));
 }
 
-TEST_CASE("the paper's selection: at most 10 divisions at the end, G_2 > 0, then Tukey fences") {
-  const std::vector<double> div{0, 10, 11, 3, 2}, G2{0.1, 0.2, 0.3, -0.1, NAN};
-  CHECK(paper_admitted(div, G2) == std::vector<bool>{true, true, false, false, true});
-  CHECK(paper_admitted(div, G2, 11) == std::vector<bool>{true, true, true, false, true});
-  // admitted 1…8 and 30 (fences [−3, 13]); 100 is not admitted and does not move the fences
-  const std::vector<double> v{1, 2, 3, 4, 5, 6, 7, 8, 30, 100};
-  std::vector<bool> adm(v.size(), true);
+TEST_CASE("the paper's selection decides on the divisions at the smallest target at or beyond φ_2") {
+  // targets in any order: φ 0.85, 0.80, 0.83, 0.81 with 14, 0, 9, 2 divisions after φ_J
+  const std::vector<double> phi{0.85, 0.80, 0.83, 0.81}, div{14, 0, 9, 2};
+  CHECK(selection_divisions(phi, div, 0.82) == 9);  // the 0.83 run: admitted
+  CHECK(paper_admits(selection_divisions(phi, div, 0.82)));
+  CHECK(selection_divisions(phi, div, 0.84) == 14);  // the 0.85 run: more than 10
+  CHECK(!paper_admits(selection_divisions(phi, div, 0.84)));
+  CHECK(selection_divisions(phi, div, 0.81) == 2);        // a run that ends exactly at φ_2 has passed it
+  CHECK(std::isnan(selection_divisions(phi, div, 0.9)));  // no target reaches φ_2: no run to select
+  CHECK(!paper_admits(selection_divisions(phi, div, 0.9)));
+  CHECK(paper_admits(10));
+  CHECK(!paper_admits(10.5));
+  CHECK_THROWS(selection_divisions(phi, std::vector<double>{1}, 0.8));
+}
+
+TEST_CASE("the paper's fences apply to G_2 alone: G_2 > 0 first, four values at least, never an empty set") {
+  // admitted 1…8, 30, −1, NaN and (not admitted) 100: the positive admitted ones are 1…8 and 30,
+  // quartiles 3 and 7, fences [−3, 13]: 30 falls out; 100 is not admitted and does not move them.
+  const std::vector<double> G2{1, 2, 3, 4, 5, 6, 7, 8, 30, -1, NAN, 100};
+  std::vector<bool> adm(G2.size(), true);
   adm.back() = false;
-  CHECK(tukey_inliers(v, adm) == std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8});
-  CHECK(tukey_inliers(v, std::vector<bool>(v.size(), false)).empty());
+  const auto kept = paper_G2_kept(G2, adm);
+  CHECK(kept == std::vector<bool>{true, true, true, true, true, true, true, true, false, false, false, false});
+  // three positive values: no fences
+  CHECK(paper_G2_kept(std::vector<double>{1, 2, 300}, std::vector<bool>(3, true)) == std::vector<bool>(3, true));
+  // zero IQR: no fences either
+  const std::vector<double> flat{2, 2, 2, 2, 2, 9};
+  CHECK(paper_G2_kept(flat, std::vector<bool>(6, true)) == std::vector<bool>(6, true));
 }
 
 TEST_CASE("P* = n_J (6 + 2 u_J) a_c / (8 ln 10)") {
@@ -238,64 +256,46 @@ TEST_CASE(
 }
 
 namespace {
-// One analysis.json group entry with the fields the finite-size table reads: u_J = 0.2 + 3/N_J
-// exactly, G_2/P_max a median that does not depend on size.
+// One analysis.json group entry with the fields the depletion finite-size table reads: Δφ_2 =
+// 0.02 + 3/N_J exactly, G_2/P_max a median that does not depend on size.
 io::Json size_group(double L, const char* P0_label, double N_J, double se) {
-  const io::Json mean_se = {{"n", 20}, {"mean", 0.2 + 3.0 / N_J}, {"se", se}};
   io::Json g;
   g["L"] = L;
   g["P0"] = std::string(P0_label) == "none" ? io::Json(nullptr) : io::Json(std::stod(P0_label));
   g["P0_label"] = P0_label;
   g["runs"] = 20;
   g["N_J"] = {{"n", 20}, {"mean", N_J}, {"se", 1.0}};
-  for (const char* k : {"u_J", "u_J_lobes", "n_J", "phi_J", "dphi_2"}) g[k] = mean_se;
-  g["dphi_2_paper"] = {{"n", 12}, {"mean", 0.02}, {"se", nullptr}, {"median", 0.02}};
+  g["dphi_2"] = {{"n", 20}, {"mean", 0.02 + 3.0 / N_J}, {"se", se}};
+  g["dphi_2_paper"] = {{"n", 3}, {"mean", 0.02}, {"se", nullptr}};
   g["N_div_2_over_N_J"] = {{"n", 20}, {"median", 0.05}, {"se", se}};
   g["G_2_over_Pmax"] = {{"n", 20}, {"median", 0.4}, {"se", se}};
   return g;
 }
 }  // namespace
 
-TEST_CASE("finite-size extrapolation recovers the N → ∞ limit of q_∞ + c/N and needs three sizes") {
+TEST_CASE("the depletion finite-size table extrapolates with five sizes per P0, not with three") {
   io::Json groups = io::Json::array();
-  groups.push_back(size_group(20, "0.001", 300, 0.004));
-  groups.push_back(size_group(8, "0.001", 48, 0.01));
-  groups.push_back(size_group(15, "0.001", 176, 0.006));
-  groups.push_back(size_group(8, "none", 48, 0.01));
-  groups.push_back(size_group(15, "none", 176, 0.006));
-  groups.push_back(size_group(15, "1e-05", 176, 0.006));  // one size only: no row
+  const std::vector<double> Ls{20, 8, 10, 15, 12}, Ns{300, 48, 75, 176, 108};  // any order
+  for (std::size_t k = 0; k < Ls.size(); ++k) groups.push_back(size_group(Ls[k], "0.001", Ns[k], 0.001));
+  for (double L : {8.0, 15.0, 20.0}) groups.push_back(size_group(L, "none", L * L * 0.77, 0.001));
+  groups.push_back(size_group(15, "1e-05", 176, 0.001));  // one size only: no entry
   const auto fs = finite_size_json(groups);
   REQUIRE(fs.size() == 2);
   const auto& fed = fs[0]["P0_label"] == "0.001" ? fs[0] : fs[1];
   const auto& none = fs[0]["P0_label"] == "none" ? fs[0] : fs[1];
-  // rows sorted by L whatever the order of the groups
   CHECK(fed["sizes"][0]["L"] == 8);
-  CHECK(fed["sizes"][2]["L"] == 20);
-  const auto& u = fed["extrapolation"]["u_J"];
-  CHECK(u["limit"].get<double>() == Approx(0.2).epsilon(1e-12));
-  CHECK(u["slope"].get<double>() == Approx(3.0).epsilon(1e-9));
-  CHECK(u["chi2"].get<double>() == Approx(0.0).margin(1e-18));
-  CHECK(u["limit_se"].get<double>() > 0);
-  // a size-independent median extrapolates to itself with zero slope
+  CHECK(fed["sizes"][4]["L"] == 20);
+  const auto& d = fed["extrapolation"]["dphi_2"];
+  CHECK(d["limit"].get<double>() == Approx(0.02).epsilon(1e-9));
+  CHECK(d["slope"].get<double>() == Approx(3.0).epsilon(1e-6));
+  CHECK(d["residuals_in_se"].size() == 5);
   CHECK(fed["extrapolation"]["G_2_over_Pmax"]["limit"].get<double>() == Approx(0.4));
-  CHECK(fed["extrapolation"]["G_2_over_Pmax"]["slope"].get<double>() == Approx(0.0).margin(1e-9));
-  // a median of one run has a rounding-level bootstrap SE, not an error bar: that size is not fitted
-  {
-    io::Json single = groups;
-    for (auto& g : single)
-      if (g["P0_label"] == "0.001") g["G_2_over_Pmax"] = {{"n", g["L"] == 20 ? 1 : 20}, {"median", 0.4}, {"se", 1e-16}};
-    const auto fs1 = finite_size_json(single);
-    const auto& f = fs1[0]["P0_label"] == "0.001" ? fs1[0] : fs1[1];
-    CHECK(f["extrapolation"]["G_2_over_Pmax"]["sizes"] == 2);
-  }
-  // a quantity the groups lack (an older analysis.json) gives empty cells and no extrapolation
-  CHECK(fed["sizes"][0]["G_2_over_Pmax_at_paper_phi2"]["value"].is_null());
-  CHECK(fed["extrapolation"]["G_2_over_Pmax_at_paper_phi2"]["sizes"] == 0);
-  // values without an error bar are not fitted
+  // values without an error bar (n < 5) are not fitted; a quantity the groups lack gives empty cells
   CHECK(fed["extrapolation"]["dphi_2_paper"]["limit"].is_null());
   CHECK(fed["extrapolation"]["dphi_2_paper"]["sizes"] == 0);
-  // two sizes: rows, but no extrapolation
-  CHECK(none["sizes"].size() == 2);
-  CHECK(none["extrapolation"]["u_J"]["limit"].is_null());
-  CHECK(none["extrapolation"]["u_J"]["why"].get<std::string>().find("fewer than 3") != std::string::npos);
+  CHECK(fed["sizes"][0]["G_2_over_Pmax_paper"]["value"].is_null());
+  // three sizes: rows, no extrapolation, and the reason
+  CHECK(none["sizes"].size() == 3);
+  CHECK(none["extrapolation"]["dphi_2"]["limit"].is_null());
+  CHECK(none["extrapolation"]["dphi_2"]["why"].get<std::string>().find("needs 5") != std::string::npos);
 }

@@ -6,6 +6,10 @@
 
 namespace budjam::tools {
 
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
 std::optional<std::size_t> depletion_state(std::span<const double> tagged_active, std::size_t from, double left) {
   for (std::size_t k = from; k < tagged_active.size(); ++k)
     if (tagged_active[k] <= left) return k;
@@ -19,23 +23,35 @@ double growth_coordinate_average(std::span<const double> y, std::size_t first, s
   return mean(in);
 }
 
-std::vector<bool> paper_admitted(std::span<const double> divisions_at_end, std::span<const double> G_2,
-                                 double max_divisions) {
-  std::vector<bool> keep(divisions_at_end.size());
-  for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = divisions_at_end[k] <= max_divisions && !(G_2[k] <= 0);
-  return keep;
+double selection_divisions(std::span<const double> target_phi, std::span<const double> target_divisions, double phi_2) {
+  if (target_phi.size() != target_divisions.size())
+    throw std::invalid_argument("selection_divisions: target φ and divisions differ in length");
+  double smallest_phi = kInf, divisions = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t k = 0; k < target_phi.size(); ++k)
+    if (target_phi[k] >= phi_2 && target_phi[k] < smallest_phi) {
+      smallest_phi = target_phi[k];
+      divisions = target_divisions[k];
+    }
+  return divisions;
 }
 
-std::vector<double> tukey_inliers(std::span<const double> values, const std::vector<bool>& admitted, double k) {
-  std::vector<double> in;
-  for (std::size_t r = 0; r < values.size(); ++r)
-    if (admitted[r] && std::isfinite(values[r])) in.push_back(values[r]);
-  if (in.empty()) return in;
-  const Fences f = tukey_fences(in, k);
-  std::vector<double> out;
-  for (double v : in)
-    if (f.contains(v)) out.push_back(v);
-  return out;
+std::vector<bool> paper_G2_kept(std::span<const double> G_2, const std::vector<bool>& admitted, double k) {
+  if (admitted.size() != G_2.size()) throw std::invalid_argument("paper_G2_kept: G_2 and admitted differ in length");
+  std::vector<bool> kept(G_2.size());
+  std::vector<double> positive;
+  for (std::size_t r = 0; r < G_2.size(); ++r)
+    if (admitted[r] && std::isfinite(G_2[r]) && G_2[r] > 0) {
+      kept[r] = true;
+      positive.push_back(G_2[r]);
+    }
+  if (positive.size() < 4) return kept;
+  const Fences f = tukey_fences(positive, k);
+  if (!(f.hi > f.lo)) return kept;  // zero IQR: no fences
+  std::vector<bool> inside(kept);
+  bool any = false;
+  for (std::size_t r = 0; r < G_2.size(); ++r)
+    if (kept[r]) any |= (inside[r] = f.contains(G_2[r]));
+  return any ? inside : kept;
 }
 
 double crossover_pressure(double n_J, double u_J, double a_c_area) {

@@ -22,14 +22,23 @@ std::optional<std::size_t> depletion_state(std::span<const double> tagged_active
 // samples of a (one growth step each). NaN for an empty interval or no finite value.
 double growth_coordinate_average(std::span<const double> y, std::size_t first, std::size_t last);
 
-// The paper's run selection for φ_2, P_2, G_2 and λ̄_c: runs with at most `max_divisions`
-// divisions after φ_J at the end of the run and G_2 > 0 (a NaN G_2 — no moduli — does not exclude).
-std::vector<bool> paper_admitted(std::span<const double> divisions_at_end, std::span<const double> G_2,
-                                 double max_divisions = 10);
+// The paper's run selection (its figure pipeline, where every target Δφ is a run of its own): a
+// (P0, seed) enters the φ_2, P_2, λ̄_c, Eq. 14 and G_2 statistics through the run of the smallest
+// target whose end lies at or beyond φ_2, and only when that run had at most 10 divisions after φ_J
+// at its end. One budjam run visits every target, so that run is this run up to the smallest target
+// at or beyond φ_2: the divisions counted there decide. `target_phi` and `target_divisions` are the
+// run's targets (φ, divisions after φ_J); NaN when no target reaches φ_2 (the paper has no such run).
+double selection_divisions(std::span<const double> target_phi, std::span<const double> target_divisions, double phi_2);
 
-// The finite values of the admitted runs that lie within the Tukey fences (k·IQR) of those values:
-// the per-P0 outlier rule that follows paper_admitted.
-std::vector<double> tukey_inliers(std::span<const double> values, const std::vector<bool>& admitted, double k = 1.5);
+// A run whose selection divisions are at most 10 (a NaN is never admitted).
+inline constexpr double kPaperMaxDivisions = 10;
+inline bool paper_admits(double selection_divisions) { return selection_divisions <= kPaperMaxDivisions; }
+
+// The paper's outlier rule, applied to G_2 only: of the admitted runs, those with a finite G_2 > 0,
+// then Tukey's fences (k·IQR, quartiles interpolated linearly) on those G_2 — unless fewer than four
+// remain or their IQR is zero (no fences), and never an empty result (then every positive G_2 stays).
+// Returns the runs kept.
+std::vector<bool> paper_G2_kept(std::span<const double> G_2, const std::vector<bool>& admitted, double k = 1.5);
 
 // Crossover pressure of the growth-rate distribution P* = n_J (6 + 2u_J) a_c / (8 ln 10)
 // (Eq. E12), with a_c the typical completion size as a true area.

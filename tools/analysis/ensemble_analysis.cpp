@@ -22,6 +22,7 @@
 #include "analysis/ensemble_records.hpp"
 #include "analysis/ensemble_tables.hpp"
 #include "analysis/finite_size.hpp"
+#include "analysis/growth_only.hpp"
 #include "analysis/jamming_states.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "io/run_data.hpp"
@@ -35,6 +36,7 @@
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
+#include "io/scene_file.hpp"
 #include "io/text.hpp"
 
 #include <algorithm>
@@ -60,6 +62,11 @@ using io::Json;
 constexpr double kPmax = 0.1;         // confluence pressure scale (paper Eq. D25)
 constexpr double kM4 = 0.125;         // ⟨n_x² n_y²⟩ of an isotropic network
 constexpr double kDphiGrowth = 3e-3;  // Δφ of the growth-rate crossover (appendix E)
+// The growth-only baseline of the cell count (growth_only.hpp): enough histories for an SE of N/L² ten
+// times below the jamming ensembles' (≈ 1e-4 at L = 15), their own seeds, and the large box of n_J,∞.
+constexpr std::size_t kGrowthOnlySamples = 400;
+constexpr std::uint64_t kGrowthOnlyFirstSeed = 1'000'000'000;
+constexpr double kGrowthOnlyLargeL = 100;
 
 std::string num(double v) { return io::format_double(v); }
 
@@ -174,7 +181,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   }
   x.depleted = std::isfinite(x.phi_2);
   if (x.depleted) x.dphi_2 = x.phi_2 - x.phi_J;
-  double step_2_paper = kNaN;
+  double step_2_none_left = kNaN;
   if (x.depleted) {
     const auto k2 = static_cast<std::size_t>(std::find(st.begin(), st.end(), step_2) - st.begin());
     if (k2 < st.size()) {
@@ -183,14 +190,12 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
     }
   }
-  if (const auto k2 = depletion_state(active, 1, kPaperTaggedLeft)) {
-    step_2_paper = st[*k2];
-    x.phi_2_paper = phi[*k2];
-    x.dphi_2_paper = phi[*k2] - x.phi_J;
-    x.P_2_paper = P[*k2];
-    x.N_div_2_paper = divisions[*k2];
-    x.chi_bar_paper = growth_coordinate_average(chi, 0, *k2);
-    x.lambda_bar_paper = growth_coordinate_average(lambda, 0, *k2);
+  if (const auto k2 = depletion_state(active, 1, kNoneLeft)) {
+    step_2_none_left = st[*k2];
+    x.phi_2_none_left = phi[*k2];
+    x.dphi_2_none_left = phi[*k2] - x.phi_J;
+    x.P_2_none_left = P[*k2];
+    x.N_div_2_none_left = divisions[*k2];
   }
 
   // Survival of the tagged buds: per-run a_ε with ε = 1/N_nr,J (at most one left = φ_2's definition)
@@ -268,7 +273,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.G_2_energy = sm.G_energy;
       x.G_min_2 = sm.G_min;
     }
-    if (saved_step_2 == step_2_paper) x.G_2_paper = sm.G;
+    if (saved_step_2 == step_2_none_left) x.G_2_none_left = sm.G;
   }
   {
     const fs::path jam = r.dir / io::run_files::packing(io::run_files::jammed);
@@ -308,12 +313,16 @@ std::vector<double> finite(std::vector<double> v) {
   return v;
 }
 
+// No error bar, bootstrap or otherwise, from fewer samples than this: an SE from 2–4 values is itself
+// uncertain by 35–70 %, and a bootstrap of so few values has only a handful of distinct resamples.
+constexpr std::size_t kMinSamplesForError = 5;
+
 Json mean_se_json(const std::vector<double>& v0) {
   const auto v = finite(v0);
   Json j;
   j["n"] = v.size();
   j["mean"] = io::number_or_null(mean(v));
-  j["se"] = io::number_or_null(v.size() >= 2 ? standard_error(v) : kNaN);
+  j["se"] = io::number_or_null(v.size() >= kMinSamplesForError ? standard_error(v) : kNaN);
   return j;
 }
 
@@ -327,8 +336,15 @@ Json median_json(const std::vector<double>& v0, const BootstrapOptions& bo) {
     j["ci95"] = Json::array({nullptr, nullptr});
     return j;
   }
+  j["median"] = median(v);
+  if (v.size() < kMinSamplesForError) {
+    j["se"] = nullptr;
+    j["ci95"] = Json::array({nullptr, nullptr});
+    j["q25"] = quantile(v, 0.25);
+    j["q75"] = quantile(v, 0.75);
+    return j;
+  }
   const auto b = bootstrap_median(v, bo);
-  j["median"] = b.estimate;
   j["se"] = b.se;  // bootstrap SE of the median
   j["ci95"] = Json::array({b.lo, b.hi});
   j["q25"] = quantile(v, 0.25);
@@ -427,6 +443,9 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
       throw InputError((dirs[k] / io::run_files::summary).string() + ": " + x.what());
     }
   }
+  // The growth parameters of the runs, for the growth-only baseline (the first run stands for all:
+  // an ensemble shares its cell parameters and initial state, and only those enter).
+  if (!e.rows.empty()) e.growth_scene = io::load_scene(e.rows.front().dir / io::run_files::scene);
   std::vector<JammingKey> keys;
   for (const auto& r : e.rows) keys.push_back({r.L, r.seed, r.step_J, r.N_J, r.phi_J});
   const auto states = jamming_state_ids(keys);
@@ -497,28 +516,53 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
     seed.push_back(r->seed);
   }
   const MeanSE m = mean_over_states(v, st);
+  const bool error_bar = m.n >= kMinSamplesForError;
   Json j;
   j["runs"] = rs.size();
   j["n"] = m.n;  // distinct jamming states
   j["mean"] = io::number_or_null(m.mean);
-  j["se"] = io::number_or_null(m.se);
-  j["bootstrap_se_by_seed"] = m.n ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
+  j["se"] = error_bar ? io::number_or_null(m.se) : Json(nullptr);
+  j["bootstrap_se_by_seed"] = error_bar ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
   return j;
 }
 
-// A per-group statistic under the paper's selection: runs with ≤ 10 divisions at their end and
-// G_2 > 0, then Tukey's 1.5·IQR fences on the quantity itself.
-template <class F>
-Json paper_selected_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
-  const auto admitted = paper_admitted(collect(rs, [](auto& r) { return r.N_div_end; }), collect(rs, G_for_paper_phi2));
-  const auto kept = tukey_inliers(collect(rs, f), admitted);
-  Json j = mean_se_json(kept);
-  const Json m = median_json(kept, bo);
-  j["median"] = m["median"];
-  j["median_se"] = m["se"];
-  j["runs"] = rs.size();
-  j["admitted"] = std::count(admitted.begin(), admitted.end(), true);
-  return j;
+// The divisions that decide the paper's selection for a run (selection_divisions): at its smallest
+// target at or beyond its φ_2.
+double run_selection_divisions(const RunRow& r) {
+  std::vector<double> phi, divisions;
+  for (const auto& t : r.targets) {
+    phi.push_back(t.phi);
+    divisions.push_back(t.N_div);
+  }
+  return selection_divisions(phi, divisions, r.phi_2);
+}
+
+// The statistics of the paper's analysis over the depleted runs of a group (docs/analysis.md,
+// "Definitions"): φ_2 at most one tagged bud left, as budjam's; the runs its selection admits; Eq. 14
+// with a as diameter squared; G_2 > 0 and Tukey's fences on G_2 alone, the G_2 ratios over the runs
+// those keep. Each statistic says how many runs the group has and how many the selection admitted.
+void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const BootstrapOptions& bo) {
+  std::vector<const RunRow*> admitted, kept;
+  for (const auto* r : rs)
+    if (r->depleted && paper_admits(run_selection_divisions(*r))) admitted.push_back(r);
+  const auto keep =
+      paper_G2_kept(collect(admitted, [](auto& r) { return r.G_2; }), std::vector<bool>(admitted.size(), true));
+  for (std::size_t k = 0; k < admitted.size(); ++k)
+    if (keep[k]) kept.push_back(admitted[k]);
+  const auto selected = [&](Json j) {
+    j["runs"] = rs.size();
+    j["admitted"] = admitted.size();
+    return j;
+  };
+  g["dphi_2_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.dphi_2; })));
+  g["dphi_2_pred_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2; })));
+  // Eq. 14 against the simulation run by run (the same runs on both sides: a paired difference)
+  g["dphi_2_pred_minus_sim_paper"] =
+      selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2 - r.dphi_2; })));
+  g["P_2_over_Pmax_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.P_2 / kPmax; })));
+  g["lambda_bar_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.lambda_bar; })));
+  g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
+  g["G_2_over_P_2_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / r.P_2; }), bo));
 }
 
 // The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio.
@@ -561,7 +605,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["runs"] = rs.size();
   g["jammed"] = rs.size();
   g["depleted"] = dep.size();
-  g["depleted_paper"] = std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->phi_2_paper); });
+  g["depleted_none_left"] =
+      std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->phi_2_none_left); });
   g["phi_J"] = mean_se_json(collect(rs, [](auto& r) { return r.phi_J; }));
   g["u_J"] = mean_se_json(collect(rs, [](auto& r) { return r.u_J; }));
   g["u_J_lobes"] = mean_se_json(collect(rs, [](auto& r) { return r.u_J_lobes; }));
@@ -575,6 +620,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["phi_2"] = mean_se_json(collect(dep, [](auto& r) { return r.phi_2; }));
   g["dphi_2_pred_area"] = mean_se_json(collect(dep, [](auto& r) { return r.pred_area; }));
   g["dphi_2_pred_diameter_sq"] = mean_se_json(collect(dep, [](auto& r) { return r.pred_d2; }));
+  g["dphi_2_pred_minus_sim_area"] = mean_se_json(collect(dep, [](auto& r) { return r.pred_area - r.dphi_2; }));
   g["a_eps"] = mean_se_json(collect(dep, [](auto& r) { return r.a_eps; }));
   g["chi_bar"] = mean_se_json(collect(dep, [](auto& r) { return r.chi_bar; }));
   g["lambda_bar"] = mean_se_json(collect(dep, [](auto& r) { return r.lambda_bar; }));
@@ -589,31 +635,11 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["G_2_energy"] = median_json(collect(dep, [](auto& r) { return r.G_2_energy; }), bo);
   g["G_2_over_Pmax"] = median_json(collect(dep, [](auto& r) { return r.G_2 / kPmax; }), bo);
   g["G_2_over_P_2"] = median_json(collect(dep, [](auto& r) { return r.G_2 / r.P_2; }), bo);
-  // The paper's definitions and selection: φ_2 = first state with no tagged bud left; χ̄ and λ̄_c
-  // over [φ_J, that φ_2]; runs with ≤ 10 divisions at their end and G_2 > 0, Tukey fences per P0.
-  // G_2 is that of the packing saved at the paper's φ_2 in runs that saved it there
-  // (jamming.phi2_tagged_left = 0; G_2_at_paper_phi2 counts them), else at budjam's φ_2.
-  g["dphi_2_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.dphi_2_paper; }, bo);
-  g["P_2_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.P_2_paper; }, bo);
-  g["P_2_over_Pmax_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.P_2_paper / kPmax; }, bo);
-  g["G_2_paper"] = paper_selected_json(rs, G_for_paper_phi2, bo);
-  g["G_2_over_Pmax_paper"] = paper_selected_json(
-      rs, [](auto& r) { return G_for_paper_phi2(r) / kPmax; }, bo);
-  g["G_2_over_P_2_paper"] = paper_selected_json(
-      rs, [](auto& r) { return std::isfinite(r.G_2_paper) ? r.G_2_paper / r.P_2_paper : r.G_2 / r.P_2; },
-      bo);  // one packing
-  // The paper's φ_2 in every run that reached it, without the selection (whose absolute cut of 10
-  // divisions admits fewer runs the larger the box), and G there where the run saved it.
-  g["dphi_2_paper_all"] = mean_se_json(collect(rs, [](auto& r) { return r.dphi_2_paper; }));
-  g["G_2_over_Pmax_at_paper_phi2"] = median_json(collect(rs, [](auto& r) { return r.G_2_paper / kPmax; }), bo);
-  g["G_2_at_paper_phi2"] = std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->G_2_paper); });
-  g["chi_bar_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.chi_bar_paper; }, bo);
-  g["lambda_bar_paper"] = paper_selected_json(
-      rs, [](auto& r) { return r.lambda_bar_paper; }, bo);
+  paper_analysis_json(g, rs, bo);
+  // The first state with no tagged bud left, in every run that reached it, and G there where the run
+  // saved it.
+  g["dphi_2_none_left"] = mean_se_json(collect(rs, [](auto& r) { return r.dphi_2_none_left; }));
+  g["G_2_over_Pmax_none_left"] = median_json(collect(rs, [](auto& r) { return r.G_2_none_left / kPmax; }), bo);
   {
     // Packings unstable to some simple shear of the box (G_min < 0; moduli.hpp, ShearStability).
     std::size_t n = 0, k = 0, n2 = 0, k2 = 0;
@@ -626,10 +652,11 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
     g["shear_unstable_phi2"] = fraction_json(k2, n2);
   }
   // Divisions by φ_2 normalised by the mean number of cells at jamming (Fig. D1B), by budjam's φ_2
-  // (summary N_div_2) and by the paper's (every division after φ_J up to no tagged bud left)
+  // (summary N_div_2) and as the paper's division figure counts them (every division after φ_J up to
+  // the first state with no tagged bud left)
   const double NJ = mean(finite(collect(rs, [](auto& r) { return r.N_J; })));
   g["N_div_2_over_N_J"] = median_json(collect(dep, [NJ](auto& r) { return r.N_div_2 / NJ; }), bo);
-  g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_paper / NJ; }), bo);
+  g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_none_left / NJ; }), bo);
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
@@ -781,6 +808,25 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
   }
   j["per_P0_feedback"] = per;
   j["feedback_targets"] = mean_se_json(res_fed);
+  // The identity assumes that the buds free at jamming are not repopulated by divisions: over the
+  // targets a run reached with at most kPaperMaxDivisions divisions after φ_J (the paper's own bound
+  // for that), one mean residual per run — the targets of one run are not independent — and per P0
+  // the mean and SE over runs.
+  std::map<double, std::vector<double>> run_means;
+  for (const auto* r : m) {
+    if (!r->P0) continue;
+    std::vector<double> v;
+    for (const auto& t : r->targets)
+      if (std::isfinite(t.dZ_pred) && paper_admits(t.N_div)) v.push_back(t.dZ - t.dZ_pred);
+    if (!v.empty()) run_means[*r->P0].push_back(mean(v));
+  }
+  Json unrep = Json::array();
+  for (auto it = run_means.rbegin(); it != run_means.rend(); ++it) {
+    Json p = mean_se_json(it->second);
+    p["P0"] = it->first;
+    unrep.push_back(p);
+  }
+  j["per_P0_unrepopulated_by_run"] = unrep;
   return j;
 }
 
@@ -788,7 +834,7 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
 // jamming state counts once), and ω* against ΔZ and Z − 6: budjam's free linear fit over every
 // packing, the paper's proportionality through the origin on the Δφ-target packings.
 Json spectrum_json(const std::vector<const DosRow*>& rows) {
-  std::vector<double> w, dz, z6, diff;
+  std::vector<double> w, dz, z6, diff, signed_diff;
   std::size_t equal = 0;
   std::set<std::size_t> jammed_seen;
   std::vector<CollapsePoint> targets;
@@ -798,6 +844,7 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
     dz.push_back(q->dZ);
     z6.push_back(q->Z - 6.0);
     diff.push_back(std::abs(q->N_zero - q->N_u));
+    signed_diff.push_back(q->N_zero - q->N_u);
     equal += q->N_zero == q->N_u;
     if (q->target) targets.push_back({q->omega_star, q->N_c, q->N_nr, static_cast<long>(q->N_u)});
   }
@@ -808,6 +855,7 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
   Json j{{"packings", w.size()},
          {"N_zero_equals_N_u", equal / n},
          {"N_zero_minus_N_u_abs", mean(diff)},
+         {"N_zero_minus_N_u", mean_se_json(signed_diff)},
          {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd.slope_se}, {"intercept", fd.intercept}}},
          {"r2_dZ", fd.r2},
          {"r2_Z_minus_6", f6.r2}};
@@ -878,6 +926,12 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
       m, [](auto& r) { return r.phi_J; }, bo);
   h["N_J"] = states_json(
       m, [](auto& r) { return r.N_J; }, bo);
+  h["Z_J"] = states_json(
+      m, [](auto& r) { return r.Z_J; }, bo);
+  h["rattler_fraction"] = states_json(
+      m, [](auto& r) { return 1.0 - r.N_nr_J / r.N_J; }, bo);
+  h["cells_per_area"] = states_json(
+      m, [](auto& r) { return r.N_J / (r.L * r.L); }, bo);
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m);
   h["B_grow_over_lambda_B_log10"] = growth_bulk_json(m, bo);
@@ -1034,6 +1088,16 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
     J["sizes"] = sizes;
   }
   J["finite_size"] = finite_size_json(J["groups"]);
+  {
+    // The growth-only baseline with the growth parameters of the runs (every run of an ensemble shares
+    // them; tables carry none, so there the scene defaults, which are the paper's, stand in).
+    Scene scene = e.growth_scene;
+    const GrowthOnly growth_only = [&scene](double L, double phi) {
+      scene.L = L;
+      return growth_only_cells(scene, phi, kGrowthOnlySamples, kGrowthOnlyFirstSeed);
+    };
+    J["finite_size_jamming"] = jamming_finite_size_json(J["sizes"], growth_only, kGrowthOnlyLargeL);
+  }
   {
     Json br = Json::array();
     for (const auto& [L, f] : branch) {

@@ -4,6 +4,7 @@
 // directories (ensemble_analysis.cpp) and from the tables an earlier analysis wrote
 // (ensemble_tables.hpp); the estimators see no difference. The column lists name each record field
 // in runs.csv and targets.csv, for the writer and the tables reader alike.
+#include "budjam/scene.hpp"
 #include "budjam/survival.hpp"
 
 #include <cmath>
@@ -29,9 +30,10 @@ struct TargetRow {
   bool below_phi2 = false;
 };
 
-// φ_2 is the first state after jamming with at most this many tagged buds still unconstrained:
-// budjam's definition (ε ~ 1/N_nr,J) and the paper's (none left).
-inline constexpr double kBudjamTaggedLeft = 1, kPaperTaggedLeft = 0;
+// φ_2 is the first state after jamming with at most kBudjamTaggedLeft tagged buds still unconstrained
+// (ε ~ 1/N_nr,J), in budjam and in the paper's analysis alike; the paper's division figure alone counts
+// the divisions up to the first state with none left (docs/analysis.md, "Definitions").
+inline constexpr double kBudjamTaggedLeft = 1, kNoneLeft = 0;
 
 struct RunRow {
   std::filesystem::path dir;
@@ -49,17 +51,16 @@ struct RunRow {
   double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
   // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
   double chi_bar = kNaN, lambda_bar = kNaN;
-  // the paper's φ_2: first state with no tagged bud left; its P, divisions and interval averages
-  double phi_2_paper = kNaN, dphi_2_paper = kNaN, P_2_paper = kNaN, N_div_2_paper = kNaN;
-  double chi_bar_paper = kNaN, lambda_bar_paper = kNaN;
-  double N_div_end = kNaN;  // divisions after φ_J at the end of the run (the paper's selection)
+  // the first state with no tagged bud left: its φ, P and the divisions after φ_J up to it
+  double phi_2_none_left = kNaN, dphi_2_none_left = kNaN, P_2_none_left = kNaN, N_div_2_none_left = kNaN;
+  double N_div_end = kNaN;  // divisions after φ_J at the end of the run
   // The definition of the φ_2 the run saved (packings/phi2.pack, summary.json phi_2): at most this
   // many tagged buds left (jamming.phi2_tagged_left; 1 in runs from before that key). The other
   // definition's φ_2 comes from steps.csv, without a packing.
   double phi2_tagged_left = kBudjamTaggedLeft;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
   double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;     // at budjam's φ_2, if saved there
-  double G_2_paper = kNaN;                                              // at the paper's φ_2, if saved there
+  double G_2_none_left = kNaN;  // at the first state with none left, where the run saved that packing
   double h_gamma = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
@@ -68,10 +69,6 @@ struct RunRow {
   std::vector<double> remaining;  // tagged_active / tagged (NaN beyond the run)
   std::vector<double> divisions;  // cumulative divisions after φ_J
 };
-
-// G at the paper's φ_2 where the run saved that packing, else at budjam's φ_2 (the nearest saved
-// packing: runs that stop at budjam's φ_2 never reach the paper's).
-inline double G_for_paper_phi2(const RunRow& r) { return std::isfinite(r.G_2_paper) ? r.G_2_paper : r.G_2; }
 
 struct DosRow {
   std::string run, packing;
@@ -113,15 +110,20 @@ struct Ensemble {
   std::size_t dos_found = 0;
   std::size_t runs = 0;
   std::map<GroupKey, KaplanMeierCurve> survival;  // pooled over the runs of each group
+  // The cell parameters and initial state the runs were grown with (the scene defaults, which are the
+  // paper's, for tables: they record none).
+  Scene growth_scene;
   // What the inputs could not give, with the reason: quantity → "needs …" (the tables hold less
   // than the run directories). Empty for run directories.
   std::map<std::string, std::string> unavailable;
 };
 
-// A number of a record under its column name in runs.csv / targets.csv.
+// A number of a record under its column name in runs.csv / targets.csv; `legacy` is the name tables
+// of earlier versions gave the same number.
 struct RunColumn {
   const char* name;
   double RunRow::*field;
+  const char* legacy = nullptr;
 };
 struct TargetColumn {
   const char* name;
@@ -146,12 +148,10 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"N_div_2", &RunRow::N_div_2},
                                             {"chi_bar", &RunRow::chi_bar},
                                             {"lambda_bar", &RunRow::lambda_bar},
-                                            {"phi_2_paper", &RunRow::phi_2_paper},
-                                            {"dphi_2_paper", &RunRow::dphi_2_paper},
-                                            {"P_2_paper", &RunRow::P_2_paper},
-                                            {"N_div_2_paper", &RunRow::N_div_2_paper},
-                                            {"chi_bar_paper", &RunRow::chi_bar_paper},
-                                            {"lambda_bar_paper", &RunRow::lambda_bar_paper},
+                                            {"phi_2_none_left", &RunRow::phi_2_none_left, "phi_2_paper"},
+                                            {"dphi_2_none_left", &RunRow::dphi_2_none_left, "dphi_2_paper"},
+                                            {"P_2_none_left", &RunRow::P_2_none_left, "P_2_paper"},
+                                            {"N_div_2_none_left", &RunRow::N_div_2_none_left, "N_div_2_paper"},
                                             {"N_div_end", &RunRow::N_div_end},
                                             {"phi_2_tagged_left", &RunRow::phi2_tagged_left},
                                             {"a_eps", &RunRow::a_eps},
@@ -162,7 +162,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"G_2", &RunRow::G_2},
                                             {"G_2_energy", &RunRow::G_2_energy},
                                             {"G_min_2", &RunRow::G_min_2},
-                                            {"G_2_paper", &RunRow::G_2_paper},
+                                            {"G_2_none_left", &RunRow::G_2_none_left, "G_2_paper"},
                                             {"h_gamma", &RunRow::h_gamma},
                                             {"lc2_J", &RunRow::lc2_J},
                                             {"P_J", &RunRow::P_J},

@@ -22,12 +22,10 @@ std::string needs(const std::string& column) {
   static const std::map<std::string, std::string> from{{"u_2", "steps.csv"},
                                                        {"chi_bar", "steps.csv"},
                                                        {"lambda_bar", "steps.csv"},
-                                                       {"phi_2_paper", "steps.csv"},
-                                                       {"dphi_2_paper", "steps.csv"},
-                                                       {"P_2_paper", "steps.csv"},
-                                                       {"N_div_2_paper", "steps.csv"},
-                                                       {"chi_bar_paper", "steps.csv"},
-                                                       {"lambda_bar_paper", "steps.csv"},
+                                                       {"phi_2_none_left", "steps.csv"},
+                                                       {"dphi_2_none_left", "steps.csv"},
+                                                       {"P_2_none_left", "steps.csv"},
+                                                       {"N_div_2_none_left", "steps.csv"},
                                                        {"N_div_end", "steps.csv"},
                                                        {"a_eps", "bud_events.csv"},
                                                        {"integral_S", "bud_events.csv"},
@@ -45,10 +43,16 @@ double number_or_nan(const CsvTable& t, const char* name, std::size_t row) {
   return t.has_column(name) ? t.number(row, t.column(name)) : kNaN;
 }
 
+// The column of runs.csv that holds `c`: its name, or the name of an earlier version; nullptr if none.
+const char* run_column(const CsvTable& R, const RunColumn& c) {
+  if (R.has_column(c.name)) return c.name;
+  return c.legacy && R.has_column(c.legacy) ? c.legacy : nullptr;
+}
+
 void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t>& index) {
   // Tables from before jamming.phi2_tagged_left hold budjam's φ_2 only, which is what the default says.
   for (const auto& c : kRunColumns)
-    if (!R.has_column(c.name) && c.field != &RunRow::phi2_tagged_left)
+    if (!run_column(R, c) && c.field != &RunRow::phi2_tagged_left)
       e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + needs(c.name) + " of each run)";
   const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
                     c_status = R.column("status");
@@ -61,7 +65,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     x.seed = static_cast<std::uint64_t>(R.integer(k, c_seed, 0, std::numeric_limits<long long>::max()));
     x.status = R.text(k, c_status);
     for (const auto& c : kRunColumns)
-      if (R.has_column(c.name)) x.*c.field = R.number(k, R.column(c.name));
+      if (const char* name = run_column(R, c)) x.*c.field = R.number(k, R.column(name));
     x.depleted = std::isfinite(x.phi_2);
     if (!index.emplace(x.dir.string(), e.rows.size()).second)
       throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " listed twice");

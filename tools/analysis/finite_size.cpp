@@ -16,30 +16,37 @@ namespace {
 using io::Json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kMinSizesToExtrapolate = 3;  // two points fit any line: no test of the 1/N form
 
-// A quantity of a group entry: the key and which of its fields holds the value (a mean, or the
-// median for the skewed ones); the standard error is always "se".
+// A quantity of an analysis.json entry: the key and which of its fields holds the value (a mean, or
+// the median for the skewed ones); the standard error is always "se".
 struct Quantity {
   const char* name;
-  const char* group_key;
   const char* value_field;
 };
-constexpr Quantity kQuantities[] = {
-    {"u_J", "u_J", "mean"},                              // contact-free buds at jamming over N_nr
-    {"u_J_lobes", "u_J_lobes", "mean"},                  // the paper's count: contact-free lobes
-    {"n_J", "n_J", "mean"},                              // buds per non-rattler cell at jamming
-    {"phi_J", "phi_J", "mean"},                          // packing fraction at jamming
-    {"dphi_2", "dphi_2", "mean"},                        // φ_2 − φ_J, at most one tagged bud left
-    {"dphi_2_paper", "dphi_2_paper", "mean"},            // φ_2 − φ_J, none left, the paper's selection
-    {"dphi_2_paper_all", "dphi_2_paper_all", "mean"},    // the same, every run that reached it
-    {"N_div_2_over_N_J", "N_div_2_over_N_J", "median"},  // divisions by φ_2 per cell at jamming
-    {"G_2_over_Pmax", "G_2_over_Pmax", "median"},        // shear modulus at φ_2 over P_max
-    {"G_2_over_Pmax_at_paper_phi2", "G_2_over_Pmax_at_paper_phi2", "median"},  // the same at none left
+constexpr Quantity kDepletionQuantities[] = {
+    {"dphi_2", "mean"},                 // φ_2 − φ_J, at most one tagged bud left, every run
+    {"dphi_2_paper", "mean"},           // the same φ_2, the runs the paper's selection admits
+    {"dphi_2_none_left", "mean"},       // φ − φ_J at the first state with no tagged bud left
+    {"N_div_2_over_N_J", "median"},     // divisions by φ_2 per cell at jamming
+    {"G_2_over_Pmax", "median"},        // shear modulus at φ_2 over P_max, every run
+    {"G_2_over_Pmax_paper", "median"},  // the same, the paper's selection and fences
+};
+constexpr Quantity kJammingQuantities[] = {
+    {"u_J", "mean"},               // contact-free buds at jamming over N_nr
+    {"u_J_lobes", "mean"},         // the paper's count: contact-free lobes
+    {"phi_J", "mean"},             // packing fraction at jamming
+    {"Z_J", "mean"},               // contacts per non-rattler cell at jamming
+    {"rattler_fraction", "mean"},  // 1 − N_nr/N at jamming
 };
 
 double number(const Json& j, const char* key) {
   return j.contains(key) && j[key].is_number() ? j[key].get<double>() : kNaN;
+}
+
+// The value, its SE and n of a quantity of one size's entry ({} where an older analysis.json lacks it).
+Json cell(const Json& entry, const Quantity& q) {
+  const Json v = entry.contains(q.name) ? entry[q.name] : Json::object();
+  return Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
 }
 
 Json extrapolation_json(const std::vector<double>& N, const std::vector<double>& q, const std::vector<double>& se) {
@@ -47,7 +54,8 @@ Json extrapolation_json(const std::vector<double>& N, const std::vector<double>&
   x["sizes"] = N.size();
   if (N.size() < kMinSizesToExtrapolate) {
     x["limit"] = nullptr;
-    x["why"] = "fewer than " + std::to_string(kMinSizesToExtrapolate) + " sizes with an error bar";
+    x["why"] = std::to_string(N.size()) + " sizes with an error bar; the fit needs " +
+               std::to_string(kMinSizesToExtrapolate) + " to test its form";
     return x;
   }
   std::vector<double> inv_N;
@@ -55,12 +63,33 @@ Json extrapolation_json(const std::vector<double>& N, const std::vector<double>&
   const auto f = weighted_linear_fit(inv_N, q, se);
   x["limit"] = io::number_or_null(f.intercept);  // q_∞
   x["limit_se"] = io::number_or_null(f.intercept_se);
-  x["slope"] = io::number_or_null(f.slope);  // c of q_∞ + c/N_J
+  x["slope"] = io::number_or_null(f.slope);  // c of q_∞ + c/N
   x["slope_se"] = io::number_or_null(f.slope_se);
   x["chi2"] = f.chi2;
   x["dof"] = f.dof;
+  Json residuals = Json::array();  // (q − fit)/SE per size, in the order of N
+  for (std::size_t k = 0; k < N.size(); ++k) residuals.push_back((q[k] - f.intercept - f.slope * inv_N[k]) / se[k]);
+  x["residuals_in_se"] = residuals;
   return x;
 }
+
+// The extrapolation of one quantity over the per-size rows: the sizes whose value has an error bar.
+Json extrapolate(const Json& rows, const char* name) {
+  std::vector<double> N, value, se;
+  for (const auto& row : rows) {
+    const double n = number(row["N_J"], "mean"), v = number(row[name], "value"), s = number(row[name], "se");
+    if (std::isfinite(n) && n > 0 && std::isfinite(v) && std::isfinite(s) && s > 0) {
+      N.push_back(n);
+      value.push_back(v);
+      se.push_back(s);
+    }
+  }
+  return extrapolation_json(N, value, se);
+}
+
+constexpr const char* kModel =
+    "q(N_J) = q_inf + c/N_J, weighted least squares (weights 1/SE^2), errors scaled by max(1, sqrt(chi2/dof)); "
+    "fitted with at least 5 sizes";
 
 }  // namespace
 
@@ -81,37 +110,68 @@ Json finite_size_json(const Json& groups) {
       row["L"] = (*g)["L"];
       row["runs"] = (*g)["runs"];
       row["N_J"] = Json{{"mean", (*g)["N_J"]["mean"]}, {"se", (*g)["N_J"]["se"]}};
-      for (const auto& q : kQuantities) {
-        // a key an older analysis.json lacks gives an empty cell
-        const Json v = g->contains(q.group_key) ? (*g)[q.group_key] : Json::object();
-        row[q.name] =
-            Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
-      }
+      for (const auto& q : kDepletionQuantities) row[q.name] = cell(*g, q);
       sizes.push_back(row);
     }
     Json extrapolation;
-    for (const auto& q : kQuantities) {
-      std::vector<double> N, value, se;
-      for (const auto& row : sizes) {
-        const double n = number(row["N_J"], "mean"), v = number(row[q.name], "value"), s = number(row[q.name], "se");
-        // one run's value has no error bar (a bootstrap of one value gives a rounding-level "SE")
-        if (std::isfinite(n) && n > 0 && std::isfinite(v) && std::isfinite(s) && s > 0 &&
-            number(row[q.name], "n") >= 2) {
-          N.push_back(n);
-          value.push_back(v);
-          se.push_back(s);
-        }
-      }
-      extrapolation[q.name] = extrapolation_json(N, value, se);
-    }
+    for (const auto& q : kDepletionQuantities) extrapolation[q.name] = extrapolate(sizes, q.name);
     entry["sizes"] = sizes;
-    entry["model"] =
-        "q(N_J) = q_inf + c/N_J, weighted least squares (weights 1/SE^2), errors scaled by "
-        "max(1, sqrt(chi2/dof))";
+    entry["model"] = kModel;
     entry["extrapolation"] = extrapolation;
     out.push_back(entry);
   }
   return out;
+}
+
+Json jamming_finite_size_json(const Json& sizes_in, const GrowthOnly& growth_only, double large_L) {
+  std::vector<const Json*> sizes;
+  for (const auto& s : sizes_in) sizes.push_back(&s);
+  if (sizes.size() < 2) return nullptr;
+  std::sort(sizes.begin(), sizes.end(), [](const Json* a, const Json* b) { return number(*a, "L") < number(*b, "L"); });
+  Json rows = Json::array();
+  for (const Json* s : sizes) {
+    const double L = number(*s, "L"), phi_J = number((*s)["phi_J"], "mean");
+    Json row;
+    row["L"] = L;
+    row["runs"] = (*s)["runs"];
+    row["jamming_states"] = (*s)["jamming_states"];
+    row["N_J"] = Json{{"mean", (*s)["N_J"]["mean"]}, {"se", (*s)["N_J"]["se"]}};
+    for (const auto& q : kJammingQuantities) row[q.name] = cell(*s, q);
+    row["n_J"] = cell(*s, {"n_J", "mean"});
+    row["cells_per_area"] = cell(*s, {"cells_per_area", "mean"});
+    if (std::isfinite(phi_J)) {
+      const GrowthOnlyCount g = growth_only(L, phi_J);
+      const double rho = number(row["cells_per_area"], "value"), rho_se = number(row["cells_per_area"], "se");
+      row["growth_only_cells_per_area"] =
+          Json{{"value", g.mean / (L * L)}, {"se", g.se / (L * L)}, {"n", g.samples}, {"at_phi", phi_J}};
+      const double combined = std::hypot(rho_se, g.se / (L * L));
+      row["cells_per_area_minus_growth_only_in_se"] = io::number_or_null((rho - g.mean / (L * L)) / combined);
+    }
+    rows.push_back(row);
+  }
+  Json extrapolation;
+  for (const auto& q : kJammingQuantities) extrapolation[q.name] = extrapolate(rows, q.name);
+  Json J;
+  J["sizes"] = rows;
+  J["model"] = kModel;
+  J["extrapolation"] = extrapolation;
+  // n_J,∞ = ρ_∞ (1 − r_∞): the growth-only density in a large box at φ_J,∞ times the extrapolated
+  // non-rattler fraction; its SE from both by propagation (they are independent).
+  const Json& phi = extrapolation["phi_J"];
+  const Json& r = extrapolation["rattler_fraction"];
+  if (phi["limit"].is_number() && r["limit"].is_number()) {
+    const GrowthOnlyCount g = growth_only(large_L, phi["limit"].get<double>());
+    const double A = large_L * large_L, rho = g.mean / A, rho_se = g.se / A;
+    const double keep = 1.0 - r["limit"].get<double>(), keep_se = r["limit_se"].get<double>();
+    J["n_J_limit"] = Json{{"value", rho * keep},
+                          {"se", std::hypot(rho_se * keep, rho * keep_se)},
+                          {"growth_only_cells_per_area", rho},
+                          {"growth_only_L", large_L},
+                          {"growth_only_samples", g.samples}};
+  } else {
+    J["n_J_limit"] = nullptr;
+  }
+  return J;
 }
 
 }  // namespace budjam::tools

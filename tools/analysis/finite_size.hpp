@@ -1,19 +1,39 @@
 #pragma once
-// Finite-size study (docs/analysis.md, "Finite size"): for each feedback strength that was run at
-// several box sizes, the per-size values of the quantities fixed at jamming (u_J, n_J, φ_J) and at
-// the depletion point (Δφ_2 both ways, divisions, G_2/P_max), and their extrapolation to N → ∞.
+// Finite-size study (docs/analysis.md, "Finite size").
 //
-// Model: q(N_J) = q_∞ + c/N_J, the leading correction of the finite-size counting (the +2 of the
-// isostatic count and the discreteness of u = N_u/N_nr are O(1/N)). It is fitted by weighted least
-// squares on the per-size means (medians for G_2 and divisions) with their standard errors; the fit's
-// χ²/dof says whether 1/N describes the data. Sizes whose value has no finite error bar are left out.
+// Model: q(N) = q_∞ + c/N, the leading correction of the finite-size counting (the +2 of the
+// isostatic count and the discreteness of u = N_u/N_nr are O(1/N)), fitted by weighted least squares
+// on the per-size values with their standard errors. It is fitted only where at least five sizes have
+// an error bar: with three the fit has one degree of freedom and cannot test the form. The fit
+// reports χ²/dof and each size's residual in units of its SE, so the form is checked, not assumed.
+//
+// Two tables: the quantities fixed at jamming, from ensembles whose sizes have independent seeds
+// (one measurement per jamming state: feedback acts only above jamming), and the quantities of the
+// depletion point per feedback strength. The cell density at jamming is not fitted by q_∞ + c/N:
+// N/L² from the growth process alone is not monotone in L (growth_only.hpp), so it is compared at
+// each size with that growth-only expectation, and n_J = (N_J/L²)(1 − rattler fraction) is
+// extrapolated as the growth-only density in a large box times the fitted non-rattler fraction.
+#include "analysis/growth_only.hpp"
 #include "io/json.hpp"
+
+#include <functional>
 
 namespace budjam::tools {
 
+inline constexpr std::size_t kMinSizesToExtrapolate = 5;
+
 // `groups`: the "groups" array that analyse writes to analysis.json, one entry per (L, P0). Returns
-// one entry per P0 present at two sizes or more: its per-size rows and, with three sizes or more,
-// the extrapolation of every quantity.
+// one entry per P0 present at two sizes or more: its per-size rows of the depletion-point quantities
+// and, with kMinSizesToExtrapolate sizes or more, their extrapolation.
 io::Json finite_size_json(const io::Json& groups);
+
+// The cell count of the growth process alone at a box side and packing fraction.
+using GrowthOnly = std::function<GrowthOnlyCount(double L, double phi)>;
+
+// `sizes`: the "sizes" array that analyse writes (one entry per L, quantities fixed at jamming over
+// distinct jamming states). Per-size rows of u_J, u_J (lobes), φ_J, Z_J, the rattler fraction, N_J/L²
+// beside the growth-only density at ⟨φ_J⟩, and n_J; the 1/N extrapolations; and n_J,∞ from the
+// growth-only density in a box of side `large_L` at φ_J,∞. Null when fewer than two sizes.
+io::Json jamming_finite_size_json(const io::Json& sizes, const GrowthOnly& growth_only, double large_L);
 
 }  // namespace budjam::tools

@@ -1,0 +1,114 @@
+"""The one verdict rule of the reproduction reports (docs/analysis.md, "Verdicts").
+
+A claim of the paper is a set C of values: a number quoted to its last digit ("≃ 0.23": every value
+that rounds to it, [0.225, 0.235]), a range ("0.2 – 1"), or a bound ("≲ 3e-3", "> 1/2"). budjam's
+estimate x has its standard error s_b from n_b samples. The paper's number has a sampling error of its
+own that the paper does not quote; with the same protocol the spread per sample is the same, so it is
+s_p = s_b √(n_b / n_p) for the paper's n_p samples (n_p = n_b when budjam ran the paper's grid). The
+combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C).
+
+    inconclusive   n_b < 5: no error bar and no verdict (the n is stated);
+    confirmed      z ≤ 2: x lies within 2σ of C, consistent with the claim at about 95 %;
+    not confirmed  z > 2.
+
+A trend over the feedback groups ("decreases with feedback") is budjam's own data tested for
+direction, each group with its SE: not confirmed when a step between neighbouring groups goes against
+the claimed direction by more than 2σ of that step, confirmed when the change from the first group to
+the last goes the claimed way by more than 2σ and no step goes against it by more than 2σ, and
+inconclusive otherwise (the data do not resolve the trend) or when a group has fewer than 5 samples.
+
+Nothing here measures: the estimates and their errors come from `budjam analyse`.
+"""
+import math
+from dataclasses import dataclass
+
+MIN_SAMPLES = 5  # no error bar and no verdict from fewer (as `budjam analyse` writes no SE then)
+Z_MAX = 2.0      # ≈ 95 % two-sided
+
+
+@dataclass(frozen=True)
+class Claim:
+    """The set of values a claim allows: the closed interval [lo, hi] (±inf for a bound)."""
+    lo: float
+    hi: float
+
+    def distance(self, x):
+        return max(self.lo - x, 0.0, x - self.hi)
+
+
+def quoted(value, last_digit):
+    """'≃ value' quoted to `last_digit` (0.23 → 0.01): the values that round to it."""
+    return Claim(value - last_digit / 2, value + last_digit / 2)
+
+
+def interval(lo, hi):
+    return Claim(lo, hi)
+
+
+def at_most(bound):
+    return Claim(-math.inf, bound)
+
+
+def at_least(bound):
+    return Claim(bound, math.inf)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    word: str            # confirmed | not confirmed | inconclusive
+    why: str             # z and σ, or the reason there is no verdict
+
+    def __str__(self):
+        return f"{self.word} ({self.why})"
+
+
+def _fmt(v):
+    if v == 0 or not math.isfinite(v):
+        return f"{v:g}"
+    a = abs(v)
+    return f"{v:.2g}" if 1e-3 <= a < 1e4 else f"{v:.1e}"
+
+
+def inconclusive_n(n):
+    return Verdict("inconclusive", f"n = {n} < {MIN_SAMPLES}")
+
+
+def compare(estimate, se, n, claim, n_paper=None):
+    """The verdict on one claim from budjam's estimate ± se over n samples; n_paper = the paper's
+    number of samples (None: the same as budjam's)."""
+    if estimate is None or n is None or n < MIN_SAMPLES or se is None or not math.isfinite(se):
+        return inconclusive_n(n or 0)
+    s_p = se * math.sqrt(n / (n_paper or n))
+    sigma = math.hypot(se, s_p)
+    d = claim.distance(estimate)
+    if sigma == 0:
+        z = 0.0 if d == 0 else math.inf
+    else:
+        z = d / sigma
+    word = "confirmed" if z <= Z_MAX else "not confirmed"
+    return Verdict(word, f"z = {_fmt(z)}, σ = {_fmt(sigma)}")
+
+
+def trend(points, increasing):
+    """The verdict on a monotone trend over groups in order: points = [(estimate, se, n), …]."""
+    if len(points) < 2:
+        return Verdict("inconclusive", f"{len(points)} group(s)")
+    for est, se, n in points:
+        if est is None or n is None or n < MIN_SAMPLES or se is None or not math.isfinite(se):
+            return inconclusive_n(n or 0)
+    sign = 1.0 if increasing else -1.0
+
+    def z(a, b):
+        s = math.hypot(a[1], b[1])
+        d = sign * (b[0] - a[0])
+        return math.copysign(math.inf, d) if s == 0 and d != 0 else (0.0 if s == 0 else d / s)
+
+    steps = [z(a, b) for a, b in zip(points, points[1:])]
+    worst = min(steps)
+    overall = z(points[0], points[-1])
+    why = f"first to last z = {_fmt(overall)}, worst step z = {_fmt(worst)}"
+    if worst < -Z_MAX:
+        return Verdict("not confirmed", why)
+    if overall > Z_MAX:
+        return Verdict("confirmed", why)
+    return Verdict("inconclusive", why + ": not resolved")

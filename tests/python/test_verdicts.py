@@ -1,0 +1,58 @@
+"""The verdict rule of the reproduction reports (scripts/verdicts.py): each branch on its edge."""
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.environ.get("BUDJAM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", "..")),
+                                "scripts"))
+import verdicts as v  # noqa: E402
+
+
+def test_no_verdict_below_five_samples_whatever_the_agreement():
+    assert v.compare(0.23, 0.0, 4, v.quoted(0.23, 0.01)).word == "inconclusive"
+    assert v.compare(0.23, 0.01, 5, v.quoted(0.23, 0.01)).word == "confirmed"
+    assert v.compare(0.23, None, 20, v.quoted(0.23, 0.01)).word == "inconclusive"
+
+
+def test_a_quoted_number_allows_what_rounds_to_it():
+    c = v.quoted(0.23, 0.01)
+    assert c.distance(0.2349) == 0 and c.distance(0.2251) == 0
+    assert math.isclose(c.distance(0.24), 0.005)
+
+
+def test_the_combined_error_adds_the_papers_sampling_error():
+    # same number of samples: σ = √2 s_b; z just below and above 2
+    s = 0.01
+    c = v.quoted(0.5, 0.0)
+    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 0.999, s, 20, c).word == "confirmed"
+    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 1.001, s, 20, c).word == "not confirmed"
+    # the paper's 20 samples against budjam's 200: σ = s_b √(1 + 10)
+    assert v.compare(0.5 + 2 * math.sqrt(11) * s * 0.999, s, 200, c, n_paper=20).word == "confirmed"
+    assert v.compare(0.5 + 2 * math.sqrt(11) * s * 1.001, s, 200, c, n_paper=20).word == "not confirmed"
+
+
+def test_a_fraction_within_noise_of_a_bound_is_consistent_with_it():
+    # 48.6 % of 940 packings against "more than half": 1 SE below, not a refutation
+    p, n = 0.486, 940
+    se = math.sqrt(p * (1 - p) / n)
+    assert v.compare(p, se, n, v.at_least(0.5)).word == "confirmed"
+    assert v.compare(0.40, math.sqrt(0.4 * 0.6 / n), n, v.at_least(0.5)).word == "not confirmed"
+
+
+def test_ranges_and_bounds():
+    assert v.compare(0.15, 0.01, 20, v.interval(0.2, 1.0)).word == "not confirmed"
+    assert v.compare(0.19, 0.01, 20, v.interval(0.2, 1.0)).word == "confirmed"
+    assert v.compare(0.0, 0.0, 20, v.at_most(3e-3)).word == "confirmed"
+    assert v.compare(0.02, 0.001, 20, v.at_most(3e-3)).word == "not confirmed"
+
+
+def test_trend_confirmed_refuted_or_unresolved():
+    down = [(0.04, 0.002, 20), (0.03, 0.002, 20), (0.01, 0.001, 20)]
+    assert v.trend(down, increasing=False).word == "confirmed"
+    assert v.trend(down, increasing=True).word == "not confirmed"
+    flat = [(0.04, 0.01, 20), (0.039, 0.01, 20), (0.041, 0.01, 20)]
+    assert v.trend(flat, increasing=False).word == "inconclusive"
+    # a step against the trend by more than 2σ refutes it even when the ends agree with it
+    bump = [(0.04, 0.001, 20), (0.05, 0.001, 20), (0.01, 0.001, 20)]
+    assert v.trend(bump, increasing=False).word == "not confirmed"
+    assert v.trend([(0.04, 0.001, 4), (0.01, 0.001, 20)], increasing=False).word == "inconclusive"
