@@ -2,6 +2,7 @@
 
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
+#include "budjam/jamming.hpp"
 #include "budjam/stability.hpp"
 
 #include <algorithm>
@@ -18,15 +19,6 @@ const char* to_string(Phase phase) {
   switch (phase) {
     case Phase::unjammed: return "unjammed";
     case Phase::jammed: return "jammed";
-  }
-  return "?";
-}
-
-const char* to_string(TrialStart start) {
-  switch (start) {
-    case TrialStart::accepted_state: return "accepted_state";
-    case TrialStart::lowest_overshoot: return "lowest_overshoot";
-    case TrialStart::settled: return "settled";
   }
   return "?";
 }
@@ -62,18 +54,135 @@ std::string num(double v) {
   return buf;
 }
 
-using Overshoot = JammingOvershoot;
+// Δt of a step stored as `scaled` with `log_scale`, and its logarithm.
+double unscaled_dt(double scaled, double log_scale) { return log_scale == 0.0 ? scaled : scaled * std::exp(log_scale); }
+double log_dt(double scaled, double log_scale) { return std::log(scaled) + log_scale; }
 
-// √(E/N) in the middle of the jamming window [ε_U, 2ε_U].
-double window_centre(double eps) { return 0.5 * (1.0 + std::sqrt(2.0)) * std::sqrt(eps); }
+// Buds with at least one contact.
+std::size_t compressed_buds(std::size_t cells, const std::vector<Contact>& contacts) {
+  std::vector<char> touched(cells, 0);
+  for (const Contact& c : contacts) {
+    if (is_bud(c.i)) touched[cell_of(c.i)] = 1;
+    if (is_bud(c.j)) touched[cell_of(c.j)] = 1;
+  }
+  return static_cast<std::size_t>(std::ranges::count(touched, 1));
+}
 
-// Slope ds/dφ of s = √(E/N) at an overjammed minimum, from its energy and pressure alone. Near φ_J,
-// U ≈ C (φ − φ_J)², so φ − φ_J = 2U / (dU/dφ); growing every length by λ at fixed centroids is
-// dU/dλ = 2U + Σ f r = 2U + 2L²P and dφ/dλ = 2φ, so dU/dφ ≈ (U + L²P)/φ. Buds grow alone and at
-// different rates, so this is an estimate; the second overshoot replaces it by a secant.
-double overshoot_slope(double phi, double s, double U, double P, double L) {
-  const double dphi = 2.0 * U * phi / (U + L * L * P);
-  return dphi > 0 ? s / dphi : 0.0;
+// χ_c = ⟨exp(−p/P0)⟩ over compressed buds, and ln χ_c by log-sum-exp about the largest factor, which
+// survives when every factor underflows. (1, 0) when no bud is compressed.
+struct CompressedFactor {
+  double chi = 1.0, log_chi = 0.0;
+};
+CompressedFactor mean_compressed_factor(const std::vector<double>& pressures, std::optional<double> P0) {
+  double sum = 0, log_top = -std::numeric_limits<double>::infinity();
+  std::size_t n = 0;
+  for (double p : pressures) {
+    if (!(p > 0)) continue;
+    sum += growth_factor(p, P0);
+    log_top = std::max(log_top, log_growth_factor(p, P0));
+    ++n;
+  }
+  if (!n) return {};
+  double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
+  for (double p : pressures)
+    if (p > 0) relative += std::exp(log_growth_factor(p, P0) - log_top);
+  return {sum / static_cast<double>(n), log_top + std::log(relative / static_cast<double>(n))};
+}
+
+// Δt that the next step starts from (before any bisection halving), from the accepted state with
+// its bud `pressures` (null below jamming or when not computed).
+// The nominal growth.dt (docs/model.md, "Growth protocol"). With growth.adaptive_dt, above jamming with feedback:
+// dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0) = the factor of the least
+// compressed bud, so that the fastest-growing cell gains γ0_i·dt of relative area, as in a
+// nominal step. While every factor and that Δt are doubles it is stored as it is (log_scale 0);
+// else the step is stored as dt, log_scale = −ln max(g_max, floor) and the rates are scaled by
+// e^{log_scale}: the growth γ0_i·dt·exp(−p_i/P0)/max(g_max, floor) is then exact at any p/P0.
+StepStart step_start(const Scene& scene, const std::vector<double>* pressures) {
+  if (!(scene.adaptive_dt && scene.P0 && pressures) || pressures->empty()) return {scene.dt, 0.0};
+  double g_max = 0.0, log_g_max = -std::numeric_limits<double>::infinity();
+  bool underflow = false;  // the plain form would lose some bud's growth
+  for (double p : *pressures) {
+    const double log_g = log_growth_factor(p, scene.P0);
+    const double g = factor_from_log(log_g);
+    underflow = underflow || g == 0.0;
+    g_max = std::max(g_max, g);
+    log_g_max = std::max(log_g_max, log_g);
+  }
+  const double top = std::max(g_max, scene.adaptive_floor);
+  if (!underflow && std::isfinite(scene.dt / top)) return {scene.dt / top, 0.0};
+  return {scene.dt, -std::max(log_g_max, std::log(scene.adaptive_floor))};  // floor 0: log = −∞
+}
+
+// The record of target k (Δφ = dphi above φ_J = phi_J) landed by the accepted state `v`.
+TargetRecord target_record(const StateView& v, std::size_t k, double dphi, double phi_J) {
+  TargetRecord t;
+  t.index = k;
+  t.dphi = dphi;
+  t.phi_target = phi_J + dphi;
+  t.step = v.step;
+  t.phi = v.phi;
+  t.P = v.P;
+  t.E_per_cell = v.E_per_cell;
+  t.network = v.network->summary();
+  t.chi_c = v.chi_c;
+  t.divisions_since_jamming = v.divisions_since_jamming;
+  return t;
+}
+
+// The record of the jamming point `v`, the jamming episode's index `episode`.
+JammingRecord jamming_record(const StateView& v, int episode) {
+  JammingRecord j;
+  j.episode = episode;
+  j.step = v.step;
+  j.phi = v.phi;
+  j.P = v.P;
+  j.E_per_cell = v.E_per_cell;
+  j.network = v.network->summary();
+  const double L = v.packing->box.L;
+  j.n_J = static_cast<double>(v.network->N_nr) / (L * L);
+  return j;
+}
+
+// φ_2 at the accepted state `v`, with `still_unconstrained` tagged buds left.
+DepletionRecord depletion_record(const StateView& v, std::size_t still_unconstrained) {
+  DepletionRecord d;
+  d.step = v.step;
+  d.phi = v.phi;
+  d.P = v.P;
+  d.network = v.network->summary();
+  d.still_unconstrained = still_unconstrained;
+  d.divisions_since_jamming = v.divisions_since_jamming;
+  return d;
+}
+
+// The observers' account of a relaxed trial made at attempt `attempt`, its step scaled by
+// `log_scale`, and what it cost.
+TrialRelaxed trial_relaxed(const Trial& t, long attempt, double log_scale, TrialVerdict verdict, long iterations,
+                           long evaluations) {
+  return TrialRelaxed{attempt,
+                      unscaled_dt(t.dt, log_scale),
+                      log_dt(t.dt, log_scale),
+                      t.packing.size(),
+                      t.packing.packing_fraction(),
+                      t.E,
+                      t.start,
+                      verdict,
+                      iterations,
+                      evaluations};
+}
+
+// Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires `field` to be current
+// for `p` (freshly evaluated on it).
+bool is_minimum(const Packing& p, const ForceField& field) {
+  const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
+  return stability(p, c, analyse_network(p.size(), c)).minimum();
+}
+
+// (φ, s, slope) of a relaxed trial above the jamming window. Requires `field` to be current for it.
+JammingOvershoot overshoot_of(const Trial& t, const ForceField& field) {
+  const std::vector<Contact> c = find_contacts(t.packing, field.lobes(), field.neighbours());
+  return overshoot_line(t.packing.packing_fraction(), t.E, t.packing.size(), pressure(c, t.packing.box),
+                        t.packing.box.L);
 }
 
 }  // namespace
@@ -100,10 +209,8 @@ struct GrowthDriver::Impl {
   long divisions_since_jamming = 0;
   int episodes = 0;  // jamming episodes begun
   BudTracker buds;
-  // Secant search: the relaxed trials of this unjammed phase that overshot the jamming window.
-  std::vector<Overshoot> overshoots;
-  int slow_trials = 0;       // consecutive trials that did not halve the bracket around φ_J
-  double bracket_width = 0;  // φ from the accepted state to the lowest overshoot at the last trial
+  JammingWindow window;
+  std::unique_ptr<JammingSearcher> search;  // its state between accepted states is checkpointed
 
   // Derived from the accepted state (recomputed identically after a restore).
   double E = 0, P = 0, phi = 0;
@@ -114,7 +221,7 @@ struct GrowthDriver::Impl {
   std::vector<double> pressures;
   bool have_pressures = false;
   std::size_t compressed = 0;
-  double chi_c = 1.0, log_chi_c = 0.0;
+  CompressedFactor chi_c;     // χ_c and ln χ_c
   std::vector<double> rates;  // γ_i·e^{log_scale} of the next step, frozen from the accepted state
   StepStart next;             // where the next step starts, from the accepted state
 
@@ -126,8 +233,9 @@ struct GrowthDriver::Impl {
   bool final_emitted = false;
   std::function<void()> checkpoint_hook;
 
-  Impl(const Scene& s, const DriverOptions& o) : scene(s), field(s.skin, s.threads) {
+  Impl(const Scene& s, const DriverOptions& o) : scene(s), window(s.epsilon_U), field(s.skin, s.threads) {
     validate(scene);
+    search = make_jamming_searcher(scene);
     seed = o.seed ? *o.seed : scene.seed;
     rng.seed(seed);
     dt = scene.dt;
@@ -159,13 +267,6 @@ struct GrowthDriver::Impl {
     return fr.converged || budgeted;
   }
 
-  // Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires the field to be current
-  // for `p` (fresh_energy_per_cell just called on it).
-  bool is_minimum(const Packing& p) {
-    const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
-    return stability(p, c, analyse_network(p.size(), c)).minimum();
-  }
-
   // Contacts, P, network, bud pressures, rates for the accepted state. Requires the field to be
   // current for `packing` (fresh_energy_per_cell just called on it).
   void derive() {
@@ -180,68 +281,11 @@ struct GrowthDriver::Impl {
     const bool feedback = jammed && scene.P0.has_value();
     have_pressures = feedback || (observe_here && needs.bud_pressures);
     if (have_pressures) pressures = bud_pressures(packing, contacts);
-    compressed = 0;
-    std::vector<char> touched(packing.size(), 0);
-    for (const Contact& c : contacts) {
-      if (is_bud(c.i)) touched[cell_of(c.i)] = 1;
-      if (is_bud(c.j)) touched[cell_of(c.j)] = 1;
-    }
-    for (char t : touched) compressed += t ? 1 : 0;
-    chi_c = 1.0;
-    log_chi_c = 0.0;
-    if (have_pressures && scene.P0) mean_compressed_factor();
-    next = step_start();
+    compressed = compressed_buds(packing.size(), contacts);
+    chi_c = have_pressures && scene.P0 ? mean_compressed_factor(pressures, scene.P0) : CompressedFactor{};
+    next = step_start(scene, jammed && have_pressures ? &pressures : nullptr);
     rates = growth_rates(packing, feedback ? &pressures : nullptr, scene.P0, next.log_scale);
   }
-
-  // χ_c = ⟨exp(−p/P0)⟩ over compressed buds, and ln χ_c by log-sum-exp about the largest factor, which
-  // survives when every factor underflows.
-  void mean_compressed_factor() {
-    double sum = 0, log_top = -std::numeric_limits<double>::infinity();
-    std::size_t n = 0;
-    for (double p : pressures) {
-      if (!(p > 0)) continue;
-      sum += growth_factor(p, scene.P0);
-      log_top = std::max(log_top, log_growth_factor(p, scene.P0));
-      ++n;
-    }
-    if (!n) return;
-    chi_c = sum / static_cast<double>(n);
-    double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
-    for (double p : pressures)
-      if (p > 0) relative += std::exp(log_growth_factor(p, scene.P0) - log_top);
-    log_chi_c = log_top + std::log(relative / static_cast<double>(n));
-  }
-
-  // Δt that the next step starts from (before any bisection halving), from the accepted state.
-  // The nominal growth.dt (docs/model.md, "Growth protocol"). With growth.adaptive_dt, above jamming with feedback:
-  // dt / max(g_max, adaptive_floor), g_max = max_i exp(−p_i/P0) = the factor of the least
-  // compressed bud, so that the fastest-growing cell gains γ0_i·dt of relative area, as in a
-  // nominal step. While every factor and that Δt are doubles it is stored as it is (log_scale 0);
-  // else the step is stored as dt, log_scale = −ln max(g_max, floor) and the rates are scaled by
-  // e^{log_scale}: the growth γ0_i·dt·exp(−p_i/P0)/max(g_max, floor) is then exact at any p/P0.
-  StepStart step_start() const {
-    if (!(scene.adaptive_dt && phase == Phase::jammed && scene.P0 && have_pressures) || pressures.empty())
-      return {scene.dt, 0.0};
-    double g_max = 0.0, log_g_max = -std::numeric_limits<double>::infinity();
-    bool underflow = false;  // the plain form would lose some bud's growth
-    for (double p : pressures) {
-      const double log_g = log_growth_factor(p, scene.P0);
-      const double g = factor_from_log(log_g);
-      underflow = underflow || g == 0.0;
-      g_max = std::max(g_max, g);
-      log_g_max = std::max(log_g_max, log_g);
-    }
-    const double top = std::max(g_max, scene.adaptive_floor);
-    if (!underflow && std::isfinite(scene.dt / top)) return {scene.dt / top, 0.0};
-    return {scene.dt, -std::max(log_g_max, std::log(scene.adaptive_floor))};  // floor 0: log = −∞
-  }
-
-  // Δt of a step stored as `scaled` with `log_scale`, and its logarithm.
-  static double unscaled_dt(double scaled, double log_scale) {
-    return log_scale == 0.0 ? scaled : scaled * std::exp(log_scale);
-  }
-  static double log_dt(double scaled, double log_scale) { return std::log(scaled) + log_scale; }
 
   StateView view() const {
     StateView v;
@@ -262,8 +306,8 @@ struct GrowthDriver::Impl {
     v.buds = &buds;
     v.divisions_since_jamming = phase == Phase::jammed ? divisions_since_jamming : 0;
     v.compressed_buds = compressed;
-    v.chi_c = chi_c;
-    v.log_chi_c = log_chi_c;
+    v.chi_c = chi_c.chi;
+    v.log_chi_c = chi_c.log_chi;
     return v;
   }
 
@@ -285,8 +329,7 @@ struct GrowthDriver::Impl {
       return fail(RunStatus::minimiser_failed, "FIRE did not converge on the initial state");
     }
     E = fresh_energy_per_cell(packing);
-    if (E >= scene.epsilon_U)
-      throw InputError("init: the relaxed initial state is already jammed (E/N = " + num(E) + ")");
+    if (window.jammed(E)) throw InputError("init: the relaxed initial state is already jammed (E/N = " + num(E) + ")");
     derive();
     const StateView v = view();
     for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
@@ -311,21 +354,6 @@ struct GrowthDriver::Impl {
     }
   }
 
-  TargetRecord target_record(std::size_t k) const {
-    TargetRecord t;
-    t.index = k;
-    t.dphi = scene.targets[k];
-    t.phi_target = result.jamming->phi + scene.targets[k];
-    t.step = step;
-    t.phi = phi;
-    t.P = P;
-    t.E_per_cell = E;
-    t.network = net.summary();
-    t.chi_c = chi_c;
-    t.divisions_since_jamming = divisions_since_jamming;
-    return t;
-  }
-
   // ---- choosing the growth step --------------------------------------------------------------
   // φ after a growth step Δt from the accepted state, divisions (and their draws) included. Known
   // before relaxing: relaxation moves cells but does not change their areas.
@@ -336,85 +364,13 @@ struct GrowthDriver::Impl {
     return p.packing_fraction();
   }
 
-  // A Δt in (dt_lo, dt_hi] with |φ(Δt) − goal| ≤ tol, by bisection from φ(dt_lo) < goal < φ(dt_hi).
-  // φ rises continuously with Δt except at divisions, where it drops, so the bracket always closes
-  // on a continuous crossing. Returns the lower end if the bracket shrinks to nothing first.
-  double dt_for_phi(double goal, double dt_lo, double dt_hi, double tol) const {
-    double lo = dt_lo, hi = dt_hi;
-    while (true) {
-      const double mid = 0.5 * (lo + hi);
-      if (!(mid > lo && mid < hi)) return lo;
-      const double miss = phi_after(mid) - goal;
-      if (std::abs(miss) <= tol) return mid;
-      (miss < 0 ? lo : hi) = mid;
-    }
-  }
-
-  // s = √(E/N) on the line through the lowest overshoot: the secant through the two lowest, or the
-  // virial slope of the lowest alone. Requires overshoots sorted by φ, not empty.
-  double overshoot_line_slope() const {
-    const Overshoot& a = overshoots[0];
-    if (overshoots.size() >= 2 && overshoots[1].s > a.s) return (overshoots[1].s - a.s) / (overshoots[1].phi - a.phi);
-    return a.slope;
-  }
-
-  // After an unjammed state was accepted: overshoots at or below it are gone, and an overshoot
-  // found from an earlier accepted state whose line puts this unjammed state above the jamming
-  // window does not hold on this path (φ_J depends on the path): dropped too.
-  void prune_overshoots() {
-    std::erase_if(overshoots, [&](const Overshoot& o) { return o.phi <= phi; });
-    std::sort(overshoots.begin(), overshoots.end(),
-              [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
-    const double s_top = std::sqrt(2.0 * scene.epsilon_U);
-    while (!overshoots.empty() && overshoots[0].s - overshoot_line_slope() * (overshoots[0].phi - phi) > s_top)
-      overshoots.erase(overshoots.begin());
-  }
-
-  // The φ the next trial of the secant search aims at: where s = √(E/N) reaches the middle of the
-  // jamming window on the line through the lowest overshoot, kept strictly inside the bracket
-  // (φ, lowest overshoot). Two trials in a row that do not halve the bracket make the next one a
-  // bisection, so the search is never slower than halving. nullopt without an overshoot.
-  std::optional<double> search_goal() {
-    if (overshoots.empty()) return std::nullopt;
-    std::sort(overshoots.begin(), overshoots.end(),
-              [](const Overshoot& a, const Overshoot& b) { return a.phi < b.phi; });
-    const Overshoot& a = overshoots.front();
-    const double width = a.phi - phi;
-    slow_trials = (bracket_width > 0 && width > 0.5 * bracket_width) ? slow_trials + 1 : 0;
-    bracket_width = width;
-    double goal = phi + 0.5 * width;
-    const double slope = overshoot_line_slope();
-    if (slow_trials >= 2)
-      slow_trials = 0;
-    else if (slope > 0)
-      goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope;
-    return std::clamp(goal, phi + width / 32, a.phi - width / 32);
-  }
-
-  // Δt of the next trial: the nominal (or bisected) dt, or with the secant search, the Δt that
-  // reaches the search's goal below jamming or lands the next target exactly above it.
-  double trial_dt() {
-    if (scene.search == JammingSearch::bisection) return dt;
-    if (phase == Phase::unjammed && scene.search == JammingSearch::bracket) return bracket ? bracket_dt() : dt;
-    if (phase == Phase::unjammed) {
-      const std::optional<double> goal = search_goal();
-      return goal ? dt_for_phi(*goal, 0, dt, 1e-3 * bracket_width) : dt;
-    }
-    if (next_target < scene.targets.size()) {
-      const double goal = result.jamming->phi + scene.targets[next_target];
-      if (phi_after(dt) > goal + scene.target_tolerance) return dt_for_phi(goal, 0, dt, 0.5 * scene.target_tolerance);
-    }
-    return dt;
-  }
-
-  // (φ, s, slope) of a relaxed trial above the jamming window. Requires the field to be current for
-  // `trial`.
-  Overshoot overshoot_of(const Packing& trial, double E_trial) const {
-    const std::vector<Contact> c = find_contacts(trial, field.lobes(), field.neighbours());
-    const double s = std::sqrt(E_trial), phi_trial = trial.packing_fraction();
-    return {phi_trial, s,
-            overshoot_slope(phi_trial, s, E_trial * static_cast<double>(trial.size()), pressure(c, trial.box),
-                            trial.box.L)};
+  // The accepted state as the search plans from it.
+  SearchFrom search_from() const {
+    SearchFrom from{phase == Phase::unjammed, phi, dt, std::nullopt, scene.target_tolerance, {}};
+    from.phi_after = [this](double by) { return phi_after(by); };
+    if (phase == Phase::jammed && next_target < scene.targets.size())
+      from.target_phi = result.jamming->phi + scene.targets[next_target];
+    return from;
   }
 
   // `step` is scaled (a trial's dt): Δt < dt_min ⇔ step < dt_min·e^{−log_scale}.
@@ -425,220 +381,34 @@ struct GrowthDriver::Impl {
     return true;
   }
 
-  void reset_search() {
-    overshoots.clear();
-    slow_trials = 0;
-    bracket_width = 0;
-    bracket.reset();
-  }
-
   // ---- one growth attempt -------------------------------------------------------------------
-  // A relaxed trial step, made on copies: a rejection leaves the accepted packing and RNG untouched.
-  struct Trial {
-    Packing packing;
-    Rng rng;
-    std::vector<Division> divisions;
-    double dt = 0, E = 0;
-    TrialStart start = TrialStart::accepted_state;
-    // Its relaxation spent jamming.trial_budget far above the window: an upper end of the bracket
-    // until the bracket collapses onto it; then it is relaxed on (resume_top).
-    bool deferred = false;
-  };
-  // A trial is deferred only with E/N above this many times the top of the window at its budget.
-  static constexpr double kDeferAbove = 100.0;
-
-  // ---- bracket search (jamming.search = bracket) ---------------------------------------------
-  // From the fixed accepted state, φ_J lies between the largest Δt whose trial relaxed below the
-  // jamming window and the smallest whose trial overshot it. Opened by the first overshoot, closed
-  // by the next accepted state: never open at a checkpoint.
-  struct BracketEnd {
-    Trial trial;     // relaxed
-    Overshoot line;  // its (φ, s = √(E/N), slope)
-  };
-  struct Bracket {
-    std::optional<Trial> below;     // the highest trial below the window, relaxed only to E/N < ε_U
-    std::vector<BracketEnd> above;  // the two relaxed overshoots of smallest Δt and the deferred trials
-                                    // beneath them, smallest Δt first
-    int slow_trials = 0;            // consecutive trials that did not halve the bracket
-    double width = 0;               // Δt width of the bracket at the last trial
-  };
-  std::optional<Bracket> bracket;
-
-  double bracket_lo() const { return bracket->below ? bracket->below->dt : 0.0; }
-  double bracket_phi_lo() const { return bracket->below ? bracket->below->packing.packing_fraction() : phi; }
-
-  // ds/dφ of the line through the lowest overshoot: the secant through the two lowest (same base,
-  // so the same function s(Δt)), or the virial slope of the lowest alone (also when either is a
-  // deferred trial, whose s is only an upper bound).
-  double bracket_slope() const {
-    const std::vector<BracketEnd>& above = bracket->above;
-    const Overshoot& a = above[0].line;
-    const bool relaxed = above.size() >= 2 && !above[0].trial.deferred && !above[1].trial.deferred;
-    if (relaxed && above[1].line.s > a.s && above[1].line.phi > a.phi)
-      return (above[1].line.s - a.s) / (above[1].line.phi - a.phi);
-    return a.slope;
-  }
-
-  // Δt of the next trial in the bracket: where the line through the lowest overshoot reaches the
-  // middle of the window (φ(Δt) solved for between the ends), at least 1/32 of the bracket from
-  // either end; after two trials that did not halve the bracket, its middle.
-  double bracket_dt() {
-    Bracket& b = *bracket;
-    const Overshoot& a = b.above[0].line;
-    const double lo = bracket_lo(), hi = b.above[0].trial.dt, width = hi - lo;
-    b.slow_trials = (b.width > 0 && width > 0.5 * b.width) ? b.slow_trials + 1 : 0;
-    b.width = width;
-    double step = lo + 0.5 * width;
-    const double slope = bracket_slope();
-    if (b.slow_trials >= 2) {
-      b.slow_trials = 0;
-    } else if (slope > 0) {
-      const double goal = a.phi - (a.s - window_centre(scene.epsilon_U)) / slope, phi_lo = bracket_phi_lo();
-      if (goal > phi_lo && goal < a.phi) step = dt_for_phi(goal, lo, hi, 1e-3 * (a.phi - phi_lo));
-    }
-    return std::clamp(step, lo + width / 32, hi - width / 32);
-  }
-
-  // Whether no trial can land in the window: the bracket, from a trial below it, has shrunk to an
-  // eighth of the distance the line puts between its upper end and the middle of the window (or
-  // below growth.dt_min), so s jumps across the window (a division, or the relaxation falling into
-  // another basin); or s visibly jumps at the lower end (jumps_at_lower_end). Without a trial below,
-  // the search goes on (to dt_underflow at worst).
-  bool bracket_collapsed() const {
-    if (!bracket->below) return false;
-    if (bracket->above.empty()) return true;  // its only upper end, resumed, relaxed below the window
-    const Overshoot& a = bracket->above[0].line;
-    const double slope = bracket_slope();
-    const double reach = slope > 0 ? (a.s - window_centre(scene.epsilon_U)) / slope : 0.0;
-    return a.phi - bracket_phi_lo() < reach / 8 || bracket->above[0].trial.dt - bracket_lo() < scene.dt_min ||
-           jumps_at_lower_end();
-  }
-
-  // Overshoots relaxed from the lowest one form one branch of minima, on which s = √(E/N) is nearly
-  // linear in φ. When the two lowest lie on it close to the lower end (the farther at most
-  // kNearLowerEnd times as far from it as the nearer, so the line is a local one) and their line
-  // meets the lower end far above the window, the branch does not come down to the window before
-  // the lower end: s jumps there. Without this test the bracket would halve towards the lower end
-  // with overshoots whose E/N levels off above the window, each a marginal relaxation, until its
-  // width decides (docs/growth.md, "Jamming search").
-  bool jumps_at_lower_end() const {
-    constexpr double kNearLowerEnd = 4.0;
-    const std::vector<BracketEnd>& above = bracket->above;
-    if (scene.jump_factor <= 0 || above.size() < 2) return false;
-    if (above[0].trial.start != TrialStart::lowest_overshoot || above[1].trial.start != TrialStart::lowest_overshoot)
-      return false;
-    if (above[0].trial.deferred || above[1].trial.deferred) return false;  // their E/N is still falling
-    const Overshoot &a = above[0].line, &b = above[1].line;
-    const double lo = bracket_phi_lo();
-    if (!(b.phi > a.phi && a.phi > lo) || b.phi - lo > kNearLowerEnd * (a.phi - lo)) return false;
-    const double s_at_lo = a.s - (b.s - a.s) / (b.phi - a.phi) * (a.phi - lo);
-    return s_at_lo > scene.jump_factor * std::sqrt(2.0 * scene.epsilon_U);
-  }
-
-  // The fallback of a collapsed bracket: its highest trial below the window, relaxed on to the
-  // ordinary stopping rule, is the next accepted (unjammed) state. nullopt if the run failed. The
-  // trial was counted rejected when it narrowed the bracket; it is one attempt, now accepted
-  // (accepted + rejected = attempts, which a checkpoint is checked against).
-  std::optional<Trial> settle_below() {
-    Trial t = std::move(*bracket->below);
-    bracket.reset();
-    if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
-      return std::nullopt;
-    --result.rejected;
-    t.E = fresh_energy_per_cell(t.packing);
-    t.start = TrialStart::settled;
-    return t;
-  }
-
-  // A trial inside the bracket starts from the relaxed positions of the lowest overshoot: they lie
-  // next to the jammed configuration. The overshoot's larger step may have divided more cells; those
-  // are put back together from their newborns (start_across_divisions; otherwise such a trial starts
-  // from the accepted state). Shrunk back towards the accepted state's sizes, an overshoot's
-  // configuration may however stay jammed where the accepted state's is not: until a trial has
-  // relaxed below the window, an overshoot that was itself started so is not started from again (the
-  // next trial starts from the accepted state), so that the bracket always closes.
-  void start_from_overshoot(Trial& t) const {
-    const Trial& top = bracket->above[0].trial;
-    if (!bracket->below && top.start == TrialStart::lowest_overshoot) return;
-    const auto same = [](const Division& a, const Division& b) { return a.mother_index == b.mother_index; };
-    if (!scene.start_across_divisions && !std::ranges::equal(t.divisions, top.divisions, same)) return;
-    std::optional<Eigen::VectorXd> q = coordinates_before_divisions(top.packing, top.divisions, t.divisions);
-    if (!q) return;
-    t.packing.q = std::move(*q);
-    t.start = TrialStart::lowest_overshoot;
-  }
-
-  // A deferred upper end is worth its remaining relaxation only once the bracket has collapsed onto
-  // it: trials beneath it are cheap (they relax below the window, or overshoot it and make it moot,
-  // or land in it), its remaining creep is not.
-  bool top_to_resume() const {
-    return !bracket->above.empty() && bracket->above.front().trial.deferred && bracket_collapsed();
-  }
-
-  // The deferred upper end, relaxed on to convergence from where its budget ended, is judged again as
-  // the same attempt (counted rejected until then). Whether it overshoots, lands in the window or
-  // falls below it, the bracket stays consistent. nullopt if the run failed.
-  std::optional<Trial> resume_top() {
-    Trial t = std::move(bracket->above.front().trial);
-    bracket->above.erase(bracket->above.begin());
-    --result.rejected;
-    t.deferred = false;
-    if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, growth step " + std::to_string(attempts)))
-      return std::nullopt;
-    t.E = fresh_energy_per_cell(t.packing);
-    if (!relax_if_saddle(t)) return std::nullopt;
-    return t;
-  }
-
-  // A relaxed jamming candidate that is a saddle of U (FIRE stopped on it) is relaxed on to FIRE's
-  // force resolution; the energy usually falls to 0. false if the run failed.
-  bool relax_if_saddle(Trial& t) {
-    const double eps = scene.epsilon_U;
-    if (!scene.check_minimum || phase != Phase::unjammed || t.E < eps || t.E > 2.0 * eps || is_minimum(t.packing))
-      return true;
-    FireParams deep = scene.fire;
-    deep.force_tol = 0;
-    ++result.saddles_relaxed;
-    if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return false;
-    t.E = fresh_energy_per_cell(t.packing);
-    return true;
-  }
-
-  // An overshoot is the new upper end of the bracket (trials lie inside it), opening it if needed.
-  // Requires the field to be current for the trial.
-  void lower_bracket_top(Trial&& t) {
-    const Overshoot line = overshoot_of(t.packing, t.E);
-    if (!bracket) bracket = Bracket{};
-    std::vector<BracketEnd>& above = bracket->above;
-    above.insert(above.begin(), BracketEnd{std::move(t), line});
-    // The two lowest relaxed overshoots stay, and the deferred trials beneath them: a deferred trial
-    // may yet relax below the window, and the bracket then still has its relaxed upper end.
-    int relaxed = 0;
-    const auto last =
-        std::ranges::find_if(above, [&](const BracketEnd& e) { return !e.trial.deferred && ++relaxed == 2; });
-    if (last != above.end()) above.erase(std::next(last), above.end());
-  }
-
-  // Grows and relaxes a trial from the accepted state; a jamming candidate that is a saddle is
-  // relaxed on. nullopt if the run failed (minimiser or Δt below dt_min).
+  // The attempt the search asks for, relaxed; a jamming candidate that is a saddle is relaxed on.
+  // nullopt if the run failed (minimiser or Δt below dt_min).
   std::optional<Trial> make_trial() {
-    if (bracket && top_to_resume()) return resume_top();
-    if (bracket && bracket_collapsed()) return settle_below();
-    Trial t{packing, rng, {}, trial_dt(), 0};
+    NextTrial plan = search->next_trial(search_from());
+    switch (plan.kind) {
+      case NextTrial::Kind::resume: return resume_deferred(std::move(plan.trial));
+      case NextTrial::Kind::settle: return settle(std::move(plan.trial));
+      case NextTrial::Kind::grow: break;
+    }
+    return grow_trial(plan.dt);
+  }
+
+  // A trial grown by `step` from the accepted state. One whose budget ran out far above the window
+  // is set aside unrelaxed (deferred); near the window it is relaxed on: it may be the jamming point,
+  // and a deferred trial there would only draw the next trials onto itself (docs/growth.md,
+  // "Jamming search").
+  std::optional<Trial> grow_trial(double step) {
+    Trial t{packing, rng, {}, step, 0};
     if (fail_below_dt_min(t.dt)) return std::nullopt;
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
-    if (bracket) start_from_overshoot(t);
-    // Inside an open bracket a trial only has to be placed above or below the window: one that
-    // creeps on past the budget far above the window is set aside as a deferred upper end. Near the
-    // window it is relaxed on: it may be the jamming point, and a deferred trial there would only
-    // draw the next trials onto itself (docs/growth.md, "Jamming search").
+    search->place(t);
     const std::string where =
         "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
-    const long budget = bracket ? scene.trial_budget : 0;
-    if (!relax(t.packing, trial_minimiser(), where, budget, &t.deferred)) return std::nullopt;
+    if (!relax(t.packing, trial_minimiser(), where, search->trial_budget(), &t.deferred)) return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);
-    if (t.deferred && t.E <= kDeferAbove * 2.0 * scene.epsilon_U) {
+    if (t.deferred && window.near(t.E)) {
       t.deferred = false;
       if (!relax(t.packing, trial_minimiser(), where)) return std::nullopt;
       t.E = fresh_energy_per_cell(t.packing);
@@ -648,25 +418,63 @@ struct GrowthDriver::Impl {
     return t;
   }
 
+  // A deferred trial, relaxed on to convergence from where its budget ended, is judged again as the
+  // same attempt (counted rejected until then). nullopt if the run failed.
+  std::optional<Trial> resume_deferred(Trial t) {
+    --result.rejected;
+    t.deferred = false;
+    if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, growth step " + std::to_string(attempts)))
+      return std::nullopt;
+    t.E = fresh_energy_per_cell(t.packing);
+    if (!relax_if_saddle(t)) return std::nullopt;
+    return t;
+  }
+
+  // The fallback of a collapsed bracket: its highest trial below the window, relaxed on to the
+  // ordinary stopping rule, is the next accepted (unjammed) state. nullopt if the run failed. The
+  // trial was counted rejected when it narrowed the bracket; it is one attempt, now accepted
+  // (accepted + rejected = attempts, which a checkpoint is checked against).
+  std::optional<Trial> settle(Trial t) {
+    if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
+      return std::nullopt;
+    --result.rejected;
+    t.E = fresh_energy_per_cell(t.packing);
+    t.start = TrialStart::settled;
+    return t;
+  }
+
+  // A relaxed jamming candidate that is a saddle of U (FIRE stopped on it) is relaxed on to FIRE's
+  // force resolution; the energy usually falls to 0. false if the run failed.
+  bool relax_if_saddle(Trial& t) {
+    if (!scene.check_minimum || phase != Phase::unjammed || !window.candidate(t.E) || is_minimum(t.packing, field))
+      return true;
+    FireParams deep = scene.fire;
+    deep.force_tol = 0;
+    ++result.saddles_relaxed;
+    if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return false;
+    t.E = fresh_energy_per_cell(t.packing);
+    return true;
+  }
+
   // The Newton finish only above jamming: below it the trials are unjammed or marginal, their
   // Hessian is indefinite and Newton would cost a factorisation for nothing (docs/minimiser.md).
-  // Inside an open bracket a trial is only classified, so its relaxation stops as soon as E/N < ε_U:
-  // the energy only falls, so it is certainly below the window.
+  // While the search only classifies trials, a relaxation stops as soon as it is below the window.
   FireParams trial_minimiser() const {
     FireParams params = scene.fire;
     if (phase == Phase::unjammed) params.newton_force = 0;
-    if (bracket) params.energy_floor = std::max(params.energy_floor, scene.epsilon_U);
+    if (search->classifying()) params.energy_floor = std::max(params.energy_floor, window.floor());
     return params;
   }
 
   // The decision table of docs/growth.md ("Protocol") for a relaxed trial.
   TrialVerdict judge(const Trial& t) const {
-    const double eps = scene.epsilon_U, phi_trial = t.packing.packing_fraction();
     if (t.deferred) return TrialVerdict::deferred;  // E/N ≥ ε_U (the floor did not stop it), still falling
-    if (bracket && t.E < eps) return TrialVerdict::below_window;  // below the window: the bracket's new lower end
+    const WindowSide side = window.side(t.E);
+    if (search->classifying() && side == WindowSide::below) return TrialVerdict::below_window;
     if (phase == Phase::unjammed)
-      return t.E > 2.0 * eps ? TrialVerdict::rejected : TrialVerdict::accepted;  // overshot jamming
-    if (t.E < eps) return TrialVerdict::accepted;                                // unjamming
+      return side == WindowSide::above ? TrialVerdict::rejected : TrialVerdict::accepted;  // overshot jamming
+    if (side == WindowSide::below) return TrialVerdict::accepted;                          // unjamming
+    const double phi_trial = t.packing.packing_fraction();
     if (next_target < scene.targets.size())
       return phi_trial > result.jamming->phi + scene.targets[next_target] + scene.target_tolerance
                  ? TrialVerdict::rejected
@@ -677,14 +485,13 @@ struct GrowthDriver::Impl {
     return TrialVerdict::accepted;
   }
 
+  // Below jamming an overshoot goes to the search if it keeps them; otherwise (and above jamming,
+  // a target passed) Δt is halved.
   void reject(Trial&& t) {
     ++result.rejected;
-    if (phase == Phase::unjammed && scene.search == JammingSearch::secant) {
-      overshoots.push_back(overshoot_of(t.packing, t.E));
-      return;
-    }
-    if (phase == Phase::unjammed && scene.search == JammingSearch::bracket) {
-      lower_bracket_top(std::move(t));
+    if (phase == Phase::unjammed && search->keeps_overshoots()) {
+      const JammingOvershoot line = overshoot_of(t, field);
+      search->keep_overshoot(std::move(t), line);
       return;
     }
     dt *= 0.5;
@@ -702,47 +509,34 @@ struct GrowthDriver::Impl {
     last_dt = t.dt;
     last_log_scale = next.log_scale;
     result.divisions += static_cast<long>(t.divisions.size());
+    const bool jammed = window.jammed(E);
     Change change = Change::none;
-    if (phase == Phase::unjammed && E >= scene.epsilon_U) {
+    if (phase == Phase::unjammed && jammed) {
       phase = Phase::jammed;
       change = Change::jammed;
-      reset_search();
-    } else if (phase == Phase::jammed && E < scene.epsilon_U) {
+    } else if (phase == Phase::jammed && !jammed) {
       phase = Phase::unjammed;
       change = Change::unjammed;
-      reset_search();
     } else if (phase == Phase::jammed) {
       divisions_since_jamming += static_cast<long>(t.divisions.size());
     }
     derive();
-    if (phase == Phase::unjammed) prune_overshoots();
+    search->accepted(phi, phase == Phase::unjammed, change != Change::none);
     dt = next.dt;
     return change;
   }
 
   // The jamming episode ends: φ_J, the targets and φ_2 belong to the next one.
   std::vector<BudEvent> record_unjamming() {
-    UnjamRecord r;
-    r.episode = result.jamming->episode;
-    r.step = step;
-    r.phi = phi;
-    r.phi_J = result.jamming->phi;
-    r.targets_lost = result.targets.size();
-    result.unjammings.push_back(r);
+    result.unjammings.push_back(
+        UnjamRecord{result.jamming->episode, step, phi, result.jamming->phi, result.targets.size()});
     std::vector<BudEvent> events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
     start_episode(std::nullopt);
     return events;
   }
 
   std::vector<BudEvent> record_jamming() {
-    JammingRecord j;
-    j.episode = episodes++;
-    j.step = step;
-    j.phi = phi;
-    j.P = P;
-    j.E_per_cell = E;
-    j.network = net.summary();
-    j.n_J = static_cast<double>(net.N_nr) / (packing.box.L * packing.box.L);
+    JammingRecord j = jamming_record(view(), episodes++);
     std::vector<BudEvent> events = buds.tag(j.episode, step, phi, packing, net);
     j.tagged = events.size();
     start_episode(j);
@@ -762,19 +556,12 @@ struct GrowthDriver::Impl {
   void land_targets_and_depletion(const StateView& v) {
     while (next_target < scene.targets.size() &&
            std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
-      result.targets.push_back(target_record(next_target));
+      result.targets.push_back(target_record(v, next_target, scene.targets[next_target], result.jamming->phi));
       ++next_target;
       for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
     }
     if (result.depletion || buds.active() > scene.phi2_tagged_left) return;
-    DepletionRecord d;
-    d.step = step;
-    d.phi = phi;
-    d.P = P;
-    d.network = net.summary();
-    d.still_unconstrained = buds.active();
-    d.divisions_since_jamming = divisions_since_jamming;
-    result.depletion = d;
+    result.depletion = depletion_record(v, buds.active());
     for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
   }
 
@@ -794,16 +581,9 @@ struct GrowthDriver::Impl {
     if (!trial) return result.status;
     const TrialVerdict verdict = judge(*trial);
     if (!observers.empty()) {
-      const TrialRelaxed relaxed{attempts,
-                                 unscaled_dt(trial->dt, next.log_scale),
-                                 log_dt(trial->dt, next.log_scale),
-                                 trial->packing.size(),
-                                 trial->packing.packing_fraction(),
-                                 trial->E,
-                                 trial->start,
-                                 verdict,
-                                 result.fire_iterations - iterations,
-                                 result.force_evaluations - evaluations};
+      const TrialRelaxed relaxed =
+          trial_relaxed(*trial, attempts, next.log_scale, verdict, result.fire_iterations - iterations,
+                        result.force_evaluations - evaluations);
       for (Observer* o : observers) o->on_trial(relaxed);
     }
     switch (verdict) {
@@ -811,7 +591,7 @@ struct GrowthDriver::Impl {
       case TrialVerdict::deferred: reject(std::move(*trial)); return result.status;
       case TrialVerdict::below_window:
         ++result.rejected;
-        bracket->below = std::move(*trial);
+        search->keep_below(std::move(*trial));
         return result.status;
       case TrialVerdict::stop:
         field.invalidate();
@@ -820,8 +600,15 @@ struct GrowthDriver::Impl {
         return result.status;
       case TrialVerdict::accepted: break;
     }
-    const std::vector<Division> divisions = trial->divisions;
-    const Change change = accept(std::move(*trial));
+    take(std::move(*trial));
+    return result.status;
+  }
+
+  // An accepted trial: the new accepted state, its records and events; then the end of the run or
+  // a checkpoint.
+  void take(Trial&& trial) {
+    const std::vector<Division> divisions = trial.divisions;
+    const Change change = accept(std::move(trial));
 
     // Records first, so that every event of this state sees the same, final view.
     std::vector<BudEvent> bud_events;
@@ -844,34 +631,39 @@ struct GrowthDriver::Impl {
     if (phase == Phase::jammed && next_target == scene.targets.size() &&
         (!scene.continue_to_phi2 || result.depletion)) {
       result.status = RunStatus::finished;
-      finish_events();
-      return result.status;
+      return finish_events();
     }
     if (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) newton.clear();
     if (checkpoint_hook) checkpoint_hook();
-    return result.status;
   }
 
   // ---- checkpoints ---------------------------------------------------------------------------
+  // The fields a checkpoint holds besides the seed and the search, from the driver to a GrowthState
+  // or back (moved out of a non-const source).
+  template <class To, class From>
+  static void transfer(To& to, From& from) {
+    to.rng = from.rng;
+    to.phase = from.phase;
+    to.dt = from.dt;
+    to.last_dt = from.last_dt;
+    to.last_log_scale = from.last_log_scale;
+    to.step = from.step;
+    to.attempts = from.attempts;
+    to.next_target = from.next_target;
+    to.divisions_since_jamming = from.divisions_since_jamming;
+    to.episodes = from.episodes;
+    to.result = std::move(from.result);
+    to.buds = std::move(from.buds);
+    to.packing = std::move(from.packing);
+  }
+
   GrowthState state() const {
     if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
-    return GrowthState{
-        .seed = seed,
-        .rng = rng,
-        .phase = phase,
-        .dt = dt,
-        .last_dt = last_dt,
-        .last_log_scale = last_log_scale,
-        .step = step,
-        .attempts = attempts,
-        .next_target = next_target,
-        .divisions_since_jamming = divisions_since_jamming,
-        .episodes = episodes,
-        .result = result,
-        .buds = buds,
-        .packing = packing,
-        .search = JammingSearchState{overshoots, slow_trials, bracket_width},
-    };
+    GrowthState s;
+    s.seed = seed;
+    transfer(s, *this);
+    s.search = search->state();
+    return s;
   }
 
   void restore(GrowthState s) {
@@ -879,23 +671,9 @@ struct GrowthDriver::Impl {
       throw InputError("checkpoint: seed " + std::to_string(s.seed) + " does not match the run's seed " +
                        std::to_string(seed));
     if (s.packing.box.L != scene.L) throw InputError("checkpoint: box side does not match the scene");
-    rng = s.rng;
-    phase = s.phase;
-    dt = s.dt;
-    last_dt = s.last_dt;
-    last_log_scale = s.last_log_scale;
-    step = s.step;
-    attempts = s.attempts;
-    next_target = s.next_target;
-    divisions_since_jamming = s.divisions_since_jamming;
-    episodes = s.episodes;
-    result = std::move(s.result);
+    transfer(*this, s);
     result.status = RunStatus::running;
-    buds = std::move(s.buds);
-    packing = std::move(s.packing);
-    overshoots = std::move(s.search.overshoots);
-    slow_trials = s.search.slow_trials;
-    bracket_width = s.search.bracket_width;
+    search->restore(std::move(s.search));
     started = true;
     final_emitted = false;
     newton.clear();

@@ -348,3 +348,52 @@ TEST_CASE("cells crossing the periodic boundary during minimisation relax as a s
   }
   CHECK(crossed > 0);
 }
+
+TEST_CASE("after an uphill step FIRE steps half back and restarts from rest along the force", "[fast]") {
+  // FIRE 2.0 (Guénolé et al. 2020, Algorithm 2): when P = F·v ≤ 0, x ← x − ½Δt v and v ← 0, so the
+  // step that follows is ½ back plus Δt² F: its move part m = Δx + ½ m_previous is parallel to F.
+  // Seen from outside, from the iterates x_k (max_iterations = k on copies; the path is
+  // deterministic) in FIRE's scaled coordinates (x, y, r_g θ), with the force scaled alike: after an
+  // ordinary step m_k = Δx_k = Δt v_k, so F(x_k)·m_k ≤ 0 is FIRE's own uphill test. Keeping the
+  // velocity would leave a component along m_k in the next move part.
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const Packing start = random_packing(30, 1.0, seed);
+    const std::size_t n = start.size();
+    ForceField field;
+    const auto scaled = [&](const Packing& p) {
+      Eigen::VectorXd x = p.q;
+      for (std::size_t i = 0; i < n; ++i) x[3 * i + 2] *= p.dumbbell(i).gyration;
+      return x;
+    };
+    const auto scaled_force = [&](const Packing& p) {
+      Eigen::VectorXd F;
+      field.evaluate(p, F);
+      for (std::size_t i = 0; i < n; ++i) F[3 * i + 2] /= p.dumbbell(i).gyration;
+      return F;
+    };
+    Eigen::VectorXd x_prev = scaled(start), m = Eigen::VectorXd::Zero(x_prev.size()), F = scaled_force(start);
+    bool restart = true;  // the first iteration starts from rest (P = 0)
+    int uphill = 0;
+    for (long k = 1; k <= 200; ++k) {
+      Packing p = start;
+      FireParams params;
+      params.max_iterations = k;
+      REQUIRE_FALSE(minimise(p, field, params).converged);
+      const Eigen::VectorXd x = scaled(p), dx = x - x_prev;
+      const Eigen::VectorXd move = restart ? Eigen::VectorXd(dx + 0.5 * m) : dx;
+      if (restart && k > 1) {
+        ++uphill;
+        INFO("seed " << seed << ", iteration " << k);
+        CHECK(move.dot(F) / (move.norm() * F.norm()) > 1 - 1e-6);
+      }
+      m = move;
+      x_prev = x;
+      F = scaled_force(p);
+      const double cosine = F.dot(m) / (F.norm() * m.norm());
+      if (std::abs(cosine) < 1e-6) break;  // too close to call: the rest of the path is not followed
+      restart = cosine <= 0;
+    }
+    INFO("seed " << seed);
+    CHECK(uphill >= 3);  // the path went uphill (else the check above tested nothing)
+  }
+}

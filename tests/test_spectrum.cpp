@@ -2,6 +2,7 @@
 // (paper appendix "Vibrational density of states"; docs/spectrum.md).
 #include "budjam/spectrum.hpp"
 
+#include "budjam/energy.hpp"
 #include "budjam/errors.hpp"
 #include "budjam/hessian.hpp"
 #include "budjam/rigidity.hpp"
@@ -735,4 +736,34 @@ TEST_CASE("budjam dos refuses bad options with one line naming the option", "[sp
   r = run_budjam("dos '" + pack.string() + "' --sigma 0.1");
   CHECK(r.code == 2);
   CHECK(r.err.find("--sigma") != std::string::npos);
+}
+
+TEST_CASE("on a saddle the zero-mode count #{lambda < tol} includes the unstable mode, as Sylvester's inertia does",
+          "[spectrum]") {
+  // A jamming candidate FIRE stopped on (tests/test_stability.cpp): one eigenvalue of its
+  // non-rattler problem is negative beyond rounding. Counting |lambda| < tol would leave it out.
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const Packing p = io::read_packing(std::filesystem::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
+  ForceField field;
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  const std::vector<Contact> contacts = find_contacts(p, field.lobes(), field.neighbours());
+  const VibrationalProblem prob = vibrational_problem(p, contacts, analyse_network(p.size(), contacts));
+  SpectrumOptions options;
+  options.method = SpectrumMethod::dense;
+  options.vectors = false;
+  const Spectrum s = solve_spectrum(prob.H, prob.mass, options);
+  const double lambda_min = s.lambda.minCoeff();
+  INFO("lowest eigenvalue " << lambda_min);
+  REQUIRE(lambda_min < -1e-12);
+  for (const double tol : {0.5 * -lambda_min, 1e-6}) {
+    INFO("tol " << tol);
+    const auto near_zero = static_cast<std::size_t>((s.lambda.array().abs() < tol).count());
+    const auto unstable = static_cast<std::size_t>((s.lambda.array() <= -tol).count());
+    CHECK(count_below(s.lambda, tol) == near_zero + unstable);
+    CHECK(static_cast<long>(count_below(s.lambda, tol)) == count_below_by_inertia(prob.H, prob.mass, tol));
+  }
+  CHECK(count_below(s.lambda, 0.5 * -lambda_min) >
+        static_cast<std::size_t>((s.lambda.array().abs() < 0.5 * -lambda_min).count()));
 }

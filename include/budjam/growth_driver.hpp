@@ -1,9 +1,8 @@
 #pragma once
 // The quasistatic growth loop (docs/model.md, "Growth protocol"):
-//   growth step Δt → FIRE → classify E/N → accept / reject → emit events. After a rejection the
-//   next Δt is half the last (jamming.search = bisection) or aimed by the secant search (with
-//   `bracket`, from a fixed accepted state); both also solve for the Δt that lands a target before
-//   relaxing (docs/growth.md).
+//   growth step Δt → FIRE → classify E/N → accept / reject → emit events. The jamming window and
+//   the searches that choose the next Δt (bisection, secant, bracket) are in jamming.hpp; the
+//   driver keeps the protocol (docs/growth.md).
 // Everything optional (logs, packings, moduli, spectra, rigidity) is an Observer that receives a
 // read-only view of each accepted state. The driver computes contacts, the contact network and the
 // bud pressures only when the protocol (feedback, depletion) or an observer needs them.
@@ -27,6 +26,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/growth.hpp"
+#include "budjam/jamming.hpp"
 #include "budjam/packing.hpp"
 #include "budjam/scene.hpp"
 
@@ -134,12 +134,6 @@ struct StateView {
   double log_chi_c = 0;                    // ... and ln χ_c, exact when every factor underflows
 };
 
-// Where a trial's relaxation started (docs/growth.md, "Jamming search"): the accepted state grown
-// by Δt, the relaxed positions of the bracket's lowest overshoot with the trial's sizes, or (a
-// collapsed bracket's settle) the highest trial below the window, relaxed on.
-enum class TrialStart { accepted_state, lowest_overshoot, settled };
-const char* to_string(TrialStart start);
-
 // What the decision table made of a relaxed trial: accepted; rejected (an overshoot of the jamming
 // window, or a target passed); below the window, the bracket's new lower end; deferred (inside the
 // bracket, jamming.trial_budget FIRE iterations spent with E/N still over 100 · 2ε_U: an upper end
@@ -230,23 +224,6 @@ class Observer {
   virtual void load_state(std::istream&) {}
 };
 
-// Everything that determines the rest of a run, besides the scene: a checkpoint
-// (tools/io/checkpoint.hpp) stores it, and the quantities derived from it (contacts, network,
-// pressures, rates) are recomputed identically after restore(), so that a resumed run repeats an
-// uninterrupted one bit for bit.
-// A relaxed trial above the jamming window, remembered by the secant search onto φ_J: its φ,
-// s = √(E/N), and the slope ds/dφ it implies.
-struct JammingOvershoot {
-  double phi = 0, s = 0, slope = 0;
-};
-
-// What the secant search onto φ_J carries from one trial to the next (docs/growth.md, "Jamming search").
-struct JammingSearchState {
-  std::vector<JammingOvershoot> overshoots;  // sorted by φ
-  int slow_trials = 0;                       // consecutive trials that did not halve the bracket around φ_J
-  double bracket_width = 0;                  // φ from the accepted state to the lowest overshoot at the last trial
-};
-
 // Where a growth step starts from the accepted state: Δt = dt·e^{log_scale}, with the rates scaled
 // by e^{log_scale} to match. log_scale is 0 except for an adaptive step out of the double range
 // (docs/growth.md, "Adaptive growth step").
@@ -255,6 +232,10 @@ struct StepStart {
   double log_scale = 0;
 };
 
+// Everything that determines the rest of a run, besides the scene: a checkpoint
+// (tools/io/checkpoint.hpp) stores it, and the quantities derived from it (contacts, network,
+// pressures, rates) are recomputed identically after restore(), so that a resumed run repeats an
+// uninterrupted one bit for bit.
 struct GrowthState {
   std::uint64_t seed = 0;
   Rng rng;
