@@ -33,6 +33,7 @@ complete_words() {  # prints COMPREPLY for the command line "$@" (the last word 
 }
 [[ $(complete_words "$prefix/bin/budjam" exp) == export ]] || fail "completion of 'budjam exp'"
 [[ $(complete_words "$prefix/bin/budjam" export --fo) == --format ]] || fail "completion of 'budjam export --fo'"
+[[ $(complete_words "$prefix/bin/budjam" export --format g) == gsd ]] || fail "completion of 'budjam export --format g'"
 
 # find_package(budjam) from a separate project; its program agrees with `budjam rigidity`.
 cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$prefix" \
