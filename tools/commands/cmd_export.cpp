@@ -51,7 +51,7 @@ void run(const Options& o) {
 }
 
 const bool registered = budjam::cli::register_command(
-    {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (XYZ, GSD, VTK)",
+    {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (--format)",
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
