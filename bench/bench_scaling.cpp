@@ -1,4 +1,4 @@
-// Scaling of whole growth runs with the number of cells (docs/growth.md, "Scaling").
+// Scaling of whole growth runs with the number of cells (docs/growth.md, "Speed").
 // Not a test: prints one summary line per run (and, optionally, one CSV row per growth attempt).
 //
 //   bench_scaling [options] [--set section.key=value]...

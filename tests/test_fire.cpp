@@ -18,6 +18,14 @@ namespace {
 
 constexpr double kEpsilonU = 1e-16;  // the jamming threshold ε_U on E/N (docs/model.md)
 
+// FIRE on its own (no Newton finish), at the force tolerance these tests' bounds were set for.
+FireParams fire_alone() {
+  FireParams f;
+  f.newton_force = 0.0;
+  f.force_tol = 1e-12;
+  return f;
+}
+
 // Random placement in which no two lobes overlap by more than `max_overlap`: real overlaps, but
 // no interpenetration deep enough to lock a lobe in the waist of another cell (deep random
 // overlaps of dumbbells can be local minima of U with E > 0 even in a dilute box).
@@ -113,7 +121,7 @@ Packing jammed_start(std::size_t n, std::uint64_t seed) {
 // [e_lo, e_hi] and the bracket is narrower than `width`. Returns the jammed end of the bracket and,
 // in `below`, the relaxed unjammed end.
 Packing near_jamming(Packing jammed, double e_lo, double e_hi, double width, Packing* below = nullptr,
-                     const FireParams& params = {}) {
+                     const FireParams& params = fire_alone()) {
   ForceField field;
   double hi = jammed.packing_fraction(), lo = hi - 0.15;
   Packing unjammed = at_phi(jammed, lo);
@@ -144,7 +152,7 @@ TEST_CASE("FIRE reaches its force tolerance on a random overlapping packing", "[
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     Packing p = random_packing(100, 1.0, seed);
     ForceField field;
-    const FireParams params;
+    const FireParams params = fire_alone();
     const FireResult r = minimise(p, field, params);
     INFO("seed " << seed << " iterations " << r.iterations);
     CHECK(r.converged);
@@ -164,7 +172,7 @@ TEST_CASE("FIRE relaxes a dilute overlapping packing to E/N below 1e-20 quickly"
     ForceField field;
     const double U0 = field.energy(p);
     REQUIRE(U0 > 1e-3);  // it starts with real overlaps
-    const FireResult r = minimise(p, field);
+    const FireResult r = minimise(p, field, fire_alone());
     INFO("seed " << seed << " evaluations " << r.evaluations);
     CHECK(r.converged);
     CHECK(r.stop == MinimiserStop::energy_floor);
@@ -177,7 +185,7 @@ TEST_CASE("FIRE relaxes a dilute overlapping packing to E/N below 1e-20 quickly"
 TEST_CASE("a relaxed jammed packing has balanced forces and torques on every cell", "[fast]") {
   Packing p = random_packing(80, 0.95, 21);
   ForceField field;
-  const FireResult r = minimise(p, field);
+  const FireResult r = minimise(p, field, fire_alone());
   REQUIRE(r.converged);
   CHECK(r.energy / 80 > 1e-8);
   // Σ f n and Σ τ/r_g per cell, from the contacts, vanish to the tolerance, while single contact
@@ -186,20 +194,20 @@ TEST_CASE("a relaxed jammed packing has balanced forces and torques on every cel
   double f_typical = 0;
   for (const Contact& c : contacts) f_typical += c.force() / static_cast<double>(contacts.size());
   CHECK(f_typical > 1e-4);
-  CHECK(contact_force_residual(p) < 1.5 * FireParams{}.force_tol);
+  CHECK(contact_force_residual(p) < 1.5 * fire_alone().force_tol);
 }
 
 TEST_CASE("FIRE counts its force evaluations and is deterministic", "[fast]") {
   Packing a = random_packing(70, 0.9, 31), b = a;
   ForceField fa, fb;
-  const FireResult ra = minimise(a, fa);
-  const FireResult rb = minimise(b, fb);
+  const FireResult ra = minimise(a, fa, fire_alone());
+  const FireResult rb = minimise(b, fb, fire_alone());
   CHECK(ra.evaluations == fa.evaluations());
   CHECK(ra.evaluations == ra.iterations + 1);
   CHECK(ra.iterations == rb.iterations);
   CHECK(a.q == b.q);  // bit for bit
   // An already relaxed packing costs one evaluation.
-  const FireResult again = minimise(a, fa);
+  const FireResult again = minimise(a, fa, fire_alone());
   CHECK(again.converged);
   CHECK(again.evaluations == 1);
   CHECK(again.iterations == 0);
@@ -208,7 +216,7 @@ TEST_CASE("FIRE counts its force evaluations and is deterministic", "[fast]") {
 TEST_CASE("FIRE gives up after max_iterations and reports it", "[fast]") {
   Packing p = random_packing(50, 1.0, 41);
   ForceField field;
-  FireParams params;
+  FireParams params = fire_alone();
   params.max_iterations = 10;
   const FireResult r = minimise(p, field, params);
   CHECK_FALSE(r.converged);
@@ -228,7 +236,7 @@ TEST_CASE("centroids far outside the box are brought back by whole periods witho
   }
   CHECK(energy_per_cell(far) == Approx(energy_per_cell(p)).epsilon(1e-10));
   ForceField field;
-  FireParams params;
+  FireParams params = fire_alone();
   params.max_iterations = 1;
   minimise(far, field, params);
   const double L = p.box.L;
@@ -264,7 +272,7 @@ TEST_CASE("a packing just above jamming stays above the threshold; just below it
   // (1) Relaxing further with a much tighter tolerance changes E by a negligible amount: the
   //     stopping rule had resolved the energy.
   Packing tight = jam;
-  FireParams strict;
+  FireParams strict = fire_alone();
   strict.force_tol = 1e-30;  // i.e. down to force_resolution()
   strict.max_iterations = 200000;
   minimise(tight, field, strict);
@@ -277,7 +285,7 @@ TEST_CASE("a packing just above jamming stays above the threshold; just below it
   for (int k = 0; k < 3; ++k) {
     Packing q = jam;
     for (Eigen::Index c = 0; c < q.q.size(); ++c) q.q[c] += g(rng);
-    const FireResult r = minimise(q, field);
+    const FireResult r = minimise(q, field, fire_alone());
     CHECK(r.converged);
     CHECK(r.energy / 40 >= kEpsilonU);
     CHECK(r.energy / 40 == Approx(e).epsilon(1e-5));
@@ -293,7 +301,7 @@ TEST_CASE("packing 1e-9 above jamming: the default minimiser classifies it as a 
   ForceField field;
   // Bracket the jamming point to 1e-9 in φ with a strict minimiser (no energy floor, forces down to
   // the resolution): its jammed end has a true minimum E/N > 1e-24 (~(1e-9)²), its other end none.
-  FireParams strict;
+  FireParams strict = fire_alone();
   strict.force_tol = 1e-30;  // i.e. force_resolution()
   strict.energy_floor = 0.0;
   strict.max_iterations = 2000000;
@@ -310,7 +318,7 @@ TEST_CASE("packing 1e-9 above jamming: the default minimiser classifies it as a 
   for (int k = 0; k < 3; ++k) {
     Packing q = jam;
     for (Eigen::Index c = 0; c < q.q.size(); ++c) q.q[c] += g(rng);
-    const FireResult r = minimise(q, field);
+    const FireResult r = minimise(q, field, fire_alone());
     CHECK(r.converged);
     CHECK(std::isfinite(r.energy));
     CHECK((r.energy / 40 < kEpsilonU) == (e < kEpsilonU));
@@ -333,8 +341,8 @@ TEST_CASE("cells crossing the periodic boundary during minimisation relax as a s
   }
   const Packing before = corner;
   ForceField fc, fm;
-  const FireResult rc = minimise(corner, fc);
-  const FireResult rm = minimise(middle, fm);
+  const FireResult rc = minimise(corner, fc, fire_alone());
+  const FireResult rm = minimise(middle, fm, fire_alone());
   CHECK(rc.converged);
   CHECK(rm.converged);
   CHECK(rc.energy / 8 < 1e-20);

@@ -1,4 +1,6 @@
-// Scene files: the TOML reader, --set overrides, the writers and budjam::validate.
+// Scene files: the TOML reader, --set overrides, the writers, budjam::validate, and one default per knob.
+#include "analysis/moduli_report.hpp"
+#include "budjam/newton.hpp"
 #include "budjam/scene.hpp"
 #include "budjam/scene_keys.hpp"
 #include "io/scene_file.hpp"
@@ -41,6 +43,24 @@ TEST_CASE("absent keys keep the documented defaults of Scene", "[scene]") {
   CHECK_FALSE(parsed.P0.has_value());
   CHECK(parsed.L == 8.0);
   CHECK(parsed.init == InitialState::two_cells);
+}
+
+TEST_CASE("every minimiser knob has one default: the library's structs are the scene's", "[scene]") {
+  // A scene built from the library's own defaults reads, key for key, what a default scene reads:
+  // neither overrides the other.
+  Scene library;
+  library.fire = FireParams{};
+  library.skin = kDefaultSkin;
+  std::size_t minimiser_keys = 0;
+  for (const SceneKey& k : scene_keys()) {
+    if (k.section != "minimiser") continue;
+    ++minimiser_keys;
+    INFO(k.key());
+    CHECK(value_text(k.get(Scene{})) == value_text(k.get(library)));
+  }
+  CHECK(minimiser_keys >= 10);
+  CHECK(NewtonParams{}.force_tol == Scene{}.fire.force_tol);
+  CHECK(tools::moduli_fire().force_tol == Scene{}.fire.force_tol);  // the relaxations of budjam moduli
 }
 
 TEST_CASE("a scene file with every section sets every value it names", "[scene]") {

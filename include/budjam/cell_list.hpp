@@ -12,11 +12,16 @@
 
 namespace budjam {
 
+// The Verlet skin every neighbour list, force field and scene (minimiser.skin) starts from: the
+// results do not depend on it (pairs are sorted); 0.15 is the cheapest of 0.1–0.3 in whole runs
+// (docs/minimiser.md, "Neighbour list").
+inline constexpr double kDefaultSkin = 0.15;
+
 class NeighbourList {
  public:
   // The near skin is a fifth of the skin: thin enough that the near list holds few pairs out of
   // contact, thick enough that FIRE's steps near force balance rarely expire it.
-  explicit NeighbourList(double skin = 0.15) : skin_(skin), near_skin_(skin / 5) {}
+  explicit NeighbourList(double skin = kDefaultSkin) : skin_(skin), near_skin_(skin / 5) {}
 
   // Rebuilds if the number of lobes or any radius changed (buds grow between minimisations), if
   // the box (L or Lees–Edwards shear) changed, or if the near list has expired (the two largest

@@ -38,7 +38,7 @@ struct PairImage {
 class ForceField {
  public:
   // threads: 1 = serial, 0 = one per core. Without OpenMP every count means one thread.
-  explicit ForceField(double skin = 0.15, int threads = 1);
+  explicit ForceField(double skin = kDefaultSkin, int threads = 1);
 
   // Smaller packings always use one thread: their evaluation (≈ 40 µs at 512 cells) is too short
   // to pay for the synchronisation of the threads.

@@ -90,19 +90,9 @@ struct Scene {
   // cut one seed's search 4.7 times in force evaluations and made another's slower.
   long trial_budget = 0;
 
-  // [minimiser]
-  // The Newton finish above jamming from a largest force of 1e-8, converging to the force resolution
-  // of double precision (force_tol below force_resolution for L ≥ 3): on the accuracy-against-cost
-  // front, where FIRE alone and force_tol = 1e-12 are not (docs/minimiser.md, "Newton finish").
-  FireParams fire = [] {
-    FireParams f;
-    f.newton_force = 1e-8;
-    f.force_tol = 1e-14;
-    return f;
-  }();
-  // Verlet skin: the results do not depend on it (pairs are sorted); 0.15 is the cheapest of
-  // 0.1–0.3 in whole runs (docs/minimiser.md, "Neighbour list").
-  double skin = 0.15;
+  // [minimiser]: the library's defaults are the scene's (fire.hpp).
+  FireParams fire;
+  double skin = kDefaultSkin;  // Verlet skin (cell_list.hpp)
   int threads = 1;  // of each force evaluation (ForceField); 0 = one per core. Not physics: results are identical.
 
   // [observe]

@@ -60,7 +60,7 @@ struct StrainSweep {
 // then for each strain s (≠ 0) applies it to a copy of the reference and relaxes. Strains for the
 // isotropic kind are ε = ln(A/A0).
 StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::vector<double>& strains,
-                         const FireParams& fire, double skin = 0.15);
+                         const FireParams& fire, double skin = kDefaultSkin);
 
 // Symmetric strains ±h, ±2h, …, ±count·h.
 std::vector<double> symmetric_strains(double h, int count);

@@ -33,14 +33,17 @@ complete_words() {  # prints COMPREPLY for the command line "$@" (the last word 
 }
 [[ $(complete_words "$prefix/bin/budjam" exp) == export ]] || fail "completion of 'budjam exp'"
 [[ $(complete_words "$prefix/bin/budjam" export --fo) == --format ]] || fail "completion of 'budjam export --fo'"
+[[ $(complete_words "$prefix/bin/budjam" export --format g) == gsd ]] || fail "completion of 'budjam export --format g'"
 
 # find_package(budjam) from a separate project; its program agrees with `budjam rigidity`.
 cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$prefix" \
   -DCMAKE_BUILD_TYPE=Release >/dev/null || fail "configuring a project with find_package(budjam)"
 cmake --build "$work/consumer" >/dev/null || fail "building against the installed libraries"
-read -r n phi contacts < <("$work/consumer/packing_fraction" "$packing")
-expected=$("$prefix/bin/budjam" rigidity "$packing" --json | "$python" -c 'import json, sys; j = json.load(sys.stdin); print(j["N"], j["contacts"])')
-[[ "$n $contacts" == "$expected" ]] || fail "consumer says N, contacts = $n $contacts, budjam rigidity $expected"
+read -r n phi contacts excess < <("$work/consumer/packing_fraction" "$packing")
+expected=$("$prefix/bin/budjam" rigidity "$packing" --json | "$python" -c \
+  'import json, sys; j = json.load(sys.stdin); print(j["N"], j["contacts"], 2 * j["contacts_load_bearing"] - (6 * j["N_nr"] - 2 * j["N_u"] - 2))')
+[[ "$n $contacts $excess" == "$expected" ]] ||
+  fail "consumer says N, contacts, excess contacts = $n $contacts $excess, budjam rigidity $expected"
 
 # The Python module imports from the prefix, outside the source and build trees.
 if [[ -d $prefix/$pydir/budjam ]]; then

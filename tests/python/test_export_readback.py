@@ -2,6 +2,7 @@
 meshio (legacy VTK). The three files of one packing must describe the same particles and bonds,
 and agree with `budjam rigidity` on the same packing."""
 import collections
+import re
 import subprocess
 
 import ase.io
@@ -13,19 +14,33 @@ import pytest
 from conftest import PACKING, rigidity_json
 
 
+# The independent reader of each format.
+READERS = {
+    "xyz": lambda path: ase.io.read(path, format="extxyz"),
+    "gsd": lambda path: gsd.hoomd.open(path, "rb")[0],
+    "vtk": meshio.read,
+}
+
+
+def export_formats(run_budjam):
+    """The formats `budjam export --format` accepts, as its help lists them ({xyz,gsd,vtk})."""
+    help_text = run_budjam("export", "--help").stdout
+    return re.search(r"--format\s+\S*\{([^}]*)\}", help_text).group(1).split(",")
+
+
+def test_every_export_format_has_a_reader_here(run_budjam):
+    assert sorted(export_formats(run_budjam)) == sorted(READERS)
+
+
 @pytest.fixture(scope="module", params=["unsheared", "sheared"])
 def exported(request, run_budjam, sheared_packing, tmp_path_factory):
     packing = PACKING if request.param == "unsheared" else sheared_packing
     base = tmp_path_factory.mktemp("export") / "p"
-    for fmt in ("xyz", "gsd", "vtk"):
+    files = {"packing": packing}
+    for fmt, read in READERS.items():
         run_budjam("export", packing, "--format", fmt, "--out", base)
-    frame = gsd.hoomd.open(str(base) + ".gsd", "rb")[0]
-    return {
-        "packing": packing,
-        "xyz": ase.io.read(str(base) + ".xyz", format="extxyz"),
-        "gsd": frame,
-        "vtk": meshio.read(str(base) + ".vtk"),
-    }
+        files[fmt] = read(str(base) + "." + fmt)
+    return files
 
 
 def header(packing):
@@ -59,9 +74,17 @@ def test_one_particle_per_lobe_in_every_format(exported):
     g = exported["gsd"].particles
     assert [g.types[t] for t in g.typeid] == list(kinds)
     assert list(vtk_points(exported, "bud")) == list(np.arange(2 * n) % 2)
-    cell = np.arange(2 * n) // 2
-    for column in (exported["xyz"].arrays["cell"], exported["gsd"].log["particles/cell"], vtk_points(exported, "cell")):
-        np.testing.assert_array_equal(column, cell)
+    np.testing.assert_array_equal(exported["xyz"].arrays["cell_id"], np.arange(2 * n) // 2)
+
+
+def test_every_per_lobe_quantity_has_one_name_and_the_same_values_in_every_format(exported):
+    # The XYZ columns after type, pos and radius are the per-lobe quantities.
+    names = [name for name in exported["xyz"].arrays if name not in ("numbers", "positions", "type", "radius")]
+    assert names == ["cell_id", "id", "rigid_cluster", "rattler"]
+    for name in names:
+        xyz = exported["xyz"].arrays[name].astype(np.int64)
+        np.testing.assert_array_equal(exported["gsd"].log["particles/" + name], xyz, err_msg=name)
+        np.testing.assert_array_equal(vtk_points(exported, name), xyz, err_msg=name)
 
 
 def test_box_is_the_packing_box(exported):
@@ -116,9 +139,7 @@ def test_contacts_and_clusters_agree_with_budjam_rigidity(exported, run_budjam):
     rigidity = rigidity_json(run_budjam, exported["packing"])
     kind = np.asarray(exported["gsd"].bonds.typeid)
     assert int(np.sum(kind == 1)) == rigidity["contacts"]
-    cluster = exported["xyz"].arrays["cluster"]
-    np.testing.assert_array_equal(exported["gsd"].log["particles/rigid_cluster"], cluster)
-    np.testing.assert_array_equal(vtk_points(exported, "cluster"), cluster)
+    cluster = exported["xyz"].arrays["rigid_cluster"]
     assert np.all(cluster[0::2] == cluster[1::2])  # a cell's lobes share its bar's cluster
     cells_per_cluster = collections.Counter(cluster[0::2][cluster[0::2] >= 0])
     assert max(cells_per_cluster.values()) == rigidity["rigid_clusters"]["largest_cells"]

@@ -135,7 +135,7 @@ def test_particle_frame_is_what_export_writes(run_budjam, tmp_path):
     atoms = ase.io.read(tmp_path / "p.xyz", format="extxyz")
     f = budjam.particle_frame(budjam.read_packing(PACKING))
     np.testing.assert_array_equal(atoms.positions[:, 0], f["wrapped_x"])
-    np.testing.assert_array_equal(atoms.arrays["cluster"], f["cluster"])
+    np.testing.assert_array_equal(atoms.arrays["rigid_cluster"], f["cluster"])
     budjam.export(budjam.read_packing(PACKING), tmp_path / "q.xyz", "xyz")
     assert (tmp_path / "q.xyz").read_bytes() == (tmp_path / "p.xyz").read_bytes()
 

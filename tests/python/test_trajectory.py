@@ -44,7 +44,7 @@ def test_event_frame_is_the_export_of_the_event_packing(reference, run_budjam, t
     exported = ase.io.read(tmp_path / "j.xyz", format="extxyz")
     at_jamming = frames[summary["step_J"]]
     np.testing.assert_array_equal(at_jamming.positions, exported.positions)
-    for name in ("radius", "cell", "id", "cluster", "rattler", "type"):
+    for name in ("radius", "cell_id", "id", "rigid_cluster", "rattler", "type"):
         np.testing.assert_array_equal(at_jamming.arrays[name], exported.arrays[name])
 
 

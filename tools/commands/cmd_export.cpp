@@ -1,7 +1,8 @@
-// `budjam export PACKING --format xyz|gsd|vtk [--out BASE] [--network load-bearing|raw]`
+// `budjam export PACKING --format FORMAT [--out BASE] [--network load-bearing|raw]`, FORMAT one of
+// io::export_formats()
 // Writes a packing as particles and bonds for OVITO, ASE, ParaView and HOOMD-blue
-// (io/export.hpp, docs/files.md "Export"): BASE.xyz, BASE.gsd or BASE.vtk, BASE defaulting to the
-// packing's path without its extension. Nothing is printed.
+// (io/export.hpp, docs/files.md "Export"): BASE.<format>, BASE defaulting to the packing's path
+// without its extension. Nothing is printed.
 #include "commands/command.hpp"
 
 #include "io/export.hpp"
@@ -10,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -22,6 +24,23 @@ struct Options {
   std::string network = "load-bearing";
 };
 
+// "xyz (extended XYZ: OVITO, ASE), gsd (...) or vtk (...)"
+std::string format_help() {
+  const auto& formats = io::export_formats();
+  std::string help;
+  for (std::size_t k = 0; k < formats.size(); ++k) {
+    if (k > 0) help += k + 1 == formats.size() ? " or " : ", ";
+    help += std::string(formats[k].name) + " (" + std::string(formats[k].description) + ")";
+  }
+  return help;
+}
+
+std::vector<std::string> format_names() {
+  std::vector<std::string> names;
+  for (const io::ExportFormat& f : io::export_formats()) names.emplace_back(f.name);
+  return names;
+}
+
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
   const io::PackingFile file = io::read_packing(o.packing);
@@ -32,13 +51,11 @@ void run(const Options& o) {
 }
 
 const bool registered = budjam::cli::register_command(
-    {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (XYZ, GSD, VTK)",
+    {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (--format)",
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
-       sub.add_option("--format", o->format, "xyz (extended XYZ), gsd (HOOMD schema) or vtk (legacy VTK)")
-           ->required()
-           ->check(CLI::IsMember({"xyz", "gsd", "vtk"}));
+       sub.add_option("--format", o->format, format_help())->required()->check(CLI::IsMember(format_names()));
        sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
            ->type_name("BASE");
        sub.add_option("--network", o->network,

@@ -102,17 +102,43 @@ ParticleFrame particle_frame(const Packing& p, RigidityNetwork which) {
   return f;
 }
 
+const std::vector<LobeField>& lobe_fields() {
+  static const std::vector<LobeField> fields = {
+      {"cell_id", "cell index in the packing file (0-based row)", false, "int", "int64",
+       [](const ParticleFrame&, std::size_t k) { return static_cast<std::int64_t>(cell_of(k)); }},
+      {"id", "lineage id: the packing's `id` column", false, "long", "int64",
+       [](const ParticleFrame& f, std::size_t k) { return f.id[k]; }},
+      {"rigid_cluster",
+       "rigid cluster (pebble game, `--network`) of the cell's mother–bud bar, in the canonical order of "
+       "docs/rigidity.md; −1: cell not analysed (a rattler of the load-bearing network)",
+       false, "int", "int32", [](const ParticleFrame& f, std::size_t k) { return std::int64_t{f.cluster[k]}; }},
+      {"rattler", "the cell is a rattler (iterative rule)", true, "int", "uint8",
+       [](const ParticleFrame& f, std::size_t k) { return std::int64_t{f.rattler[k]}; }},
+  };
+  return fields;
+}
+
 std::string format_extxyz(const ParticleFrame& f) {
   std::ostringstream out;
   const std::string L = format_double(f.L);
   out << f.size() << '\n';
   out << "Lattice=\"" << L << " 0 0 " << format_double(f.shear * f.L) << ' ' << L << " 0 0 0 1\" "
-      << "Properties=type:S:1:pos:R:3:radius:R:1:cell:I:1:id:I:1:cluster:I:1:rattler:L:1 "
-      << "pbc=\"T T F\" step=" << f.step << '\n';
-  for (std::size_t k = 0; k < f.size(); ++k)
+      << "Properties=type:S:1:pos:R:3:radius:R:1";
+  for (const LobeField& field : lobe_fields()) out << ':' << field.name << (field.flag ? ":L:1" : ":I:1");
+  out << " pbc=\"T T F\" step=" << f.step << '\n';
+  for (std::size_t k = 0; k < f.size(); ++k) {
     out << (is_bud(k) ? "bud" : "mother") << ' ' << format_double(f.wrapped_x[k]) << ' '
-        << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]) << ' ' << cell_of(k) << ' ' << f.id[k]
-        << ' ' << f.cluster[k] << ' ' << (f.rattler[k] ? 'T' : 'F') << '\n';
+        << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]);
+    for (const LobeField& field : lobe_fields()) {
+      const std::int64_t v = field.value(f, k);
+      out << ' ';
+      if (field.flag)
+        out << (v ? 'T' : 'F');
+      else
+        out << v;
+    }
+    out << '\n';
+  }
   return out.str();
 }
 
@@ -138,14 +164,14 @@ std::string format_vtk(const ParticleFrame& f) {
   out << "POINT_DATA " << n << '\n';
   scalars("radius", "double", n, [&](std::size_t k) { return format_double(f.radius[k]); });
   scalars("bud", "int", n, [](std::size_t k) { return static_cast<int>(is_bud(k)); });
-  scalars("cell", "int", n, [](std::size_t k) { return cell_of(k); });
-  scalars("id", "long", n, [&](std::size_t k) { return f.id[k]; });
-  scalars("cluster", "int", n, [&](std::size_t k) { return f.cluster[k]; });
-  scalars("rattler", "int", n, [&](std::size_t k) { return static_cast<int>(f.rattler[k]); });
+  for (const LobeField& field : lobe_fields())
+    scalars(std::string(field.name).c_str(), std::string(field.vtk_type).c_str(), n,
+            [&](std::size_t k) { return field.value(f, k); });
   out << "CELL_DATA " << nb << '\n';
   scalars("contact", "int", nb, [&](std::size_t k) { return static_cast<int>(f.bonds[k].kind); });
-  scalars("force", "double", nb, [&](std::size_t k) { return format_double(f.bonds[k].force); });
-  scalars("crosses_boundary", "int", nb, [&](std::size_t k) { return static_cast<int>(f.bonds[k].crosses_boundary); });
+  scalars(kBondForce.data(), "double", nb, [&](std::size_t k) { return format_double(f.bonds[k].force); });
+  scalars(kBondCrossesBoundary.data(), "int", nb,
+          [&](std::size_t k) { return static_cast<int>(f.bonds[k].crosses_boundary); });
   return out.str();
 }
 
@@ -188,13 +214,10 @@ with gsd.hoomd.open(sys.argv[2], mode) as out:
         s.bonds.types = ['link', 'contact']
         s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
         s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
-        # Not particles/body: HOOMD reads body >= 0 as constituents of its rigid bodies.
-        s.log['particles/cell'] = np.arange(n, dtype=np.int64) // 2
-        s.log['particles/id'] = np.array(j['id'], dtype=np.int64)
-        s.log['particles/rigid_cluster'] = np.array(j['cluster'], dtype=np.int32)
-        s.log['particles/rattler'] = np.array(j['rattler'], dtype=np.uint8)
-        s.log['bonds/force'] = np.array(j['bond_force'], dtype=np.float64)
-        s.log['bonds/crosses_boundary'] = np.array(j['bond_crosses'], dtype=np.uint8)
+        # The cell index is not particles/body: HOOMD reads body >= 0 as constituents of its rigid
+        # bodies.
+        for entry in j['log']:
+            s.log[entry['name']] = np.array(entry['values'], dtype=entry['dtype'])
         out.append(s)
 )";
 
@@ -208,21 +231,28 @@ Json frame_json(const ParticleFrame& f) {
   j["image_x"] = f.image_x;
   j["image_y"] = f.image_y;
   j["radius"] = f.radius;
-  j["id"] = f.id;
-  j["cluster"] = f.cluster;
-  j["rattler"] = f.rattler;
+  // Quantities without a HOOMD field, each under log/ with the name every format gives it.
+  Json log = Json::array();
+  for (const LobeField& field : lobe_fields()) {
+    Json values = Json::array();
+    for (std::size_t k = 0; k < f.size(); ++k) values.push_back(field.value(f, k));
+    log.push_back({{"name", "particles/" + std::string(field.name)},
+                   {"dtype", std::string(field.gsd_dtype)},
+                   {"values", values}});
+  }
   Json kind = Json::array(), group = Json::array(), force = Json::array(), crosses = Json::array();
   for (const Bond& b : f.bonds) {
     kind.push_back(static_cast<int>(b.kind));
     group.push_back(b.a);
     group.push_back(b.b);
     force.push_back(b.force);
-    crosses.push_back(b.crosses_boundary);
+    crosses.push_back(static_cast<int>(b.crosses_boundary));
   }
+  log.push_back({{"name", "bonds/" + std::string(kBondForce)}, {"dtype", "float64"}, {"values", force}});
+  log.push_back({{"name", "bonds/" + std::string(kBondCrossesBoundary)}, {"dtype", "uint8"}, {"values", crosses}});
+  j["log"] = log;
   j["bond_kind"] = kind;
   j["bond_group"] = group;
-  j["bond_force"] = force;
-  j["bond_crosses"] = crosses;
   return j;
 }
 
@@ -257,15 +287,28 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
   std::filesystem::rename(tmp, path);
 }
 
+const std::vector<ExportFormat>& export_formats() {
+  static const std::vector<ExportFormat> formats = {
+      {"xyz", "extended XYZ: OVITO, ASE",
+       [](const std::filesystem::path& path, const ParticleFrame& f) { write_atomically(path, format_extxyz(f)); }},
+      {"gsd", "GSD in the HOOMD schema: OVITO, gsd, HOOMD-blue",
+       [](const std::filesystem::path& path, const ParticleFrame& f) { write_gsd(path, {f}); }},
+      {"vtk", "legacy VTK: ParaView, meshio",
+       [](const std::filesystem::path& path, const ParticleFrame& f) { write_atomically(path, format_vtk(f)); }},
+  };
+  return formats;
+}
+
+const ExportFormat* find_export_format(std::string_view name) {
+  for (const ExportFormat& format : export_formats())
+    if (format.name == name) return &format;
+  return nullptr;
+}
+
 void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format) {
-  if (format == "xyz")
-    write_atomically(path, format_extxyz(frame));
-  else if (format == "vtk")
-    write_atomically(path, format_vtk(frame));
-  else if (format == "gsd")
-    write_gsd(path, {frame});
-  else
-    throw std::invalid_argument("write_particles: unknown format " + format);
+  const ExportFormat* f = find_export_format(format);
+  if (!f) throw std::invalid_argument("write_particles: unknown format " + format);
+  f->write(path, frame);
 }
 
 }  // namespace budjam::io

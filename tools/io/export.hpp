@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace budjam::io {
@@ -49,6 +50,23 @@ struct ParticleFrame {
 // `budjam rigidity` computes them; `which` chooses the network whose clusters label the lobes.
 ParticleFrame particle_frame(const Packing& p, RigidityNetwork which = RigidityNetwork::load_bearing);
 
+// A per-lobe quantity under the one name every format gives it: the XYZ column, the VTK point data
+// and the GSD entry log/particles/<name>. Names that clash with a reader's own attribute (ASE's
+// Atoms.cell is the box, OVITO's Cluster the result of its cluster analysis) are avoided.
+struct LobeField {
+  std::string_view name;
+  std::string_view meaning;  // one line, for the docs table
+  bool flag;                 // true/false rather than an integer
+  std::string_view vtk_type, gsd_dtype;
+  std::int64_t (*value)(const ParticleFrame& frame, std::size_t lobe);
+};
+// cell_id, id, rigid_cluster, rattler, in the order of the XYZ columns.
+const std::vector<LobeField>& lobe_fields();
+
+// The per-bond quantities (VTK cell data, GSD log/bonds/<name>).
+inline constexpr std::string_view kBondForce = "force";
+inline constexpr std::string_view kBondCrossesBoundary = "crosses_boundary";
+
 // Extended XYZ (ASE, OVITO): wrapped positions (z = 0), the cell as Lattice, pbc "T T F"; the
 // lobe kind in column `type` (mother/bud; not `species`, which ASE reads as chemical elements).
 // Bonds are not part of the format (use GSD or VTK). Frames concatenate into a trajectory.
@@ -64,8 +82,18 @@ std::string format_vtk(const ParticleFrame& frame);
 // IoError if the interpreter or its gsd package is missing or the write fails.
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames);
 
-// write_atomically of format_extxyz / format_vtk, or write_gsd, chosen by `format`
-// ("xyz", "gsd", "vtk"); std::invalid_argument for another format.
+// An export format: its name is the value of `--format` and the file's extension. The one list of
+// formats: the command line, its help and completion, and the docs table follow it.
+struct ExportFormat {
+  std::string_view name;
+  std::string_view description;  // "extended XYZ: OVITO, ASE", for --help and the docs
+  void (*write)(const std::filesystem::path& path, const ParticleFrame& frame);  // atomic
+};
+// xyz, gsd, vtk.
+const std::vector<ExportFormat>& export_formats();
+const ExportFormat* find_export_format(std::string_view name);  // nullptr if there is none
+
+// The format named `format` writes `frame` to `path`; std::invalid_argument for an unknown name.
 void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format);
 
 }  // namespace budjam::io

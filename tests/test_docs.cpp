@@ -1,0 +1,120 @@
+// The documentation names only what exists: every scene key written as `section.name` in a code
+// span or a shell block of README.md and docs/*.md is a row of the knob table, and every
+// `budjam <subcommand>` there is a subcommand of the executable.
+#include "budjam/scene_keys.hpp"
+#include "scratch.hpp"
+
+#include <catch2/catch.hpp>
+#include "run_budjam.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using budjam::testing::run_budjam;
+using budjam::testing::slurp;
+using budjam::testing::source_file;
+
+namespace {
+
+struct Doc {
+  std::string name;
+  // Its code spans and the lines of its code blocks, one a line; not the blocks of Python, C++ or
+  // diagrams (`text`), nor error messages, which quote bad input.
+  std::string code;
+};
+
+// README.md and every page of docs/.
+std::vector<Doc> documents() {
+  std::vector<fs::path> files{source_file("README.md")};
+  for (const auto& e : fs::directory_iterator(source_file("docs")))
+    if (e.path().extension() == ".md") files.push_back(e.path());
+  std::vector<Doc> docs;
+  const std::regex span("`([^`\n]+)`");
+  for (const fs::path& f : files) {
+    Doc d{f.filename().string(), {}};
+    std::istringstream in(slurp(f));
+    bool block = false, foreign = false;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("```", 0) == 0) {
+        const std::string info = line.substr(3);
+        foreign = !block && (info == "python" || info == "cpp" || info == "text");
+        block = !block;
+        continue;
+      }
+      if (block) {
+        if (!foreign && line.rfind("budjam: error:", 0) != 0) d.code += line + '\n';
+        continue;
+      }
+      for (std::sregex_iterator m(line.begin(), line.end(), span), end; m != end; ++m) d.code += (*m)[1].str() + '\n';
+    }
+    docs.push_back(std::move(d));
+  }
+  return docs;
+}
+
+// The subcommands `budjam --help` lists (as the bash completion reads them).
+std::set<std::string> subcommands() {
+  const auto help = run_budjam("--help");
+  REQUIRE(help.code == 0);
+  std::set<std::string> names;
+  std::istringstream in(help.out);
+  bool listing = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Subcommands:", 0) == 0) {
+      listing = true;
+    } else if (listing && line.size() > 2 && line.rfind("  ", 0) == 0 &&
+               std::islower(static_cast<unsigned char>(line[2]))) {
+      names.insert(line.substr(2, line.find(' ', 2) - 2));
+    }
+  }
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("every scene key the documentation names is a row of the knob table", "[docs]") {
+  // A section word that begins a name (not a path such as budjam/growth.hpp, nor a file growth.md).
+  const std::regex key(
+      R"((^|[^A-Za-z0-9_./-])(run|box|cells|init|growth|jamming|minimiser|observe)\.([A-Za-z_][A-Za-z0-9_]*)(\.[A-Za-z_][A-Za-z0-9_]*)?)");
+  const std::set<std::string> file_kinds{"md",   "hpp", "cpp", "csv", "tsv", "json", "toml",
+                                         "pack", "py",  "sh",  "svg", "png", "txt"};
+  std::size_t named = 0;
+  for (const Doc& d : documents()) {
+    for (std::sregex_iterator m(d.code.begin(), d.code.end(), key), end; m != end; ++m) {
+      const std::string section = (*m)[2].str(), name = (*m)[3].str(), more = (*m)[4].str();
+      if (file_kinds.count(name)) continue;
+      const bool subsection = section == "observe" && (name == "moduli" || name == "dos") && !more.empty();
+      const std::string k = subsection ? section + "." + name + more : section + "." + name;
+      // A key, or a section that holds keys (`observe.moduli`).
+      const bool section_of_keys = std::any_of(budjam::scene_keys().begin(), budjam::scene_keys().end(),
+                                               [&](const budjam::SceneKey& r) { return r.section == k; });
+      INFO(d.name << ": `" << k << "`");
+      CHECK((budjam::find_scene_key(k) != nullptr || section_of_keys));
+      ++named;
+    }
+  }
+  CHECK(named > 50);  // the pattern finds the keys the pages name
+}
+
+TEST_CASE("every budjam subcommand the documentation names exists", "[docs]") {
+  const std::set<std::string> known = subcommands();
+  REQUIRE(known.count("grow") == 1);
+  // Not a path that follows one executable with another (`OLD/budjam build/budjam`).
+  const std::regex command(R"((^|[\s/`(])budjam ([a-z][a-z-]*)(?![A-Za-z0-9_-]*/))");
+  std::size_t named = 0;
+  for (const Doc& d : documents()) {
+    for (std::sregex_iterator m(d.code.begin(), d.code.end(), command), end; m != end; ++m) {
+      INFO(d.name << ": `budjam " << (*m)[2].str() << "`");
+      CHECK(known.count((*m)[2].str()) == 1);
+      ++named;
+    }
+  }
+  CHECK(named > 30);
+}
