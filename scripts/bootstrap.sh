@@ -44,8 +44,8 @@ install_build() { cmake --install build >/dev/null; }
 
 case "${1:-}" in
   demo)
-    echo "bootstrap: demo set-up: packages, then budjam and the Python module" \
-      "(measured: 6 min on 2 shared cores with the packages present; see README)" >&2
+    echo "bootstrap: demo set-up: the missing packages, then budjam and the Python module:" \
+      "about 12 CPU-minutes of compiling (about 6 min on 2 idle cores, longer on a busy machine; README)" >&2
     install_missing "${demo_packages[@]}"
     build build "${demo_options[@]}"
     install_build
