@@ -7,14 +7,22 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
-          catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev python3-matplotlib librsvg2-bin
-          pybind11-dev python3-dev python3-numpy python3-pandas python3-gsd python3-pytest python3-ase
-          python3-meshio help2man slurm-wlm munge clang-14 libclang-rt-14-dev clang-format-14)
+# What the demo needs: the compilers, the libraries, the Python module's build and runtime.
+demo_packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
+               libtomlplusplus-dev libcli11-dev nlohmann-json3-dev librsvg2-bin pybind11-dev python3-dev
+               python3-numpy python3-pandas help2man bash-completion)
+# What the whole test suite needs on top: Catch2, the independent readers of every file format,
+# `pip install .` into a venv, the notebook, Slurm, the sanitizer and fuzzing compilers, clang-format.
+test_packages=(catch2 python3-matplotlib python3-gsd python3-pytest python3-ase python3-meshio
+               python3-venv python3-pip python3-setuptools python3-wheel jupyter-notebook python3-nbconvert
+               python3-ipykernel slurm-wlm munge clang-14 libclang-rt-14-dev clang-format-14)
+# The demo builds budjam and the Python module only; `test` builds everything (tests, benchmarks).
+demo_options=(-DBUILD_TESTING=OFF -DBUDJAM_BENCHMARKS=OFF)
+test_options=(-DBUILD_TESTING=ON -DBUDJAM_BENCHMARKS=ON)
 
-install_missing() {
+install_missing() {  # install_missing PACKAGE...
   local missing=()
-  for p in "${packages[@]}"; do
+  for p in "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if ((${#missing[@]})); then
@@ -36,8 +44,10 @@ install_build() { cmake --install build >/dev/null; }
 
 case "${1:-}" in
   demo)
-    install_missing
-    build build
+    echo "bootstrap: demo set-up: the missing packages, then budjam and the Python module:" \
+      "about 12 CPU-minutes of compiling (about 6 min on 2 idle cores, longer on a busy machine; README)" >&2
+    install_missing "${demo_packages[@]}"
+    build build "${demo_options[@]}"
     install_build
     rm -rf runs/demo
     ./build/budjam grow data/scenes/demo.toml --out runs/demo
@@ -45,8 +55,8 @@ case "${1:-}" in
     echo "bootstrap: demo run in runs/demo (summary.json, logs, packings, jammed.svg/.png)"
     ;;
   test)
-    install_missing
-    build build
+    install_missing "${demo_packages[@]}" "${test_packages[@]}"
+    build build "${test_options[@]}"
     install_build
     (cd build && ctest --output-on-failure -j"$(nproc)")
     # Hard cases again under AddressSanitizer + UndefinedBehaviorSanitizer.

@@ -29,6 +29,17 @@ from matplotlib import cm, colors  # noqa: E402
 
 PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D25), also in analysis.json
 
+# Okabe–Ito colours (distinguishable with every common colour-vision deficiency) for the categorical
+# series; ordered scales use viridis / plasma, which stay ordered in grey and for colour-blind readers.
+OKABE_ITO = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000"]
+BLUE, VERMILLION = OKABE_ITO[0], OKABE_ITO[1]
+plt.rcParams["axes.prop_cycle"] = matplotlib.cycler(color=OKABE_ITO)  # series without a colour of their own
+
+# Axis units (docs/files.md, "Columns and units"): stresses, pressures and 2D moduli in k, lengths
+# in D0, frequencies in sqrt(k/m0).
+K = r" [$k$]"
+OMEGA = r" [$\sqrt{k/m_0}$]"
+
 
 class Missing(Exception):
     pass
@@ -65,7 +76,7 @@ def p0_axis(ax, labels):
     ax.set_xscale("log")
     ax.set_xticks(xs)
     ax.set_xticklabels(["none" if x == 1.0 else r"$10^{%d}$" % round(math.log10(x)) for x in xs])
-    ax.set_xlabel(r"$P_0$")
+    ax.set_xlabel(r"$P_0$" + K)
     ax.minorticks_off()
 
 
@@ -220,7 +231,7 @@ def figS(T):
         ax.step(a, S, where="post", color=c, label=p0_text(lab))
         ax.fill_between(a, [num(r["lo"]) for r in rr], [num(r["hi"]) for r in rr], step="post", color=c, alpha=0.15, lw=0)
     ax.set_xscale("symlog", linthresh=1e-4)
-    ax.set_xlabel(r"added bud area $a$ (true area $\pi a_{D^2}/4$)")
+    ax.set_xlabel(r"added bud area $a$ [$D_0^2$] (true area $\pi a/4$)")
     ax.set_ylabel(r"$S(a)$")
     ax.legend(fontsize=7, frameon=False)
     save(fig, T.out, "figS")
@@ -255,8 +266,8 @@ def bgrow_identity(ax, targets, colour_of, label_of):
     ax.legend(fontsize=7, frameon=False, loc="upper left")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel(r"$\lambda_c B_{\rm ext}$")
-    ax.set_ylabel(r"$B_{\rm grow}=\phi\,(\partial P/\partial\phi)_{\rm grow}$")
+    ax.set_xlabel(r"$\lambda_c B_{\rm ext}$" + K)
+    ax.set_ylabel(r"$B_{\rm grow}=\phi\,(\partial P/\partial\phi)_{\rm grow}$" + K)
 
 
 def fig3(T):
@@ -280,10 +291,10 @@ def fig3(T):
     ins = ax.inset_axes([0.58, 0.12, 0.38, 0.35])
     lb = [g for g in gs if g["lambda_bar"]["mean"] is not None]
     ins.errorbar([p0_value(g["P0_label"]) for g in lb], [g["lambda_bar"]["mean"] for g in lb],
-                 yerr=[g["lambda_bar"]["se"] or 0 for g in lb], fmt="s", ms=3, color="tab:blue", capsize=2)
+                 yerr=[g["lambda_bar"]["se"] or 0 for g in lb], fmt="s", ms=3, color=BLUE, capsize=2)
     ins.set_xscale("log")
     ins.set_yscale("log")
-    ins.set_xlabel(r"$P_0$", fontsize=7)
+    ins.set_xlabel(r"$P_0$" + K, fontsize=7)
     ins.set_ylabel(r"$\bar\lambda_c$", fontsize=7)
     ins.tick_params(labelsize=6)
     panel(ax, "B")
@@ -296,7 +307,7 @@ def fig3(T):
     ax.errorbar([p0_value(g["P0_label"]) for g in gm], [g["G_2"]["median"] for g in gm],
                 yerr=[g["G_2"]["se"] for g in gm], fmt="ko", capsize=3, zorder=2, label="median ± bootstrap SE")
     p0_axis(ax, [g["P0_label"] for g in gs])
-    ax.set_ylabel(r"$G_2=G(\phi_2)$")
+    ax.set_ylabel(r"$G_2=G(\phi_2)$" + K)
     # symlog: a run near a shear instability of its box (G_2 ≪ 0) stays visible without flattening the rest
     ax.set_yscale("symlog", linthresh=1e-2, linscale=0.5)
     ax.legend(fontsize=7, frameon=False)
@@ -344,7 +355,7 @@ def figB1(T):
     T.need_moduli("Fig. B1 (panels C, D)")
     targets = T.csv("targets.csv")
     Ls = sorted({float(r["L"]) for r in targets})
-    col = {L: cm.tab10(k) for k, L in enumerate(Ls)}
+    col = {L: OKABE_ITO[k % len(OKABE_ITO)] for k, L in enumerate(Ls)}
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
     dz_identity(axes[0], targets, lambda r: col[float(r["L"])], lambda r: f"L = {float(r['L']):g}")
     panel(axes[0], "A")
@@ -375,7 +386,7 @@ def figB1(T):
         ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g["G_2"]["median"] for g in gs],
                     yerr=[g["G_2"]["se"] for g in gs], fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
     p0_axis(ax, [g["P0_label"] for g in T.groups()])
-    ax.set_ylabel(r"median $G_2$")
+    ax.set_ylabel(r"median $G_2$" + K)
     ax.legend(fontsize=7, frameon=False)
     panel(ax, "D")
     save(fig, T.out, "figB1")
@@ -444,8 +455,8 @@ def figD2(T):
             ax.errorbar(g[0]["P_2_median"]["median"], g[0]["G_2"]["median"], xerr=g[0]["P_2_median"]["se"],
                         yerr=g[0]["G_2"]["se"], fmt="o", ms=8, color=c, mec="k", capsize=3, label=p0_text(lab))
     ax.set_xscale("log")
-    ax.set_xlabel(r"$P_2$")
-    ax.set_ylabel(r"$G_2$")
+    ax.set_xlabel(r"$P_2$" + K)
+    ax.set_ylabel(r"$G_2$" + K)
     ax.legend(fontsize=7, frameon=False)
     panel(ax, "A")
     ax = axes[1]
@@ -486,13 +497,13 @@ def figE1(T):
         rr = [r for r in hist if r["P0"] == lab]
         bars = [r for r in rr if r["delta_at_1"] == "false"]
         ins.bar([num(r["g_lo"]) for r in bars], [num(r["density"]) for r in bars],
-                width=[num(r["g_hi"]) - num(r["g_lo"]) for r in bars], align="edge", color="tab:blue",
+                width=[num(r["g_hi"]) - num(r["g_lo"]) for r in bars], align="edge", color=BLUE,
                 label="compressed buds")
         delta = [num(r["density"]) for r in rr if r["delta_at_1"] == "true"]
         if delta:
             ins.annotate("", xy=(1.0, 0.95), xytext=(1.0, 0.0), xycoords=("data", "axes fraction"),
-                         arrowprops=dict(arrowstyle="->", color="tab:red", lw=1.5))
-            ins.text(0.97, 0.85, r"$u\,\delta(g-1)$: %.2f" % delta[0], color="tab:red", fontsize=7, ha="right",
+                         arrowprops=dict(arrowstyle="->", color=VERMILLION, lw=1.5))
+            ins.text(0.97, 0.85, r"$u\,\delta(g-1)$: %.2f" % delta[0], color=VERMILLION, fontsize=7, ha="right",
                      transform=ins.transAxes)
         ins.set_xlim(0, 1.05)
         ins.set_title(p0_text(lab), fontsize=8)
@@ -546,10 +557,15 @@ def figF1(T):
             lab = r"$\phi_J$" if name == "jammed" else (r"$\phi_2$" if name == "phi2" else
                                                        r"$\Delta\phi=%g$" % dphi[0])
             ax.hist(w, bins=30, density=True, histtype="step", color=c, label=lab)
-            ax.plot(sum(ws) / len(ws), 0, "v", color=c, ms=9, clip_on=False)
+            # ω* of that state (mean over the runs): a dashed line through the panel and a marker on
+            # its top edge, both visible in print and in grey.
+            omega_star = sum(ws) / len(ws)
+            ax.axvline(omega_star, color=c, ls="--", lw=1.5)
+            ax.plot(omega_star, 1, "v", transform=ax.get_xaxis_transform(), color=c, mec="k", ms=10, clip_on=False)
         ax.set_title(p0_text(strong) + f", {len({r['run'] for r in rr})} runs pooled", fontsize=8)
-    ax.set_xlabel(r"$\omega$")
-    ax.set_ylabel(r"$D(\omega)$")
+    ax.plot([], [], "k--", lw=1.5, label=r"$\omega^\ast$ (mean over runs)")
+    ax.set_xlabel(r"$\omega$" + OMEGA)
+    ax.set_ylabel(r"$D(\omega)$" + r" [$\sqrt{m_0/k}$]")
     ax.legend(fontsize=6, frameon=False)
     panel(ax, "A")
     ax = axes[1]
@@ -561,11 +577,11 @@ def figF1(T):
     fit = (T.analysis["main"].get("dos") or {}).get("paper")
     if fit and tg:
         xs = [0.0, max(num(r["dZ"]) for r in tg)]
-        ax.plot(xs, [fit["through_origin_dZ"]["slope"] * x for x in xs], "-", color="tab:blue", lw=1,
+        ax.plot(xs, [fit["through_origin_dZ"]["slope"] * x for x in xs], "-", color=BLUE, lw=1,
                 label=r"$\omega^\ast\propto\Delta Z$")
     ax.axvline(0, color="0.8", lw=1)
     ax.set_xlabel(r"$\Delta Z$")
-    ax.set_ylabel(r"$\omega^\ast$")
+    ax.set_ylabel(r"$\omega^\ast$" + OMEGA)
     ax.legend(fontsize=7, frameon=False)
     panel(ax, "B")
     ax = axes[2]
@@ -603,7 +619,7 @@ def accuracy(T):
     if not panels:
         raise Missing("accuracy.json has no measured errors")
     knobs = sorted({g["knob"] for g in acc["groups"]})
-    colour = {k: cm.tab10(i % 10) for i, k in enumerate(knobs)}
+    colour = {k: OKABE_ITO[i % len(OKABE_ITO)] for i, k in enumerate(knobs)}
     cols = 4
     nrow = (len(panels) + cols - 1) // cols
     fig, axes = plt.subplots(nrow, cols, figsize=(4.2 * cols, 3.3 * nrow), squeeze=False)
@@ -633,7 +649,7 @@ def accuracy(T):
         for r in mine:
             if r["default"]:
                 e = r["err_" + q]
-                ax.plot(r["cost"], max(e, lo), "*", color="tab:red", ms=11, zorder=5, label="default")
+                ax.plot(r["cost"], max(e, lo), "*", color=VERMILLION, ms=11, zorder=5, label="default")
         ax.set_xscale("log")
         ax.set_yscale("log")
         # Errors that differ by less than a factor error_ratio, or lie below error_floor, tie (the

@@ -620,12 +620,15 @@ struct GrowthDriver::Impl {
     const StateView v = view();
     for (const Division& d : divisions)
       for (Observer* o : observers) o->on_divided(Divided{v, d});
-    emit_bud_events(v, bud_events);
+    // Events in physical order: the buds tagged at a jamming follow the jamming they belong to.
+    if (change != Change::jammed) emit_bud_events(v, bud_events);
     for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
     if (change == Change::unjammed)
       for (Observer* o : observers) o->on_unjammed(Unjammed{v, result.unjammings.back()});
-    if (change == Change::jammed)
+    if (change == Change::jammed) {
       for (Observer* o : observers) o->on_jammed(Jammed{v, *result.jamming});
+      emit_bud_events(v, bud_events);
+    }
     if (phase == Phase::jammed && change == Change::none) land_targets_and_depletion(v);
 
     if (phase == Phase::jammed && next_target == scene.targets.size() &&

@@ -153,6 +153,17 @@ std::string render_svg(const Packing& p, const std::vector<Contact>& contacts, c
   }
   o += "</g>\n";
 
+  // Mother–bud links: which bud belongs to which mother, also where lobes of different cells touch.
+  o += "<g clip-path=\"url(#box)\" stroke=\"#252525\" stroke-width=\"1.5\" stroke-linecap=\"round\">\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x0 = lx[mother_lobe(i)], y0 = ly[mother_lobe(i)], x1 = lx[bud_lobe(i)], y1 = ly[bud_lobe(i)];
+    for (const auto& d :
+         images(std::min(x0, x1), std::max(x0, x1), std::min(y0, y1), std::max(y0, y1), p.box, opt.periodic_images))
+      o += "<line class=\"link\" data-link=\"" + std::to_string(i) + "\" x1=\"" + num(X(x0 + d[0])) + "\" y1=\"" +
+           num(Y(y0 + d[1])) + "\" x2=\"" + num(X(x1 + d[0])) + "\" y2=\"" + num(Y(y1 + d[1])) + "\"/>\n";
+  }
+  o += "</g>\n";
+
   double f_max = 0;
   for (const auto& c : contacts) f_max = std::max(f_max, c.force());
   if (opt.draw_contacts) {

@@ -353,6 +353,8 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
     const std::string err = slurp(dir.string() + ".stderr");
     CHECK(std::count(err.begin(), err.end(), '\n') == 1);
     CHECK(err.find("resume with: budjam grow --resume " + dir.string()) != std::string::npos);
+    // A stop that can be resumed is a notice (docs/files.md), not an error.
+    CHECK(err.rfind("budjam: grow: stopped by ", 0) == 0);
     CHECK_FALSE(fs::exists(dir / "summary.json"));
     const Result r = grow("--resume " + q(dir) + " --quiet");
     INFO(r.err);

@@ -82,6 +82,19 @@ TEST_CASE("render places lobes at their centres in pixels, y pointing up") {
   CHECK(svg.find("x1=\"45.00\" y1=\"250.00\" x2=\"110.00\" y2=\"250.00\"") != std::string::npos);
 }
 
+TEST_CASE("render links every bud to its own mother, so lineages are visible") {
+  auto s = make();
+  RenderOptions o;
+  o.pixels_per_unit = 100;
+  o.margin = 0.5;  // 50 px
+  o.periodic_images = false;
+  const std::string svg = render_svg(s.p, s.contacts, s.net, o);
+  CHECK(count(svg, "class=\"link\"") == 4);
+  // cell 0: mother (1.85, 2) to bud (2.6, 2); cell 1: mother (3.2, 2) to bud (3.95, 2)
+  CHECK(svg.find("data-link=\"0\" x1=\"235.00\" y1=\"250.00\" x2=\"310.00\" y2=\"250.00\"") != std::string::npos);
+  CHECK(svg.find("data-link=\"1\" x1=\"370.00\" y1=\"250.00\" x2=\"445.00\" y2=\"250.00\"") != std::string::npos);
+}
+
 TEST_CASE("render marks rattlers and unconstrained buds") {
   auto s = make();
   const std::string svg = render_svg(s.p, s.contacts, s.net);

@@ -1,7 +1,8 @@
 #pragma once
 // A picture of a packing as SVG text: every cell as its mother and bud lobes, drawn with their
-// periodic images where they cross the box boundary (and clipped to the box), the contacts as
-// segments between lobe centres coloured by force, rattlers greyed and unconstrained buds marked.
+// periodic images where they cross the box boundary (and clipped to the box), a dark bar from each
+// mother's centre to its bud's (class "link"), the contacts as segments between lobe centres
+// coloured by force, rattlers greyed and unconstrained buds marked.
 // Returns the document as a string; writing it (and converting it to PNG) is the caller's business.
 #include <string>
 #include <vector>

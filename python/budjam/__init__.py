@@ -9,43 +9,109 @@ time in the units of the growth rates (docs/files.md lists every file's columns 
     p.x, p.y, p.theta, p.b                 # numpy arrays, one entry per cell
     p.lobes()["radius"]                    # lobe 2i: mother of cell i, 2i+1: its bud
     budjam.rigidity(p)["lobe_cluster"]     # rigid cluster of every lobe
-    budjam.moduli(p)["G"]                  # shear modulus (contact-virial convention)
+    budjam.moduli("run/packings/target_1.pack")["G"]   # a path works wherever a packing does
+    p.to_ase(), p.to_gsd_frame(), p.particles()        # ase.Atoms, gsd frame, pandas DataFrame
     budjam.export(p, "jammed.gsd", "gsd")  # for OVITO / HOOMD-blue
     budjam.survival(["run"])["S"]          # Kaplan-Meier S(a) of the buds free at jamming
-    run = budjam.load_run("run")           # pandas DataFrames of every table of a growth run
+    run = budjam.load_run("run")           # pandas DataFrames of budjam's tables of a growth run
     run.steps["phi"]
-    for event in budjam.grow("scene.toml", seed=3):   # jamming, targets, phi_2, divisions, buds
+    for event in budjam.grow("scene.toml", seed=3, set={"growth.P0": 1e-3}):
         print(event["kind"], event["phi"])
 
-The functions are the ones `budjam` (the command line) runs, so their results are the same.
+The functions are the ones `budjam` (the command line) runs, so their results are the same; the
+result of moduli() is the JSON of `budjam moduli --json`, key for key.
 """
-import json
+import functools
+import os
 import pathlib
 
-from ._budjam import (Growth, InputError, OutputError, Packing, contacts, export, moduli, particle_frame,
-                      read_packing, rigidity, spectrum, survival)
+from . import _budjam
+from ._budjam import Growth, InputError, OutputError, Packing, __version__, read_packing, survival
 
-__all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "contacts", "export", "load_run", "moduli",
-           "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+__all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "__version__", "contacts", "export",
+           "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+
+
+def _accepts_paths(function):
+    """`function` (first argument a Packing) also taking the path of a packing file (str or os.PathLike)."""
+
+    @functools.wraps(function)
+    def wrapper(packing, *args, **kwargs):
+        if isinstance(packing, (str, os.PathLike)):
+            packing = read_packing(packing)
+        return function(packing, *args, **kwargs)
+
+    return wrapper
+
+
+contacts = _accepts_paths(_budjam.contacts)
+rigidity = _accepts_paths(_budjam.rigidity)
+moduli = _accepts_paths(_budjam.moduli)
+spectrum = _accepts_paths(_budjam.spectrum)
+particle_frame = _accepts_paths(_budjam.particle_frame)
+export = _accepts_paths(_budjam.export)
+gsd_frame = _accepts_paths(_budjam.gsd_frame)
+
+
+def _lobe_columns(frame):
+    """Per-lobe columns of a particle_frame: type (mother/bud), x, y (unwrapped, cells whole),
+    wrapped_x, wrapped_y, image_x, image_y, radius (D0), cell_id (row of the packing), id (lineage),
+    rigid_cluster (-1 for a rattler), rattler: the names of the export formats' columns."""
+    import numpy
+
+    n = len(frame["radius"])
+    return {"type": numpy.where(numpy.arange(n) % 2 == 1, "bud", "mother"),
+            **{k: frame[k] for k in ("x", "y", "wrapped_x", "wrapped_y", "image_x", "image_y", "radius")},
+            "cell_id": numpy.arange(n) // 2, **{k: frame[k] for k in ("id", "rigid_cluster", "rattler")}}
+
+
+def _particles(packing, network="load-bearing"):
+    """The particles of `budjam export` as a pandas DataFrame, one row per lobe (lobe 2i: mother of
+    cell i, 2i+1: its bud): type, x, y, wrapped_x, wrapped_y, image_x, image_y, radius, cell_id, id,
+    rigid_cluster, rattler (docs/files.md, "Export")."""
+    import pandas
+
+    return pandas.DataFrame(_lobe_columns(particle_frame(packing, network)))
+
+
+def _to_ase(packing, network="load-bearing"):
+    """The packing as ase.Atoms, as `budjam export --format xyz` writes it and ase.io.read reads it:
+    one atom per lobe at its wrapped position (z = 0), cell vectors (L, 0, 0), (shear*L, L, 0),
+    (0, 0, 1), pbc (True, True, False); arrays type, radius, cell_id, id, rigid_cluster, rattler; info step."""
+    import ase
+    import numpy
+
+    frame = particle_frame(packing, network)
+    columns = _lobe_columns(frame)
+    L, shear = frame["L"], frame["shear"]
+    positions = numpy.zeros((len(frame["radius"]), 3))
+    positions[:, 0], positions[:, 1] = frame["wrapped_x"], frame["wrapped_y"]
+    atoms = ase.Atoms(positions=positions, cell=[[L, 0, 0], [shear * L, L, 0], [0, 0, 1]], pbc=[True, True, False])
+    for column in ("type", "radius", "cell_id", "id", "rigid_cluster", "rattler"):
+        atoms.new_array(column, numpy.asarray(columns[column]))
+    atoms.info["step"] = frame["step"]
+    return atoms
+
+
+Packing.particles = _particles
+Packing.to_ase = _to_ase
+Packing.to_gsd_frame = gsd_frame
 
 
 class Run:
-    """A finished growth-run directory (`budjam grow`): summary.json as a dict and every CSV table
-    of the directory as a pandas DataFrame, by file stem: run.steps, run.divisions, run.bud_events,
-    run.moduli, run.dos, run.rigidity_events, run.trials (those the scene asked for). Empty fields
-    (e.g. a P0 of "no feedback", a quantity not reached) are NaN; numbers are read back
-    bit-identically (float_precision="round_trip"). Packing files are listed in run.packings."""
+    """A finished growth-run directory (`budjam grow`), checked as `budjam survival` checks it:
+    summary.json as a dict and each table budjam writes there as a pandas DataFrame, by name:
+    run.steps, run.divisions, run.bud_events, run.moduli, run.dos, run.rigidity_events, run.trials
+    (those the scene asked for; other files in the directory are not read). Empty fields (e.g. a P0
+    of "no feedback", a quantity not reached) are NaN; numbers are read back bit-identically
+    (float_precision="round_trip"). Packing files are listed in run.packings."""
 
     def __init__(self, directory):
         import pandas
 
         self.dir = pathlib.Path(directory)
-        summary = self.dir / "summary.json"
-        if not summary.is_file():
-            raise InputError(f"{self.dir}: not a finished run (no summary.json)")
-        with open(summary) as f:
-            self.summary = json.load(f)
-        self.tables = {csv.stem: pandas.read_csv(csv, float_precision="round_trip") for csv in sorted(self.dir.glob("*.csv"))}
+        self.summary, tables = _budjam.read_run(self.dir)
+        self.tables = {pathlib.Path(t).stem: pandas.read_csv(t, float_precision="round_trip") for t in tables}
         self.packings = sorted((self.dir / "packings").glob("*.pack"))
 
     def __getattr__(self, name):
@@ -59,18 +125,41 @@ class Run:
 
 
 def load_run(directory):
-    """Read a finished run directory: a Run with .summary (dict) and one DataFrame per CSV table."""
+    """Read a finished run directory: a Run with .summary (dict) and one DataFrame per budjam table."""
     return Run(directory)
+
+
+def _override_value(value):
+    """A Python value as the text of a `--set` value: TOML booleans, numbers that read back equal,
+    None as "none" (growth.P0: no feedback), lists as TOML arrays, text as given."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if value is None:
+        return "none"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_override_value(v) for v in value) + "]"
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def _overrides(set):
+    """`set` as the list of "section.key=value" strings that `budjam grow --set` takes."""
+    if isinstance(set, str):
+        return [set]
+    if hasattr(set, "items"):
+        return [f"{key}={_override_value(value)}" for key, value in set.items()]
+    return list(set)
 
 
 def grow(scene, seed=None, set=(), callback=None):
     """Grow the scene (a .toml path) with the same driver as `budjam grow`, without writing files.
 
-    seed (0 ≤ seed < 2**63) overrides run.seed; set is a list of "section.key=value" overrides.
+    seed (0 ≤ seed < 2**63) overrides run.seed. set overrides scene keys as `--set` does: a dict
+    {"growth.P0": 1e-3, "growth.max_steps": 500} (None is "none", lists are arrays), one
+    "section.key=value" string, or a list of them.
     Without callback, returns the Growth iterator of events (see Growth); with one, calls
     callback(event) for every event and returns the final status ('finished', or an expected early
     stop such as 'step_limit')."""
-    growth = Growth(str(scene), seed, list(set))
+    growth = Growth(str(scene), seed, _overrides(set))
     if callback is None:
         return growth
     for event in growth:

@@ -2,6 +2,7 @@
 // them, the same functions the command line calls (python/budjam/__init__.py adds load_run).
 // Units everywhere: lengths in mother diameters D0, forces in k·D0, stresses and moduli in k
 // (per unit area in 2D), eigenvalues λ in k/m (m = mother mass), angles in radians.
+#include "analysis/moduli_report.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/growth_driver.hpp"
@@ -13,10 +14,12 @@
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
 #include "io/run_data.hpp"
+#include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 #include "io/text.hpp"
 
 #include <pybind11/eigen.h>
+#include <pybind11/eval.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -118,25 +121,29 @@ py::dict rigidity_dict(const Packing& p, const std::string& network) {
                   "spans_y"_a = s.spans_y, "buds_rigid"_a = buds_rigid);
 }
 
-py::dict moduli_of(const Moduli& m) {
-  return py::dict("B"_a = m.B, "G_simple"_a = m.G_simple, "G_pure"_a = m.G_pure, "G_mean"_a = m.G_mean);
-}
+// A JSON document of the command line as Python objects (null -> None), so that a Python result
+// has the keys and values of the CLI's --json output by construction.
+py::object python_of(const io::Json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
-py::dict moduli_dict(const Packing& p, const std::string& solver) {
+py::object moduli_dict(const Packing& p, const std::string& solver) {
   const Analysed a(p);
   ModuliOptions options;
   options.solver = parse_moduli_solver(solver);
-  const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
-  return py::dict("B"_a = e.moduli.B, "G"_a = e.moduli.G_simple, "moduli"_a = moduli_of(e.moduli),
-                  "moduli_affine"_a = moduli_of(e.moduli_affine), "moduli_energy"_a = moduli_of(e.moduli_energy),
-                  "moduli_energy_affine"_a = moduli_of(e.moduli_energy_affine), "P"_a = e.P, "P_energy"_a = e.P_energy,
-                  "stress"_a = e.stress, "stress_energy"_a = e.stress_energy, "R"_a = e.R, "R_affine"_a = e.R_affine,
-                  "E"_a = e.E, "E_affine"_a = e.E_affine, "C"_a = e.C, "C_affine"_a = e.C_affine,
-                  "shear_stability"_a =
-                      py::dict("G_min"_a = e.shear.G_min, "phi_min"_a = e.shear.phi_min, "G_max"_a = e.shear.G_max,
-                               "phi_max"_a = e.shear.phi_max, "stable"_a = e.shear.stable),
-                  "energy_minimum"_a = e.energy_minimum(), "well_posed"_a = e.kernel.well_posed,
-                  "residual"_a = e.kernel.residual, "N_nr"_a = e.N_nr, "Z"_a = e.Z, "dZ"_a = e.dZ);
+  return python_of(tools::elastic_response_json(elastic_response(p, a.pc.contacts, a.pc.network, options)));
+}
+
+// A metadata value as the Python type it reads as: an integer, a number, or text ("none", "jammed").
+py::object typed_meta_value(const std::string& text) {
+  if (const auto i = io::parse_int64(text)) return py::int_(*i);
+  if (const auto d = io::parse_double(text)) return py::float_(*d);
+  return py::str(text);
+}
+
+// A metadata value given from Python as the text a packing file holds (numbers round-trip).
+std::string meta_text(const py::handle& value) {
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
+  if (py::isinstance<py::float_>(value)) return io::format_double(value.cast<double>());
+  return py::str(value);
 }
 
 py::dict spectrum_dict(const Packing& p, const std::string& method, int modes) {
@@ -189,10 +196,10 @@ py::dict frame_dict(const io::ParticleFrame& f) {
     a.push_back(bond.a), b.push_back(bond.b), kind.push_back(static_cast<int>(bond.kind));
     force.push_back(bond.force), crosses.push_back(bond.crosses_boundary);
   }
-  return py::dict("L"_a = f.L, "shear"_a = f.shear, "x"_a = array(f.x), "y"_a = array(f.y),
+  return py::dict("step"_a = f.step, "L"_a = f.L, "shear"_a = f.shear, "x"_a = array(f.x), "y"_a = array(f.y),
                   "wrapped_x"_a = array(f.wrapped_x), "wrapped_y"_a = array(f.wrapped_y),
                   "image_x"_a = array(f.image_x), "image_y"_a = array(f.image_y), "radius"_a = array(f.radius),
-                  "id"_a = array(f.id), "cluster"_a = array(f.cluster), "rattler"_a = array(f.rattler),
+                  "id"_a = array(f.id), "rigid_cluster"_a = array(f.cluster), "rattler"_a = array(f.rattler),
                   "bond_a"_a = array(a), "bond_b"_a = array(b), "bond_kind"_a = array(kind),
                   "bond_force"_a = array(force), "bond_crosses_boundary"_a = array(crosses));
 }
@@ -290,6 +297,7 @@ class Growth {
 
 PYBIND11_MODULE(_budjam, m) {
   m.doc() = "budjam: growing budding-cell packings, jamming and rigidity (compiled core).";
+  m.attr("__version__") = BUDJAM_VERSION;
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<io::IoError>(m, "OutputError", PyExc_OSError);
 
@@ -305,7 +313,7 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
                        const py::array_t<double, py::array::c_style | py::array::forcecast>& theta,
                        const py::array_t<double, py::array::c_style | py::array::forcecast>& b,
                        std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>> gamma0,
-                       double shear, std::map<std::string, std::string> meta) {
+                       double shear, const py::dict& meta) {
              const std::size_t n = static_cast<std::size_t>(b.size());
              const auto xs = vector_of<double>(x, n, "x"), ys = vector_of<double>(y, n, "y"),
                         ts = vector_of<double>(theta, n, "theta"), bs = vector_of<double>(b, n, "b");
@@ -314,14 +322,15 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
              f.packing.box.L = L;
              f.packing.box.shear = shear;
              for (std::size_t i = 0; i < n; ++i) f.packing.add_cell(xs[i], ys[i], ts[i], bs[i], gs[i], -1);
-             for (auto& [k, v] : meta) f.meta.set(k, v);
+             for (const auto& [k, v] : meta) f.meta.set(py::str(k), meta_text(v));
              // The file format's checks (positive L, b in range, ...) apply to packings built here too.
              return io::parse_packing(io::format_packing(f.packing, f.meta), "Packing(...)");
            }),
            "L"_a, "x"_a, "y"_a, "theta"_a, "b"_a, "gamma0"_a = py::none(), "shear"_a = 0.0,
-           "meta"_a = std::map<std::string, std::string>{},
+           "meta"_a = py::dict(),
            "A packing of founder cells (ids 0..N-1, parent -1) from arrays; L and lengths in D0, theta in "
-           "radians; gamma0 (innate growth rates) defaults to 0; meta: text key/value metadata.")
+           "radians; gamma0 (innate growth rates) defaults to 0; meta: key/value metadata (numbers are "
+           "written so that they read back equal; Packing(..., meta=p.meta) keeps p's).")
       .def_property_readonly("N", [](const io::PackingFile& f) { return f.packing.size(); }, "number of cells")
       .def_property_readonly("L", [](const io::PackingFile& f) { return f.packing.box.L; }, "box side, D0")
       .def_property_readonly("shear", [](const io::PackingFile& f) { return f.packing.box.shear; },
@@ -340,8 +349,15 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
       .def_property_readonly("id", [](const io::PackingFile& f) { return array(f.packing.id); }, "lineage ids")
       .def_property_readonly("parent", [](const io::PackingFile& f) { return array(f.packing.parent); },
                              "id of each cell's mother cell, -1 for founders")
-      .def_property_readonly("meta", [](const io::PackingFile& f) { return f.meta.values; },
-                             "the file's metadata (phase, phi, P, step, seed, ...) as text")
+      .def_property_readonly(
+          "meta",
+          [](const io::PackingFile& f) {
+            py::dict d;
+            for (const auto& [k, v] : f.meta.values) d[py::str(k)] = typed_meta_value(v);
+            return d;
+          },
+          "the file's metadata (phase, phi, P, step, seed, ...): integers as int, other numbers as float, "
+          "the rest (phase, P0 'none') as str")
       .def("lobes", [](const io::PackingFile& f) {
              Lobes l;
              place_lobes(f.packing, l);
@@ -381,12 +397,14 @@ periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's
   m.def(
       "moduli", [](const io::PackingFile& f, const std::string& solver) { return moduli_dict(f.packing, solver); },
       "packing"_a, "solver"_a = "ldlt",
-      R"(Linear elastic response of a relaxed packing, as `budjam moduli` (docs/moduli.md).
+      R"(Linear elastic response of a relaxed packing: the dict of `budjam moduli --json` (same keys and
+values, without "file"; docs/moduli.md, docs/files.md).
 
-B and G (units k, 2D) from the contact-virial stress S (the paper's convention, the headline values)
-(moduli) and from the energy stress tau (moduli_energy), relaxed and affine (*_affine); the response matrices R = dS/de,
-E = (1/A) d2U/de de (4x4, order xx, xy, yx, yy), the Voigt stiffness C (3x3), the shear
-stability of the box (G_min, G_max over simple-shear directions phi, radians).)");
+B and G (units k, 2D; G is the simple-shear modulus G_simple) from the contact-virial stress S
+(the paper's convention), B_energy and G_energy from the relaxed energy; moduli, moduli_affine,
+moduli_energy, moduli_energy_affine hold B, G_simple, G_pure, G_mean of each convention;
+elastic_tensor is the Voigt stiffness C; response holds the 4x4 matrices dS_de, E, ... (order xx,
+xy, yx, yy); shear_stability the softest and stiffest simple-shear directions (degrees).)");
   m.def(
       "spectrum",
       [](const io::PackingFile& f, const std::string& method, int modes) {
@@ -410,23 +428,47 @@ its Greenwood variance, and at_risk / events / censored at each a; records and c
   m.def(
       "particle_frame",
       [](const io::PackingFile& f, const std::string& network) {
-        return frame_dict(io::particle_frame(f.packing, network_of(network)));
+        return frame_dict(io::particle_frame(f, network_of(network)));
       },
       "packing"_a, "network"_a = "load-bearing",
       "The packing as particles (one per lobe) and bonds (links, then contacts), as `budjam export` "
       "writes it (docs/files.md, 'Export'): positions unwrapped (x, y) and wrapped with images, radius, "
-      "lineage id, rigid cluster, rattler; bonds a, b, kind (0 link, 1 contact), force (k D0, compressive).");
+      "lineage id, rigid_cluster, rattler; bonds a, b, kind (0 link, 1 contact), force (k D0, compressive).");
   m.def(
       "export",
       [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
          const std::string& network) {
         if (format != "xyz" && format != "gsd" && format != "vtk")
           throw py::value_error("format: must be 'xyz', 'gsd' or 'vtk' (got '" + format + "')");
-        io::write_particles(path, io::particle_frame(f.packing, network_of(network)), format);
+        io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
       "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
       "GSD (HOOMD schema) or legacy VTK.");
+  m.def(
+      "gsd_frame",
+      [](const io::PackingFile& f, const std::string& network) {
+        py::dict scope;
+        py::exec(io::kGsdFrameSource, scope);  // ImportError without numpy or gsd
+        return scope["gsd_frame"](python_of(io::particle_frame_json(io::particle_frame(f, network_of(network)))));
+      },
+      "packing"_a, "network"_a = "load-bearing",
+      "The packing as one gsd.hoomd.Frame, the frame `budjam export --format gsd` writes (needs the gsd "
+      "package).");
+  m.def(
+      "read_run",
+      [](const std::filesystem::path& dir) {
+        namespace rf = io::run_files;
+        const tools::RunData run = tools::load_run(dir);
+        py::list tables;
+        for (const std::string_view name :
+             {rf::steps, rf::divisions, rf::bud_events, rf::moduli, rf::dos, rf::rigidity, rf::trials})
+          if (std::filesystem::is_regular_file(dir / name)) tables.append(dir / name);
+        return py::make_tuple(python_of(run.summary), tables);
+      },
+      "directory"_a,
+      "A finished run directory read and checked as `budjam survival` reads it: (summary.json as a dict, "
+      "the paths of the CSV tables budjam wrote there). budjam.load_run builds on it.");
 
   py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
 

@@ -21,4 +21,8 @@ trap requeue USR1
 # shellcheck disable=SC2086  # the make command is words
 $makecmd "${targets[@]}" &
 child=$!
-wait "$child"
+rc=0
+wait "$child" || rc=$?
+# The status, beside the task's log, for the submitter (submit_sweep.sh with SLURM_WAIT=1).
+echo "$rc" >"$(dirname "$runs")/run-${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}.rc"
+exit "$rc"

@@ -34,6 +34,13 @@ complete_words() {  # prints COMPREPLY for the command line "$@" (the last word 
 [[ $(complete_words "$prefix/bin/budjam" exp) == export ]] || fail "completion of 'budjam exp'"
 [[ $(complete_words "$prefix/bin/budjam" export --fo) == --format ]] || fail "completion of 'budjam export --fo'"
 [[ $(complete_words "$prefix/bin/budjam" export --format g) == gsd ]] || fail "completion of 'budjam export --format g'"
+# Debian's bash-completion (part of the set-up) finds it by itself: its loader looks in
+# share/bash-completion/completions of every XDG data directory.
+loader=/usr/share/bash-completion/bash_completion
+if [[ -f $loader ]]; then
+  XDG_DATA_DIRS=$prefix/share bash -c 'source "$1"; _completion_loader budjam; complete -p budjam' _ "$loader" \
+    | grep -q -- "-F _budjam budjam" || fail "bash-completion's loader does not find the installed completion"
+fi
 
 # find_package(budjam) from a separate project; its program agrees with `budjam rigidity`.
 cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$prefix" \

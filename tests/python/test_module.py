@@ -1,7 +1,6 @@
 """The Python module `budjam` against the command line on the same packings: the same library
 functions must give the same numbers, and the arrays must describe the same physics."""
 import json
-import math
 import shutil
 
 import numpy as np
@@ -97,15 +96,10 @@ def test_moduli_equal_budjam_moduli(run_budjam, relaxed):
     cli = json.loads(run_budjam("moduli", relaxed, "--json").stdout)
     m = budjam.moduli(budjam.read_packing(relaxed))
     assert m["energy_minimum"] and cli["energy_minimum"]
-    assert m["B"] == cli["B"] and m["G"] == cli["G"]
-    for convention in ("moduli", "moduli_affine", "moduli_energy", "moduli_energy_affine"):
-        assert m[convention] == cli[convention], convention
-    s = cli["shear_stability"]
-    assert m["shear_stability"]["G_min"] == s["G_min"] and m["shear_stability"]["G_max"] == s["G_max"]
-    assert math.degrees(m["shear_stability"]["phi_min"]) == pytest.approx(s["phi_min_deg"], rel=1e-12)
+    assert m == {k: v for k, v in cli.items() if k != "file"}
     # G(0) of the shear-stability scan is Lees–Edwards shear: E_xyxy of the energy stiffness.
-    assert m["E"].shape == (4, 4) and m["C"].shape == (3, 3)
-    assert m["shear_stability"]["G_min"] <= m["E"][1, 1] <= m["shear_stability"]["G_max"]
+    E = np.array(m["response"]["E"])
+    assert E.shape == (4, 4) and m["shear_stability"]["G_min"] <= E[1, 1] <= m["shear_stability"]["G_max"]
 
 
 @pytest.mark.slow
@@ -135,7 +129,7 @@ def test_particle_frame_is_what_export_writes(run_budjam, tmp_path):
     atoms = ase.io.read(tmp_path / "p.xyz", format="extxyz")
     f = budjam.particle_frame(budjam.read_packing(PACKING))
     np.testing.assert_array_equal(atoms.positions[:, 0], f["wrapped_x"])
-    np.testing.assert_array_equal(atoms.arrays["rigid_cluster"], f["cluster"])
+    np.testing.assert_array_equal(atoms.arrays["rigid_cluster"], f["rigid_cluster"])
     budjam.export(budjam.read_packing(PACKING), tmp_path / "q.xyz", "xyz")
     assert (tmp_path / "q.xyz").read_bytes() == (tmp_path / "p.xyz").read_bytes()
 

@@ -47,7 +47,7 @@ void run(const Options& o) {
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
-  io::write_particles(out, io::particle_frame(file.packing, which), o.format);
+  io::write_particles(out, io::particle_frame(file, which), o.format);
 }
 
 const bool registered = budjam::cli::register_command(

@@ -1,6 +1,7 @@
 // `budjam render PACKING -o FILE.svg|FILE.png|FILE.pdf [--png] [--scale PX] [--no-images] [--no-contacts]`
-// Draws a packing file as SVG (budjam/render.hpp): lobes with their periodic images, contacts
-// coloured by force, rattlers greyed, unconstrained buds marked. A .png or .pdf output is
+// Draws a packing file as SVG (budjam/render.hpp): lobes with their periodic images, each bud
+// linked to its mother by a dark bar, contacts coloured by force, rattlers greyed, unconstrained
+// buds marked. A .png or .pdf output is
 // converted from the SVG by Debian's rsvg-convert (package librsvg2-bin); --png also writes
 // FILE.png beside FILE.svg.
 #include "commands/command.hpp"

@@ -26,6 +26,18 @@ int error(const std::string& message, int code) {
   return code;
 }
 
+// An expected stop (a signal after a checkpoint) or a finding (a saddle): a notice, not an error.
+int notice(const std::string& message, int code) {
+  std::cerr << "budjam: " << budjam::io::escape_control(message) << std::endl;
+  return code;
+}
+
+// The help that documents what was mistyped: the subcommand's, once one was named.
+std::string help_hint(const CLI::App& app) {
+  const auto chosen = app.get_subcommands();
+  return chosen.empty() ? "budjam --help" : "budjam " + chosen.front()->get_name() + " --help";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -50,14 +62,13 @@ int main(int argc, char** argv) {
     return kExitOk;
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
-    return error(std::string(e.what()) + " (see budjam --help)", kExitBadInput);
+    return error(std::string(e.what()) + " (see " + help_hint(app) + ")", kExitBadInput);
   } catch (const Interrupted& e) {
-    return error(e.what(), 128 + e.signal);
+    return notice(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
   } catch (const Finding& e) {
-    std::cerr << "budjam: " << budjam::io::escape_control(e.what()) << std::endl;
-    return kExitRunFailed;
+    return notice(e.what(), kExitRunFailed);
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {

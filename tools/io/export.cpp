@@ -118,6 +118,12 @@ const std::vector<LobeField>& lobe_fields() {
   return fields;
 }
 
+ParticleFrame particle_frame(const PackingFile& file, RigidityNetwork which) {
+  ParticleFrame f = particle_frame(file.packing, which);
+  if (file.meta.has("step")) f.step = file.meta.integer("step");
+  return f;
+}
+
 std::string format_extxyz(const ParticleFrame& f) {
   std::ostringstream out;
   const std::string L = format_double(f.L);
@@ -175,53 +181,41 @@ std::string format_vtk(const ParticleFrame& f) {
   return out.str();
 }
 
-namespace {
-
-// Reads the frames (JSON, argv[1]) and writes them as GSD (argv[2]). HOOMD conventions: positions
-// centred on the box, box = [Lx, Ly, Lz, xy, xz, yz], dimensions 2; quantities without a HOOMD
-// field go under log/.
-constexpr int kNoGsdPackage = 4;
-constexpr const char* kGsdWriter = R"(import json, sys
-try:
-    import numpy as np
-    import gsd, gsd.hoomd
-except ImportError:
-    sys.exit(4)
+// HOOMD conventions: positions centred on the box, box = [Lx, Ly, Lz, xy, xz, yz], dimensions 2;
+// quantities without a HOOMD field go under log/.
+const char* const kGsdFrameSource = R"(import numpy as np
+import gsd, gsd.hoomd
 Frame = getattr(gsd.hoomd, 'Frame', None) or gsd.hoomd.Snapshot
-mode = 'w' if int(gsd.__version__.split('.')[0]) >= 3 else 'wb'
-with open(sys.argv[1]) as f:
-    frames = json.load(f)
-with gsd.hoomd.open(sys.argv[2], mode) as out:
-    for j in frames:
-        s = Frame()
-        s.configuration.step = j['step']
-        s.configuration.dimensions = 2
-        L, xy = j['L'], j['shear']
-        s.configuration.box = [L, L, 1, xy, 0, 0]
-        n = len(j['radius'])
-        s.particles.N = n
-        s.particles.types = ['mother', 'bud']
-        s.particles.typeid = np.arange(n, dtype=np.uint32) % 2
-        pos = np.zeros((n, 3))
-        pos[:, 0] = np.array(j['x']) - 0.5 * L * (1 + xy)
-        pos[:, 1] = np.array(j['y']) - 0.5 * L
-        s.particles.position = pos
-        s.particles.diameter = 2 * np.array(j['radius'])
-        image = np.zeros((n, 3), dtype=np.int32)
-        image[:, 0], image[:, 1] = j['image_x'], j['image_y']
-        s.particles.image = image
-        s.bonds.N = len(j['bond_kind'])
-        s.bonds.types = ['link', 'contact']
-        s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
-        s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
-        # The cell index is not particles/body: HOOMD reads body >= 0 as constituents of its rigid
-        # bodies.
-        for entry in j['log']:
-            s.log[entry['name']] = np.array(entry['values'], dtype=entry['dtype'])
-        out.append(s)
+def gsd_frame(j):
+    s = Frame()
+    s.configuration.step = j['step']
+    s.configuration.dimensions = 2
+    L, xy = j['L'], j['shear']
+    s.configuration.box = [L, L, 1, xy, 0, 0]
+    n = len(j['radius'])
+    s.particles.N = n
+    s.particles.types = ['mother', 'bud']
+    s.particles.typeid = np.arange(n, dtype=np.uint32) % 2
+    pos = np.zeros((n, 3))
+    pos[:, 0] = np.array(j['x']) - 0.5 * L * (1 + xy)
+    pos[:, 1] = np.array(j['y']) - 0.5 * L
+    s.particles.position = pos
+    s.particles.diameter = 2 * np.array(j['radius'])
+    image = np.zeros((n, 3), dtype=np.int32)
+    image[:, 0], image[:, 1] = j['image_x'], j['image_y']
+    s.particles.image = image
+    s.bonds.N = len(j['bond_kind'])
+    s.bonds.types = ['link', 'contact']
+    s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
+    s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
+    # The cell index is not particles/body: HOOMD reads body >= 0 as constituents of its rigid
+    # bodies.
+    for entry in j['log']:
+        s.log[entry['name']] = np.array(entry['values'], dtype=entry['dtype'])
+    return s
 )";
 
-Json frame_json(const ParticleFrame& f) {
+Json particle_frame_json(const ParticleFrame& f) {
   Json j;
   j["step"] = f.step;
   j["L"] = f.L;
@@ -256,11 +250,31 @@ Json frame_json(const ParticleFrame& f) {
   return j;
 }
 
+namespace {
+
+// Reads the frames (JSON, argv[1]) and writes them as GSD (argv[2]); exit 4 without numpy or gsd.
+constexpr int kNoGsdPackage = 4;
+std::string gsd_writer() {
+  return std::string(R"(import json, sys
+try:
+    import numpy, gsd.hoomd
+except ImportError:
+    sys.exit(4)
+)") + kGsdFrameSource +
+         R"(mode = 'w' if int(gsd.__version__.split('.')[0]) >= 3 else 'wb'
+with open(sys.argv[1]) as f:
+    frames = json.load(f)
+with gsd.hoomd.open(sys.argv[2], mode) as out:
+    for j in frames:
+        out.append(gsd_frame(j))
+)";
+}
+
 }  // namespace
 
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
   Json all = Json::array();
-  for (const auto& f : frames) all.push_back(frame_json(f));
+  for (const auto& f : frames) all.push_back(particle_frame_json(f));
   std::filesystem::path input = path, tmp = path;
   input += ".frames.json";
   tmp += ".tmp";
@@ -269,7 +283,7 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
   const std::string python = env && *env ? env : BUDJAM_PYTHON_EXECUTABLE;
   int rc = 0;
   try {
-    rc = run_program({python, "-c", kGsdWriter, input.string(), tmp.string()}, "export --format gsd",
+    rc = run_program({python, "-c", gsd_writer(), input.string(), tmp.string()}, "export --format gsd",
                      "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
   } catch (...) {
     std::filesystem::remove(input);

@@ -9,6 +9,8 @@
 // (γ = Lees–Edwards shear, the HOOMD tilt factor xy).
 #include "budjam/packing.hpp"
 #include "budjam/rigidity.hpp"
+#include "io/json.hpp"
+#include "io/packing_file.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -49,6 +51,15 @@ struct ParticleFrame {
 // Contacts, contact network and rigid clusters of the packing as it is (nothing is relaxed), as
 // `budjam rigidity` computes them; `which` chooses the network whose clusters label the lobes.
 ParticleFrame particle_frame(const Packing& p, RigidityNetwork which = RigidityNetwork::load_bearing);
+// The same for a packing file, at the growth step its metadata records (0 when it has none).
+ParticleFrame particle_frame(const PackingFile& file, RigidityNetwork which = RigidityNetwork::load_bearing);
+
+// Python source defining gsd_frame(j): the HOOMD frame (gsd.hoomd.Frame, or Snapshot before gsd 3)
+// of particle_frame_json(f). The GSD writer and the Python module's Packing.to_gsd_frame() both
+// run it, so a frame in memory is the frame in the file.
+extern const char* const kGsdFrameSource;
+// The frame as the JSON document gsd_frame reads.
+Json particle_frame_json(const ParticleFrame& f);
 
 // A per-lobe quantity under the one name every format gives it: the XYZ column, the VTK point data
 // and the GSD entry log/particles/<name>. Names that clash with a reader's own attribute (ASE's
