@@ -163,39 +163,46 @@ except ImportError:
     sys.exit(4)
 Frame = getattr(gsd.hoomd, 'Frame', None) or gsd.hoomd.Snapshot
 mode = 'w' if int(gsd.__version__.split('.')[0]) >= 3 else 'wb'
-with open(sys.argv[1]) as f:
-    frames = json.load(f)
-with gsd.hoomd.open(sys.argv[2], mode) as out:
-    for j in frames:
-        s = Frame()
-        s.configuration.step = j['step']
-        s.configuration.dimensions = 2
-        L, xy = j['L'], j['shear']
-        s.configuration.box = [L, L, 1, xy, 0, 0]
-        n = len(j['radius'])
-        s.particles.N = n
-        s.particles.types = ['mother', 'bud']
-        s.particles.typeid = np.arange(n, dtype=np.uint32) % 2
-        pos = np.zeros((n, 3))
-        pos[:, 0] = np.array(j['x']) - 0.5 * L * (1 + xy)
-        pos[:, 1] = np.array(j['y']) - 0.5 * L
-        s.particles.position = pos
-        s.particles.diameter = 2 * np.array(j['radius'])
-        image = np.zeros((n, 3), dtype=np.int32)
-        image[:, 0], image[:, 1] = j['image_x'], j['image_y']
-        s.particles.image = image
-        s.bonds.N = len(j['bond_kind'])
-        s.bonds.types = ['link', 'contact']
-        s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
-        s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
-        # Not particles/body: HOOMD reads body >= 0 as constituents of its rigid bodies.
-        s.log['particles/cell'] = np.arange(n, dtype=np.int64) // 2
-        s.log['particles/id'] = np.array(j['id'], dtype=np.int64)
-        s.log['particles/rigid_cluster'] = np.array(j['cluster'], dtype=np.int32)
-        s.log['particles/rattler'] = np.array(j['rattler'], dtype=np.uint8)
-        s.log['bonds/force'] = np.array(j['bond_force'], dtype=np.float64)
-        s.log['bonds/crosses_boundary'] = np.array(j['bond_crosses'], dtype=np.uint8)
-        out.append(s)
+def write():
+    with open(sys.argv[1]) as f:
+        frames = json.load(f)
+    with gsd.hoomd.open(sys.argv[2], mode) as out:
+        for j in frames:
+            s = Frame()
+            s.configuration.step = j['step']
+            s.configuration.dimensions = 2
+            L, xy = j['L'], j['shear']
+            s.configuration.box = [L, L, 1, xy, 0, 0]
+            n = len(j['radius'])
+            s.particles.N = n
+            s.particles.types = ['mother', 'bud']
+            s.particles.typeid = np.arange(n, dtype=np.uint32) % 2
+            pos = np.zeros((n, 3))
+            pos[:, 0] = np.array(j['x']) - 0.5 * L * (1 + xy)
+            pos[:, 1] = np.array(j['y']) - 0.5 * L
+            s.particles.position = pos
+            s.particles.diameter = 2 * np.array(j['radius'])
+            image = np.zeros((n, 3), dtype=np.int32)
+            image[:, 0], image[:, 1] = j['image_x'], j['image_y']
+            s.particles.image = image
+            s.bonds.N = len(j['bond_kind'])
+            s.bonds.types = ['link', 'contact']
+            s.bonds.typeid = np.array(j['bond_kind'], dtype=np.uint32)
+            s.bonds.group = np.array(j['bond_group'], dtype=np.uint32).reshape(-1, 2)
+            # Not particles/body: HOOMD reads body >= 0 as constituents of its rigid bodies.
+            s.log['particles/cell'] = np.arange(n, dtype=np.int64) // 2
+            s.log['particles/id'] = np.array(j['id'], dtype=np.int64)
+            s.log['particles/rigid_cluster'] = np.array(j['cluster'], dtype=np.int32)
+            s.log['particles/rattler'] = np.array(j['rattler'], dtype=np.uint8)
+            s.log['bonds/force'] = np.array(j['bond_force'], dtype=np.float64)
+            s.log['bonds/crosses_boundary'] = np.array(j['bond_crosses'], dtype=np.uint8)
+            out.append(s)
+# One line, no traceback: the caller reports the failure with its own context.
+try:
+    write()
+except Exception as e:
+    sys.stderr.write('gsd: %s: %s\n' % (type(e).__name__, e))
+    sys.exit(5)
 )";
 
 Json frame_json(const ParticleFrame& f) {
@@ -231,30 +238,23 @@ Json frame_json(const ParticleFrame& f) {
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
   Json all = Json::array();
   for (const auto& f : frames) all.push_back(frame_json(f));
-  std::filesystem::path input = path, tmp = path;
-  input += ".frames.json";
-  tmp += ".tmp";
-  write_atomically(input, all.dump());
+  const Directory dir = Directory::open(path.parent_path(), true);
+  const std::string name = path.filename().string();
+  TempFile input(dir, name + ".frames.json");  // never committed: removed on every way out
+  input.write(all.dump());
+  TempFile out(dir, name);
   const char* env = std::getenv("BUDJAM_PYTHON");
   const std::string python = env && *env ? env : BUDJAM_PYTHON_EXECUTABLE;
-  int rc = 0;
-  try {
-    rc = run_program({python, "-c", kGsdWriter, input.string(), tmp.string()}, "export --format gsd",
-                     "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
-  } catch (...) {
-    std::filesystem::remove(input);
-    throw;
-  }
-  std::filesystem::remove(input);
+  const int rc =
+      run_program({python, "-c", kGsdWriter, input.path().string(), out.path().string()}, "export --format gsd",
+                  "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
   if (rc == kNoGsdPackage)
     throw IoError(path.string() + ": " + python +
                   " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
-  if (rc != 0) {
-    std::filesystem::remove(tmp);
+  if (rc != 0)
     throw IoError(path.string() + ": the GSD writer (" + python + ", package gsd) failed with status " +
                   std::to_string(rc));
-  }
-  std::filesystem::rename(tmp, path);
+  out.commit();
 }
 
 void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format) {

@@ -47,10 +47,10 @@ class Progress : public Observer {
   long last_attempts_ = 0;
 };
 
-const tools::ObserverRegistration registration{"progress",
-                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                                 if (c.quiet || !c.scene.progress) return nullptr;
-                                                 return std::make_unique<Progress>();
-                                               }};
+const tools::ObserverRegistration registration{
+    "progress", {}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (c.quiet || !c.scene.progress) return nullptr;
+      return std::make_unique<Progress>();
+    }};
 
 }  // namespace
