@@ -55,15 +55,16 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
 std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
 
 // Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR` in the background (a run of a few
-// seconds, long enough to be interrupted), its stderr to
+// seconds, long enough to be interrupted; `box_L` another box), its stderr to
 // DIR.stderr; returns its pid.
-pid_t start_grow(const fs::path& scene, const fs::path& dir) {
+pid_t start_grow(const fs::path& scene, const fs::path& dir, const std::string& box_L = "12") {
   const pid_t pid = ::fork();
   REQUIRE(pid >= 0);
   if (pid == 0) {
     const std::string e = exe(), sc = scene.string(), out = dir.string(), err = dir.string() + ".stderr";
+    const std::string L = "box.L=" + box_L;
     if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(126);
-    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=12", "--out", out.c_str(),
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", L.c_str(), "--out", out.c_str(),
             static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -318,8 +319,8 @@ namespace {
 // Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR`, lets it run `delay` seconds after
 // the file `after` (in DIR) appears, sends `sig` and returns the exit status.
 int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig,
-                    const char* after = "steps.csv.partial") {
-  const pid_t pid = start_grow(scene, dir);
+                    const char* after = "steps.csv.partial", const std::string& box_L = "12") {
+  const pid_t pid = start_grow(scene, dir, box_L);
   const auto t0 = std::chrono::steady_clock::now();
   while (!fs::exists(dir / after) && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -506,17 +507,19 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   return out;
 }
 
-// A run (box.L = 12, checkpointed at every accepted step, trials and trajectory on) killed with
-// SIGKILL as soon as its first target packing exists: its checkpoint holds a jamming record and
-// tagged buds, and its logs go on past the checkpoint.
-fs::path killed_after_jamming(const std::string& name) {
-  const fs::path scene = small_scene(name, "[observe]\ncheckpoint_every = 1\ntrials = true\ntrajectory_every = 40\n");
+// A run (box.L = 6, trials and trajectory on) stopped by SIGTERM as soon as it has jammed: its
+// checkpoint holds a jamming record and tagged buds.
+fs::path stopped_after_jamming(const std::string& name) {
+  const fs::path scene = small_scene(name, "[observe]\ncheckpoint_every = 20\ntrials = true\ntrajectory_every = 40\n");
   const fs::path dir = work_dir() / name;
-  fs::remove_all(dir);
-  const int status = grow_and_signal(scene, dir, 0.0, SIGKILL, "packings/target_0.pack");
-  REQUIRE(WIFSIGNALED(status));
-  REQUIRE(fs::exists(dir / "checkpoint.txt"));
-  REQUIRE(slurp(dir / "checkpoint.txt").find("\njamming 1 ") != std::string::npos);
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    fs::remove_all(dir);
+    const int status = grow_and_signal(scene, dir, 0.0, SIGTERM, "packings/jammed.pack", "6");
+    REQUIRE(WIFEXITED(status));
+    if (WEXITSTATUS(status) == 143 && slurp(dir / "checkpoint.txt").find("\njamming 1 ") != std::string::npos)
+      return dir;
+  }
+  FAIL("no SIGTERM after jamming left a checkpoint with the jamming record in " << dir);
   return dir;
 }
 
@@ -572,7 +575,7 @@ void refused_unchanged(const fs::path& dir, const std::string& expect) {
 }  // namespace
 
 TEST_CASE("a refused resume leaves the run directory byte-identical, whichever file is damaged", "[grow_cli]") {
-  const fs::path run = killed_after_jamming("damage");
+  const fs::path run = stopped_after_jamming("damage");
   const fs::path copy = work_dir() / "damage_copy";
   auto fresh_copy = [&] {
     fs::remove_all(copy);
@@ -619,7 +622,7 @@ TEST_CASE("a refused resume leaves the run directory byte-identical, whichever f
 
 TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed against the logs and packings",
           "[grow_cli]") {
-  const fs::path run = killed_after_jamming("edited");
+  const fs::path run = stopped_after_jamming("edited");
   const std::vector<std::string> lines = lines_of(slurp(run / "checkpoint.txt"));
   const fs::path copy = work_dir() / "edited_copy";
   auto edited = [&](const std::function<void(std::vector<std::string>&)>& edit, const std::string& expect) {
@@ -686,7 +689,7 @@ TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed 
 TEST_CASE("resume refuses a scene with any key edited, and a P0 edit even with the scene hash recomputed",
           "[grow_cli]") {
   using namespace budjam;
-  const fs::path run = killed_after_jamming("keys");
+  const fs::path run = stopped_after_jamming("keys");
   const std::string text = slurp(run / "scene.toml");
   const Scene original = io::parse_scene(text, "scene.toml");
   const fs::path copy = work_dir() / "keys_copy";
@@ -717,14 +720,23 @@ TEST_CASE("resume refuses a scene with any key edited, and a P0 edit even with t
       if (!l->empty()) candidates.push_back(std::vector<double>(l->begin(), l->end() - 1));
     }
     if (k.type == KeyType::real_or_none && std::holds_alternative<double>(v)) candidates.push_back(std::string("none"));
+    // init.kind and init.cells are only valid together: random seeds need at least one cell.
+    auto with_seeds = [](Scene& s) {
+      find_scene_key("init.kind")->set(s, std::string("random_seeds"));
+      if (s.n_seeds == 0) s.n_seeds = 1;
+    };
     for (const SceneValue& c : candidates) {
-      Scene s = original;
-      try {
-        k.set(s, c);
-        validate(s);
-        changed = s;
-        break;
-      } catch (const std::exception&) {}
+      for (bool seeds : {false, true}) {
+        Scene s = original;
+        try {
+          k.set(s, c);
+          if (seeds) with_seeds(s);
+          validate(s);
+          changed = s;
+          break;
+        } catch (const std::exception&) {}
+      }
+      if (changed) break;
     }
     INFO(k.key());
     REQUIRE(changed);

@@ -59,8 +59,10 @@ RunLog::RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resumin
           run_dir.root(),
           {{std::string(run_files::steps), step_columns()}, {std::string(run_files::divisions), division_columns()}},
           resuming),
-      packings_(run_dir.root().subdirectory(run_files::packings, !resuming)),
-      seed_(seed) {}
+      run_dir_(run_dir),
+      seed_(seed) {
+  if (!resuming) packings();  // every run directory has packings/, also one that never jams
+}
 
 io::OwnedEntries RunLog::files() {
   const std::string p = std::string(run_files::packings) + "/";
@@ -132,17 +134,18 @@ void RunLog::write_pack(const std::string& stem, const StateView& s, const std::
     meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
     meta.set_number("Z", s.network->Z);
   }
-  io::write_packing(packings_, stem + ".pack", *s.packing, meta);
+  io::write_packing(packings(), stem + ".pack", *s.packing, meta);
 }
 
 void RunLog::on_unjammed(const Unjammed&) {
   // The jamming point, the targets and φ_2 of the lost episode are void (summary.json drops
   // them too); they are written again when reached in the next episode.
-  for (const std::string& name : packings_.names()) {
+  const io::Directory dir = packings();
+  for (const std::string& name : dir.names()) {
     const fs::path p(name);
-    const auto st = packings_.entry(name);
+    const auto st = dir.entry(name);
     if (st && S_ISREG(st->st_mode) && p.extension() == ".pack" && run_files::is_run_packing_stem(p.stem().string()))
-      packings_.remove(name);
+      dir.remove(name);
   }
 }
 
@@ -154,7 +157,17 @@ void RunLog::on_target_reached(const TargetReached& e) {
 
 void RunLog::check_resumed_state(const GrowthState& s, const Scene& scene, const io::CheckpointLines& at,
                                  const std::string& checkpoint_file) const {
-  io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_cut(kDivisions), packings_);
+  const io::Directory& root = run_dir_.root();
+  if (!root.entry(run_files::packings)) {
+    if (s.result.jamming)
+      throw InputError(io::escape_control(checkpoint_file + ":" + std::to_string(at.jamming) +
+                                          ": the record has no saved packing (no packings/ directory)"));
+    // Without records no packing is read: the run directory stands in for packings/.
+    io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_cut(kDivisions), root);
+    return;
+  }
+  io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_cut(kDivisions),
+                        root.subdirectory(run_files::packings, false));
 }
 
 // ---- summary.json --------------------------------------------------------------------------------

@@ -46,7 +46,9 @@ class RunLog : public CsvLogObserver {
 
  private:
   void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
-  io::Directory packings_;
+  // Opened when used: a resume refused for another reason must not find packings/ created.
+  io::Directory packings() const { return run_dir_.subdirectory(io::run_files::packings); }
+  const io::RunDirectory& run_dir_;
   std::uint64_t seed_;
   static constexpr std::size_t kSteps = 0, kDivisions = 1;  // log(k)
 };
