@@ -5,13 +5,16 @@
 // that is accepted or refused with InputError, and calls std::abort() when a property fails;
 // any other exception escapes.
 #include "budjam/scene.hpp"
+#include "io/atomic_file.hpp"
 #include "io/checkpoint.hpp"
 #include "io/packing_file.hpp"
 #include "io/scene_file.hpp"
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <istream>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -73,27 +76,79 @@ struct LogLengths : Observer {
   }
 };
 
-// The checkpoint reader past its checksum: the input's last line is replaced by the right
-// checksum, so that inputs explore the parser and its range checks instead of being refused
-// at once. Any input is read or refused; what is read is restored into a driver and one growth
-// attempt is made from it (a short FIRE budget: an edited state may be far from relaxed).
-inline void checkpoint(std::string_view input) {
+// The input with its last line replaced by the right checksum, so that inputs explore the parser
+// and its range checks instead of being refused at once.
+inline std::string with_checksum(std::string_view input) {
   std::string text(input);
   const std::size_t at = text.rfind("checksum ");
   if (at != std::string::npos) text.resize(at);
   char sum[40];
   std::snprintf(sum, sizeof sum, "checksum %016llx\n", static_cast<unsigned long long>(io::fnv1a64(text)));
-  text += sum;
+  return text + sum;
+}
+
+// One growth attempt from an accepted state (a short FIRE budget: an edited state may be far
+// from relaxed).
+inline void advance_from(GrowthState s) {
+  Scene quick = checkpoint_scene();
+  quick.fire.max_iterations = 200;
+  GrowthDriver driver(quick);
+  driver.restore(std::move(s));
+  driver.advance();
+}
+
+// The checkpoint reader past its checksum. Any input is read or refused; what is read is restored
+// into a driver and one growth attempt is made from it.
+inline void checkpoint(std::string_view input) {
+  const std::string text = with_checksum(input);
   const Scene& scene = checkpoint_scene();
   LogLengths run_log("run_log", 2), buds("bud_events", 1);
   const std::vector<Observer*> observers{&buds, &run_log};
   try {
-    GrowthState s = io::parse_checkpoint(text, "fuzz.txt", scene, scene.seed, observers);
-    Scene quick = scene;
-    quick.fire.max_iterations = 200;
-    GrowthDriver driver(quick);
-    driver.restore(std::move(s));
-    driver.advance();
+    advance_from(io::parse_checkpoint(text, "fuzz.txt", scene, scene.seed, observers));
+  } catch (const InputError&) {}
+}
+
+// The run log's section read as `budjam grow --resume` reads it: the two log lengths, each
+// checked against the log in `dir` (its header as the file has it).
+struct RunLogCuts : Observer {
+  io::Directory dir;
+  io::CsvLog::Cut steps, divisions;
+  explicit RunLogCuts(io::Directory d) : dir(std::move(d)) {}
+  std::string name() const override { return "run_log"; }
+  bool stateful() const override { return true; }
+  io::CsvLog::Cut cut(const std::string& log, std::uint64_t bytes) const {
+    const std::string text = io::read_text_file(dir, log + ".partial");
+    std::vector<std::string> columns;
+    std::istringstream header(text.substr(0, text.find('\n')));
+    for (std::string c; std::getline(header, c, ',');) columns.push_back(c);
+    return io::CsvLog::check_resumable(dir, log, columns, bytes);
+  }
+  void load_state(std::istream& is) override {
+    std::uint64_t s = 0, d = 0;
+    if (!(is >> s >> d)) throw InputError("bad run_log state");
+    steps = cut("steps.csv", s);
+    divisions = cut("divisions.csv", d);
+  }
+};
+
+// The resume checks past the checksum: the checkpoint parsed, then cross-checked against the
+// logs and packings of a run of checkpoint_scene() killed after jamming (`run_dir`, e.g.
+// fuzz/fixtures/resume/, as `budjam grow` left it), which are only read. Any input is refused
+// with InputError or accepted; what is accepted is grown one attempt.
+inline void resume(std::string_view input, const std::filesystem::path& run_dir) {
+  const std::string text = with_checksum(input);
+  const Scene& scene = checkpoint_scene();
+  const io::Directory dir = io::Directory::open(run_dir, false);
+  RunLogCuts run_log(dir);
+  LogLengths buds("bud_events", 1);
+  const std::vector<Observer*> observers{&buds, &run_log};
+  try {
+    io::CheckpointLines lines;
+    GrowthState s = io::parse_checkpoint(text, "fuzz.txt", scene, scene.seed, observers, &lines);
+    io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.divisions,
+                          dir.subdirectory("packings", false));
+    advance_from(std::move(s));
   } catch (const InputError&) {}
 }
 

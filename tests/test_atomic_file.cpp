@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 #include "small_disk.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -111,7 +112,7 @@ TEST_CASE("a CSV log is .partial until finished, then complete under its own nam
   TempDir dir("csv");
   const fs::path file = dir.path / "steps.csv";
   {
-    CsvLog log(file, {"step", "phi", "phase", "N_c"});
+    CsvLog log(Directory::open(dir.path, false), "steps.csv", {"step", "phi", "phase", "N_c"});
     log.row({1, 0.5, "growing", CsvField::missing()});
     log.row({2, 0.1 + 0.2, "jammed", std::optional<double>(12.0)});
     CHECK(fs::exists(log.partial_path()));
@@ -127,7 +128,7 @@ TEST_CASE("a CSV log is .partial until finished, then complete under its own nam
 TEST_CASE("a log that is never finished stays .partial", "[atomic][csv]") {
   TempDir dir("csv-unfinished");
   {
-    CsvLog log(dir.path / "divisions.csv", {"step", "id"});
+    CsvLog log(Directory::open(dir.path, false), "divisions.csv", {"step", "id"});
     log.row({5, 7});
   }  // destroyed without finish(): as if the run had stopped here
   CHECK(names_in(dir.path) == std::vector<std::string>{"divisions.csv.partial"});
@@ -136,11 +137,11 @@ TEST_CASE("a log that is never finished stays .partial", "[atomic][csv]") {
 TEST_CASE("starting a log removes a finished log of an earlier run in the same place", "[atomic][csv]") {
   TempDir dir("csv-stale");
   {
-    CsvLog log(dir.path / "steps.csv", {"a"});
+    CsvLog log(Directory::open(dir.path, false), "steps.csv", {"a"});
     log.row({1});
     log.finish();
   }
-  CsvLog again(dir.path / "steps.csv", {"a"});
+  CsvLog again(Directory::open(dir.path, false), "steps.csv", {"a"});
   CHECK_FALSE(fs::exists(dir.path / "steps.csv"));
 }
 
@@ -160,7 +161,7 @@ TEST_CASE("CSV fields read back exactly: round-trip doubles, RFC 4180 quoting", 
 
 TEST_CASE("a row with the wrong number of fields is refused", "[csv]") {
   TempDir dir("csv-count");
-  CsvLog log(dir.path / "x.csv", {"a", "b"});
+  CsvLog log(Directory::open(dir.path, false), "x.csv", {"a", "b"});
   CHECK_THROWS_AS(log.row({1}), std::logic_error);
   CHECK_THROWS_AS(log.row({1, 2, 3}), std::logic_error);
 }
@@ -171,20 +172,20 @@ TEST_CASE("resuming a log at a checkpointed size gives the same file as an unint
   auto value = [](int i) { return 0.5 + 1e-3 * i / 7.0; };
 
   {  // the uninterrupted run
-    CsvLog log(dir.path / "ref.csv", cols);
+    CsvLog log(Directory::open(dir.path, false), "ref.csv", cols);
     for (int i = 0; i < 20; ++i) log.row({i, value(i)});
     log.finish();
   }
   std::uint64_t checkpoint = 0;
   {  // the interrupted run: checkpoint after 12 rows, then 5 more rows are lost with the process
-    CsvLog log(dir.path / "run.csv", cols);
+    CsvLog log(Directory::open(dir.path, false), "run.csv", cols);
     for (int i = 0; i < 12; ++i) log.row({i, value(i)});
     log.sync();
     checkpoint = log.bytes();
     for (int i = 12; i < 17; ++i) log.row({i, value(i)});
   }
   {
-    CsvLog log = CsvLog::resume(dir.path / "run.csv", cols, checkpoint);
+    CsvLog log = CsvLog::resume(Directory::open(dir.path, false), "run.csv", cols, checkpoint);
     CHECK(log.bytes() == checkpoint);
     for (int i = 12; i < 20; ++i) log.row({i, value(i)});
     log.finish();
@@ -192,17 +193,82 @@ TEST_CASE("resuming a log at a checkpointed size gives the same file as an unint
   CHECK(slurp(dir.path / "run.csv") == slurp(dir.path / "ref.csv"));
 
   // Refusals: no partial file, another header, fewer bytes than the checkpoint says.
-  CHECK_THROWS_AS(CsvLog::resume(dir.path / "none.csv", cols, 10), InputError);
+  CHECK_THROWS_AS(CsvLog::resume(Directory::open(dir.path, false), "none.csv", cols, 10), InputError);
   {
-    CsvLog log(dir.path / "short.csv", cols);
+    CsvLog log(Directory::open(dir.path, false), "short.csv", cols);
     log.row({1, 2.0});
   }
-  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", {"step", "P"}, 10), Contains("header"));
-  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 1000), Contains("checkpoint expects 1000"));
+  CHECK_THROWS_WITH(CsvLog::resume(Directory::open(dir.path, false), "short.csv", {"step", "P"}, 10),
+                    Contains("header"));
+  CHECK_THROWS_WITH(CsvLog::resume(Directory::open(dir.path, false), "short.csv", cols, 1000),
+                    Contains("checkpoint expects 1000"));
   // A cut point inside a row (here: after "step,phi\n1,") would leave half a row to append to.
-  CHECK_THROWS_WITH(CsvLog::resume(dir.path / "short.csv", cols, 11), Contains("not the end of a line"));
+  CHECK_THROWS_WITH(CsvLog::resume(Directory::open(dir.path, false), "short.csv", cols, 11),
+                    Contains("not the end of a line"));
   CHECK(slurp(dir.path / "short.csv.partial") == "step,phi\n1,2\n");  // refused: untouched
-  CHECK_NOTHROW(CsvLog::resume(dir.path / "short.csv", cols, 9));
+  const CsvLog::Cut cut = CsvLog::check_resumable(Directory::open(dir.path, false), "short.csv", cols, 13);
+  CHECK(cut.rows == 1);
+  CHECK(cut.last_row == "1,2");
+  CHECK(CsvLog::check_resumable(Directory::open(dir.path, false), "short.csv", cols, 9).rows == 0);
+  CHECK(slurp(dir.path / "short.csv.partial") == "step,phi\n1,2\n");  // checking changes nothing
+  CHECK_NOTHROW(CsvLog::resume(Directory::open(dir.path, false), "short.csv", cols, 9));
+  CHECK(slurp(dir.path / "short.csv.partial") == "step,phi\n");
+}
+
+TEST_CASE("a link in a written file's place is replaced, never written through", "[atomic]") {
+  TempDir dir("links");
+  const fs::path foreign = dir.path / "foreign.txt";
+  std::ofstream(foreign) << "foreign\n";
+  fs::create_symlink(foreign, dir.path / "summary.json");
+  write_atomically(dir.path / "summary.json", "{}\n");
+  CHECK(slurp(foreign) == "foreign\n");
+  CHECK_FALSE(fs::is_symlink(dir.path / "summary.json"));
+  CHECK(slurp(dir.path / "summary.json") == "{}\n");
+  // A log, a read, a subdirectory: refused with one line naming the link.
+  const Directory d = Directory::open(dir.path, false);
+  fs::create_symlink(foreign, dir.path / "steps.csv.partial");
+  CHECK_THROWS_WITH(CsvLog::check_resumable(d, "steps.csv", {"a"}, 2),
+                    Contains("steps.csv.partial: is a symbolic link"));
+  CHECK_THROWS_WITH(read_text_file(d, "steps.csv.partial"), Contains("is a symbolic link"));
+  fs::create_directory_symlink(dir.path, dir.path / "packings");
+  CHECK_THROWS_WITH(d.subdirectory("packings", true), Contains("packings: is a symbolic link"));
+  CHECK(slurp(foreign) == "foreign\n");
+}
+
+TEST_CASE("every file written gets the same mode, the one open(2) gives with 0666 and the umask", "[atomic]") {
+  TempDir dir("modes");
+  const Directory d = Directory::open(dir.path, false);
+  write_atomically(d, "whole.json", "{}\n");
+  {
+    CsvLog log(d, "log.csv", {"a"});
+    log.finish();
+  }
+  {
+    TempFile t(d, "external.gsd");
+    // a program that creates its output with its own mode (gsd: 0640) in the temporary's place
+    fs::remove(t.path());
+    const int fd = ::open(t.path().c_str(), O_WRONLY | O_CREAT | O_EXCL, 0640);
+    REQUIRE(fd >= 0);
+    ::close(fd);
+    t.commit();
+  }
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  for (const char* f : {"whole.json", "log.csv", "external.gsd"}) {
+    INFO(f);
+    CHECK((fs::status(dir.path / f).permissions() & fs::perms::all) == fs::perms(0666 & ~mask));
+  }
+}
+
+TEST_CASE("output names that do not name a file are refused", "[atomic]") {
+  TempDir dir("names");
+  for (const std::string bad : {"d/", "", ".", "..", "x/..", "=odd.png", "sub/=odd.gsd"}) {
+    INFO(bad);
+    CHECK_THROWS_AS(check_output_name("--out", bad), InputError);
+  }
+  CHECK_THROWS_WITH(check_output_name("--out", dir.path), Contains("is a directory"));
+  CHECK_NOTHROW(check_output_name("-o", dir.path / "-dash.png"));
+  CHECK_NOTHROW(check_output_name("-o", "odd=.png"));
 }
 
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {
@@ -214,7 +280,7 @@ TEST_CASE("a process killed while logging leaves only whole lines in the .partia
   REQUIRE(child >= 0);
   if (child == 0) {
     ::close(ready[0]);
-    CsvLog log(file, {"step", "phi", "phase"});
+    CsvLog log(Directory::open(dir.path, false), "steps.csv", {"step", "phi", "phase"});
     for (long i = 0;; ++i) {
       log.row({i, 0.5 + 1e-9 * static_cast<double>(i), "growing"});
       if (i == 1000) (void)!::write(ready[1], "x", 1);
@@ -273,7 +339,7 @@ TEST_CASE("a log that hits a full disk still ends with a whole row", "[csv]") {
       return;
     }
     const fs::path file = disk.path / "steps.csv";
-    CsvLog log(file, {"step", "phi", "note"});
+    CsvLog log(Directory::open(disk.path, false), "steps.csv", {"step", "phi", "note"});
     bool full = false;
     for (int i = 0; i < 100000 && !full; ++i) {
       try {

@@ -53,3 +53,38 @@ TEST_CASE("the packing harness passes on its corpus and reproducers", "[fuzz][.h
 TEST_CASE("the checkpoint harness passes on its corpus and reproducers", "[fuzz][.hard]") {
   replay("checkpoint", budjam::fuzz::checkpoint);
 }
+
+TEST_CASE("the resume harness passes on its corpus and reproducers", "[fuzz][.hard]") {
+  const fs::path run = fs::path(std::getenv("BUDJAM_SOURCE_DIR")) / "fuzz" / "fixtures" / "resume";
+  replay("resume", [&](std::string_view text) { budjam::fuzz::resume(text, run); });
+}
+
+TEST_CASE("the resume harness reaches the checks against the run's files", "[fuzz]") {
+  // Its seed is the fixture's own checkpoint: accepted as it is, refused by the cross-checks once
+  // a record disagrees with the packings (the harness recomputes the checksum).
+  const fs::path run = fs::path(std::getenv("BUDJAM_SOURCE_DIR")) / "fuzz" / "fixtures" / "resume";
+  std::ifstream in(run / "checkpoint.txt", std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string good = text.str();
+  const budjam::Scene& scene = budjam::fuzz::checkpoint_scene();
+  const budjam::io::Directory dir = budjam::io::Directory::open(run, false);
+  budjam::fuzz::RunLogCuts run_log(dir);
+  budjam::fuzz::LogLengths buds("bud_events", 1);
+  const std::vector<budjam::Observer*> observers{&buds, &run_log};
+  auto check = [&](const std::string& t) {
+    budjam::io::CheckpointLines lines;
+    const budjam::GrowthState s =
+        budjam::io::parse_checkpoint(budjam::fuzz::with_checksum(t), "fuzz.txt", scene, scene.seed, observers, &lines);
+    budjam::io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.divisions,
+                                  dir.subdirectory("packings", false));
+  };
+  CHECK_NOTHROW(check(good));
+  const std::size_t at = good.find("\njamming 1 ");
+  REQUIRE(at != std::string::npos);
+  // The jamming record's φ_J one digit off: only packings/jammed.pack can tell.
+  std::string bad = good;
+  const std::size_t phi = bad.find(' ', bad.find(' ', bad.find(' ', bad.find(' ', at + 1) + 1) + 1) + 1) + 1;
+  bad[phi + 3] = bad[phi + 3] == '1' ? '2' : '1';
+  CHECK_THROWS_WITH(check(bad), Catch::Matchers::Contains("disagrees with packings/jammed.pack"));
+}

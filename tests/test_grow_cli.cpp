@@ -1,6 +1,9 @@
 // `budjam grow` end to end: the run directory, determinism, failure statuses, resume after SIGKILL.
+#include "budjam/scene_keys.hpp"
+#include "io/checkpoint.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
+#include "io/scene_file.hpp"
 
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"
@@ -16,6 +19,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -49,15 +55,16 @@ fs::path small_scene(const std::string& name, const std::string& extra = "") {
 std::string q(const fs::path& p) { return budjam::testing::shell_quoted(p); }
 
 // Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR` in the background (a run of a few
-// seconds, long enough to be interrupted), its stderr to
+// seconds, long enough to be interrupted; `box_L` another box), its stderr to
 // DIR.stderr; returns its pid.
-pid_t start_grow(const fs::path& scene, const fs::path& dir) {
+pid_t start_grow(const fs::path& scene, const fs::path& dir, const std::string& box_L = "12") {
   const pid_t pid = ::fork();
   REQUIRE(pid >= 0);
   if (pid == 0) {
     const std::string e = exe(), sc = scene.string(), out = dir.string(), err = dir.string() + ".stderr";
+    const std::string L = "box.L=" + box_L;
     if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(126);
-    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", "box.L=12", "--out", out.c_str(),
+    ::execl(e.c_str(), e.c_str(), "grow", sc.c_str(), "--quiet", "--set", L.c_str(), "--out", out.c_str(),
             static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -312,8 +319,8 @@ namespace {
 // Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR`, lets it run `delay` seconds after
 // the file `after` (in DIR) appears, sends `sig` and returns the exit status.
 int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, int sig,
-                    const char* after = "steps.csv.partial") {
-  const pid_t pid = start_grow(scene, dir);
+                    const char* after = "steps.csv.partial", const std::string& box_L = "12") {
+  const pid_t pid = start_grow(scene, dir, box_L);
   const auto t0 = std::chrono::steady_clock::now();
   while (!fs::exists(dir / after) && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -481,4 +488,303 @@ TEST_CASE("a run that fills its disk exits 3 with one line and leaves whole rows
         CHECK((text.empty() || text.back() == '\n'));
       }
   }
+}
+
+namespace {
+
+// Every regular file and link under `dir` with its content (a link: its target), but the lock,
+// which records the last claimant.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const std::string rel = fs::relative(e.path(), dir).string();
+    if (rel == ".budjam-lock") continue;
+    if (e.is_symlink())
+      out[rel] = "-> " + fs::read_symlink(e.path()).string();
+    else if (e.is_regular_file())
+      out[rel] = slurp(e.path());
+    else
+      out[rel] = "<dir>";
+  }
+  return out;
+}
+
+// A run (box.L = 6, trials and trajectory on) stopped by SIGTERM as soon as it has jammed: its
+// checkpoint holds a jamming record and tagged buds.
+fs::path stopped_after_jamming(const std::string& name) {
+  const fs::path scene = small_scene(name, "[observe]\ncheckpoint_every = 20\ntrials = true\ntrajectory_every = 40\n");
+  const fs::path dir = work_dir() / name;
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    fs::remove_all(dir);
+    const int status = grow_and_signal(scene, dir, 0.0, SIGTERM, "packings/jammed.pack", "6");
+    REQUIRE(WIFEXITED(status));
+    if (WEXITSTATUS(status) == 143 && slurp(dir / "checkpoint.txt").find("\njamming 1 ") != std::string::npos)
+      return dir;
+  }
+  FAIL("no SIGTERM after jamming left a checkpoint with the jamming record in " << dir);
+  return dir;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> v;
+  std::istringstream is(text);
+  for (std::string l; std::getline(is, l);) v.push_back(l);
+  return v;
+}
+
+std::vector<std::string> words_of(const std::string& line) {
+  std::vector<std::string> w;
+  std::istringstream is(line);
+  for (std::string x; is >> x;) w.push_back(x);
+  return w;
+}
+
+std::string joined(const std::vector<std::string>& w) {
+  std::string s;
+  for (const auto& x : w) s += (s.empty() ? "" : " ") + x;
+  return s;
+}
+
+// The checkpoint text with its checksum line recomputed, as an editor who knows the format writes it.
+void write_with_checksum(const fs::path& file, std::vector<std::string> lines) {
+  lines.pop_back();
+  std::string body;
+  for (const auto& l : lines) body += l + "\n";
+  char sum[40];
+  std::snprintf(sum, sizeof sum, "checksum %016llx\n", static_cast<unsigned long long>(budjam::io::fnv1a64(body)));
+  std::ofstream(file, std::ios::trunc) << body << sum;
+}
+
+std::size_t line_starting(const std::vector<std::string>& lines, const std::string& prefix) {
+  for (std::size_t k = 0; k < lines.size(); ++k)
+    if (lines[k].rfind(prefix, 0) == 0) return k;
+  FAIL("no line starts with '" << prefix << "'");
+  return 0;
+}
+
+// Resumes `dir`, which must be refused with exit 2 and one line holding `expect`, leaving
+// every file of the directory as it was.
+void refused_unchanged(const fs::path& dir, const std::string& expect) {
+  const auto before = snapshot(dir);
+  const Result r = grow("--resume " + q(dir) + " --quiet");
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find(expect) != std::string::npos);
+  CHECK(snapshot(dir) == before);
+}
+
+}  // namespace
+
+TEST_CASE("a refused resume leaves the run directory byte-identical, whichever file is damaged", "[grow_cli]") {
+  const fs::path run = stopped_after_jamming("damage");
+  const fs::path copy = work_dir() / "damage_copy";
+  auto fresh_copy = [&] {
+    fs::remove_all(copy);
+    fs::copy(run, copy, fs::copy_options::recursive);
+  };
+  auto truncate_to = [&](const char* file, std::size_t bytes) {
+    fs::resize_file(copy / file, std::min<std::uintmax_t>(bytes, fs::file_size(copy / file)));
+  };
+  // Each log cut short of what the checkpoint records (the other logs would be cut back first
+  // if the checks were not all made before the first cut).
+  for (const char* log : {"steps.csv.partial", "divisions.csv.partial", "bud_events.csv.partial", "trials.csv.partial",
+                          "trajectory.xyz.partial"}) {
+    fresh_copy();
+    truncate_to(log, 3);
+    INFO(log);
+    refused_unchanged(copy, log);
+  }
+  fresh_copy();
+  std::string text = slurp(copy / "checkpoint.txt");
+  text[text.size() / 2] = text[text.size() / 2] == '1' ? '2' : '1';
+  std::ofstream(copy / "checkpoint.txt", std::ios::trunc) << text;
+  refused_unchanged(copy, "checkpoint.txt:");
+
+  fresh_copy();
+  std::ofstream(copy / "scene.toml", std::ios::app) << "[box]\nL = 13.0\n";
+  refused_unchanged(copy, "scene.toml");
+
+  fresh_copy();
+  std::ofstream(copy / "packings/jammed.pack", std::ios::app) << "not a cell\n";
+  refused_unchanged(copy, "jammed.pack");
+
+  fresh_copy();
+  fs::remove(copy / ".budjam-run");
+  refused_unchanged(copy, "not a budjam run directory");
+
+  // A temporary a killed writer recorded is removed only by a resume that goes ahead.
+  fresh_copy();
+  const Result r = grow("--resume " + q(copy) + " --quiet");
+  INFO(r.err);
+  CHECK(r.code == 0);
+  for (const auto& e : fs::recursive_directory_iterator(copy))
+    CHECK(e.path().filename().string().find(".tmp-") == std::string::npos);
+}
+
+TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed against the logs and packings",
+          "[grow_cli]") {
+  const fs::path run = stopped_after_jamming("edited");
+  const std::vector<std::string> lines = lines_of(slurp(run / "checkpoint.txt"));
+  const fs::path copy = work_dir() / "edited_copy";
+  auto edited = [&](const std::function<void(std::vector<std::string>&)>& edit, const std::string& expect) {
+    fs::remove_all(copy);
+    fs::copy(run, copy, fs::copy_options::recursive);
+    std::vector<std::string> v = lines;
+    edit(v);
+    REQUIRE(v != lines);
+    write_with_checksum(copy / "checkpoint.txt", v);
+    refused_unchanged(copy, expect);
+  };
+  const std::size_t state = line_starting(lines, "state "), counters = line_starting(lines, "counters ");
+  const std::size_t jamming = line_starting(lines, "jamming "), buds = line_starting(lines, "buds ");
+  const std::size_t run_log = line_starting(lines, "observer run_log ");
+  auto at = [](std::size_t k) { return "checkpoint.txt:" + std::to_string(k + 1) + ": "; };
+
+  // A step counter one ahead (attempts and accepted kept consistent): steps.csv has one row fewer.
+  edited(
+      [&](auto& v) {
+        auto s = words_of(v[state]), c = words_of(v[counters]);
+        s[5] = std::to_string(std::stol(s[5]) + 1), s[6] = std::to_string(std::stol(s[6]) + 1);
+        c[1] = std::to_string(std::stol(c[1]) + 1);
+        v[state] = joined(s), v[counters] = joined(c);
+      },
+      at(state) + "step ");
+  // One division more than divisions.csv holds.
+  edited(
+      [&](auto& v) {
+        auto c = words_of(v[counters]);
+        c[5] = std::to_string(std::stol(c[5]) + 1);
+        v[counters] = joined(c);
+      },
+      at(counters) + "divisions ");
+  // Z_J = 9.5, which packings/jammed.pack does not have.
+  edited(
+      [&](auto& v) {
+        auto j = words_of(v[jamming]);
+        j[14] = "9.5";
+        v[jamming] = joined(j);
+      },
+      at(jamming) + "Z = 9.5 disagrees with packings/jammed.pack");
+  // A tagged bud's size at jamming.
+  REQUIRE(std::stoi(words_of(lines[buds])[2]) > 0);
+  edited(
+      [&](auto& v) {
+        auto t = words_of(v[buds + 1]);
+        t[1] = "0.5";
+        v[buds + 1] = joined(t);
+      },
+      at(buds + 1) + "tagged bud");
+  // steps.csv's recorded length 50 rows short (still a line end).
+  edited(
+      [&](auto& v) {
+        auto b = words_of(v[run_log + 1]);
+        const std::string steps = slurp(run / "steps.csv.partial").substr(0, std::stoul(b[0]));
+        std::size_t cut = steps.size() - 1;
+        for (int k = 0; k < 50; ++k) cut = steps.rfind('\n', cut - 1);
+        b[0] = std::to_string(cut + 1);
+        v[run_log + 1] = joined(b);
+      },
+      at(state) + "step ");
+}
+
+TEST_CASE("resume refuses a scene with any key edited, and a P0 edit even with the scene hash recomputed",
+          "[grow_cli]") {
+  using namespace budjam;
+  const fs::path run = stopped_after_jamming("keys");
+  const std::string text = slurp(run / "scene.toml");
+  const Scene original = io::parse_scene(text, "scene.toml");
+  const fs::path copy = work_dir() / "keys_copy";
+  auto fresh_copy = [&] {
+    fs::remove_all(copy);
+    fs::copy(run, copy, fs::copy_options::recursive);
+  };
+  std::size_t edited_keys = 0;
+  for (const SceneKey& k : scene_keys()) {
+    if (k.key() == "minimiser.threads") continue;  // not physics: a resume may use other threads
+    // The first of a few plausible edits of the key that still makes a valid scene.
+    std::optional<Scene> changed;
+    const SceneValue v = k.get(original);
+    std::vector<SceneValue> candidates;
+    if (const auto* b = std::get_if<bool>(&v)) candidates.push_back(!*b);
+    if (const auto* i = std::get_if<std::int64_t>(&v)) candidates = {*i + 1, *i - 1};
+    if (const auto* d = std::get_if<double>(&v)) candidates = {*d * 1.25, *d * 0.8, *d + 1, *d - 1};
+    if (const auto* s = std::get_if<std::string>(&v)) {
+      for (const auto& c : k.choices)
+        if (c != *s) candidates.push_back(c);
+      if (k.type == KeyType::text) candidates.push_back(*s + "x");
+      if (k.type == KeyType::real_or_none) candidates.push_back(1e-3);
+    }
+    if (const auto* l = std::get_if<std::vector<double>>(&v)) {
+      auto longer = *l;
+      longer.push_back(l->empty() ? 0.5 : l->back() * 2);
+      candidates.push_back(longer);
+      if (!l->empty()) candidates.push_back(std::vector<double>(l->begin(), l->end() - 1));
+    }
+    if (k.type == KeyType::real_or_none && std::holds_alternative<double>(v)) candidates.push_back(std::string("none"));
+    // init.kind and init.cells are only valid together: random seeds need at least one cell.
+    auto with_seeds = [](Scene& s) {
+      find_scene_key("init.kind")->set(s, std::string("random_seeds"));
+      if (s.n_seeds == 0) s.n_seeds = 1;
+    };
+    for (const SceneValue& c : candidates) {
+      for (bool seeds : {false, true}) {
+        Scene s = original;
+        try {
+          k.set(s, c);
+          if (seeds) with_seeds(s);
+          validate(s);
+          changed = s;
+          break;
+        } catch (const std::exception&) {}
+      }
+      if (changed) break;
+    }
+    INFO(k.key());
+    REQUIRE(changed);
+    fresh_copy();
+    std::ofstream(copy / "scene.toml", std::ios::trunc) << io::scene_to_toml(*changed);
+    refused_unchanged(copy, "scene.toml has changed");
+    ++edited_keys;
+  }
+  CHECK(edited_keys + 1 == scene_keys().size());
+
+  // growth.P0 edited and the checkpoint's scene hash (and checksum) recomputed: the saved packings,
+  // grown under the old P0, disagree.
+  fresh_copy();
+  Scene other = original;
+  other.P0 = 2e-3;
+  std::ofstream(copy / "scene.toml", std::ios::trunc) << io::scene_to_toml(other);
+  std::vector<std::string> v = lines_of(slurp(run / "checkpoint.txt"));
+  char hash[20];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(io::scene_hash(other)));
+  v[line_starting(v, "scene ")] = std::string("scene ") + hash;
+  write_with_checksum(copy / "checkpoint.txt", v);
+  refused_unchanged(copy, "P0 = 0.002 disagrees with packings/jammed.pack");
+}
+
+TEST_CASE("--overwrite after a run with every observer on leaves no file of the earlier run", "[grow_cli]") {
+  const std::string all =
+      "[observe]\ncheckpoint_every = 10\ntrials = true\nrigidity_events = true\n"
+      "trajectory_every = 20\n[observe.moduli]\nat_jamming = true\nat_targets = true\n"
+      "[observe.dos]\nat_jamming = true\nevery = 50\n";
+  const std::string none = "[observe]\nbud_events = false\n";
+  const fs::path everything = small_scene("observers_all", all), nothing = small_scene("observers_none", none);
+  const fs::path dir = work_dir() / "observers", ref = work_dir() / "observers_ref";
+  REQUIRE(grow(q(everything) + " --quiet --out " + q(dir)).code == 0);
+  const auto first = snapshot(dir);
+  for (const char* f : {"trajectory.xyz", "trials.csv", "rigidity_events.csv", "moduli.csv", "dos.csv"}) {
+    INFO(f);
+    CHECK(first.count(f) == 1);
+  }
+  std::ofstream(dir / "notes.txt") << "mine\n";
+  REQUIRE(grow(q(nothing) + " --quiet --overwrite --out " + q(dir)).code == 0);
+  REQUIRE(grow(q(nothing) + " --quiet --out " + q(ref)).code == 0);
+  auto after = snapshot(dir), expected = snapshot(ref);
+  CHECK(after["notes.txt"] == "mine\n");
+  after.erase("notes.txt");
+  std::vector<std::string> names_after, names_expected;
+  for (const auto& [name, content] : after) names_after.push_back(name);
+  for (const auto& [name, content] : expected) names_expected.push_back(name);
+  CHECK(names_after == names_expected);
 }

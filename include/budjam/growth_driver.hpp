@@ -219,9 +219,13 @@ class Observer {
   // of a checkpointed step; load_state gets exactly what it wrote (any text) and throws
   // InputError if it does not fit. A `stateful` observer must find its section in a checkpoint
   // (else the resume is refused); a stateless one (a progress display) may come and go.
+  // load_state only reads and checks: it changes nothing outside the observer, because the
+  // resume may still be refused; on_resumed() follows once the whole resume was accepted, and
+  // may then change what the observer keeps outside (cut its logs back).
   virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
   virtual void load_state(std::istream&) {}
+  virtual void on_resumed() {}
 };
 
 // Where a growth step starts from the accepted state: Δt = dt·e^{log_scale}, with the rates scaled

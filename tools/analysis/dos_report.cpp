@@ -109,8 +109,9 @@ io::CommandResult dos_result(const DosReport& r, const DosRequest& request) {
   return result;
 }
 
-std::vector<fs::path> write_dos_files(const fs::path& base, const DosReport& r, const DosRequest& request) {
-  return io::write_result_files(fs::path(base.string() + ".dos"), dos_result(r, request));
+std::vector<fs::path> write_dos_files(const io::Directory& dir, const std::string& stem, const DosReport& r,
+                                      const DosRequest& request) {
+  return io::write_result_files(dir, stem + ".dos", dos_result(r, request));
 }
 
 std::string dos_line(const DosReport& r) {

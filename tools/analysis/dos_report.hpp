@@ -47,10 +47,10 @@ io::Json dos_json(const DosReport& report, const DosRequest& request);
 // the CSV writer refers to `report`, which must outlive it.
 io::CommandResult dos_result(const DosReport& report, const DosRequest& request);
 
-// Writes <base>.dos.json and <base>.dos.csv atomically (the sidecar files of a run's packings);
-// returns the two paths, JSON first.
-std::vector<std::filesystem::path> write_dos_files(const std::filesystem::path& base, const DosReport& report,
-                                                   const DosRequest& request);
+// Writes <stem>.dos.json and <stem>.dos.csv atomically in `dir` (the sidecar files of a run's
+// packings); returns the two paths, JSON first.
+std::vector<std::filesystem::path> write_dos_files(const io::Directory& dir, const std::string& stem,
+                                                   const DosReport& report, const DosRequest& request);
 
 // One-line summary for a terminal.
 std::string dos_line(const DosReport& report);

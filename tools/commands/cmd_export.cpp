@@ -5,6 +5,7 @@
 // without its extension. Nothing is printed.
 #include "commands/command.hpp"
 
+#include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
 
@@ -43,10 +44,12 @@ std::vector<std::string> format_names() {
 
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
+  if (!o.out.empty()) io::check_output_name("--out", o.out);
   const io::PackingFile file = io::read_packing(o.packing);
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
+  io::check_output_name("--out", out);
   io::write_particles(out, io::particle_frame(file, which), o.format);
 }
 

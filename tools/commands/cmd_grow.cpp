@@ -74,14 +74,14 @@ void run(const Options& o) {
   if (resuming) {
     if (!o.scene.empty() || o.seed || !o.overrides.empty() || !o.out.empty() || o.overwrite)
       throw InputError("--resume: takes no SCENE, --seed, --set, --out or --overwrite (the run directory has them)");
-    run_dir.emplace(io::RunDirectory::resume(o.resume));
+    run_dir.emplace(io::RunDirectory::resume(o.resume, tools::run_owned_entries()));
     const io::RunDirectory& d = *run_dir;
-    if (fs::exists(d / run_files::summary))
+    if (d.root().entry(run_files::summary))
       throw InputError("--resume: " + d.path().string() + " holds a finished run (" + std::string(run_files::summary) +
                        " exists)");
-    if (!fs::exists(d / run_files::checkpoint))
+    if (!d.root().entry(run_files::checkpoint))
       throw InputError("--resume: no " + std::string(run_files::checkpoint) + " in " + d.path().string());
-    scene = io::load_scene(d / run_files::scene);
+    scene = io::parse_scene(io::read_text_file(d.root(), run_files::scene), (d / run_files::scene).string());
     if (o.threads) scene.threads = *o.threads;  // not in the checkpoint's scene hash: results do not change
   } else {
     if (o.scene.empty()) throw InputError("SCENE: a scene file is required (or --resume DIR)");
@@ -92,19 +92,28 @@ void run(const Options& o) {
     const fs::path out = o.out.empty()
                              ? fs::path("runs") / (safe_name(scene.name) + "-seed" + std::to_string(scene.seed))
                              : fs::path(o.out);
-    run_dir.emplace(io::RunDirectory::create(out, o.overwrite));
-    io::write_atomically(*run_dir / run_files::scene, io::scene_to_toml(scene));
+    run_dir.emplace(io::RunDirectory::create(out, o.overwrite, tools::run_owned_entries()));
+    io::write_atomically(run_dir->root(), run_files::scene, io::scene_to_toml(scene));
   }
   const fs::path dir = run_dir->path();
+  const io::Directory& root = run_dir->root();
 
   GrowthDriver driver(scene);
-  tools::RunLog log(dir, scene.seed, resuming);
-  const tools::ObserverContext ctx{scene, scene.seed, dir, resuming, o.quiet};
+  tools::RunLog log(*run_dir, scene.seed, resuming);
+  const tools::ObserverContext ctx{scene, scene.seed, *run_dir, resuming, o.quiet};
   auto owned = tools::make_observers(ctx);
   std::vector<Observer*> observers{&log};
   for (auto& obs : owned) observers.push_back(obs.get());
   for (Observer* obs : observers) driver.add_observer(*obs);
-  if (resuming) driver.restore(io::read_checkpoint(dir / run_files::checkpoint, scene, scene.seed, observers));
+  if (resuming) {
+    // Everything is checked before anything changes: a refused resume leaves the run as it was.
+    io::CheckpointLines lines;
+    GrowthState state = io::read_checkpoint(root, run_files::checkpoint, scene, scene.seed, observers, &lines);
+    log.check_resumed_state(state, scene, lines, (dir / run_files::checkpoint).string());
+    run_dir->remove_recorded_temporaries();
+    for (Observer* obs : observers) obs->on_resumed();
+    driver.restore(std::move(state));
+  }
 
   // Checkpoints every observe.checkpoint_every accepted steps, and at the first accepted state
   // after SIGTERM or SIGINT, which then ends the run (resumable). A state that holds less than the
@@ -116,7 +125,7 @@ void run(const Options& o) {
     const long step = driver.view().step;
     const int signal = cli::StopSignals::received();
     if ((scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) || (signal && driver.state_is_complete())) {
-      io::write_checkpoint(dir / run_files::checkpoint, scene, driver.state(), observers);
+      io::write_checkpoint(root, run_files::checkpoint, scene, driver.state(), observers);
       last_checkpoint = step;
     }
     if (!signal) return;
@@ -140,8 +149,8 @@ void run(const Options& o) {
   const RunStatus status = driver.run();
   timing.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  tools::write_summary(dir, driver, timing);
-  fs::remove(dir / run_files::checkpoint);  // a finished (or failed) run is not resumed
+  tools::write_summary(root, driver, timing);
+  root.remove(run_files::checkpoint);  // a finished (or failed) run is not resumed
   if (status == RunStatus::step_limit) {
     std::cerr << step_limit_notice(scene, driver.result(), dir / run_files::summary) << std::endl;
     return;

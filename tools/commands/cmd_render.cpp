@@ -39,23 +39,20 @@ struct Options {
 // The largest side of a PNG or PDF that rsvg-convert (cairo) draws.
 constexpr long kMaxConvertedPixels = 32767;
 
-// rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` is complete or untouched.
-void convert_svg(const fs::path& svg, const fs::path& to, const std::string& format) {
-  fs::path tmp = to;
-  tmp += ".tmp";
+// rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` in `dir` is complete or untouched.
+void convert_svg(const fs::path& svg, const io::Directory& dir, const std::string& to, const std::string& format) {
+  io::TempFile tmp(dir, to);
   // "--output=" and "--": a file name that starts with "-" is a file, not an option.
-  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.string(), "--", svg.string()},
+  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.path().string(), "--", svg.string()},
                                  "render", "install Debian's librsvg2-bin");
-  if (rc != 0) {
-    fs::remove(tmp);
-    throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
-  }
-  fs::rename(tmp, to);
+  if (rc != 0) throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
+  tmp.commit();
 }
 
 void run(const Options& o) {
   if (!(o.scale > 0)) throw InputError("--scale: must be positive (got " + std::to_string(o.scale) + ")");
   const fs::path out = o.out;
+  io::check_output_name("-o", out);
   const std::string ext = out.extension().string();
   if (ext != ".svg" && ext != ".png" && ext != ".pdf")
     throw InputError("-o: the output must end in .svg, .png or .pdf (got " + o.out + ")");
@@ -80,23 +77,17 @@ void run(const Options& o) {
                        std::to_string(std::lround(size.height)) + " pixels, and rsvg-convert draws at most " +
                        std::to_string(kMaxConvertedPixels) + " a side: lower --scale, or write an SVG");
   }
-  fs::path svg = out;
-  svg.replace_extension(".svg");
-  if (ext != ".svg") svg += ".tmp";  // only the converted file is an output
-  io::write_atomically(svg, render_svg(f.packing, pc.contacts, pc.network, ro));
-
+  const io::Directory dir = io::Directory::open(out.parent_path(), true);
+  const std::string name = out.filename().string();
+  const std::string picture = render_svg(f.packing, pc.contacts, pc.network, ro);
   if (ext != ".svg") {
-    try {
-      convert_svg(svg, out, ext.substr(1));
-    } catch (...) {
-      fs::remove(svg);
-      throw;
-    }
-    fs::remove(svg);
-  } else if (o.png) {
-    fs::path png = out;
-    convert_svg(svg, png.replace_extension(".png"), "png");
+    io::TempFile svg(dir, name);  // only the converted file is an output: never committed
+    svg.write(picture);
+    convert_svg(svg.path(), dir, name, ext.substr(1));
+    return;
   }
+  io::write_atomically(dir, name, picture);
+  if (o.png) convert_svg(out, dir, fs::path(name).replace_extension(".png").string(), "png");
 }
 
 const bool registered = budjam::cli::register_command(

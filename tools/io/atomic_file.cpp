@@ -3,15 +3,19 @@
 #include "budjam/errors.hpp"
 #include "io/text.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace budjam::io {
 namespace fs = std::filesystem;
@@ -22,11 +26,6 @@ std::string reason(int err) { return std::strerror(err); }
 
 [[noreturn]] void io_fail(const fs::path& path, const std::string& what, int err) {
   throw IoError(path.string() + ": " + what + ": " + reason(err));
-}
-
-fs::path directory_of(const fs::path& path) {
-  const fs::path dir = path.parent_path();
-  return dir.empty() ? fs::path(".") : dir;
 }
 
 // Permissions a plain open(…, 0666) would give, honouring the user's umask.
@@ -50,57 +49,294 @@ void write_all(int fd, std::string_view data, const fs::path& path) {
   }
 }
 
-// After a rename the directory entry itself must reach the disk too.
-void sync_directory(const fs::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;  // best effort: the data itself is already synced
-  ::fsync(fd);
-  ::close(fd);
+std::string read_all(int fd, const fs::path& path) {
+  std::string text;
+  char buf[65536];
+  while (true) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw InputError(path.string() + ": cannot read: " + reason(errno));
+    if (n == 0) return text;
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+}
+
+// An entry that is not what budjam expects there is the user's input: exit 2.
+[[noreturn]] void wrong_kind(const fs::path& path, const struct ::stat& st, const char* expected) {
+  if (S_ISLNK(st.st_mode))
+    throw InputError(path.string() + ": is a symbolic link; budjam does not follow links in the directories it writes");
+  throw InputError(path.string() + ": is not " + expected);
+}
+
+// `.NAME.tmp-XXXXXX`: the only names TemporaryManifest::remove_listed removes.
+bool looks_temporary(std::string_view name) {
+  const std::size_t at = name.rfind(".tmp-");
+  return name.size() > 1 && name.front() == '.' && at != std::string_view::npos && name.size() - at == 11;
 }
 
 }  // namespace
 
-void write_atomically(const fs::path& path, std::string_view content) {
-  const fs::path dir = directory_of(path);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(dir.string() + ": cannot create directory: " + ec.message());
+// ---- Directory -----------------------------------------------------------------------------
 
-  std::string leaf = ".";  // built by appends: GCC 12 -O3 misreads "." + string as overlapping (-Wrestrict)
-  leaf += path.filename().string();
-  leaf += ".tmp-XXXXXX";
-  std::string name = (dir / leaf).string();
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) io_fail(dir, "cannot create a temporary file", errno);
-  const fs::path tmp = name;
-  try {
-    if (::fchmod(fd, file_mode()) != 0) io_fail(tmp, "cannot set permissions", errno);
-    write_all(fd, content, tmp);
-    if (::fsync(fd) != 0) io_fail(tmp, "cannot sync", errno);
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
+struct Directory::Handle {
+  int fd = -1;
+  explicit Handle(int f) : fd(f) {}
+  ~Handle() {
+    if (fd >= 0) ::close(fd);
   }
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    io_fail(tmp, "cannot close", err);
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+};
+
+int Directory::fd() const { return handle_ ? handle_->fd : -1; }
+
+Directory Directory::open(const fs::path& path, bool create) {
+  if (create && !path.empty()) {
+    std::error_code ec;
+    fs::create_directories(path, ec);
+    if (ec && !fs::is_directory(path)) throw IoError(path.string() + ": cannot create directory: " + ec.message());
   }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    io_fail(path, "cannot replace", err);
+  const int fd = ::open(path.empty() ? "." : path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) {
+    if (errno == ENOTDIR) throw InputError(path.string() + ": is not a directory");
+    io_fail(path, "cannot open directory", errno);
   }
-  sync_directory(dir);
+  Directory d;
+  d.handle_ = std::make_shared<Handle>(fd);
+  d.path_ = path;
+  return d;
 }
 
-void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
+Directory Directory::subdirectory(std::string_view name, bool create) const {
+  const std::string n(name);
+  if (create && ::mkdirat(fd(), n.c_str(), 0777) != 0 && errno != EEXIST) io_fail(*this / name, "cannot create", errno);
+  if (const auto st = entry(name); st && !S_ISDIR(st->st_mode)) wrong_kind(*this / name, *st, "a directory");
+  const int sub = ::openat(fd(), n.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (sub < 0) {
+    if (errno == ENOENT) throw InputError((*this / name).string() + ": no such directory");
+    io_fail(*this / name, "cannot open directory", errno);
+  }
+  Directory d;
+  d.handle_ = std::make_shared<Handle>(sub);
+  d.path_ = *this / name;
+  d.manifest_ = manifest_;
+  d.prefix_ = prefix_ + n + "/";
+  return d;
+}
+
+std::optional<struct ::stat> Directory::entry(std::string_view name) const {
+  struct ::stat st {};
+  if (::fstatat(fd(), std::string(name).c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0) return st;
+  if (errno == ENOENT) return std::nullopt;
+  io_fail(*this / name, "cannot stat", errno);
+}
+
+std::vector<std::string> Directory::names() const {
+  const int copy = ::openat(fd(), ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  DIR* d = copy < 0 ? nullptr : ::fdopendir(copy);
+  if (!d) {
+    const int err = errno;
+    if (copy >= 0) ::close(copy);
+    io_fail(path_, "cannot list", err);
+  }
+  std::vector<std::string> out;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string_view n = e->d_name;
+    if (n != "." && n != "..") out.emplace_back(n);
+  }
+  ::closedir(d);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+int Directory::open_file(std::string_view name, int flags) const {
+  const fs::path where = *this / name;
+  // O_NONBLOCK: a FIFO planted under an expected name must not hang the open.
+  const int f = ::openat(fd(), std::string(name).c_str(), flags | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK, 0666);
+  if (f < 0) {
+    const int err = errno;
+    if (err == ELOOP || err == ENXIO || err == EISDIR) {
+      if (const auto st = entry(name)) wrong_kind(where, *st, "a regular file");
+    }
+    if (err == ENOENT) throw InputError(where.string() + ": no such file");
+    io_fail(where, "cannot open", err);
+  }
+  struct ::stat st {};
+  if (::fstat(f, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(f);
+    wrong_kind(where, st, "a regular file");
+  }
+  ::fcntl(f, F_SETFL, ::fcntl(f, F_GETFL) & ~O_NONBLOCK);
+  return f;
+}
+
+void Directory::remove(std::string_view name) const {
+  const std::string n(name);
+  if (::unlinkat(fd(), n.c_str(), 0) == 0 || errno == ENOENT) return;
+  if ((errno == EISDIR || errno == EPERM) && ::unlinkat(fd(), n.c_str(), AT_REMOVEDIR) == 0) return;
+  io_fail(*this / name, "cannot remove", errno);
+}
+
+void Directory::rename(std::string_view from, std::string_view to) const {
+  if (::renameat(fd(), std::string(from).c_str(), fd(), std::string(to).c_str()) != 0)
+    io_fail(*this / to, "cannot rename " + std::string(from) + " to it", errno);
+}
+
+void Directory::sync() const {
+  ::fsync(fd());  // best effort: the data itself is already synced
+}
+
+void Directory::record_temporaries_in(std::shared_ptr<TemporaryManifest> manifest, std::string root_prefix) {
+  manifest_ = std::move(manifest);
+  prefix_ = std::move(root_prefix);
+}
+
+// ---- TemporaryManifest ---------------------------------------------------------------------
+
+TemporaryManifest::TemporaryManifest(Directory root, std::string_view name)
+    : root_(std::move(root)), fd_(root_.open_file(name, O_RDWR | O_CREAT | O_APPEND)) {}
+
+TemporaryManifest::~TemporaryManifest() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void TemporaryManifest::add(const std::string& relative) {
+  ++outstanding_;
+  write_all(fd_, relative + "\n", root_.path());
+}
+
+void TemporaryManifest::done() {
+  if (--outstanding_ == 0 && ::ftruncate(fd_, 0) != 0)
+    io_fail(root_.path(), "cannot empty the temporaries list", errno);
+}
+
+void TemporaryManifest::remove_listed() {
+  ::lseek(fd_, 0, SEEK_SET);
+  const std::string text = read_all(fd_, root_.path());
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    const std::string_view line = std::string_view(text).substr(start, end - start);
+    start = end + 1;
+    // Only `[dir/]...name` paths of budjam temporaries, each directory a real one of the tree.
+    std::vector<std::string_view> parts;
+    for (std::size_t at = 0; at <= line.size();) {
+      const std::size_t slash = std::min(line.find('/', at), line.size());
+      parts.push_back(line.substr(at, slash - at));
+      at = slash + 1;
+    }
+    if (!looks_temporary(parts.back())) continue;
+    Directory d = root_;
+    bool ok = true;
+    for (std::size_t k = 0; ok && k + 1 < parts.size(); ++k) {
+      const auto st = parts[k] == "." || parts[k] == ".." || parts[k].empty() ? std::nullopt : d.entry(parts[k]);
+      ok = st && S_ISDIR(st->st_mode);
+      if (ok) d = d.subdirectory(parts[k], false);
+    }
+    if (!ok) continue;
+    if (const auto st = d.entry(parts.back()); st && S_ISREG(st->st_mode)) d.remove(parts.back());
+  }
+  if (::ftruncate(fd_, 0) != 0) io_fail(root_.path(), "cannot empty the temporaries list", errno);
+  outstanding_ = 0;
+}
+
+// ---- TempFile ------------------------------------------------------------------------------
+
+TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(dir)), final_(final_name) {
+  static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
+    name_.assign(1, '.');  // not = "." nor "." + string: GCC 12 -O3 misreads those as overlapping (-Wrestrict)
+    name_ += final_;
+    name_ += ".tmp-";
+    for (int k = 0; k < 6; ++k) name_ += kChars[rng() % (sizeof kChars - 1)];
+    fd_ = ::openat(dir_.fd(), name_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd_ < 0 && errno != EEXIST) io_fail(dir_.path(), "cannot create a temporary file", errno);
+  }
+  if (fd_ < 0) io_fail(dir_.path(), "cannot create a temporary file", EEXIST);
+  // Recorded once it exists: the list never names a file this process did not create.
+  if (dir_.manifest()) {
+    try {
+      dir_.manifest()->add(dir_.manifest_prefix() + name_);
+    } catch (...) {
+      ::close(fd_);
+      ::unlinkat(dir_.fd(), name_.c_str(), 0);
+      throw;
+    }
+  }
+}
+
+TempFile::~TempFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_) ::unlinkat(dir_.fd(), name_.c_str(), 0);
+  if (dir_.manifest()) {
+    try {
+      dir_.manifest()->done();
+    } catch (const IoError&) {
+      // A list that could not be emptied only names files that no longer exist.
+    }
+  }
+}
+
+void TempFile::write(std::string_view data) { write_all(fd_, data, path()); }
+
+void TempFile::commit() {
+  const int ours = std::exchange(fd_, -1);
+  if (::close(ours) != 0) io_fail(path(), "cannot close", errno);
+  // By name again: a program given path() may have written or replaced it.
+  const int fd = dir_.open_file(name_, O_RDONLY);
+  const bool ok = ::fchmod(fd, file_mode()) == 0 && ::fsync(fd) == 0;
+  const int err = errno;
+  ::close(fd);
+  if (!ok) io_fail(path(), "cannot sync", err);
+  dir_.rename(name_, final_);
+  committed_ = true;
+  dir_.sync();
+}
+
+void check_output_name(std::string_view option, const fs::path& path) {
+  const std::string text = path.string();
+  const std::string name = path.filename().string();
+  const std::string at = std::string(option) + ": " + escape_control(text) + ": ";
+  if (text.empty() || text.back() == '/' || name.empty() || name == "." || name == "..")
+    throw InputError(at + "not a file name (it names a directory)");
+  if (name.front() == '=') throw InputError(at + "a file name may not start with '='");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InputError(at + "is a directory");
+}
+
+void write_atomically(const Directory& dir, std::string_view name, std::string_view content) {
+  TempFile tmp(dir, name);
+  tmp.write(content);
+  tmp.commit();
+}
+
+void write_atomically(const fs::path& path, std::string_view content) {
+  write_atomically(Directory::open(path.parent_path(), true), path.filename().string(), content);
+}
+
+void write_atomically(const Directory& dir, std::string_view name, const std::function<void(std::ostream&)>& writer) {
   // The whole content is produced before any file is touched: a throwing writer leaves no trace.
   std::ostringstream out;
   writer(out);
-  if (!out) throw IoError(path.string() + ": formatting the content failed");
-  write_atomically(path, out.view());
+  if (!out) throw IoError((dir / name).string() + ": formatting the content failed");
+  write_atomically(dir, name, out.view());
+}
+
+void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
+  write_atomically(Directory::open(path.parent_path(), true), path.filename().string(), writer);
+}
+
+std::string read_text_file(const Directory& dir, std::string_view name) {
+  const int fd = dir.open_file(name, O_RDONLY);
+  try {
+    std::string text = read_all(fd, dir / name);
+    ::close(fd);
+    return text;
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
 }
 
 std::string read_text_file(const fs::path& path) {
@@ -153,62 +389,77 @@ std::string header_line(const std::vector<std::string>& columns) {
 }
 }  // namespace
 
-fs::path CsvLog::partial_path() const {
-  fs::path p = path_;
-  p += ".partial";
-  return p;
-}
-
-CsvLog::CsvLog(fs::path path, std::vector<std::string> columns) : path_(std::move(path)), columns_(std::move(columns)) {
+CsvLog::CsvLog(Directory dir, std::string name, std::vector<std::string> columns)
+    : dir_(std::move(dir)), name_(std::move(name)), columns_(std::move(columns)) {
   if (columns_.empty()) throw std::logic_error("CsvLog: no columns");
-  std::error_code ec;
-  fs::create_directories(directory_of(path_), ec);
   // A finished log of an earlier run in the same place must not survive as if it were this one's.
-  if (::unlink(path_.c_str()) != 0 && errno != ENOENT) io_fail(path_, "cannot remove old log", errno);
-  fd_ = ::open(partial_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd_ < 0) io_fail(partial_path(), "cannot create", errno);
+  dir_.remove(name_);
+  dir_.remove(partial_name());
+  fd_ = dir_.open_file(partial_name(), O_WRONLY | O_CREAT | O_EXCL);
   write_line(header_line(columns_));
 }
 
-CsvLog CsvLog::resume(fs::path path, std::vector<std::string> columns, std::uint64_t bytes) {
-  CsvLog log;
-  log.path_ = std::move(path);
-  log.columns_ = std::move(columns);
-  const fs::path partial = log.partial_path();
-  log.fd_ = ::open(partial.c_str(), O_RDWR | O_CLOEXEC);
-  if (log.fd_ < 0) throw InputError(partial.string() + ": cannot resume the log: " + reason(errno));
-  struct stat st {};
-  if (::fstat(log.fd_, &st) != 0) io_fail(partial, "cannot stat", errno);
-  const std::string header = header_line(log.columns_);
-  std::string head(header.size(), '\0');
-  const ssize_t n = ::pread(log.fd_, head.data(), head.size(), 0);
-  if (n != static_cast<ssize_t>(head.size()) || head != header)
-    throw InputError(partial.string() + ":1: cannot resume the log: its header is not \"" +
+CsvLog::Cut CsvLog::check_resumable(const Directory& dir, const std::string& name,
+                                    const std::vector<std::string>& columns, std::uint64_t bytes) {
+  const std::string partial = name + ".partial";
+  const fs::path where = dir / partial;
+  std::string text;
+  try {
+    text = read_text_file(dir, partial);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + " (cannot resume the log)");
+  }
+  const std::string header = header_line(columns);
+  if (text.compare(0, header.size(), header) != 0)
+    throw InputError(where.string() + ":1: cannot resume the log: its header is not \"" +
                      header.substr(0, header.size() - 1) + "\"");
-  if (bytes < header.size() || static_cast<std::uint64_t>(st.st_size) < bytes)
-    throw InputError(partial.string() + ": cannot resume the log: it holds " + std::to_string(st.st_size) +
+  if (bytes < header.size() || text.size() < bytes)
+    throw InputError(where.string() + ": cannot resume the log: it holds " + std::to_string(text.size()) +
                      " bytes, the checkpoint expects " + std::to_string(bytes));
   // A cut point is a line end: the byte before it is the newline of a whole row.
-  char before = 0;
-  if (::pread(log.fd_, &before, 1, static_cast<off_t>(bytes - 1)) != 1 || before != '\n')
-    throw InputError(partial.string() + ": cannot resume the log: byte " + std::to_string(bytes) +
+  if (text[bytes - 1] != '\n')
+    throw InputError(where.string() + ": cannot resume the log: byte " + std::to_string(bytes) +
                      " recorded in the checkpoint is not the end of a line");
-  if (::ftruncate(log.fd_, static_cast<off_t>(bytes)) != 0) io_fail(partial, "cannot truncate", errno);
-  if (::lseek(log.fd_, 0, SEEK_END) < 0) io_fail(partial, "cannot seek", errno);
+  Cut cut;
+  cut.bytes = bytes;
+  const std::string_view kept = std::string_view(text).substr(0, bytes);
+  cut.rows = static_cast<std::size_t>(std::count(kept.begin(), kept.end(), '\n')) - 1;
+  if (cut.rows > 0) {
+    const std::size_t from = kept.rfind('\n', bytes - 2) + 1;
+    cut.last_row = kept.substr(from, bytes - 1 - from);
+  }
+  return cut;
+}
+
+CsvLog CsvLog::resume(Directory dir, std::string name, std::vector<std::string> columns, std::uint64_t bytes) {
+  check_resumable(dir, name, columns, bytes);
+  CsvLog log;
+  log.dir_ = std::move(dir);
+  log.name_ = std::move(name);
+  log.columns_ = std::move(columns);
+  log.fd_ = log.dir_.open_file(log.partial_name(), O_RDWR);
+  if (::ftruncate(log.fd_, static_cast<off_t>(bytes)) != 0) io_fail(log.partial_path(), "cannot truncate", errno);
+  if (::lseek(log.fd_, 0, SEEK_END) < 0) io_fail(log.partial_path(), "cannot seek", errno);
   log.bytes_ = bytes;
-  if (::unlink(log.path_.c_str()) != 0 && errno != ENOENT) io_fail(log.path_, "cannot remove old log", errno);
+  log.dir_.remove(log.name_);
   return log;
 }
 
 CsvLog::CsvLog(CsvLog&& o) noexcept
-    : path_(std::move(o.path_)), columns_(std::move(o.columns_)), fd_(o.fd_), bytes_(o.bytes_), finished_(o.finished_) {
+    : dir_(std::move(o.dir_)),
+      name_(std::move(o.name_)),
+      columns_(std::move(o.columns_)),
+      fd_(o.fd_),
+      bytes_(o.bytes_),
+      finished_(o.finished_) {
   o.fd_ = -1;
 }
 
 CsvLog& CsvLog::operator=(CsvLog&& o) noexcept {
   if (this != &o) {
     if (fd_ >= 0) ::close(fd_);
-    path_ = std::move(o.path_);
+    dir_ = std::move(o.dir_);
+    name_ = std::move(o.name_);
     columns_ = std::move(o.columns_);
     fd_ = o.fd_;
     bytes_ = o.bytes_;
@@ -223,7 +474,7 @@ CsvLog::~CsvLog() {
 }
 
 void CsvLog::write_line(const std::string& line) {
-  if (fd_ < 0) throw std::logic_error("CsvLog: " + path_.string() + " is closed");
+  if (fd_ < 0) throw std::logic_error("CsvLog: " + path().string() + " is closed");
   try {
     write_all(fd_, line, partial_path());
   } catch (const IoError&) {
@@ -239,8 +490,8 @@ void CsvLog::row(std::initializer_list<CsvField> fields) { row(std::vector<CsvFi
 
 void CsvLog::row(const std::vector<CsvField>& fields) {
   if (fields.size() != columns_.size())
-    throw std::logic_error("CsvLog: " + path_.filename().string() + " has " + std::to_string(columns_.size()) +
-                           " columns, a row gave " + std::to_string(fields.size()));
+    throw std::logic_error("CsvLog: " + name_ + " has " + std::to_string(columns_.size()) + " columns, a row gave " +
+                           std::to_string(fields.size()));
   write_line(join(fields));
 }
 
@@ -256,8 +507,8 @@ void CsvLog::finish() {
     io_fail(partial_path(), "cannot close", errno);
   }
   fd_ = -1;
-  if (::rename(partial_path().c_str(), path_.c_str()) != 0) io_fail(path_, "cannot rename the finished log", errno);
-  sync_directory(directory_of(path_));
+  dir_.rename(partial_name(), name_);
+  dir_.sync();
   finished_ = true;
 }
 

@@ -5,11 +5,18 @@
 //  - logs that grow during a run (CSV) are written to NAME.partial, one whole line per write(2),
 //    and renamed to NAME only by CsvLog::finish().
 // A run directory is finished when summary.json exists; it is written last (docs/files.md).
+//
+// Files are created, replaced and removed relative to an open Directory: a symbolic link among
+// the entries is never followed (O_NOFOLLOW, AT_SYMLINK_NOFOLLOW), only the directory's own path
+// is, as the user gave it. Every output file gets the mode open(2) gives with 0666 and the umask.
+#include <sys/stat.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -24,6 +31,110 @@ struct IoError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+class TemporaryManifest;
+
+// An open directory. Copies share the descriptor. Names given to its members are single path
+// components (no '/').
+class Directory {
+ public:
+  // Opens `path` (created with its parents if `create`; empty: the working directory, and
+  // members are then named by their names alone). IoError if it cannot be opened; InputError if
+  // it exists and is not a directory.
+  static Directory open(const std::filesystem::path& path, bool create);
+
+  // The entry `name` as a directory (created if `create` and absent). InputError naming it if it
+  // is a symbolic link or not a directory: a link is never followed.
+  Directory subdirectory(std::string_view name, bool create) const;
+
+  const std::filesystem::path& path() const { return path_; }
+  int fd() const;
+  // For messages and for programs that take a path.
+  std::filesystem::path operator/(std::string_view name) const { return path_ / name; }
+
+  // fstatat without following a link; std::nullopt if there is no such entry.
+  std::optional<struct ::stat> entry(std::string_view name) const;
+  // The names in the directory (not "." and ".."), sorted.
+  std::vector<std::string> names() const;
+  // Opens the regular file `name` (O_NOFOLLOW; flags as for open(2), O_CREAT with the output
+  // mode). InputError if it is a link or not a regular file; IoError for other failures.
+  int open_file(std::string_view name, int flags) const;
+  // Removes the entry `name` (a file, a link itself, an empty directory); absent is fine.
+  void remove(std::string_view name) const;
+  void rename(std::string_view from, std::string_view to) const;
+  // fsync of the directory: renames and removals reach the disk.
+  void sync() const;
+
+  // Temporaries created in this directory or its subdirectories are recorded in `manifest`
+  // under their path relative to `root_prefix` ("" for the manifest's own directory).
+  void record_temporaries_in(std::shared_ptr<TemporaryManifest> manifest, std::string root_prefix = "");
+  const std::shared_ptr<TemporaryManifest>& manifest() const { return manifest_; }
+  const std::string& manifest_prefix() const { return prefix_; }
+
+ private:
+  struct Handle;
+  std::shared_ptr<Handle> handle_;
+  std::filesystem::path path_;
+  std::shared_ptr<TemporaryManifest> manifest_;
+  std::string prefix_;
+};
+
+// The temporaries a process has created in a directory tree, listed in a file of that tree, so
+// that the next claim of the tree removes exactly those a killed process left, and never a file
+// merely named like one. Entries are appended before a temporary is created; the list is emptied
+// whenever no temporary is outstanding.
+class TemporaryManifest {
+ public:
+  // Opens (creating) `name` in `root`. Does not read it.
+  TemporaryManifest(Directory root, std::string_view name);
+  ~TemporaryManifest();
+  TemporaryManifest(const TemporaryManifest&) = delete;
+  TemporaryManifest& operator=(const TemporaryManifest&) = delete;
+
+  void add(const std::string& relative);
+  void done();
+  // Removes the regular files the list names (links and other kinds are left, as are names that
+  // do not look like budjam temporaries), then empties it.
+  void remove_listed();
+
+ private:
+  Directory root_;
+  int fd_ = -1;
+  int outstanding_ = 0;
+};
+
+// A temporary file beside `final_name` in `dir`, named `.FINAL.tmp-XXXXXX` (created with O_EXCL,
+// so never an existing file or link), removed when destroyed unless committed.
+class TempFile {
+ public:
+  TempFile(Directory dir, std::string_view final_name);
+  ~TempFile();
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+
+  // For a program that writes the file by its name.
+  std::filesystem::path path() const { return dir_ / name_; }
+  void write(std::string_view data);
+  // Makes the content durable with the output mode (also when a program wrote or replaced the
+  // file by name), renames it onto the final name and syncs the directory.
+  void commit();
+
+ private:
+  Directory dir_;
+  std::string final_, name_;
+  int fd_ = -1;
+  bool committed_ = false;
+};
+
+// Replaces `name` in `dir` by `content` atomically (a TempFile). On any failure the temporary is
+// removed, the previous file (if any) is untouched, and IoError is thrown.
+void write_atomically(const Directory& dir, std::string_view name, std::string_view content);
+void write_atomically(const Directory& dir, std::string_view name, const std::function<void(std::ostream&)>& writer);
+
+// InputError "<option>: <path>: ..." unless `path` names a file budjam may write: a name is
+// given (not empty, no trailing '/', not "." or ".."), it does not start with '=' (which
+// converters' option parsers take as part of an option) and it is not an existing directory.
+void check_output_name(std::string_view option, const std::filesystem::path& path);
+
 // Replaces `path` by `content` atomically. On any failure the temporary file is removed, the
 // previous file at `path` (if any) is untouched, and IoError is thrown.
 void write_atomically(const std::filesystem::path& path, std::string_view content);
@@ -31,6 +142,10 @@ void write_atomically(const std::filesystem::path& path, std::string_view conten
 // Same, with the content produced by `writer`; if `writer` throws, nothing is written and the
 // exception propagates unchanged.
 void write_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer);
+
+// The regular file `name` of `dir` as a string (a link is not followed); InputError
+// "<path>: cannot read: <reason>" when it cannot be read.
+std::string read_text_file(const Directory& dir, std::string_view name);
 
 // Whole file as a string; InputError "<path>: cannot read: <reason>" when it cannot be read
 // (reading is always of the user's input).
@@ -53,18 +168,28 @@ struct CsvField {
   static CsvField missing() { return CsvField(std::optional<double>{}); }
 };
 
-// An append-only CSV log that is never mistaken for a complete one: rows go to `<path>.partial`
+// An append-only CSV log that is never mistaken for a complete one: rows go to `<name>.partial`
 // (each row one write(2) of a whole line, so a killed run leaves only whole lines), and finish()
-// renames it to `<path>`. For checkpoints, bytes() is the size of what has been written; resume()
+// renames it to `<name>`. For checkpoints, bytes() is the size of what has been written; resume()
 // cuts the .partial file back to that size and appends from there.
 class CsvLog {
  public:
+  // What a resumable log holds up to a checkpoint's length.
+  struct Cut {
+    std::uint64_t bytes = 0;
+    std::size_t rows = 0;  // whole rows after the header
+    std::string last_row;  // the last of them without its newline (empty if none)
+  };
+
   // Starts a new log (an existing .partial file is replaced) and writes the header line.
-  CsvLog(std::filesystem::path path, std::vector<std::string> columns);
-  // Reopens `<path>.partial` of an interrupted run, checks its header, truncates it to `bytes`
-  // (a value of bytes() recorded in a checkpoint) and appends from there. InputError if the file
-  // is missing, has another header, is shorter than `bytes` or `bytes` is not a line end.
-  static CsvLog resume(std::filesystem::path path, std::vector<std::string> columns, std::uint64_t bytes);
+  CsvLog(Directory dir, std::string name, std::vector<std::string> columns);
+  // Checks, without changing anything, that `<name>.partial` of an interrupted run can be cut
+  // at `bytes` (a value of bytes() recorded in a checkpoint): a regular file with this header,
+  // at least `bytes` long, `bytes` a line end. InputError naming the file otherwise.
+  static Cut check_resumable(const Directory& dir, const std::string& name, const std::vector<std::string>& columns,
+                             std::uint64_t bytes);
+  // check_resumable, then truncates the file to `bytes` and appends from there.
+  static CsvLog resume(Directory dir, std::string name, std::vector<std::string> columns, std::uint64_t bytes);
 
   CsvLog(CsvLog&& other) noexcept;
   CsvLog& operator=(CsvLog&& other) noexcept;
@@ -83,14 +208,16 @@ class CsvLog {
 
   std::uint64_t bytes() const { return bytes_; }
   const std::vector<std::string>& columns() const { return columns_; }
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path partial_path() const;
+  std::filesystem::path path() const { return dir_ / name_; }
+  std::filesystem::path partial_path() const { return dir_ / partial_name(); }
   bool finished() const { return finished_; }
 
  private:
   CsvLog() = default;
+  std::string partial_name() const { return name_ + ".partial"; }
   void write_line(const std::string& line);
-  std::filesystem::path path_;
+  Directory dir_;
+  std::string name_;
   std::vector<std::string> columns_;
   int fd_ = -1;
   std::uint64_t bytes_ = 0;

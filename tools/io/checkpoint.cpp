@@ -3,9 +3,12 @@
 #include "budjam/growth.hpp"
 #include "budjam/packing_rules.hpp"
 #include "io/atomic_file.hpp"
+#include "io/packing_file.hpp"
+#include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 #include "io/text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -28,13 +31,6 @@ std::string hex64(std::uint64_t v) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
   return buf;
-}
-
-// The thread count is left out: a run resumed on another number of threads continues identically.
-std::uint64_t scene_hash(const Scene& scene) {
-  Scene physics = scene;
-  physics.threads = Scene{}.threads;
-  return fnv1a64(scene_to_toml(physics));
 }
 
 constexpr std::string_view kMagic = "budjam-checkpoint";
@@ -171,6 +167,12 @@ std::uint64_t fnv1a64(std::string_view bytes) {
   return h;
 }
 
+std::uint64_t scene_hash(const Scene& scene) {
+  Scene physics = scene;
+  physics.threads = Scene{}.threads;
+  return fnv1a64(scene_to_toml(physics));
+}
+
 std::string format_checkpoint(const Scene& scene, const GrowthState& s, const std::vector<Observer*>& observers) {
   const RunResult& r = s.result;
   std::ostringstream os;
@@ -224,13 +226,14 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   return out;
 }
 
-void write_checkpoint(const std::filesystem::path& path, const Scene& scene, const GrowthState& state,
+void write_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, const GrowthState& state,
                       const std::vector<Observer*>& observers) {
-  write_atomically(path, format_checkpoint(scene, state, observers));
+  write_atomically(dir, name, format_checkpoint(scene, state, observers));
 }
 
 GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
-                             const std::vector<Observer*>& observers) {
+                             const std::vector<Observer*>& observers, CheckpointLines* lines) {
+  CheckpointLines where;
   Lines in(text, file);
   {
     const auto w = in.next(kMagic, 1);
@@ -285,6 +288,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   const std::int64_t max_steps = scene.max_steps;
   {
     const auto w = in.next("state", 9);
+    where.state = in.line();
     if (w[0] == "jammed")
       s.phase = Phase::jammed;
     else if (w[0] == "unjammed")
@@ -306,6 +310,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   RunResult& r = s.result;
   {
     const auto w = in.next("counters", 6);
+    where.counters = in.line();
     r.accepted = in.integer(w[0], "accepted", s.step, s.step);
     r.rejected = in.integer(w[1], "rejected", s.attempts - s.step, s.attempts - s.step);
     r.force_evaluations = in.integer(w[2], "force evaluations", s.attempts, kLongMax);
@@ -336,6 +341,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   const std::size_t cells_cap = static_cast<std::size_t>(r.divisions) + 2 + scene.n_seeds;
   {
     auto w = in.next("jamming", -1);
+    where.jamming = in.line();
     if (w.empty()) in.fail("jamming: expected 0 or 1");
     const bool has = in.flag(w[0], "jamming");
     if (has != (s.phase == Phase::jammed)) in.fail("jamming: a record is present if and only if the phase is jammed");
@@ -361,6 +367,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       in.fail("targets: " + std::to_string(n) + " landed, but the next target is " + std::to_string(s.next_target));
     for (std::size_t k = 0; k < n; ++k) {
       const auto w = in.next("", 9 + kNetworkWords);
+      where.targets.push_back(in.line());
       TargetRecord t;
       t.index = in.count_of(w[0], "target index", k);
       if (t.index != k) in.fail("target index: expected " + std::to_string(k));
@@ -378,6 +385,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   }
   {
     const auto w = in.next("depletion", -1);
+    where.depletion = in.line();
     if (w.empty()) in.fail("depletion: expected 0 or 1");
     if (in.flag(w[0], "depletion")) {
       if (s.phase != Phase::jammed) in.fail("depletion: recorded while unjammed");
@@ -414,7 +422,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     }
   }
   std::string buds_text;
-  std::vector<std::pair<std::int64_t, std::size_t>> tag_ids;  // (cell id, line): checked against the packing
+  std::vector<CheckpointLines::Tag> tags;  // checked against the packing below
   {
     const std::size_t buds_line = in.line() + 1;
     const auto w = in.next("buds", 2);
@@ -425,11 +433,11 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     for (std::size_t k = 0; k < n; ++k) {
       const auto t = in.next("", 4);
       const std::int64_t id = in.integer(t[0], "bud id", previous + 1, std::numeric_limits<std::int64_t>::max());
-      in.real(t[1], "b_J squared");
+      const double b2_J = in.real(t[1], "b_J squared");
       in.flag(t[2], "touched");
       in.integer(t[3], "bud state", 0, 3);
       previous = id;
-      tag_ids.emplace_back(id, in.line());
+      tags.push_back({id, b2_J, in.line()});
       for (const auto& x : t) buds_text.append(x).push_back(' ');
       buds_text.back() = '\n';
     }
@@ -466,8 +474,8 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     }
     p.next_id = next_id;
     if (const auto problem = box_problem(p, scene.skin)) in.fail(*problem);
-    for (const auto& [id, line] : tag_ids)
-      if (!ids.count(id)) in.fail_at(line, "bud id " + std::to_string(id) + ": no cell of the packing has it");
+    for (const auto& t : tags)
+      if (!ids.count(t.id)) in.fail_at(t.line, "bud id " + std::to_string(t.id) + ": no cell of the packing has it");
   }
 
   // Observer sections; their load_state runs only once everything above has passed.
@@ -508,12 +516,116 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       in.fail_at(sec->line, "observer '" + sec->name + "': " + e.what());
     }
   }
+  where.buds = std::move(tags);
+  if (lines) *lines = std::move(where);
   return s;
 }
 
-GrowthState read_checkpoint(const std::filesystem::path& path, const Scene& scene, std::uint64_t seed,
-                            const std::vector<Observer*>& observers) {
-  return parse_checkpoint(read_text_file(path), path.string(), scene, seed, observers);
+// ---- the checkpoint against the run's logs and packings ----------------------------------------
+
+namespace {
+
+// One checkpoint record against the packing saved with it.
+struct RecordCheck {
+  const std::string& file;
+  std::size_t line;
+  const PackingFile& pack;
+  std::string pack_name;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(escape_control(file + ":" + std::to_string(line) + ": " + what));
+  }
+  void same(const std::string& key, double recorded) const {
+    const double saved = pack.meta.number(key);
+    if (!(saved == recorded))
+      fail(key + " = " + format_double(recorded) + " disagrees with " + pack_name + " (" + key + " = " +
+           format_double(saved) + ")");
+  }
+  void network(const NetworkSummary& n) const {
+    if (pack.packing.size() != n.N)
+      fail("N = " + std::to_string(n.N) + " disagrees with " + pack_name + " (" + std::to_string(pack.packing.size()) +
+           " cells)");
+    same("N_nr", static_cast<double>(n.N_nr));
+    same("Z", n.Z);
+  }
+};
+
+}  // namespace
+
+void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
+                       const CsvLog::Cut& steps, const CsvLog::Cut& divisions, const Directory& packings) {
+  auto fail = [&](std::size_t line, const std::string& what) {
+    throw InputError(escape_control(file + ":" + std::to_string(line) + ": " + what));
+  };
+  // steps.csv has a row for the initial state (step 0) and one per accepted step.
+  const std::string steps_name = std::string(run_files::steps) + ".partial";
+  if (steps.rows != static_cast<std::size_t>(s.step) + 1)
+    fail(at.state, "step " + std::to_string(s.step) + ", but " + steps_name + " holds " + std::to_string(steps.rows) +
+                       " rows up to the recorded length (expected one per step from 0)");
+  const std::string last_step = steps.last_row.substr(0, steps.last_row.find(','));
+  if (last_step != std::to_string(s.step))
+    fail(at.state, "step " + std::to_string(s.step) + ", but the last row of " + steps_name + " is step " + last_step);
+  if (divisions.rows != static_cast<std::size_t>(s.result.divisions))
+    fail(at.counters, "divisions " + std::to_string(s.result.divisions) + ", but " + std::string(run_files::divisions) +
+                          ".partial holds " + std::to_string(divisions.rows) + " rows up to the recorded length");
+
+  auto saved = [&](std::size_t line, const std::string& stem) {
+    const std::string name = stem + ".pack";
+    if (!packings.entry(name))
+      fail(line, "the record has no saved packing " + (std::filesystem::path(run_files::packings) / name).string());
+    return parse_packing(read_text_file(packings, name), (packings / name).string());
+  };
+  auto common = [&](const RecordCheck& c, long step, double phi, double P) {
+    c.same("step", static_cast<double>(step));
+    c.same("phi", phi);
+    c.same("P", P);
+    c.same("seed", static_cast<double>(s.seed));
+    if (scene.P0)
+      c.same("P0", *scene.P0);
+    else if (c.pack.meta.get("P0") != "none")
+      c.fail("the scene has no P0 (no feedback), but " + c.pack_name +
+             " was grown with P0 = " + c.pack.meta.get("P0").value_or("?"));
+  };
+  const RunResult& r = s.result;
+  if (r.jamming) {
+    const PackingFile pack = saved(at.jamming, std::string(run_files::jammed));
+    const RecordCheck c{file, at.jamming, pack, "packings/jammed.pack"};
+    common(c, r.jamming->step, r.jamming->phi, r.jamming->P);
+    c.same("E_per_cell", r.jamming->E_per_cell);
+    c.network(r.jamming->network);
+    if (s.buds.episode() == r.jamming->episode)
+      for (const auto& tag : at.buds) {
+        const auto& ids = pack.packing.id;
+        const auto it = std::find(ids.begin(), ids.end(), tag.id);
+        const double b = it == ids.end() ? -1.0 : pack.packing.b[static_cast<std::size_t>(it - ids.begin())];
+        if (it == ids.end() || b * b != tag.b2_J)
+          fail(tag.line,
+               "tagged bud " + std::to_string(tag.id) + ": b_J² = " + format_double(tag.b2_J) +
+                   " disagrees with packings/jammed.pack" +
+                   (it == ids.end() ? std::string(" (no such cell)") : " (b² = " + format_double(b * b) + ")"));
+      }
+  }
+  for (std::size_t k = 0; k < r.targets.size(); ++k) {
+    const TargetRecord& t = r.targets[k];
+    const std::string stem = run_files::target_stem(t.index);
+    const PackingFile pack = saved(at.targets[k], stem);
+    const RecordCheck c{file, at.targets[k], pack, "packings/" + stem + ".pack"};
+    common(c, t.step, t.phi, t.P);
+    c.same("E_per_cell", t.E_per_cell);
+    c.same("dphi", t.dphi);
+    c.network(t.network);
+  }
+  if (r.depletion) {
+    const PackingFile pack = saved(at.depletion, std::string(run_files::phi2));
+    const RecordCheck c{file, at.depletion, pack, "packings/phi2.pack"};
+    common(c, r.depletion->step, r.depletion->phi, r.depletion->P);
+    c.network(r.depletion->network);
+  }
+}
+
+GrowthState read_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, std::uint64_t seed,
+                            const std::vector<Observer*>& observers, CheckpointLines* lines) {
+  return parse_checkpoint(read_text_file(dir, name), (dir / name).string(), scene, seed, observers, lines);
 }
 
 }  // namespace budjam::io

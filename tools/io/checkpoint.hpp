@@ -14,6 +14,7 @@
 //    content belongs to one of them.
 #include "budjam/growth_driver.hpp"
 #include "budjam/scene.hpp"
+#include "io/atomic_file.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -25,24 +26,53 @@ namespace budjam::io {
 
 inline constexpr int kCheckpointVersion = 6;
 
+// Where parse_checkpoint found the records that other files can confirm (1-based lines), so that
+// a disagreement names the checkpoint's line.
+struct CheckpointLines {
+  std::size_t state = 0, counters = 0, jamming = 0, depletion = 0;
+  std::vector<std::size_t> targets;  // one per target record
+  struct Tag {
+    std::int64_t id = 0;
+    double b2_J = 0;  // its bud's b² at jamming
+    std::size_t line = 0;
+  };
+  std::vector<Tag> buds;
+};
+
 // FNV-1a, 64 bit: the content checksum of a checkpoint and the hash of its scene.
 std::uint64_t fnv1a64(std::string_view bytes);
+
+// The hash a checkpoint records of the effective scene: FNV-1a of scene_to_toml, every key
+// included but minimiser.threads (a run resumed on another number of threads continues
+// identically).
+std::uint64_t scene_hash(const Scene& scene);
 
 // The checkpoint text of `state` of a run of `scene`, with the sections of `observers`
 // (save_state of each is called, in order).
 std::string format_checkpoint(const Scene& scene, const GrowthState& state, const std::vector<Observer*>& observers);
 
-// format_checkpoint, written atomically to `path`.
-void write_checkpoint(const std::filesystem::path& path, const Scene& scene, const GrowthState& state,
+// format_checkpoint, written atomically as `name` in `dir`.
+void write_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, const GrowthState& state,
                       const std::vector<Observer*>& observers);
 
 // Checks `text` (named `file` in messages) against the resuming run (`scene`, `seed`,
 // `observers`), then hands each observer its section (load_state) and returns the state for
 // GrowthDriver::restore. Observers' load_state is called only after the whole text was checked.
+// `lines` (if given) receives where the records were found.
 GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
-                             const std::vector<Observer*>& observers);
+                             const std::vector<Observer*>& observers, CheckpointLines* lines = nullptr);
 
-GrowthState read_checkpoint(const std::filesystem::path& path, const Scene& scene, std::uint64_t seed,
-                            const std::vector<Observer*>& observers);
+// InputError "<file>:<line>: ..." (`file` the checkpoint, `at` where parse_checkpoint found its
+// records) unless the checkpointed state `s` agrees with what the run's other files hold: the
+// step and division counters with the rows of steps.csv and divisions.csv up to their recorded
+// lengths (`steps`, `divisions`: CsvLog::check_resumable), each record (jamming point, targets,
+// φ_2) with the packing saved with it in `packings`, the scene's P0 and the seed with each of
+// those packings, and each tagged bud's size at jamming with packings/jammed.pack.
+void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
+                       const CsvLog::Cut& steps, const CsvLog::Cut& divisions, const Directory& packings);
+
+// parse_checkpoint of the file `name` in `dir` (a link is not followed).
+GrowthState read_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, std::uint64_t seed,
+                            const std::vector<Observer*>& observers, CheckpointLines* lines = nullptr);
 
 }  // namespace budjam::io

@@ -262,11 +262,18 @@ except ImportError:
     sys.exit(4)
 )") + kGsdFrameSource +
          R"(mode = 'w' if int(gsd.__version__.split('.')[0]) >= 3 else 'wb'
-with open(sys.argv[1]) as f:
-    frames = json.load(f)
-with gsd.hoomd.open(sys.argv[2], mode) as out:
-    for j in frames:
-        out.append(gsd_frame(j))
+def write():
+    with open(sys.argv[1]) as f:
+        frames = json.load(f)
+    with gsd.hoomd.open(sys.argv[2], mode) as out:
+        for j in frames:
+            out.append(gsd_frame(j))
+# One line, no traceback: the caller reports the failure with its own context.
+try:
+    write()
+except Exception as e:
+    sys.stderr.write('gsd: %s: %s\n' % (type(e).__name__, e))
+    sys.exit(5)
 )";
 }
 
@@ -275,30 +282,23 @@ with gsd.hoomd.open(sys.argv[2], mode) as out:
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
   Json all = Json::array();
   for (const auto& f : frames) all.push_back(particle_frame_json(f));
-  std::filesystem::path input = path, tmp = path;
-  input += ".frames.json";
-  tmp += ".tmp";
-  write_atomically(input, all.dump());
+  const Directory dir = Directory::open(path.parent_path(), true);
+  const std::string name = path.filename().string();
+  TempFile input(dir, name + ".frames.json");  // never committed: removed on every way out
+  input.write(all.dump());
+  TempFile out(dir, name);
   const char* env = std::getenv("BUDJAM_PYTHON");
   const std::string python = env && *env ? env : BUDJAM_PYTHON_EXECUTABLE;
-  int rc = 0;
-  try {
-    rc = run_program({python, "-c", gsd_writer(), input.string(), tmp.string()}, "export --format gsd",
-                     "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
-  } catch (...) {
-    std::filesystem::remove(input);
-    throw;
-  }
-  std::filesystem::remove(input);
+  const int rc =
+      run_program({python, "-c", gsd_writer(), input.path().string(), out.path().string()}, "export --format gsd",
+                  "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
   if (rc == kNoGsdPackage)
     throw IoError(path.string() + ": " + python +
                   " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
-  if (rc != 0) {
-    std::filesystem::remove(tmp);
+  if (rc != 0)
     throw IoError(path.string() + ": the GSD writer (" + python + ", package gsd) failed with status " +
                   std::to_string(rc));
-  }
-  std::filesystem::rename(tmp, path);
+  out.commit();
 }
 
 const std::vector<ExportFormat>& export_formats() {

@@ -9,6 +9,10 @@ std::string json_text(const Json& value) { return value.dump(2) + "\n"; }
 
 void write_json(const std::filesystem::path& path, const Json& value) { write_atomically(path, json_text(value)); }
 
+void write_json(const Directory& dir, std::string_view name, const Json& value) {
+  write_atomically(dir, name, json_text(value));
+}
+
 Json read_json(const std::filesystem::path& path) {
   const std::string text = read_text_file(path);
   try {

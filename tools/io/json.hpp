@@ -1,6 +1,8 @@
 #pragma once
 // JSON outputs (summary.json, checkpoints): key order as inserted, numbers as nlohmann prints
 // them (shortest text that reads back bit-identically; locale-free), null for a missing value.
+#include "io/atomic_file.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -20,6 +22,7 @@ std::string json_text(const Json& value);
 
 // Atomic write of json_text(value) (io/atomic_file.hpp).
 void write_json(const std::filesystem::path& path, const Json& value);
+void write_json(const Directory& dir, std::string_view name, const Json& value);
 
 // InputError "<path>: cannot read: ..." or "<path>: invalid JSON: <parser message>".
 Json read_json(const std::filesystem::path& path);

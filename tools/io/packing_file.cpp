@@ -341,6 +341,10 @@ void write_packing(const std::filesystem::path& path, const Packing& packing, co
   write_atomically(path, format_packing(packing, meta));
 }
 
+void write_packing(const Directory& dir, std::string_view name, const Packing& packing, const PackingMeta& meta) {
+  write_atomically(dir, name, format_packing(packing, meta));
+}
+
 PackingFile read_packing(const std::filesystem::path& path) {
   return parse_packing(read_text_file(path), path.string());
 }

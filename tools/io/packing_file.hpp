@@ -18,6 +18,7 @@
 // before the "cells" line. The "end" line makes any truncation detectable.
 #include "budjam/errors.hpp"
 #include "budjam/packing.hpp"
+#include "io/atomic_file.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -63,6 +64,8 @@ PackingFile parse_packing(std::string_view text, const std::string& source = "<p
 
 // Atomic write (io/atomic_file.hpp) / read of a file.
 void write_packing(const std::filesystem::path& path, const Packing& packing, const PackingMeta& meta = {});
+// The same, as the file `name` of `dir` (io/atomic_file.hpp: a link is replaced, never followed).
+void write_packing(const Directory& dir, std::string_view name, const Packing& packing, const PackingMeta& meta);
 PackingFile read_packing(const std::filesystem::path& path);
 
 // True if `text` starts like a packing file (its first line is "budjam-packing ...").

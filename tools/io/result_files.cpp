@@ -8,12 +8,6 @@ namespace budjam::io {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-fs::path with_suffix(const fs::path& base, const char* suffix) { return fs::path(base.string() + suffix); }
-
-}  // namespace
-
 fs::path result_base(const std::string& base) {
   fs::path p(base);
   if (p.extension() == ".json" || p.extension() == ".csv") p.replace_extension();
@@ -21,12 +15,17 @@ fs::path result_base(const std::string& base) {
 }
 
 std::vector<fs::path> write_result_files(const fs::path& base, const CommandResult& result) {
-  std::vector<fs::path> written{with_suffix(base, ".json")};
+  return write_result_files(Directory::open(base.parent_path(), true), base.filename().string(), result);
+}
+
+std::vector<fs::path> write_result_files(const Directory& dir, const std::string& base_name,
+                                         const CommandResult& result) {
+  std::vector<fs::path> written{dir / (base_name + ".json")};
   if (result.csv) {
-    written.push_back(with_suffix(base, ".csv"));
-    write_atomically(written.back(), result.csv);
+    written.push_back(dir / (base_name + ".csv"));
+    write_atomically(dir, base_name + ".csv", result.csv);
   }
-  write_json(written.front(), result.json);
+  write_json(dir, base_name + ".json", result.json);
   return written;
 }
 

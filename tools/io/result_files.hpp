@@ -34,6 +34,9 @@ std::filesystem::path result_base(const std::string& base);
 // Writes BASE.csv (if the result has a table), then BASE.json, so that a BASE.json present means
 // the pair is complete. Returns the paths written, JSON first.
 std::vector<std::filesystem::path> write_result_files(const std::filesystem::path& base, const CommandResult& result);
+// The same in `dir`: files `<base_name>.json` and `<base_name>.csv`.
+std::vector<std::filesystem::path> write_result_files(const Directory& dir, const std::string& base_name,
+                                                      const CommandResult& result);
 
 // What the request asks for: the files, the JSON on `out`, or the summary line on `out` (also
 // after the files, naming them, unless quiet).

@@ -1,7 +1,6 @@
 #include "io/run_directory.hpp"
 
 #include "budjam/scene.hpp"  // InputError
-#include "io/atomic_file.hpp"
 #include "io/text.hpp"
 
 #include <fcntl.h>
@@ -24,44 +23,76 @@ fs::path packing(std::string_view stem) { return fs::path(packings) / (std::stri
 std::string target_stem(std::size_t k) { return "target_" + std::to_string(k); }
 
 bool is_run_packing_stem(std::string_view stem) {
-  if (stem == jammed || stem == phi2) return true;
-  constexpr std::string_view prefix = "target_";
-  if (stem.substr(0, prefix.size()) != prefix || stem.size() == prefix.size()) return false;
-  return std::all_of(stem.begin() + prefix.size(), stem.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
-bool is_temporary(std::string_view name) {
-  return name.size() > 1 && name.front() == '.' && name.find(".tmp-") != std::string_view::npos;
+  return stem == jammed || stem == phi2 || matches_pattern("target_#", stem);
 }
 
 }  // namespace run_files
 
+bool matches_pattern(std::string_view pattern, std::string_view name) {
+  if (pattern.empty()) return name.empty();
+  const char p = pattern.front();
+  if (p == '*') {
+    for (std::size_t k = 0; k <= name.size(); ++k)
+      if (matches_pattern(pattern.substr(1), name.substr(k))) return true;
+    return false;
+  }
+  if (p == '#') {
+    std::size_t k = 0;
+    while (k < name.size() && name[k] >= '0' && name[k] <= '9') ++k;
+    for (; k > 0; --k)
+      if (matches_pattern(pattern.substr(1), name.substr(k))) return true;
+    return false;
+  }
+  return !name.empty() && name.front() == p && matches_pattern(pattern.substr(1), name.substr(1));
+}
+
 namespace {
 
 constexpr std::string_view kMarkerText = "budjam-run 1\n";
+constexpr std::string_view kPartial = ".partial";
 
-// The top-level files a run writes (logs also as NAME.partial).
-const std::vector<std::string_view>& owned_files() {
-  using namespace run_files;
-  static const std::vector<std::string_view> names{scene,      checkpoint, summary, timing,   steps, divisions,
-                                                   bud_events, moduli,     dos,     rigidity, trials};
-  return names;
+// The patterns of `owned` for directory `sub` ("" = top level), without the directory part.
+std::vector<std::string_view> patterns_in(const OwnedEntries& owned, std::string_view sub) {
+  std::vector<std::string_view> out;
+  for (const std::string& o : owned) {
+    const std::size_t slash = o.find('/');
+    const std::string_view dir = slash == std::string::npos ? std::string_view() : std::string_view(o).substr(0, slash);
+    if (dir == sub)
+      out.push_back(slash == std::string::npos ? std::string_view(o) : std::string_view(o).substr(slash + 1));
+  }
+  return out;
 }
 
-bool owned_top_level(const std::string& name) {
-  for (std::string_view f : owned_files())
-    if (name == f || name == std::string(f) + ".partial") return true;
-  return run_files::is_temporary(name);
+std::vector<std::string> owned_subdirectories(const OwnedEntries& owned) {
+  std::vector<std::string> out;
+  for (const std::string& o : owned)
+    if (const std::size_t slash = o.find('/'); slash != std::string::npos) out.push_back(o.substr(0, slash));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
-// packings/<stem>.pack and sidecars <stem>.<anything> of a run packing; spectra/step_<n>.dos.*.
-bool owned_in_subdirectory(std::string_view sub, const std::string& name) {
-  if (run_files::is_temporary(name)) return true;
-  const std::size_t dot = name.find('.');
-  if (dot == std::string::npos) return false;
-  const std::string_view stem = std::string_view(name).substr(0, dot);
-  if (sub == run_files::packings) return run_files::is_run_packing_stem(stem);
-  return stem.substr(0, 5) == "step_";
+bool owned_name(const std::vector<std::string_view>& patterns, std::string_view name, bool logs) {
+  for (std::string_view p : patterns) {
+    if (matches_pattern(p, name)) return true;
+    if (logs && name.size() > kPartial.size() && name.substr(name.size() - kPartial.size()) == kPartial &&
+        matches_pattern(p, name.substr(0, name.size() - kPartial.size())))
+      return true;
+  }
+  return false;
+}
+
+bool is_bookkeeping(std::string_view name) {
+  return name == run_files::lock || name == run_files::marker || name == run_files::temporaries;
+}
+
+void expect_regular(const Directory& dir, std::string_view name) {
+  if (const auto st = dir.entry(name); st && !S_ISREG(st->st_mode)) {
+    if (S_ISLNK(st->st_mode))
+      throw InputError((dir / name).string() +
+                       ": is a symbolic link; budjam does not follow links in a run directory (nothing was changed)");
+    throw InputError((dir / name).string() + ": is not a regular file (nothing was changed)");
+  }
 }
 
 std::string host_name() {
@@ -72,45 +103,47 @@ std::string host_name() {
 
 // Opens and flock()s DIR/.budjam-lock; the lock lives as long as the descriptor (and dies with
 // the process). InputError naming the holder if another process has it.
-int take_lock(const fs::path& dir) {
-  const fs::path path = dir / run_files::lock;
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-  if (fd < 0) throw IoError(path.string() + ": cannot create the lock file: " + std::strerror(errno));
+int take_lock(const Directory& dir) {
+  expect_regular(dir, run_files::lock);
+  const int fd = dir.open_file(run_files::lock, O_RDWR | O_CREAT);
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     char buf[300] = {};
     const ssize_t n = ::pread(fd, buf, sizeof buf - 1, 0);
     ::close(fd);
-    if (err != EWOULDBLOCK) throw IoError(path.string() + ": cannot lock: " + std::strerror(err));
+    if (err != EWOULDBLOCK) throw IoError((dir / run_files::lock).string() + ": cannot lock: " + std::strerror(err));
     std::string holder = n > 0 ? std::string(buf, static_cast<std::size_t>(n)) : "";
     while (!holder.empty() && holder.back() == '\n') holder.pop_back();
-    throw InputError(dir.string() + ": another budjam process is writing this run (" +
+    throw InputError(dir.path().string() + ": another budjam process is writing this run (" +
                      (holder.empty() ? std::string("holder unknown") : escape_control(holder)) + ")");
   }
   const std::string me = "pid " + std::to_string(::getpid()) + " on " + host_name() + "\n";
   if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, me.data(), me.size(), 0) != static_cast<ssize_t>(me.size())) {
     const int err = errno;
     ::close(fd);
-    throw IoError(path.string() + ": cannot write the lock file: " + std::strerror(err));
+    throw IoError((dir / run_files::lock).string() + ": cannot write the lock file: " + std::strerror(err));
   }
   return fd;
 }
 
 // Written in place, not through a temporary: a concurrent claim must only ever see the lock and
 // the marker, and the marker's existence is all that counts.
-void write_marker(const fs::path& dir) {
-  const fs::path path = dir / run_files::marker;
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  const bool ok =
-      fd >= 0 && ::write(fd, kMarkerText.data(), kMarkerText.size()) == static_cast<ssize_t>(kMarkerText.size());
+void write_marker(const Directory& dir) {
+  const int fd = dir.open_file(run_files::marker, O_WRONLY | O_CREAT | O_TRUNC);
+  const bool ok = ::write(fd, kMarkerText.data(), kMarkerText.size()) == static_cast<ssize_t>(kMarkerText.size());
   const int err = errno;
-  if (fd >= 0) ::close(fd);
-  if (!ok) throw IoError(path.string() + ": cannot write: " + std::strerror(err));
+  ::close(fd);
+  if (!ok) throw IoError((dir / run_files::marker).string() + ": cannot write: " + std::strerror(err));
 }
 
-bool empty_but_lock(const fs::path& dir) {
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename() != run_files::lock) return false;
+bool has_marker(const Directory& dir) {
+  expect_regular(dir, run_files::marker);
+  return dir.entry(run_files::marker).has_value();
+}
+
+bool empty_but_lock(const Directory& dir) {
+  for (const std::string& name : dir.names())
+    if (name != run_files::lock) return false;
   return true;
 }
 
@@ -118,78 +151,100 @@ bool empty_but_lock(const fs::path& dir) {
 
 bool is_run_directory(const fs::path& dir) {
   std::error_code ec;
-  return fs::is_regular_file(dir / run_files::marker, ec);
+  return fs::is_regular_file(fs::symlink_status(dir / run_files::marker, ec));
 }
 
-std::vector<std::string> remove_run_outputs(const fs::path& dir) {
+void check_run_entries(const Directory& dir, const OwnedEntries& owned) {
+  const auto top = patterns_in(owned, "");
+  for (const std::string& name : dir.names())
+    if (is_bookkeeping(name) || owned_name(top, name, true)) expect_regular(dir, name);
+  for (const std::string& sub : owned_subdirectories(owned)) {
+    const auto st = dir.entry(sub);
+    if (!st) continue;
+    const Directory d = dir.subdirectory(sub, false);  // refuses a link or another kind
+    const auto inside = patterns_in(owned, sub);
+    for (const std::string& name : d.names())
+      if (owned_name(inside, name, false)) expect_regular(d, name);
+  }
+}
+
+std::vector<std::string> remove_run_outputs(const Directory& dir, const OwnedEntries& owned) {
+  const auto top = patterns_in(owned, "");
+  const auto subs = owned_subdirectories(owned);
   std::vector<std::string> kept;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (name == run_files::lock || name == run_files::marker) continue;  // still a run, if an empty one
-    if (owned_top_level(name) && !e.is_directory()) {
-      fs::remove(e.path());
-    } else if ((name == run_files::packings || name == run_files::spectra) && e.is_directory() && !e.is_symlink()) {
-      for (const auto& f : fs::directory_iterator(e.path())) {
-        const std::string fname = f.path().filename().string();
-        if (!f.is_directory() && owned_in_subdirectory(name, fname))
-          fs::remove(f.path());
+  for (const std::string& name : dir.names()) {
+    if (is_bookkeeping(name)) continue;  // still a run, if an empty one
+    const auto st = dir.entry(name);
+    if (!st) continue;
+    if (S_ISREG(st->st_mode) && owned_name(top, name, true)) {
+      dir.remove(name);
+    } else if (S_ISDIR(st->st_mode) && std::find(subs.begin(), subs.end(), name) != subs.end()) {
+      const Directory d = dir.subdirectory(name, false);
+      const auto inside = patterns_in(owned, name);
+      for (const std::string& f : d.names()) {
+        const auto fst = d.entry(f);
+        if (fst && S_ISREG(fst->st_mode) && owned_name(inside, f, false))
+          d.remove(f);
         else
-          kept.push_back(name + "/" + fname);
+          kept.push_back(name + "/" + f);
       }
-      if (fs::is_empty(e.path())) fs::remove(e.path());
+      if (d.names().empty()) dir.remove(name);
     } else {
       kept.push_back(name);
     }
   }
+  dir.sync();
   std::sort(kept.begin(), kept.end());
   return kept;
 }
 
-void remove_stale_temporaries(const fs::path& dir) {
-  for (const fs::path& d : {dir, dir / run_files::packings, dir / run_files::spectra}) {
-    std::error_code ec;
-    if (!fs::is_directory(d, ec)) continue;
-    for (const auto& e : fs::directory_iterator(d))
-      if (run_files::is_temporary(e.path().filename().string()) && !e.is_directory()) fs::remove(e.path());
-  }
+void RunDirectory::open_manifest() {
+  manifest_ = std::make_shared<TemporaryManifest>(root_, run_files::temporaries);
+  root_.record_temporaries_in(manifest_);
 }
 
-RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite) {
+RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite, const OwnedEntries& owned) {
   std::error_code ec;
   const bool exists = fs::exists(fs::symlink_status(dir, ec));
   if (exists && !fs::is_directory(dir, ec))
     throw InputError("--out: " + dir.string() + " exists and is not a directory");
-  if (exists && !is_run_directory(dir) && !empty_but_lock(dir))
+  Directory root = Directory::open(dir, true);
+  const bool run = has_marker(root);
+  if (!run && !empty_but_lock(root))
     throw InputError("--out: " + dir.string() + " is not empty and is not a budjam run directory (no " +
                      std::string(run_files::marker) + "); nothing was changed");
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(dir.string() + ": cannot create directory: " + ec.message());
-  const int fd = take_lock(dir);
-  RunDirectory run(dir, fd);
-  if (is_run_directory(dir)) {
+  RunDirectory claimed(root, take_lock(root));
+  if (run) {
     if (!overwrite)
       throw InputError("--out: " + dir.string() +
                        " holds a budjam run; pass --overwrite to replace it, or "
                        "continue it with budjam grow --resume " +
                        dir.string());
-    remove_run_outputs(dir);
+    check_run_entries(root, owned);
+    claimed.open_manifest();
+    claimed.remove_recorded_temporaries();
+    remove_run_outputs(root, owned);
   }
-  write_marker(dir);
-  return run;
+  write_marker(root);
+  if (!claimed.manifest_) claimed.open_manifest();
+  return claimed;
 }
 
-RunDirectory RunDirectory::resume(const fs::path& dir) {
+RunDirectory RunDirectory::resume(const fs::path& dir, const OwnedEntries& owned) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError("--resume: " + dir.string() + ": no such directory");
-  if (!is_run_directory(dir))
+  Directory root = Directory::open(dir, false);
+  if (!has_marker(root))
     throw InputError("--resume: " + dir.string() + " is not a budjam run directory (no " +
                      std::string(run_files::marker) + ")");
-  RunDirectory run(dir, take_lock(dir));
-  remove_stale_temporaries(dir);
-  return run;
+  RunDirectory claimed(root, take_lock(root));
+  check_run_entries(root, owned);
+  claimed.open_manifest();
+  return claimed;
 }
 
-RunDirectory::RunDirectory(RunDirectory&& o) noexcept : dir_(std::move(o.dir_)), lock_fd_(o.lock_fd_) {
+RunDirectory::RunDirectory(RunDirectory&& o) noexcept
+    : root_(std::move(o.root_)), lock_fd_(o.lock_fd_), manifest_(std::move(o.manifest_)) {
   o.lock_fd_ = -1;
 }
 

@@ -7,14 +7,22 @@
 //  - a directory is a budjam run only if it holds the marker `.budjam-run` that budjam writes
 //    when it claims the directory (not because some file such as scene.toml exists);
 //  - a fresh run refuses a non-empty directory without the marker, and an existing run unless
-//    asked to overwrite it; overwriting removes only the entries budjam creates (remove_run_outputs),
-//    never anything else a user put there;
+//    asked to overwrite it; overwriting removes only the entries the run's writers declare
+//    (remove_run_outputs), never anything else a user put there;
+//  - every entry budjam uses is opened, replaced and removed relative to the directory's
+//    descriptor without following links: a claim is refused (InputError, nothing changed) when one
+//    of them is a symbolic link or not of its kind (a file where a file is expected, a real
+//    directory for packings/ and spectra/);
 //  - one writer at a time: the writer holds an exclusive flock(2) on `.budjam-lock` for its whole
 //    lifetime (released by the kernel when the process ends, however it ends); a second writer is
 //    refused with a message naming the holder (pid and host);
-//  - temporaries of atomic writes left by a killed writer (`.NAME.tmp-XXXXXX`) are removed when
-//    the directory is claimed again.
+//  - temporaries of atomic writes are listed in `.budjam-temporaries` (io/atomic_file.hpp,
+//    TemporaryManifest); the ones a killed writer left are removed when the directory is claimed
+//    again (remove_recorded_temporaries), and no file is ever removed for its name's pattern.
+#include "io/atomic_file.hpp"
+
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -23,9 +31,10 @@ namespace budjam::io {
 
 // Every name in a run directory, relative to it.
 namespace run_files {
-inline constexpr std::string_view marker = ".budjam-run";  // "budjam-run 1": budjam created this run
-inline constexpr std::string_view lock = ".budjam-lock";   // flock(2) target; "pid host" of the writer
-inline constexpr std::string_view scene = "scene.toml";    // the effective scene, seed included
+inline constexpr std::string_view marker = ".budjam-run";               // "budjam-run 1": budjam created this run
+inline constexpr std::string_view lock = ".budjam-lock";                // flock(2) target; "pid host" of the writer
+inline constexpr std::string_view temporaries = ".budjam-temporaries";  // TemporaryManifest
+inline constexpr std::string_view scene = "scene.toml";                 // the effective scene, seed included
 inline constexpr std::string_view checkpoint = "checkpoint.txt";
 inline constexpr std::string_view summary = "summary.json";  // written last: the run is over
 inline constexpr std::string_view timing = "timing.json";
@@ -36,6 +45,7 @@ inline constexpr std::string_view moduli = "moduli.csv";
 inline constexpr std::string_view dos = "dos.csv";
 inline constexpr std::string_view rigidity = "rigidity_events.csv";
 inline constexpr std::string_view trials = "trials.csv";
+inline constexpr std::string_view trajectory = "trajectory.xyz";
 inline constexpr std::string_view packings = "packings";  // <name>.pack and their sidecars
 inline constexpr std::string_view spectra = "spectra";    // step_<n>.dos.{json,csv}
 inline constexpr std::string_view jammed = "jammed";      // packings/jammed.pack
@@ -47,20 +57,29 @@ std::filesystem::path packing(std::string_view stem);
 std::string target_stem(std::size_t k);
 // True for a packing stem a run writes (jammed, phi2, target_<k>).
 bool is_run_packing_stem(std::string_view stem);
-// True for `.NAME.tmp-XXXXXX`, the temporary of an atomic write (io/atomic_file.hpp).
-bool is_temporary(std::string_view filename);
 }  // namespace run_files
+
+// Whether `name` matches `pattern`: '*' stands for any run of characters, '#' for one or more
+// digits, everything else for itself.
+bool matches_pattern(std::string_view pattern, std::string_view name);
+
+// The entries of a run directory its writers declare, as patterns of relative paths
+// ("steps.csv", "packings/target_#.*", "spectra/step_#.dos.*"). A top-level file pattern also
+// owns the file's `.partial` log; a pattern with a directory owns entries of that directory
+// (one level), and the directory itself once empty.
+using OwnedEntries = std::vector<std::string>;
 
 class RunDirectory {
  public:
   // Claims `dir` for a new run: creates it if needed, takes the lock, writes the marker.
   // InputError (exit 2, nothing touched) if `dir` is not a directory, is not empty and has no
-  // marker, holds a run and `overwrite` is false, or another writer holds the lock. With
-  // `overwrite`, the entries of the earlier run are removed (only those budjam creates).
-  static RunDirectory create(const std::filesystem::path& dir, bool overwrite);
-  // Claims the run in `dir` to continue it: marker and lock as above, and stale temporaries are
-  // removed. Does not look at the checkpoint.
-  static RunDirectory resume(const std::filesystem::path& dir);
+  // marker, holds a run and `overwrite` is false, another writer holds the lock, or an entry of
+  // the earlier run is a link or of the wrong kind. With `overwrite`, the recorded temporaries
+  // and the `owned` entries of the earlier run are removed.
+  static RunDirectory create(const std::filesystem::path& dir, bool overwrite, const OwnedEntries& owned);
+  // Claims the run in `dir` to continue it: marker, lock and entries checked as above. Changes
+  // nothing but the lock file; remove_recorded_temporaries() once the resume has been validated.
+  static RunDirectory resume(const std::filesystem::path& dir, const OwnedEntries& owned);
 
   RunDirectory(RunDirectory&& other) noexcept;
   RunDirectory& operator=(RunDirectory&&) = delete;
@@ -68,24 +87,34 @@ class RunDirectory {
   RunDirectory& operator=(const RunDirectory&) = delete;
   ~RunDirectory();  // releases the lock
 
-  const std::filesystem::path& path() const { return dir_; }
-  std::filesystem::path operator/(std::string_view name) const { return dir_ / name; }
+  const std::filesystem::path& path() const { return root_.path(); }
+  std::filesystem::path operator/(std::string_view name) const { return root_ / name; }
+  // The run directory; temporaries created in it and its subdirectories are recorded.
+  const Directory& root() const { return root_; }
+  // packings/, spectra/: created by budjam when absent, never a link.
+  Directory subdirectory(std::string_view name) const { return root_.subdirectory(name, true); }
+  // Removes the temporaries a killed writer left (and only those: TemporaryManifest).
+  void remove_recorded_temporaries() { manifest_->remove_listed(); }
 
  private:
-  RunDirectory(std::filesystem::path dir, int lock_fd) : dir_(std::move(dir)), lock_fd_(lock_fd) {}
-  std::filesystem::path dir_;
+  RunDirectory(Directory root, int lock_fd) : root_(std::move(root)), lock_fd_(lock_fd) {}
+  void open_manifest();
+  Directory root_;
   int lock_fd_ = -1;
+  std::shared_ptr<TemporaryManifest> manifest_;
 };
 
 // True if `dir` holds the marker of a budjam run.
 bool is_run_directory(const std::filesystem::path& dir);
 
-// Removes what a run creates in `dir` (run_files names, run packings and their sidecars, spectra,
-// temporaries) and nothing else, keeping the marker and the lock; directories are removed only once empty. Returns the
-// entries that were kept (relative paths, sorted), e.g. for a message.
-std::vector<std::string> remove_run_outputs(const std::filesystem::path& dir);
+// InputError naming the first entry of `dir` that budjam uses (the lock, the marker, the list of
+// temporaries, the `owned` entries and their directories) and that is a symbolic link or not of
+// its kind.
+void check_run_entries(const Directory& dir, const OwnedEntries& owned);
 
-// Removes the temporaries of interrupted atomic writes in `dir`, packings/ and spectra/.
-void remove_stale_temporaries(const std::filesystem::path& dir);
+// Removes the `owned` entries of `dir` and nothing else, keeping the marker, the lock and the
+// list of temporaries; directories are removed only once empty. Returns the entries that were
+// kept (relative paths, sorted), e.g. for a message. Call check_run_entries first.
+std::vector<std::string> remove_run_outputs(const Directory& dir, const OwnedEntries& owned);
 
 }  // namespace budjam::io

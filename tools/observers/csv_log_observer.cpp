@@ -10,10 +10,10 @@
 
 namespace budjam::tools {
 
-CsvLogObserver::CsvLogObserver(std::vector<LogSpec> logs, bool resuming)
-    : specs_(std::move(logs)), logs_(specs_.size()) {
+CsvLogObserver::CsvLogObserver(const io::Directory& dir, std::vector<LogSpec> logs, bool resuming)
+    : dir_(dir), specs_(std::move(logs)), logs_(specs_.size()) {
   if (resuming) return;
-  for (std::size_t k = 0; k < specs_.size(); ++k) logs_[k].emplace(specs_[k].path, specs_[k].columns);
+  for (std::size_t k = 0; k < specs_.size(); ++k) logs_[k].emplace(dir_, specs_[k].name, specs_[k].columns);
 }
 
 io::CsvLog& CsvLogObserver::log(std::size_t k) {
@@ -38,9 +38,21 @@ void CsvLogObserver::load_state(std::istream& is) {
   std::vector<std::uint64_t> bytes(specs_.size());
   for (auto& b : bytes)
     if (!(is >> b)) throw InputError("bad " + name() + " state (log lengths)");
+  cuts_.clear();
   for (std::size_t k = 0; k < specs_.size(); ++k)
-    logs_[k].emplace(io::CsvLog::resume(specs_[k].path, specs_[k].columns, bytes[k]));
+    cuts_.push_back(io::CsvLog::check_resumable(dir_, specs_[k].name, specs_[k].columns, bytes[k]));
   load_more(is);
+}
+
+void CsvLogObserver::on_resumed() {
+  if (cuts_.size() != specs_.size()) throw std::logic_error(name() + ": resumed without its checkpoint section");
+  for (std::size_t k = 0; k < specs_.size(); ++k)
+    logs_[k].emplace(io::CsvLog::resume(dir_, specs_[k].name, specs_[k].columns, cuts_[k].bytes));
+}
+
+const io::CsvLog::Cut& CsvLogObserver::resumed_cut(std::size_t k) const {
+  if (k >= cuts_.size()) throw std::logic_error(name() + ": no checkpointed log lengths");
+  return cuts_[k];
 }
 
 bool due_every(const Schedule& schedule, const StateView& s) {

@@ -17,7 +17,7 @@ namespace budjam::tools {
 class CsvLogObserver : public Observer {
  public:
   struct LogSpec {
-    std::filesystem::path path;
+    std::string name;  // in the run directory
     std::vector<std::string> columns;
   };
 
@@ -26,21 +26,28 @@ class CsvLogObserver : public Observer {
   void on_failed(const Failed&) override { finish(); }  // a failed run's logs are complete up to the failure
   // One line: the byte length of each log; then save_more's text.
   void save_state(std::ostream& os) final;
+  // Checks that each log can be cut at its recorded length (CsvLog::check_resumable); the cut
+  // itself waits for on_resumed.
   void load_state(std::istream& is) final;
+  void on_resumed() override;
 
  protected:
-  // resuming: the logs are reopened by load_state instead of created.
-  CsvLogObserver(std::vector<LogSpec> logs, bool resuming);
+  // resuming: the logs are reopened by load_state and on_resumed instead of created.
+  CsvLogObserver(const io::Directory& dir, std::vector<LogSpec> logs, bool resuming);
   // The k-th log (in the order given to the constructor); std::logic_error if not open.
   io::CsvLog& log(std::size_t k = 0);
+  // What load_state found in the k-th log up to its recorded length; std::logic_error before.
+  const io::CsvLog::Cut& resumed_cut(std::size_t k) const;
 
   virtual void save_more(std::ostream&) {}
   virtual void load_more(std::istream&) {}
 
  private:
   void finish();
+  io::Directory dir_;
   std::vector<LogSpec> specs_;
   std::vector<std::optional<io::CsvLog>> logs_;
+  std::vector<io::CsvLog::Cut> cuts_;
 };
 
 // A non-negative quantity known also by its natural log (Δt, χ_c): the double's round-trip text

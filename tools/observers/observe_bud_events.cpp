@@ -14,8 +14,8 @@ const std::vector<std::string> kBudColumns{"episode", "cell_id", "event", "step"
 
 class BudEventLog : public tools::CsvLogObserver {
  public:
-  BudEventLog(const fs::path& dir, bool resuming)
-      : CsvLogObserver({{dir / io::run_files::bud_events, kBudColumns}}, resuming) {}
+  BudEventLog(const io::Directory& dir, bool resuming)
+      : CsvLogObserver(dir, {{std::string(io::run_files::bud_events), kBudColumns}}, resuming) {}
   std::string name() const override { return "bud_events"; }
   void on_bud_event(const BudEventHappened& e) override {
     const BudEvent& b = e.event;
@@ -24,9 +24,10 @@ class BudEventLog : public tools::CsvLogObserver {
 };
 
 const tools::ObserverRegistration registration{"bud_events",
+                                               {std::string(io::run_files::bud_events)},
                                                [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.bud_events) return nullptr;
-                                                 return std::make_unique<BudEventLog>(c.run_dir, c.resuming);
+                                                 return std::make_unique<BudEventLog>(c.run_dir.root(), c.resuming);
                                                }};
 
 }  // namespace

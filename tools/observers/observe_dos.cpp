@@ -27,8 +27,10 @@ const std::vector<std::string> kColumns{"episode",  "step",         "kind",     
 
 class DosObserver : public tools::CsvLogObserver {
  public:
-  DosObserver(const Scene& scene, fs::path dir, bool resuming)
-      : CsvLogObserver({{dir / io::run_files::dos, kColumns}}, resuming), schedule_(scene.dos), dir_(std::move(dir)) {}
+  DosObserver(const Scene& scene, const io::RunDirectory& dir, bool resuming)
+      : CsvLogObserver(dir.root(), {{std::string(io::run_files::dos), kColumns}}, resuming),
+        schedule_(scene.dos),
+        dir_(dir) {}
   std::string name() const override { return "dos"; }
   Needs needs() const override {
     Needs n;
@@ -37,32 +39,32 @@ class DosObserver : public tools::CsvLogObserver {
   }
 
   void on_jammed(const Jammed& e) override {
-    if (schedule_.at_jamming) record(e.state, "jammed", packing_base(io::run_files::jammed), std::nullopt);
+    if (schedule_.at_jamming)
+      record(e.state, "jammed", io::run_files::packings, std::string(io::run_files::jammed), std::nullopt);
   }
   void on_depleted(const Depleted& e) override {
-    if (schedule_.at_phi2) record(e.state, "phi2", packing_base(io::run_files::phi2), std::nullopt);
+    if (schedule_.at_phi2)
+      record(e.state, "phi2", io::run_files::packings, std::string(io::run_files::phi2), std::nullopt);
   }
   void on_target_reached(const TargetReached& e) override {
     if (schedule_.at_targets)
-      record(e.state, "target", packing_base(io::run_files::target_stem(e.target.index)), e.target.dphi);
+      record(e.state, "target", io::run_files::packings, io::run_files::target_stem(e.target.index), e.target.dphi);
   }
   void on_step_accepted(const StepAccepted& e) override {
     const StateView& s = e.state;
     if (!tools::due_every(schedule_, s)) return;
-    record(s, "step", fs::path(io::run_files::spectra) / ("step_" + std::to_string(s.step)), std::nullopt);
+    record(s, "step", io::run_files::spectra, "step_" + std::to_string(s.step), std::nullopt);
   }
 
  private:
-  // packings/<stem>: the sidecar base beside a run packing
-  static fs::path packing_base(std::string_view stem) { return fs::path(io::run_files::packings) / stem; }
-  void record(const StateView& s, const std::string& kind, const fs::path& base, std::optional<double> dphi) {
+  // <sub>/<stem>.dos.{json,csv}: beside a run packing, or a spectrum of its own
+  void record(const StateView& s, const std::string& kind, std::string_view sub, const std::string& stem,
+              std::optional<double> dphi) {
     if (s.contacts == nullptr || s.network == nullptr)
       throw std::logic_error("dos observer: the driver gave no contact network at a " + kind + " state");
     if (s.network->N_nr == 0) return;  // no non-rattler: nothing vibrates
     const tools::DosReport r = tools::dos_report(*s.packing, *s.contacts, *s.network, request_);
-    const fs::path b = dir_ / base;
-    fs::create_directories(b.parent_path());
-    tools::write_dos_files(b, r, request_);
+    tools::write_dos_files(dir_.subdirectory(sub), stem, r, request_);
     const auto& m = r.result.summary;
     log().row({static_cast<long>(s.jamming ? s.jamming->episode : -1), s.step, kind,
                dphi ? io::CsvField(*dphi) : io::CsvField::missing(), s.phi, s.packing->size(), r.network.N_nr,
@@ -73,11 +75,13 @@ class DosObserver : public tools::CsvLogObserver {
   }
 
   Schedule schedule_;
-  fs::path dir_;
+  const io::RunDirectory& dir_;
   tools::DosRequest request_;
 };
 
-const tools::ObserverRegistration registration{"dos", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+const tools::ObserverRegistration registration{"dos",
+                                               {std::string(io::run_files::dos), "spectra/step_#.dos.*"},
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.dos.any()) return nullptr;
                                                  return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
                                                }};

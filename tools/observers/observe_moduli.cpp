@@ -77,8 +77,8 @@ const std::vector<std::string> kColumns{"event",
 
 class ModuliLog : public tools::CsvLogObserver {
  public:
-  ModuliLog(const Scene& scene, const fs::path& dir, bool resuming)
-      : CsvLogObserver({{dir / io::run_files::moduli, kColumns}}, resuming), schedule_(scene.moduli) {}
+  ModuliLog(const Scene& scene, const io::Directory& dir, bool resuming)
+      : CsvLogObserver(dir, {{std::string(io::run_files::moduli), kColumns}}, resuming), schedule_(scene.moduli) {}
   std::string name() const override { return "moduli"; }
   Needs needs() const override { return Needs{.contacts = true, .network = true}; }
 
@@ -192,11 +192,10 @@ class ModuliLog : public tools::CsvLogObserver {
   std::string cached_error_;
 };
 
-const tools::ObserverRegistration registration{"moduli",
-                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                                 if (!c.scene.moduli.any())
-                                                   return nullptr;  // not asked: never built, costs nothing
-                                                 return std::make_unique<ModuliLog>(c.scene, c.run_dir, c.resuming);
-                                               }};
+const tools::ObserverRegistration registration{
+    "moduli", {std::string(io::run_files::moduli)}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (!c.scene.moduli.any()) return nullptr;  // not asked: never built, costs nothing
+      return std::make_unique<ModuliLog>(c.scene, c.run_dir.root(), c.resuming);
+    }};
 
 }  // namespace

@@ -75,10 +75,10 @@ class Progress : public Observer {
   long start_attempts_ = 0;
 };
 
-const tools::ObserverRegistration registration{"progress",
-                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                                 if (c.quiet || !c.scene.progress) return nullptr;
-                                                 return std::make_unique<Progress>(c.run_dir);
-                                               }};
+const tools::ObserverRegistration registration{
+    "progress", {}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (c.quiet || !c.scene.progress) return nullptr;
+      return std::make_unique<Progress>(c.run_dir);
+    }};
 
 }  // namespace

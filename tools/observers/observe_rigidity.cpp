@@ -33,8 +33,8 @@ const std::vector<std::string> kColumns{"step",           "phi",           "epis
 
 class RigidityLog : public tools::CsvLogObserver {
  public:
-  RigidityLog(const fs::path& dir, bool resuming)
-      : CsvLogObserver({{dir / io::run_files::rigidity, kColumns}}, resuming) {}
+  RigidityLog(const io::Directory& dir, bool resuming)
+      : CsvLogObserver(dir, {{std::string(io::run_files::rigidity), kColumns}}, resuming) {}
   std::string name() const override { return "rigidity"; }
   Needs needs() const override { return Needs{.contacts = true, .network = true}; }
 
@@ -110,10 +110,11 @@ class RigidityLog : public tools::CsvLogObserver {
 };
 
 const tools::ObserverRegistration registration{"rigidity",
+                                               {std::string(io::run_files::rigidity)},
                                                [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.rigidity_events)
                                                    return nullptr;  // not asked: never built, costs nothing
-                                                 return std::make_unique<RigidityLog>(c.run_dir, c.resuming);
+                                                 return std::make_unique<RigidityLog>(c.run_dir.root(), c.resuming);
                                                }};
 
 }  // namespace

@@ -11,8 +11,10 @@
 
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
+#include "io/run_directory.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -24,13 +26,14 @@
 namespace {
 
 using namespace budjam;
-namespace fs = std::filesystem;
 
 class TrajectoryLog : public Observer {
  public:
-  TrajectoryLog(long every, fs::path dir, bool resuming)
-      : every_(every), path_(std::move(dir) / "trajectory.xyz"), partial_(fs::path(path_) += ".partial") {
-    if (!resuming) open(O_TRUNC);
+  TrajectoryLog(long every, const io::Directory& dir, bool resuming) : every_(every), dir_(dir) {
+    if (resuming) return;
+    dir_.remove(io::run_files::trajectory);
+    dir_.remove(partial_name());
+    fd_ = dir_.open_file(partial_name(), O_WRONLY | O_CREAT | O_EXCL | O_APPEND);
   }
   ~TrajectoryLog() override {
     if (fd_ >= 0) ::close(fd_);
@@ -52,18 +55,25 @@ class TrajectoryLog : public Observer {
   }
   void load_state(std::istream& is) override {
     if (!(is >> bytes_ >> last_step_)) throw InputError("checkpoint: trajectory: expected <bytes> <last step>");
-    std::error_code ec;
-    if (!fs::exists(partial_) || fs::file_size(partial_, ec) < bytes_)
-      throw InputError(partial_.string() + ": missing or shorter than the checkpoint records");
-    fs::resize_file(partial_, bytes_);
-    open(0);
+    // A frame ends with a newline: the recorded length must be the end of one.
+    const int fd = dir_.open_file(partial_name(), O_RDONLY);
+    struct ::stat st {};
+    char last = 0;
+    const bool ok = ::fstat(fd, &st) == 0 && static_cast<std::uint64_t>(st.st_size) >= bytes_ &&
+                    (bytes_ == 0 || (::pread(fd, &last, 1, static_cast<off_t>(bytes_ - 1)) == 1 && last == '\n'));
+    ::close(fd);
+    if (!ok)
+      throw InputError((dir_ / partial_name()).string() + ": does not hold whole frames up to the " +
+                       std::to_string(bytes_) + " bytes the checkpoint records");
+  }
+  void on_resumed() override {
+    fd_ = dir_.open_file(partial_name(), O_WRONLY | O_APPEND);
+    if (::ftruncate(fd_, static_cast<off_t>(bytes_)) != 0)
+      throw io::IoError((dir_ / partial_name()).string() + ": cannot truncate: " + std::strerror(errno));
   }
 
  private:
-  void open(int flags) {
-    fd_ = ::open(partial_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | flags, 0644);
-    if (fd_ < 0) throw io::IoError(partial_.string() + ": cannot open: " + std::strerror(errno));
-  }
+  static std::string partial_name() { return std::string(io::run_files::trajectory) + ".partial"; }
   // One frame per state: an event state that is also a sampled step is written once.
   void frame(const StateView& s) {
     if (s.step == last_step_) return;
@@ -73,32 +83,35 @@ class TrajectoryLog : public Observer {
     for (std::size_t done = 0; done < text.size();) {
       const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
       if (n < 0 && errno == EINTR) continue;
-      if (n < 0) throw io::IoError(partial_.string() + ": write failed: " + std::strerror(errno));
+      if (n < 0) throw io::IoError((dir_ / partial_name()).string() + ": write failed: " + std::strerror(errno));
       done += static_cast<std::size_t>(n);
     }
     bytes_ += text.size();
     last_step_ = s.step;
   }
   void sync() {
-    if (::fsync(fd_) != 0) throw io::IoError(partial_.string() + ": fsync failed: " + std::strerror(errno));
+    if (::fsync(fd_) != 0)
+      throw io::IoError((dir_ / partial_name()).string() + ": fsync failed: " + std::strerror(errno));
   }
   void finish(const StateView& s) {
     frame(s);
     sync();
-    fs::rename(partial_, path_);
+    dir_.rename(partial_name(), io::run_files::trajectory);
   }
 
   long every_;
-  fs::path path_, partial_;
+  io::Directory dir_;
   int fd_ = -1;
   std::uint64_t bytes_ = 0;
   long last_step_ = -1;
 };
 
-const tools::ObserverRegistration reg{"trajectory", [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+const tools::ObserverRegistration reg{"trajectory",
+                                      {std::string(io::run_files::trajectory)},
+                                      [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                         if (c.scene.trajectory_every <= 0) return nullptr;
-                                        return std::make_unique<TrajectoryLog>(c.scene.trajectory_every, c.run_dir,
-                                                                               c.resuming);
+                                        return std::make_unique<TrajectoryLog>(c.scene.trajectory_every,
+                                                                               c.run_dir.root(), c.resuming);
                                       }};
 
 }  // namespace

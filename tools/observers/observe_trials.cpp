@@ -16,8 +16,8 @@ const std::vector<std::string> kTrialColumns{"attempt", "dt",      "N",         
 
 class TrialLog : public tools::CsvLogObserver {
  public:
-  TrialLog(const fs::path& dir, bool resuming)
-      : CsvLogObserver({{dir / io::run_files::trials, kTrialColumns}}, resuming) {}
+  TrialLog(const io::Directory& dir, bool resuming)
+      : CsvLogObserver(dir, {{std::string(io::run_files::trials), kTrialColumns}}, resuming) {}
   std::string name() const override { return "trials"; }
   void on_trial(const TrialRelaxed& t) override {
     log().row({t.attempt, tools::beyond_double_range(t.dt, t.log_dt), t.N, t.phi, t.E_per_cell, to_string(t.start),
@@ -25,10 +25,10 @@ class TrialLog : public tools::CsvLogObserver {
   }
 };
 
-const tools::ObserverRegistration registration{"trials",
-                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                                 if (!c.scene.trials) return nullptr;
-                                                 return std::make_unique<TrialLog>(c.run_dir, c.resuming);
-                                               }};
+const tools::ObserverRegistration registration{
+    "trials", {std::string(io::run_files::trials)}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (!c.scene.trials) return nullptr;
+      return std::make_unique<TrialLog>(c.run_dir.root(), c.resuming);
+    }};
 
 }  // namespace

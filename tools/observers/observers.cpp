@@ -9,8 +9,14 @@ std::vector<ObserverEntry>& observer_registry() {
   return registry;
 }
 
-ObserverRegistration::ObserverRegistration(std::string name, ObserverFactory factory) {
-  observer_registry().push_back({std::move(name), std::move(factory)});
+ObserverRegistration::ObserverRegistration(std::string name, io::OwnedEntries files, ObserverFactory factory) {
+  observer_registry().push_back({std::move(name), std::move(files), std::move(factory)});
+}
+
+io::OwnedEntries declared_observer_files() {
+  io::OwnedEntries out;
+  for (const auto& e : observer_registry()) out.insert(out.end(), e.files.begin(), e.files.end());
+  return out;
 }
 
 std::vector<std::unique_ptr<Observer>> make_observers(const ObserverContext& ctx) {

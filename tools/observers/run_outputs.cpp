@@ -2,6 +2,9 @@
 
 #include "io/packing_file.hpp"
 #include "io/text.hpp"
+#include "observers/observers.hpp"
+
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
@@ -51,13 +54,28 @@ const std::vector<std::string>& RunLog::division_columns() {
   return c;
 }
 
-RunLog::RunLog(const fs::path& run_dir, std::uint64_t seed, bool resuming)
+RunLog::RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resuming)
     : CsvLogObserver(
-          {{run_dir / run_files::steps, step_columns()}, {run_dir / run_files::divisions, division_columns()}},
+          run_dir.root(),
+          {{std::string(run_files::steps), step_columns()}, {std::string(run_files::divisions), division_columns()}},
           resuming),
-      dir_(run_dir),
+      run_dir_(run_dir),
       seed_(seed) {
-  fs::create_directories(dir_ / run_files::packings);
+  if (!resuming) packings();  // every run directory has packings/, also one that never jams
+}
+
+io::OwnedEntries RunLog::files() {
+  const std::string p = std::string(run_files::packings) + "/";
+  return {std::string(run_files::steps), std::string(run_files::divisions), p + std::string(run_files::jammed) + ".*",
+          p + std::string(run_files::phi2) + ".*", p + "target_#.*"};
+}
+
+io::OwnedEntries run_owned_entries() {
+  io::OwnedEntries out{std::string(run_files::scene), std::string(run_files::checkpoint),
+                       std::string(run_files::summary), std::string(run_files::timing)};
+  for (auto& f : RunLog::files()) out.push_back(std::move(f));
+  for (auto& f : declared_observer_files()) out.push_back(std::move(f));
+  return out;
 }
 
 void RunLog::on_step_accepted(const StepAccepted& e) {
@@ -116,22 +134,40 @@ void RunLog::write_pack(const std::string& stem, const StateView& s, const std::
     meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
     meta.set_number("Z", s.network->Z);
   }
-  io::write_packing(dir_ / run_files::packing(stem), *s.packing, meta);
+  io::write_packing(packings(), stem + ".pack", *s.packing, meta);
 }
 
 void RunLog::on_unjammed(const Unjammed&) {
   // The jamming point, the targets and φ_2 of the lost episode are void (summary.json drops
   // them too); they are written again when reached in the next episode.
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir_ / run_files::packings, ec))
-    if (entry.path().extension() == ".pack" && run_files::is_run_packing_stem(entry.path().stem().string()))
-      fs::remove(entry.path(), ec);
+  const io::Directory dir = packings();
+  for (const std::string& name : dir.names()) {
+    const fs::path p(name);
+    const auto st = dir.entry(name);
+    if (st && S_ISREG(st->st_mode) && p.extension() == ".pack" && run_files::is_run_packing_stem(p.stem().string()))
+      dir.remove(name);
+  }
 }
 
 void RunLog::on_jammed(const Jammed& e) { write_pack(std::string(run_files::jammed), e.state, "jammed", std::nullopt); }
 void RunLog::on_depleted(const Depleted& e) { write_pack(std::string(run_files::phi2), e.state, "phi2", std::nullopt); }
 void RunLog::on_target_reached(const TargetReached& e) {
   write_pack(run_files::target_stem(e.target.index), e.state, "target", e.target.dphi);
+}
+
+void RunLog::check_resumed_state(const GrowthState& s, const Scene& scene, const io::CheckpointLines& at,
+                                 const std::string& checkpoint_file) const {
+  const io::Directory& root = run_dir_.root();
+  if (!root.entry(run_files::packings)) {
+    if (s.result.jamming)
+      throw InputError(io::escape_control(checkpoint_file + ":" + std::to_string(at.jamming) +
+                                          ": the record has no saved packing (no packings/ directory)"));
+    // Without records no packing is read: the run directory stands in for packings/.
+    io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_cut(kDivisions), root);
+    return;
+  }
+  io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_cut(kDivisions),
+                        root.subdirectory(run_files::packings, false));
 }
 
 // ---- summary.json --------------------------------------------------------------------------------
@@ -222,7 +258,7 @@ Json summary_json(const GrowthDriver& driver) {
   return j;
 }
 
-void write_summary(const fs::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing) {
+void write_summary(const io::Directory& run_dir, const GrowthDriver& driver, const SessionTiming& timing) {
   const RunResult& r = driver.result();
   const long evals = r.force_evaluations - timing.force_evaluations_at_start;
   const long attempts = driver.view().attempts - timing.attempts_at_start;
@@ -234,8 +270,8 @@ void write_summary(const fs::path& run_dir, const GrowthDriver& driver, const Se
   t["force_evaluations"] = evals;
   t["force_evaluations_per_second"] = timing.wall_seconds > 0 ? evals / timing.wall_seconds : 0.0;
   t["final_N"] = driver.packing().size();
-  io::write_json(run_dir / run_files::timing, t);
-  io::write_json(run_dir / run_files::summary, summary_json(driver));  // last: marks the run complete
+  io::write_json(run_dir, run_files::timing, t);
+  io::write_json(run_dir, run_files::summary, summary_json(driver));  // last: marks the run complete
 }
 
 }  // namespace budjam::tools

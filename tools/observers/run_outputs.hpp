@@ -6,6 +6,7 @@
 // observe_progress.cpp).
 #include "budjam/growth_driver.hpp"
 #include "io/atomic_file.hpp"
+#include "io/checkpoint.hpp"
 #include "io/json.hpp"
 #include "io/run_directory.hpp"
 #include "observers/csv_log_observer.hpp"
@@ -20,7 +21,10 @@ namespace budjam::tools {
 class RunLog : public CsvLogObserver {
  public:
   // resuming: the logs are reopened by load_state (cut back to the checkpoint) instead of created.
-  RunLog(const std::filesystem::path& run_dir, std::uint64_t seed, bool resuming);
+  RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resuming);
+  // The entries it writes: steps.csv, divisions.csv, the run packings and their sidecars (which
+  // describe the packing and go with it).
+  static io::OwnedEntries files();
   std::string name() const override { return "run_log"; }
   void on_step_accepted(const StepAccepted& e) override;
   void on_divided(const Divided& e) override;
@@ -32,9 +36,19 @@ class RunLog : public CsvLogObserver {
   static const std::vector<std::string>& step_columns();
   static const std::vector<std::string>& division_columns();
 
+  // After load_state: InputError "<checkpoint>:<line>: ..." unless the checkpointed state `s`
+  // agrees with what this log and the packings hold: the step and division counters with the
+  // rows of steps.csv and divisions.csv up to their recorded lengths, each record (jamming point,
+  // targets, φ_2) with its saved packing, the scene's P0 and the seed with every such packing,
+  // and each tagged bud's size at jamming with the jammed packing.
+  void check_resumed_state(const GrowthState& s, const Scene& scene, const io::CheckpointLines& at,
+                           const std::string& checkpoint_file) const;
+
  private:
   void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
-  std::filesystem::path dir_;
+  // Opened when used: a resume refused for another reason must not find packings/ created.
+  io::Directory packings() const { return run_dir_.subdirectory(io::run_files::packings); }
+  const io::RunDirectory& run_dir_;
   std::uint64_t seed_;
   static constexpr std::size_t kSteps = 0, kDivisions = 1;  // log(k)
 };
@@ -47,6 +61,10 @@ struct SessionTiming {
   long attempts_at_start = 0;  // growth steps already done when this session started
   long force_evaluations_at_start = 0;
 };
-void write_summary(const std::filesystem::path& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
+void write_summary(const io::Directory& run_dir, const GrowthDriver& driver, const SessionTiming& timing);
+
+// Every entry a growth run may write (io::OwnedEntries): scene.toml, checkpoint.txt, summary.json,
+// timing.json, RunLog::files() and what every registered observer declares.
+io::OwnedEntries run_owned_entries();
 
 }  // namespace budjam::tools
