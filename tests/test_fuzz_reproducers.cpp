@@ -53,3 +53,7 @@ TEST_CASE("the packing harness passes on its corpus and reproducers", "[fuzz][.h
 TEST_CASE("the checkpoint harness passes on its corpus and reproducers", "[fuzz][.hard]") {
   replay("checkpoint", budjam::fuzz::checkpoint);
 }
+
+TEST_CASE("the degenerate-packing harness passes on its corpus and reproducers", "[fuzz][.hard]") {
+  replay("degenerate", budjam::fuzz::degenerate);
+}

@@ -127,6 +127,7 @@ py::dict moduli_dict(const Packing& p, const std::string& solver) {
   ModuliOptions options;
   options.solver = parse_moduli_solver(solver);
   const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
+  require_relaxed_moduli(e, "moduli");  // a saddle is returned, flagged by energy_minimum
   return py::dict("B"_a = e.moduli.B, "G"_a = e.moduli.G_simple, "moduli"_a = moduli_of(e.moduli),
                   "moduli_affine"_a = moduli_of(e.moduli_affine), "moduli_energy"_a = moduli_of(e.moduli_energy),
                   "moduli_energy_affine"_a = moduli_of(e.moduli_energy_affine), "P"_a = e.P, "P_energy"_a = e.P_energy,
@@ -290,8 +291,23 @@ class Growth {
 
 PYBIND11_MODULE(_budjam, m) {
   m.doc() = "budjam: growing budding-cell packings, jamming and rigidity (compiled core).";
-  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
-  py::register_exception<io::IoError>(m, "OutputError", PyExc_OSError);
+  // Messages as the command line prints them: one line, control bytes escaped, bounded in length.
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  static py::exception<io::IoError> output_error(m, "OutputError", PyExc_OSError);
+  static py::exception<NoResultError> no_result_error(m, "NoResultError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const InputError& e) {
+      input_error(io::one_line(e.what()).c_str());
+    } catch (const io::IoError& e) {
+      output_error(io::one_line(e.what()).c_str());
+    } catch (const NoResultError& e) {
+      no_result_error(io::one_line(e.what()).c_str());
+    }
+  });
+
+  m.def("_one_line", &io::one_line, "text"_a, "A message as `budjam` prints it: one line, control bytes as \\xNN.");
 
   py::class_<io::PackingFile>(m, "Packing", R"(A packing of rigid mother–bud dumbbells in a periodic square box.
 
@@ -386,7 +402,9 @@ periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's
 B and G (units k, 2D) from the contact-virial stress S (the paper's convention, the headline values)
 (moduli) and from the energy stress tau (moduli_energy), relaxed and affine (*_affine); the response matrices R = dS/de,
 E = (1/A) d2U/de de (4x4, order xx, xy, yx, yy), the Voigt stiffness C (3x3), the shear
-stability of the box (G_min, G_max over simple-shear directions phi, radians).)");
+stability of the box (G_min, G_max over simple-shear directions phi, radians).
+An unjammed packing (N_nr = 0: no rigid backbone) or a relaxation that did not converge raises
+NoResultError; a saddle is returned flagged, energy_minimum False and the relaxed moduli NaN.)");
   m.def(
       "spectrum",
       [](const io::PackingFile& f, const std::string& method, int modes) {

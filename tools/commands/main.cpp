@@ -21,8 +21,8 @@
 namespace {
 
 int error(const std::string& message, int code) {
-  // One line, always, and no control bytes from a file reaching the terminal.
-  std::cerr << "budjam: error: " << budjam::io::escape_control(message) << std::endl;
+  // One short line, always, and no control bytes from a file reaching the terminal.
+  std::cerr << "budjam: error: " << budjam::io::one_line(message) << std::endl;
   return code;
 }
 
@@ -55,8 +55,8 @@ int main(int argc, char** argv) {
     return error(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
-  } catch (const Finding& e) {
-    std::cerr << "budjam: " << budjam::io::escape_control(e.what()) << std::endl;
+  } catch (const budjam::NoResultError& e) {  // cli::Finding included
+    std::cerr << "budjam: " << budjam::io::one_line(e.what()) << std::endl;
     return kExitRunFailed;
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
