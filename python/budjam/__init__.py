@@ -22,11 +22,23 @@ The functions are the ones `budjam` (the command line) runs, so their results ar
 import json
 import pathlib
 
-from ._budjam import (Growth, InputError, OutputError, Packing, contacts, export, moduli, particle_frame,
-                      read_packing, rigidity, spectrum, survival)
+from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, _one_line, contacts, export, moduli,
+                      particle_frame, read_packing, rigidity, spectrum, survival)
 
-__all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "contacts", "export", "load_run", "moduli",
-           "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+__all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "contacts", "export",
+           "load_run", "moduli", "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+
+
+def _input_error(message):
+    """InputError with the message as the command line prints it: one line, control bytes escaped."""
+    return InputError(_one_line(message))
+
+
+def _read_table(path, pandas):
+    try:
+        return pandas.read_csv(path, float_precision="round_trip", encoding="utf-8")
+    except (ValueError, OSError) as e:  # pandas' ParserError and EmptyDataError, UnicodeDecodeError are ValueErrors
+        raise _input_error(f"{path}: not a readable CSV table: {e}") from None
 
 
 class Run:
@@ -42,11 +54,19 @@ class Run:
         self.dir = pathlib.Path(directory)
         summary = self.dir / "summary.json"
         if not summary.is_file():
-            raise InputError(f"{self.dir}: not a finished run (no summary.json)")
-        with open(summary) as f:
-            self.summary = json.load(f)
-        self.tables = {csv.stem: pandas.read_csv(csv, float_precision="round_trip") for csv in sorted(self.dir.glob("*.csv"))}
-        self.packings = sorted((self.dir / "packings").glob("*.pack"))
+            raise _input_error(f"{self.dir}: not a finished run (no summary.json)")
+        try:
+            with open(summary, encoding="utf-8") as f:
+                self.summary = json.load(f)
+        except (ValueError, OSError) as e:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+            raise _input_error(f"{summary}: invalid JSON: {e}") from None
+        if not isinstance(self.summary, dict) or self.summary.get("format") != "budjam-summary":
+            raise _input_error(f"{summary}: not a budjam run summary (a JSON object with format budjam-summary)")
+        packings = self.dir / "packings"
+        if packings.exists() and not packings.is_dir():
+            raise _input_error(f"{packings}: not a directory (a run keeps its packings in one)")
+        self.tables = {csv.stem: _read_table(csv, pandas) for csv in sorted(self.dir.glob("*.csv"))}
+        self.packings = sorted(packings.glob("*.pack"))
 
     def __getattr__(self, name):
         tables = self.__dict__.get("tables", {})
