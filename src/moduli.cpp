@@ -647,10 +647,10 @@ void require_relaxed_moduli(const ElasticResponse& e, const std::string& what) {
   const bool finite = std::isfinite(e.B()) && std::isfinite(e.G()) && std::isfinite(e.B_energy()) &&
                       std::isfinite(e.G_energy()) && e.R.allFinite() && e.E.allFinite();
   if (!finite || !e.kernel.well_posed)
-    throw NoResultError(what + ": the linear response did not converge (solver " + to_string(e.kernel.method) +
-                        ", relative residual " + std::to_string(e.kernel.residual) +
-                        (finite ? "" : ", moduli not finite") +
-                        "); try another solver (dense, cholesky) or relax the packing to force balance first");
+    throw NoResultError(
+        what + ": the linear response did not converge (solver " + to_string(e.kernel.method) + ", relative residual " +
+        std::to_string(e.kernel.residual) + (finite ? "" : ", moduli not finite") +
+        "); try another of the solvers ldlt, cholesky, dense and cg, or relax the packing to force balance first");
 }
 
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
