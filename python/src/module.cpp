@@ -419,7 +419,8 @@ matrix M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the
 u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
 translations are removed); participation ratios, N_zero below lambda_tol,
 the band edge omega_star (None if not available). method: auto | dense | arpack; modes:
-ARPACK modes (0: as many as omega_star needs).)");
+ARPACK modes (0: as many as omega_star needs). An unjammed packing raises InputError; an
+eigensolver that does not converge raises NoResultError saying what to try.)");
   m.def("survival", &survival_dict, "runs"_a,
         R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories, as
 `budjam survival` (each run's last jamming episode; completion is the event, division and the
