@@ -63,7 +63,11 @@ std::optional<std::string> overlap_problem(const Packing& p, std::pair<std::size
   const Box box{L, p.box.shear - std::nearbyint(p.box.shear)};
   double reach = 0;  // largest σ of any pair
   for (double R : lobes.R) reach = std::max(reach, 2 * R);
-  const auto bins_along = [L](double width) { return std::max<long>(1, static_cast<long>(std::floor(L / width))); };
+  // At most about one bin per lobe a side: a huge box with few cells must not allocate empty bins.
+  const double side_max = std::max(1.0, std::floor(std::sqrt(static_cast<double>(n))));
+  const auto bins_along = [L, side_max](double width) {
+    return static_cast<long>(std::clamp(std::floor(L / width), 1.0, side_max));
+  };
   const long ns = bins_along(reach * (1 + std::abs(box.shear))), ny = bins_along(reach);
   const auto wrap = [L](double v) { return v - L * std::floor(v / L); };
   const auto bin_of = [](double v, double L_, long nb) { return std::min(nb - 1, static_cast<long>(v / L_ * nb)); };

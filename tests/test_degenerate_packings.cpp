@@ -181,6 +181,11 @@ TEST_CASE("the reader refuses phi >= 4 before looking for pairs: 10^5 cells stac
   const auto t0 = std::chrono::steady_clock::now();
   CHECK_THAT(error_of(q), Contains("the mother of cell 0 and the mother of cell 1 are r = 0 apart"));
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 5);
+  // A vast box with two cells: no bins for the empty space.
+  Packing vast = box_of(1e300);
+  vast.add_cell(1, 1, 0, 0.5, 0.002, -1);
+  vast.add_cell(1.1, 1, 0, 0.5, 0.002, -1);
+  CHECK_THAT(error_of(vast), Contains("the mother of cell 0 and the mother of cell 1 are r = 0.1"));
 }
 
 TEST_CASE("packings grown and compressed by budjam obey the geometric rules", "[degenerate]") {
