@@ -4,17 +4,23 @@
 // (fuzz/corpus/, fuzz/reproducers/) in the ordinary build. Each returns normally for an input
 // that is accepted or refused with InputError, and calls std::abort() when a property fails;
 // any other exception escapes.
+#include "budjam/moduli.hpp"
 #include "budjam/scene.hpp"
 #include "io/atomic_file.hpp"
+#include "budjam/spectrum.hpp"
 #include "io/checkpoint.hpp"
 #include "io/packing_file.hpp"
+#include "io/run_data.hpp"
 #include "io/scene_file.hpp"
 
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <istream>
 #include <sstream>
+#include <numbers>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -150,6 +156,47 @@ inline void resume(std::string_view input, const std::filesystem::path& run_dir)
                           dir.subdirectory("packings", false));
     advance_from(std::move(s));
   } catch (const InputError&) {}
+}
+
+// Degenerate geometry, structured: the bytes place up to 48 cells in a small box (byte 0: L, byte 1:
+// the Lees–Edwards shear; then 4 bytes per cell: x, y, θ, b, with x = 255 stacking the cell on the
+// previous one), so that stacked, coincident and interpenetrating cells come at once, which text
+// mutations of a packing file rarely reach. Every packing the reader accepts gets moduli and a
+// dense spectrum with finite numbers, or a NoResultError (no answer, said so); never NaN as a result.
+inline void degenerate(std::string_view bytes) {
+  const auto byte = [&](std::size_t k) { return static_cast<double>(static_cast<unsigned char>(bytes[k])); };
+  if (bytes.size() < 6) return;
+  Packing p;
+  p.box.L = 2.6 + byte(0) / 16;
+  p.box.shear = (byte(1) - 128) / 256;
+  for (std::size_t k = 2; k + 4 <= bytes.size() && p.size() < 48; k += 4) {
+    if (byte(k) == 255 && p.size() > 0) {
+      const std::size_t i = p.size() - 1;
+      p.add_cell(p.x(i), p.y(i), p.theta(i), p.b[i], 0.002, -1);
+    } else {
+      p.add_cell(p.box.L * byte(k) / 256, p.box.L * byte(k + 1) / 256, 2 * std::numbers::pi * byte(k + 2) / 256,
+                 1.2 * byte(k + 3) / 256, 0.002, -1);
+    }
+  }
+  io::PackingFile f;
+  try {
+    f = io::parse_packing(io::format_packing(p), "fuzz.pack");
+  } catch (const InputError&) {
+    return;
+  }
+  const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
+  try {
+    const ElasticResponse e = elastic_response(f.packing, pc.contacts, pc.network);
+    require_relaxed_moduli(e, "fuzz.pack");
+    if (e.energy_minimum() && !(std::isfinite(e.B()) && std::isfinite(e.G()) && std::isfinite(e.G_energy())))
+      std::abort();
+  } catch (const NoResultError&) {}
+  if (pc.network.N_nr == 0) return;  // refused as input by the spectrum (tested elsewhere)
+  try {
+    SpectrumOptions o;
+    o.method = SpectrumMethod::dense;
+    if (!packing_spectrum(f.packing, pc.contacts, pc.network, o).spectrum.lambda.allFinite()) std::abort();
+  } catch (const NoResultError&) {}
 }
 
 }  // namespace budjam::fuzz

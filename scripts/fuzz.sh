@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the libFuzzer harnesses in fuzz/ (ASan + UBSan, clang-14) for a fixed time each:
-#   bash scripts/fuzz.sh [SECONDS] [scene|packing|checkpoint|resume ...]      (default: 60 s, all four)
+#   bash scripts/fuzz.sh [SECONDS] [scene|packing|checkpoint|resume|degenerate ...] (default: 60 s, all five)
 # The seed corpus is fuzz/corpus/<name>/; new inputs go to build-fuzz/corpus/<name>/, crash and
 # hang reproducers to build-fuzz/artifacts/<name>/. Exits 1 if any harness found one.
 set -euo pipefail
@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 names=("$@")
-((${#names[@]})) || names=(scene packing checkpoint resume)
+((${#names[@]})) || names=(scene packing checkpoint resume degenerate)
 
 cmake -S . -B build-fuzz -DBUDJAM_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" >/dev/null

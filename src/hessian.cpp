@@ -1,4 +1,5 @@
 #include "budjam/hessian.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/orientation.hpp"
 
 #include <Eigen/Dense>
@@ -122,6 +123,15 @@ Eigen::VectorXd expand_vector(const Eigen::VectorXd& v, const DofMap& map) {
   Eigen::VectorXd full = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * map.n_cells()));
   for (Eigen::Index k = 0; k < v.size(); ++k) full[map.full(k)] = v[k];
   return full;
+}
+
+void require_dense_fits(std::size_t n, int matrices, const std::string& method, const std::string& alternative) {
+  const double bytes = static_cast<double>(matrices) * 8.0 * static_cast<double>(n) * static_cast<double>(n);
+  if (bytes > kMaxDenseBytes)
+    throw InputError(method + ": " + std::to_string(matrices) + " dense matrices of " + std::to_string(n) +
+                     " rows would take " + std::to_string(static_cast<long long>(std::ceil(bytes / 1e9))) +
+                     " GB, more than the limit of " + std::to_string(static_cast<int>(kMaxDenseBytes / 1e9)) +
+                     " GB; use " + alternative);
 }
 
 }  // namespace budjam

@@ -113,8 +113,9 @@ Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::Matr
   for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
   delta /= 100;
   if (!ok)
-    throw std::runtime_error("elastic_response: no LDLᵀ factor of the regularised Hessian (zero pivot at column " +
-                             std::to_string(ldl.failed_column()) + ")");
+    throw NoResultError("elastic_response: no LDLᵀ factor of the regularised Hessian (zero pivot at column " +
+                        std::to_string(ldl.failed_column()) +
+                        "); try the dense or cg solver, or relax the packing first");
   k.regularisation = delta;
   k.rcond = ldl.rcond();
   // Sylvester's law of inertia: the negative pivots of LDLᵀ(H_ff + δ1) count the eigenvalues of H_ff
@@ -155,7 +156,9 @@ Eigen::MatrixXd cg_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, cons
                           : static_cast<int>(std::min<Eigen::Index>(10 * Hf.rows(), 1 << 30)));
   cg.compute(Hf);
   if (cg.info() != Eigen::Success)
-    throw std::runtime_error("elastic_response: the conjugate-gradient preconditioner could not be built");
+    throw NoResultError(
+        "elastic_response: the conjugate-gradient preconditioner could not be built; try the diagonal "
+        "preconditioner or a direct solver (ldlt, cholesky, dense)");
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());
   for (Eigen::Index c = 0; c < Xf.cols(); ++c) {
     if (Xf.col(c).norm() == 0) continue;
@@ -453,6 +456,9 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       return regularised_refinement(Hf, Xf, options, k);
     }
     case ModuliSolver::dense: {
+      // H_ff and its factor.
+      require_dense_fits(static_cast<std::size_t>(Hf.rows()), 2, "moduli: the dense solver",
+                         "a sparse one (--solver ldlt)");
       const Eigen::LDLT<Eigen::MatrixXd> ldl{Eigen::MatrixXd(Hf)};
       if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
         k.method = SolveMethod::dense;
@@ -630,6 +636,21 @@ ElasticResponse elastic_response(const ResponseProblem& pr, const Relaxation& re
   out.shear = shear_stability(out.E);
   out.shear_stress = shear_stability(out.R);
   return out;
+}
+
+void require_relaxed_moduli(const ElasticResponse& e, const std::string& what) {
+  if (e.N_nr == 0 || e.contacts == 0)
+    throw NoResultError(what + " is not jammed: all " + std::to_string(e.N) +
+                        " cells are rattlers (N_nr = 0), so it has no rigid backbone and no elastic moduli; "
+                        "moduli need a jammed, relaxed packing such as a run's packings/jammed.pack");
+  if (!e.energy_minimum()) return;
+  const bool finite = std::isfinite(e.B()) && std::isfinite(e.G()) && std::isfinite(e.B_energy()) &&
+                      std::isfinite(e.G_energy()) && e.R.allFinite() && e.E.allFinite();
+  if (!finite || !e.kernel.well_posed)
+    throw NoResultError(
+        what + ": the linear response did not converge (solver " + to_string(e.kernel.method) + ", relative residual " +
+        std::to_string(e.kernel.residual) + (finite ? "" : ", moduli not finite") +
+        "); try another of the solvers ldlt, cholesky, dense and cg, or relax the packing to force balance first");
 }
 
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,

@@ -64,6 +64,16 @@ void validate(const Scene& s) {
   if (!(s.dt_min < s.dt)) fail("growth.dt_min", "must be smaller than growth.dt = " + value_text(s.dt), s.dt_min);
 
   // [jamming]
+  if (s.targets.size() > kMaxTargets)
+    fail("jamming.targets", "at most " + std::to_string(kMaxTargets) + " targets (each writes a packing file)",
+         s.targets);
+  const double target_bytes = static_cast<double>(s.targets.size()) * kPackingBytesPerCell * kCellsPerArea * s.L * s.L;
+  if (target_bytes > kMaxTargetOutputBytes)
+    fail("jamming.targets",
+         "their packings would take about " + value_text(std::round(target_bytes / 1e9)) + " GB at box.L = " +
+             value_text(s.L) + ", more than the limit of " + value_text(kMaxTargetOutputBytes / 1e9) +
+             " GB (each holds about " + value_text(kPackingBytesPerCell * kCellsPerArea) + " L² bytes)",
+         s.targets);
   if (!s.targets.empty()) {
     if (!(s.target_tolerance < s.targets.front()))
       fail("jamming.target_tolerance", "must be smaller than the first target " + value_text(s.targets.front()),

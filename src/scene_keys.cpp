@@ -35,9 +35,18 @@ std::string value_text(const SceneValue& value) {
     std::string operator()(std::int64_t i) const { return std::to_string(i); }
     std::string operator()(double d) const { return show(d); }
     std::string operator()(const std::string& s) const { return "\"" + s + "\""; }
+    // A long list (10⁶ targets, say) as its first and last values and its length: one short line.
     std::string operator()(const std::vector<double>& v) const {
+      constexpr std::size_t kHead = 4, kTail = 2;
       std::string s = "[";
-      for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + show(v[i]);
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        if (v.size() > kHead + kTail + 1 && i == kHead) {
+          s += ", ... (" + std::to_string(v.size()) + " values) ...";
+          i = v.size() - kTail - 1;
+          continue;
+        }
+        s += (i ? ", " : "") + show(v[i]);
+      }
       return s + "]";
     }
   };
@@ -159,8 +168,8 @@ std::vector<SceneKey> make_keys() {
 
   e.push_back(choice("init", "kind", "initial state: \"two_cells\" (the paper's) or \"random_seeds\"",
                      {"two_cells", "random_seeds"}, BUDJAM_FIELD(init)));
-  e.push_back(integer("init", "cells", "number of newborn cells placed at random (random_seeds only)", {},
-                      BUDJAM_FIELD(n_seeds)));
+  e.push_back(integer("init", "cells", "number of newborn cells placed at random (random_seeds only)",
+                      at_most(kMaxInitialCells, " so that the initial state fits in memory"), BUDJAM_FIELD(n_seeds)));
 
   SceneKey P0 = row("growth", "P0", KeyType::real_or_none,
                     "feedback pressure scale of γ = γ0 exp(−p/P0), or \"none\" for no feedback",
@@ -198,7 +207,10 @@ std::vector<SceneKey> make_keys() {
   e.push_back(targets);
   e.push_back(flag("jamming", "continue_to_phi2", "keep growing past the last target until φ_2 is found",
                    BUDJAM_FIELD(continue_to_phi2)));
-  e.push_back(real("jamming", "max_dphi", "never grow beyond φ_J + max_dphi", kPositive, BUDJAM_FIELD(max_dphi)));
+  e.push_back(
+      real("jamming", "max_dphi", "never grow beyond φ_J + max_dphi",
+           between(0, kMaxDphi, "(]", " so that grown packings keep every overlap below half its contact distance"),
+           BUDJAM_FIELD(max_dphi)));
   e.push_back(integer("jamming", "phi2_tagged_left",
                       "φ_2 is the first state after jamming with at most this many tagged buds still unconstrained "
                       "(0: the paper's definition)",

@@ -139,6 +139,9 @@ std::vector<LocalMode> local_null_vectors(const Sparse& K, double tol) {
 
 Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
   const Eigen::Index n3 = mass.size(), nd = n3 - 2;
+  // K, its complement block, the eigenvectors and the modes.
+  require_dense_fits(static_cast<std::size_t>(n3), 4, "spectrum: the dense method",
+                     "the arpack method (--method arpack)");
   Spectrum s;
   s.method = SpectrumMethod::dense;
   s.n_cells = static_cast<std::size_t>(n3 / 3);
@@ -157,7 +160,9 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
   const Eigen::MatrixXd Kc = K.bottomRightCorner(nd, nd).selfadjointView<Eigen::Lower>();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kc,
                                                     opt.vectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-  if (es.info() != Eigen::Success) throw std::runtime_error("spectrum: dense eigensolver did not converge");
+  if (es.info() != Eigen::Success)
+    throw NoResultError("spectrum: the dense eigensolver did not converge on " + std::to_string(nd) +
+                        " modes; try the arpack method, or relax the packing to force balance first");
   s.lambda = es.eigenvalues();
   if (opt.vectors) {
     s.modes = Eigen::MatrixXd::Zero(n3, nd);
@@ -165,6 +170,18 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
     s.modes.applyOnTheLeft(Q);
   }
   return s;
+}
+
+// ARPACK's failures on a valid problem (too few iterations, no shifts, a Lanczos breakdown) are
+// outcomes of the input, not errors of budjam.
+template <class Op>
+LanczosResult lanczos_or_no_result(int n, double sigma, const Op& op, const LanczosOptions& lo) {
+  try {
+    return lanczos_shift_invert(n, sigma, op, lo);
+  } catch (const ArpackError& e) {
+    throw NoResultError("spectrum: ARPACK did not converge (" + std::string(e.what()) +
+                        "); try the dense method, a larger ncv or a looser tol");
+  }
 }
 
 Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
@@ -219,9 +236,9 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   for (int attempt = 0;; ++attempt) {
     if (chol.factor(K, sigma, unit)) break;
     if (attempt == 4)
-      throw std::runtime_error("spectrum: K − σ is not positive definite down to σ = " + std::to_string(sigma) +
-                               " (k/m): the packing has a negative eigenvalue (not an energy minimum?); "
-                               "use the dense method to see it");
+      throw NoResultError("spectrum: K − σ is not positive definite down to σ = " + std::to_string(sigma) +
+                          " (k/m): the packing has a negative eigenvalue (not an energy minimum?); "
+                          "try the dense method to see it, or relax the packing first");
     sigma *= 10;
   }
   s.sigma = sigma;
@@ -245,7 +262,7 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   const double scale = max_abs(K);
   for (int attempt = 0;; ++attempt) {
     const auto t1 = Clock::now();
-    const auto res = lanczos_shift_invert(
+    const auto res = lanczos_or_no_result(
         static_cast<int>(n3), sigma,
         [&](const double* x, double* y) {
           buf = Eigen::Map<const Eigen::VectorXd>(x, n3);
@@ -283,9 +300,9 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
     const long missed = s.inertia_below_top - static_cast<long>((s.lambda.array() < mu).count());
     if (missed <= 0) break;
     if (attempt == 1)
-      throw std::runtime_error("spectrum: ARPACK missed " + std::to_string(missed) + " eigenvalue(s) below " +
-                               std::to_string(mu) + " even with tol 0 and ncv " + std::to_string(lo.ncv) +
-                               " (a degenerate cluster); use the dense method or a larger --ncv");
+      throw NoResultError("spectrum: ARPACK missed " + std::to_string(missed) + " eigenvalue(s) below " +
+                          std::to_string(mu) + " even with tol 0 and ncv " + std::to_string(lo.ncv) +
+                          " (a degenerate cluster); try the dense method or a larger ncv");
     // Once more at machine precision with a larger basis.
     ++s.retries;
     lo.tol = 0.0;
@@ -304,7 +321,11 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
   if (method == SpectrumMethod::automatic)
     method = (nd <= options.dense_max_dof || static_cast<std::size_t>(options.modes) >= nd) ? SpectrumMethod::dense
                                                                                             : SpectrumMethod::arpack;
-  return method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
+  Spectrum s = method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
+  // A Hessian that is not finite (no packing the readers accept gives one) must not pass as a spectrum.
+  if (!s.lambda.allFinite())
+    throw NoResultError("spectrum: eigenvalues not finite (the Hessian is not); relax the packing first");
+  return s;
 }
 
 std::vector<LocalMode> cell_local_zero_modes(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,

@@ -104,3 +104,120 @@ TEST_CASE("the spectrum of an unjammed packing is refused naming the packing", "
   CHECK(r.err.find("loose.pack: no non-rattler cells") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
+
+namespace {
+
+// A jammed-looking run directory whose summary.json is `summary` (steps and divisions empty).
+fs::path run_with_summary(const std::string& name, const std::string& summary) {
+  const fs::path run = work_dir() / name;
+  fs::create_directories(run / "packings");
+  write(run / ".budjam-run", "budjam-run 1\n");
+  write(run / "summary.json", summary);
+  write(run / "steps.csv", "step,phi,P,N,N_f,N_u_buds,chi_c,tagged_active,divisions_since_jamming,Z,dZ\n");
+  write(run / "divisions.csv", "step,phi\n");
+  return run;
+}
+
+const std::string kSummary = R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1,
+    "L": 8, "P0": null, "phi_J": 0.84, "targets": [], "unjammings": []})";
+
+void check_one_input_error(const budjam::testing::BudjamRun& r, const std::string& start) {
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.rfind("budjam: error: " + start, 0) == 0);
+  CHECK(r.err.find("internal") == std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
+}  // namespace
+
+TEST_CASE("analyse on a summary.json field of the wrong type is exit 2 naming the file and the key", "[taxonomy]") {
+  run_with_summary("str-run", with(kSummary, "\"phi_J\": 0.84", "\"phi_J\": \"0.84\""));
+  check_one_input_error(run_budjam("analyse str-run --out str-out"), "str-run/summary.json: phi_J: not a number");
+  run_with_summary("tgt-run", with(kSummary, "\"targets\": []", "\"targets\": [{\"dphi\": \"x\"}]"));
+  check_one_input_error(run_budjam("analyse tgt-run --out tgt-out"),
+                        "tgt-run/summary.json: targets[0].dphi: not a number");
+  run_with_summary("arr-run", "[1, 2, 3]");
+  check_one_input_error(run_budjam("analyse arr-run --out arr-out"),
+                        "arr-run/summary.json: not a budjam run summary (not a JSON object)");
+}
+
+TEST_CASE("a run whose packings is a plain file is an input error (exit 2) naming it, not an output error",
+          "[taxonomy]") {
+  const fs::path run = run_with_summary("plain-run", kSummary);
+  fs::remove(run / "packings");
+  write(run / "packings", "not a directory\n");
+  check_one_input_error(run_budjam("analyse plain-run --out plain-out"), "plain-run/packings: not a directory");
+  check_one_input_error(run_budjam("survival plain-run"), "plain-run/packings: not a directory");
+}
+
+TEST_CASE("moduli of an unjammed packing (N_nr = 0) is a notice and exit 1, and writes nothing", "[taxonomy]") {
+  write(work_dir() / "gas.pack", kPacking);  // two cells far apart: every cell is a rattler
+  const auto r = run_budjam("moduli gas.pack --out gas");
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK(r.err.rfind("budjam: moduli: gas.pack is not jammed: all 2 cells are rattlers (N_nr = 0)", 0) == 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.out.empty());
+  CHECK_FALSE(fs::exists(work_dir() / "gas.json"));
+}
+
+TEST_CASE("an error line is cut to a bounded length, keeping its start and its end", "[taxonomy]") {
+  std::string deep = "missing";
+  while (deep.size() < 3000) deep += "/long-directory-name";
+  const auto r = run_budjam("validate '" + deep + "/s.toml'");
+  INFO(r.err.size());
+  CHECK(r.code == 2);
+  CHECK(r.err.rfind("budjam: error: missing/long-directory-name/", 0) == 0);
+  CHECK(r.err.find("bytes left out ...]") != std::string::npos);
+  CHECK(r.err.find("s.toml") != std::string::npos);
+  CHECK(r.err.size() < 1200);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
+TEST_CASE(
+    "scene resource bounds: init.cells, the number of targets and their output are refused with the key and "
+    "the limit",
+    "[taxonomy]") {
+  const auto validate = [](const std::string& toml) {
+    write(work_dir() / "res.toml", toml);
+    return run_budjam("validate res.toml");
+  };
+  check_one_input_error(validate("[box]\nL = 8000\n[init]\nkind = \"random_seeds\"\ncells = 10000000\n"),
+                        "res.toml: init.cells: must be at most 1e+06 so that the initial state fits in memory");
+  // 10⁵ increasing targets: refused by their number, in one short line although the list is long.
+  std::string targets = "[jamming]\nmax_dphi = 0.2\ntargets = [";
+  for (int k = 1; k <= 100000; ++k) targets += (k > 1 ? ", " : "") + std::to_string(k * 1e-6);
+  const auto many = validate(targets + "]\n");
+  check_one_input_error(many, "res.toml: jamming.targets: at most 1000 targets (each writes a packing file)");
+  CHECK(many.err.find("(100000 values)") != std::string::npos);
+  CHECK(many.err.size() < 400);
+  // 200 targets at L = 1000: about 18 GB of target packings.
+  std::string big = "[box]\nL = 1000\n[jamming]\nmax_dphi = 0.2\ntargets = [";
+  for (int k = 1; k <= 200; ++k) big += (k > 1 ? ", " : "") + std::to_string(k * 1e-4);
+  check_one_input_error(validate(big + "]\n"),
+                        "res.toml: jamming.targets: their packings would take about 18 GB at box.L = 1000, more "
+                        "than the limit of 10 GB");
+  CHECK(validate("[box]\nL = 1000\n[jamming]\ntargets = [1e-3, 1e-2]\n").code == 0);
+}
+
+// tests/data/negative_G_target_L8.pack: the Δφ = 10⁻³ target of the demo scene without feedback
+// (seed 1, L = 8), whose contact-virial shear stress falls under Lees–Edwards shear.
+TEST_CASE("moduli names the simple-shear modulus it prints, and a negative one comes with a notice (exit 0)",
+          "[taxonomy]") {
+  const std::string pack = "'" + budjam::testing::source_file("tests/data/negative_G_target_L8.pack").string() + "'";
+  const auto r = run_budjam("moduli " + pack);
+  INFO(r.err);
+  CHECK(r.code == 0);
+  CHECK(r.out.find(", G_simple = -0.00527") != std::string::npos);
+  CHECK(r.out.find("(G: Lees-Edwards simple shear)") != std::string::npos);
+  CHECK(r.err.find("budjam: moduli: ") == 0);
+  CHECK(r.err.find(": G_simple = -0.00527") != std::string::npos);
+  CHECK(r.err.find("is negative") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  // A positive G: no notice.
+  const auto positive = run_budjam(
+      "moduli '" + budjam::testing::source_file("tests/data/shear_conventions_differ_L8.pack").string() + "'");
+  CHECK(positive.code == 0);
+  CHECK(positive.err.empty());
+}

@@ -88,3 +88,7 @@ TEST_CASE("the resume harness reaches the checks against the run's files", "[fuz
   bad[phi + 3] = bad[phi + 3] == '1' ? '2' : '1';
   CHECK_THROWS_WITH(check(bad), Catch::Matchers::Contains("disagrees with packings/jammed.pack"));
 }
+
+TEST_CASE("the degenerate-packing harness passes on its corpus and reproducers", "[fuzz][.hard]") {
+  replay("degenerate", budjam::fuzz::degenerate);
+}

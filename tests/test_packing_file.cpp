@@ -1,6 +1,7 @@
 // The packing file format (io/packing_file.hpp).
 #include "budjam/packing_rules.hpp"
 #include "io/packing_file.hpp"
+#include "random_packing.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -41,6 +42,10 @@ Packing random_packing(std::size_t n, std::uint64_t seed) {
     p.add_cell(p.box.L * u(rng), p.box.L * u(rng), 2 * std::numbers::pi * (u(rng) - 0.5), 0.01 + u(rng),
                0.002 * (0.8 + 0.4 * u(rng)), parent);
   }
+  testing::redraw_refused_overlaps(p, [&](std::size_t i) {
+    p.q[3 * i] = p.box.L * u(rng);
+    p.q[3 * i + 1] = p.box.L * u(rng);
+  });
   return p;
 }
 
@@ -106,6 +111,11 @@ TEST_CASE("a packing file round-trips every double bit-exactly, including extrem
   p.b[0] = 0.0;
   p.b[1] = std::nextafter(0.01, 1.0);
   p.gamma0[2] = 0.1 + 0.2;
+  testing::redraw_refused_overlaps(p, [&](std::size_t i) {
+    for (int c = 0; c < 2; ++c) do
+        p.q[3 * i + c] = random_finite(rng);
+      while (!(std::abs(p.q[3 * i + c]) <= kMaxBoxesAway * p.box.L));
+  });
   PackingMeta meta;
   meta.set("phase", "target");
   meta.set_number("phi", 0.8412345678901234);

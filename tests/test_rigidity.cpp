@@ -636,7 +636,13 @@ TEST_CASE("a tracker restored from another's memory reports the same events for 
 TEST_CASE("budjam rigidity PACKING --json prints the library's analysis of the packing as JSON", "[fast]") {
   namespace fs = std::filesystem;
   const fs::path dir = testing::work_dir();
-  const Packing p = random_packing(120, 1.6, 4);
+  Packing p = random_packing(120, 1.6, 4);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0, 1);
+  testing::redraw_refused_overlaps(p, [&](std::size_t i) {
+    p.q[3 * i] = p.box.L * u(rng);
+    p.q[3 * i + 1] = p.box.L * u(rng);
+  });
   io::write_packing(dir / "p.pack", p);
   const Analysed a = analyse(p);  // brute-force contacts: the command finds them by neighbour list
   const auto run = [&](const std::string& args) {

@@ -12,4 +12,12 @@ struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Valid input whose asked-for quantity has no value, or that a numerical method could not compute:
+// an unjammed packing has no elastic moduli, an eigensolver did not converge. what() is one line
+// that says why and what to try. `budjam` prints it as a notice and exits with code 1 (the outcome
+// is a finding about the input, not an error of budjam); Python raises budjam.NoResultError.
+struct NoResultError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 }  // namespace budjam

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstddef>
+#include <string>
 #include <vector>
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
@@ -64,5 +65,13 @@ SparseMatrix restrict_matrix(const SparseMatrix& H, const DofMap& map);
 Eigen::VectorXd restrict_vector(const Eigen::VectorXd& v, const DofMap& map);
 // Reduced vector back to 3N, zeros on the dropped cells.
 Eigen::VectorXd expand_vector(const Eigen::VectorXd& v, const DofMap& map);
+
+// The dense methods (the dense spectrum, the dense moduli solver) hold a few n × n matrices of
+// doubles: O(n²) memory against the sparse methods' O(n). Above this much they are refused before
+// anything is allocated (10⁴ cells' spectrum would need 36 GB); the sparse methods have no such bound.
+inline constexpr double kMaxDenseBytes = 4e9;
+// InputError "<method>: ..." naming the memory, the limit and `alternative` unless `matrices` n × n
+// dense matrices of doubles fit within kMaxDenseBytes.
+void require_dense_fits(std::size_t n, int matrices, const std::string& method, const std::string& alternative);
 
 }  // namespace budjam

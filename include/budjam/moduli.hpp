@@ -242,10 +242,18 @@ struct ElasticResponse : PackingState {
 // the problem of a relaxed packing (`contacts`: all contacts of the state, `net` their network;
 // rattlers and their contacts are removed). Throws std::invalid_argument for inconsistent input.
 ResponseProblem response_problem(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net);
-// Solves it with the chosen solver and verifies the residual on all non-rattler rows.
+// Solves it with the chosen solver and verifies the residual on all non-rattler rows. A factorisation
+// that fails even regularised, or a preconditioner that cannot be built: NoResultError.
 Relaxation relax(const ResponseProblem& problem, const ModuliOptions& options = {});
 // Stress slopes, energy stiffness, moduli and shear directions along the relaxed path.
 ElasticResponse elastic_response(const ResponseProblem& problem, const Relaxation& relaxation);
+
+// Throws NoResultError (one line beginning with `what`, the packing's name, and saying what to try)
+// when a response that is not a saddle has no relaxed moduli to report: an unjammed packing (no
+// load-bearing network: N_nr = 0, every cell a rattler, so no rigid backbone), or a relaxation that
+// did not converge (not well_posed, or a modulus not finite). A saddle (energy_minimum() false) is
+// left to the caller, which reports its affine response.
+void require_relaxed_moduli(const ElasticResponse& e, const std::string& what);
 
 // The response of a relaxed packing: the three steps above. A packing whose Hessian has negative
 // eigenvalues (a saddle, not a minimum) is a result, not an error: kernel.method unstable,

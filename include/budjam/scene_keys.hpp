@@ -7,6 +7,7 @@
 // the largest cell, dt_min < dt, ...) stay in validate().
 #include "budjam/scene.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -81,5 +82,25 @@ std::string value_text(const SceneValue& value);
 // integers (at most L² cells). A box this large never jams within any affordable run anyway
 // (about 0.8 L² cells at jamming).
 inline constexpr double kMaxBoxSide = 1e4;
+
+// The deepest compression a run may grow to. The smallest r/σ over the contacts of grown packings
+// (the demo scene without feedback) is 0.73 at Δφ = 0.2, 0.59 at 0.4 and 0.53 at 0.5: beyond 0.4 a
+// run would approach the packing rules' bound r > σ/2 and could write packings no reader accepts.
+inline constexpr double kMaxDphi = 0.4;
+
+// The most cells random seed placement may start from: the initial state holds about 0.5 kB per
+// cell (peak resident memory of `budjam grow` to its first step: 56 MB at 10⁵ cells, 484 MB at
+// 10⁶; docs/files.md), and a run from 10⁶ cells grows far beyond any affordable cost anyway.
+inline constexpr double kMaxInitialCells = 1e6;
+
+// Every landed target writes a packing file (and its summary, moduli and spectrum records): the
+// targets are bounded in number, and their packings in total size. A packing file holds about
+// kPackingBytesPerCell bytes per cell and a packing at jamming about kCellsPerArea L² cells
+// (measured on grown packings, docs/files.md), so the targets of a box of side L write about
+// targets · kPackingBytesPerCell · kCellsPerArea · L² bytes.
+inline constexpr std::size_t kMaxTargets = 1000;
+inline constexpr double kPackingBytesPerCell = 110;
+inline constexpr double kCellsPerArea = 0.8;
+inline constexpr double kMaxTargetOutputBytes = 10e9;
 
 }  // namespace budjam

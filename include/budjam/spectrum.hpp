@@ -83,7 +83,7 @@ struct SpectrumOptions {
                                      // (one LDLᵀ); the Lanczos run then takes all of them (0: skip)
   bool verify = true;                // ARPACK: check by inertia that no mode below the highest
                                      // computed one (less 1e-9 max|K|) was missed; if one was, rerun once with tol 0
-                                     // and 2·ncv, then throw
+                                     // and 2·ncv, then throw NoResultError
 };
 
 // A zero mode supported on one cell: mass-weighted unit 3-vector e on block `block` (the cell's
@@ -122,7 +122,9 @@ struct Spectrum {
   Eigen::VectorXd mode(Eigen::Index k) const;
 };
 
-// Solves a problem given by H and diag(M) (any matrix, not only a packing's).
+// Solves a problem given by H and diag(M) (any matrix, not only a packing's). A solver that does not
+// converge (dense eigensolver, ARPACK, a shift that is not below the spectrum, missed modes) or
+// eigenvalues that are not finite: NoResultError saying what to try.
 Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
                         const SpectrumOptions& options = {});
 

@@ -26,10 +26,11 @@ import os
 import pathlib
 
 from . import _budjam
-from ._budjam import Growth, InputError, OutputError, Packing, __version__, read_packing, survival
+from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, _one_line, read_packing,
+                      survival)
 
-__all__ = ["Growth", "grow", "InputError", "OutputError", "Packing", "Run", "__version__", "contacts", "export",
-           "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+__all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "__version__", "contacts",
+           "export", "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
 
 
 def _accepts_paths(function):
@@ -98,6 +99,18 @@ Packing.to_ase = _to_ase
 Packing.to_gsd_frame = gsd_frame
 
 
+def _input_error(message):
+    """InputError with the message as the command line prints it: one line, control bytes escaped."""
+    return InputError(_one_line(message))
+
+
+def _read_table(path, pandas):
+    try:
+        return pandas.read_csv(path, float_precision="round_trip", encoding="utf-8")
+    except (ValueError, OSError) as e:  # pandas' ParserError and EmptyDataError, UnicodeDecodeError are ValueErrors
+        raise _input_error(f"{path}: not a readable CSV table: {e}") from None
+
+
 class Run:
     """A finished growth-run directory (`budjam grow`), checked as `budjam survival` checks it:
     summary.json as a dict and each table budjam writes there as a pandas DataFrame, by name:
@@ -110,9 +123,12 @@ class Run:
         import pandas
 
         self.dir = pathlib.Path(directory)
+        packings = self.dir / "packings"
+        if packings.exists() and not packings.is_dir():
+            raise _input_error(f"{packings}: not a directory (a run keeps its packings in one)")
         self.summary, tables = _budjam.read_run(self.dir)
-        self.tables = {pathlib.Path(t).stem: pandas.read_csv(t, float_precision="round_trip") for t in tables}
-        self.packings = sorted((self.dir / "packings").glob("*.pack"))
+        self.tables = {pathlib.Path(t).stem: _read_table(t, pandas) for t in tables}
+        self.packings = sorted(packings.glob("*.pack"))
 
     def __getattr__(self, name):
         tables = self.__dict__.get("tables", {})

@@ -129,7 +129,9 @@ py::object moduli_dict(const Packing& p, const std::string& solver) {
   const Analysed a(p);
   ModuliOptions options;
   options.solver = parse_moduli_solver(solver);
-  return python_of(tools::elastic_response_json(elastic_response(p, a.pc.contacts, a.pc.network, options)));
+  const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
+  require_relaxed_moduli(e, "moduli");  // a saddle is returned, flagged by energy_minimum
+  return python_of(tools::elastic_response_json(e));
 }
 
 // A metadata value as the Python type it reads as: an integer, a number, or text ("none", "jammed").
@@ -298,8 +300,23 @@ class Growth {
 PYBIND11_MODULE(_budjam, m) {
   m.doc() = "budjam: growing budding-cell packings, jamming and rigidity (compiled core).";
   m.attr("__version__") = BUDJAM_VERSION;
-  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
-  py::register_exception<io::IoError>(m, "OutputError", PyExc_OSError);
+  // Messages as the command line prints them: one line, control bytes escaped, bounded in length.
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  static py::exception<io::IoError> output_error(m, "OutputError", PyExc_OSError);
+  static py::exception<NoResultError> no_result_error(m, "NoResultError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const InputError& e) {
+      input_error(io::one_line(e.what()).c_str());
+    } catch (const io::IoError& e) {
+      output_error(io::one_line(e.what()).c_str());
+    } catch (const NoResultError& e) {
+      no_result_error(io::one_line(e.what()).c_str());
+    }
+  });
+
+  m.def("_one_line", &io::one_line, "text"_a, "A message as `budjam` prints it: one line, control bytes as \\xNN.");
 
   py::class_<io::PackingFile>(m, "Packing", R"(A packing of rigid mother–bud dumbbells in a periodic square box.
 
@@ -404,7 +421,9 @@ B and G (units k, 2D; G is the simple-shear modulus G_simple) from the contact-v
 (the paper's convention), B_energy and G_energy from the relaxed energy; moduli, moduli_affine,
 moduli_energy, moduli_energy_affine hold B, G_simple, G_pure, G_mean of each convention;
 elastic_tensor is the Voigt stiffness C; response holds the 4x4 matrices dS_de, E, ... (order xx,
-xy, yx, yy); shear_stability the softest and stiffest simple-shear directions (degrees).)");
+xy, yx, yy); shear_stability the softest and stiffest simple-shear directions (degrees).
+An unjammed packing (N_nr = 0: no rigid backbone) or a relaxation that did not converge raises
+NoResultError; a saddle is returned flagged, energy_minimum False and the relaxed moduli NaN.)");
   m.def(
       "spectrum",
       [](const io::PackingFile& f, const std::string& method, int modes) {
@@ -419,7 +438,8 @@ matrix M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the
 u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
 translations are removed); participation ratios, N_zero below lambda_tol,
 the band edge omega_star (None if not available). method: auto | dense | arpack; modes:
-ARPACK modes (0: as many as omega_star needs).)");
+ARPACK modes (0: as many as omega_star needs). An unjammed packing raises InputError; an
+eigensolver that does not converge raises NoResultError saying what to try.)");
   m.def("survival", &survival_dict, "runs"_a,
         R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories, as
 `budjam survival` (each run's last jamming episode; completion is the event, division and the

@@ -37,9 +37,11 @@ def run_budjam(budjam_exe):
 
 @pytest.fixture(scope="session")
 def sheared_packing(tmp_path_factory):
-    """The jammed test packing under a Lees–Edwards shear γ = 0.1 (a valid packing file)."""
-    text = PACKING.read_text().replace("\nshear 0\n", "\nshear 0.1\n", 1)
-    assert "\nshear 0.1\n" in text
+    """The jammed test packing under a Lees–Edwards shear γ = 1: the same lattice of images, so the same
+    contacts (a shear that moved the images would stack cells across the boundary, which the reader
+    refuses), with every image shifted by one box in x."""
+    text = PACKING.read_text().replace("\nshear 0\n", "\nshear 1\n", 1)
+    assert "\nshear 1\n" in text
     path = tmp_path_factory.mktemp("sheared") / "sheared.pack"
     path.write_text(text)
     return path

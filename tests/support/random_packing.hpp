@@ -2,8 +2,11 @@
 // Random packings of dumbbells for the tests and benchmarks (no growth run needed). Bud diameters
 // are uniform in [b_min, b_max]; the default range is the one a growing population covers.
 #include "budjam/packing.hpp"
+#include "budjam/packing_rules.hpp"
 
+#include <cstddef>
 #include <cstdint>
+#include <utility>
 
 namespace budjam::testing {
 
@@ -17,5 +20,14 @@ Packing random_packing(std::size_t n, double phi, std::uint64_t seed, double b_m
 // compress_to_pressure); bud diameters uniform in [b_min, b_max]. Throws std::invalid_argument if
 // a cell cannot be placed.
 Packing random_dumbbells(std::size_t n, double phi, double b_min, double b_max, std::uint64_t seed);
+
+// Draws anew, with draw(i), the position of the later cell of each pair of lobes that the packing
+// reader refuses (overlapping by half their contact distance or more, packing_rules.hpp) until none
+// is left: random packings that must survive a packing file.
+template <class Draw>
+void redraw_refused_overlaps(Packing& p, Draw draw) {
+  std::pair<std::size_t, std::size_t> cells;
+  while (overlap_problem(p, &cells)) draw(cells.second);
+}
 
 }  // namespace budjam::testing

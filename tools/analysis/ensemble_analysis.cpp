@@ -216,21 +216,28 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   }
 
   // Targets
-  for (const auto& t : r.summary.at("targets")) {
+  const fs::path summary = r.dir / io::run_files::summary;
+  const auto targets = r.summary.find("targets");
+  if (targets == r.summary.end() || !targets->is_array()) throw InputError(summary.string() + ": targets: not a list");
+  for (std::size_t k = 0; k < targets->size(); ++k) {
+    const io::Json& t = (*targets)[k];
+    if (!t.is_object()) throw InputError(summary.string() + ": targets[" + std::to_string(k) + "]: not an object");
+    const auto number = [&](const char* key) {
+      return tools::json_double(t, key, summary, "targets[" + std::to_string(k) + "]." + key);
+    };
     TargetRow y;
-    y.dphi = t.at("dphi").get<double>();
-    y.phi = t.at("phi").get<double>();
-    y.P = t.at("P").get<double>();
-    y.Z = t.at("Z").get<double>();
-    y.dZ = t.at("dZ").get<double>();
-    y.Z_iso = t.at("Z_iso").get<double>();
-    y.u = t.at("u_buds").get<double>();
-    y.u_lobes = t.at("u").get<double>();
-    y.chi_c = t.at("chi_c").get<double>();
-    y.N_div = t.at("N_div").get<double>();
-    y.N_nr = t.at("N_nr").get<double>();
+    y.dphi = number("dphi");
+    y.phi = number("phi");
+    y.P = number("P");
+    y.Z = number("Z");
+    y.dZ = number("dZ");
+    y.Z_iso = number("Z_iso");
+    y.u = number("u_buds");
+    y.u_lobes = number("u");
+    y.chi_c = number("chi_c");
+    y.N_div = number("N_div");
+    y.N_nr = number("N_nr");
     y.lambda = lambda_c(y.u, y.chi_c);
-    const fs::path summary = r.dir / io::run_files::summary;
     const long long tstep = json_integer(t, "step", summary);
     std::vector<double> ph, pp;
     for (std::size_t k = 0; k < st.size(); ++k)

@@ -64,7 +64,8 @@ void run(const Options& o) {
 
   if (pc.network.N_nr == 0)
     throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
-  const tools::DosReport report = tools::dos_report(f.packing, pc.contacts, pc.network, req);
+  const tools::DosReport report =
+      cli::naming_input("dos", o.packing, [&] { return tools::dos_report(f.packing, pc.contacts, pc.network, req); });
   io::emit(o.output, tools::dos_result(report, req), std::cout);
 }
 

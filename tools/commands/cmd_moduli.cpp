@@ -43,10 +43,12 @@ struct Options {
   io::OutputRequest output;
 };
 
+// G is the paper's: the contact-virial stress slope under Lees–Edwards simple shear, named as such.
 std::string summary_line(const ElasticResponse& e) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G = %.6g%s", e.N, e.N_nr,
-                e.phi, e.P, e.B(), e.G(), e.energy_minimum() ? "" : " (a saddle: relaxed moduli undefined)");
+  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G_simple = %.6g%s", e.N,
+                e.N_nr, e.phi, e.P, e.B(), e.G(),
+                e.energy_minimum() ? " (G: Lees-Edwards simple shear)" : " (a saddle: relaxed moduli undefined)");
   return buf;
 }
 
@@ -89,10 +91,11 @@ void run(const Options& o) {
   const auto t0 = Clock::now();
   const ResponseProblem problem = response_problem(p, contacts, net);
   const auto t1 = Clock::now();
-  const Relaxation relaxation = relax(problem, options);
+  const Relaxation relaxation = cli::naming_input("moduli", o.packing, [&] { return relax(problem, options); });
   const auto t2 = Clock::now();
   const ElasticResponse e = elastic_response(problem, relaxation);
   const auto t3 = Clock::now();
+  require_relaxed_moduli(e, "moduli: " + o.packing);
   Json j;
   j["file"] = o.packing;
   const Json body = tools::elastic_response_json(e);  // named: items() of a temporary would dangle
@@ -109,6 +112,10 @@ void run(const Options& o) {
     throw cli::Finding("moduli: " + o.packing + " is a saddle, not an energy minimum (" +
                        std::to_string(e.kernel.unstable_modes) +
                        " unstable modes): no relaxed response; its JSON has the affine moduli");
+  if (e.G() < 0)
+    cli::notice("moduli: " + o.packing + ": G_simple = " + io::format_double(e.G()) +
+                " is negative: the contact-virial shear stress falls under Lees-Edwards simple shear (small packings "
+                "near jamming; its shear_stability in the JSON; docs/moduli.md, \"Shear stability of the box\")");
 }
 
 const bool registered = budjam::cli::register_command(

@@ -13,13 +13,16 @@
 // main.cpp creates one CLI11 subcommand per registered command, in name order, calls `setup` on
 // it and runs the one the user chose. A callback reports failure by throwing (exit codes below);
 // main prints exactly one line "budjam: error: <what()>" on stderr.
+#include "budjam/errors.hpp"
 #include "io/result_files.hpp"
+#include "io/text.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <charconv>
 #include <cstdint>
 #include <functional>
+#include <iostream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -30,7 +33,7 @@ namespace budjam::cli {
 // Exit codes of `budjam` (docs/files.md).
 enum ExitCode : int {
   kExitOk = 0,         // success
-  kExitRunFailed = 1,  // the run ran and failed (step underflow, ...): RunFailure; a saddle: Finding
+  kExitRunFailed = 1,  // the run ran and failed (step underflow, ...): RunFailure; a saddle, no result: NoResultError
   kExitBadInput = 2,   // invalid command line, scene or input file: CLI11 errors, budjam::InputError
   kExitInternal = 3,   // an output could not be written, or any other error: io::IoError, std::exception
   // 128 + N: stopped by signal N (SIGINT 130, SIGTERM 143) after writing a checkpoint: Interrupted
@@ -45,10 +48,26 @@ struct RunFailure : std::runtime_error {
 // Thrown by a subcommand whose answer is not the one asked for but is a legitimate physical outcome
 // (a packing that is a saddle has no relaxed moduli), after it has written that answer. `budjam`
 // prints what() as a notice, `budjam: <what>`, not as an error, and exits with kExitRunFailed, so
-// that a pipeline can record the outcome and go on.
-struct Finding : std::runtime_error {
-  using std::runtime_error::runtime_error;
+// that a pipeline can record the outcome and go on. A budjam::NoResultError from the library (no
+// answer at all: an unjammed packing's moduli, a solver that did not converge) is treated alike.
+struct Finding : NoResultError {
+  using NoResultError::NoResultError;
 };
+
+// A notice on stderr, `budjam: <text>`, one line (io::one_line): something the user should know about
+// a result that is nevertheless given (exit 0), such as a negative shear modulus.
+inline void notice(const std::string& text) { std::cerr << "budjam: " << io::one_line(text) << std::endl; }
+
+// f(); a NoResultError from the library ("spectrum: …") is re-thrown as a Finding that names the
+// command and its input first ("dos: p.pack: spectrum: …").
+template <class F>
+auto naming_input(const std::string& command, const std::string& input, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const NoResultError& e) {
+    throw Finding(command + ": " + input + ": " + e.what());
+  }
+}
 
 // Thrown by a subcommand that stopped on a signal after saving what it needs to continue; `budjam`
 // exits with 128 + signal, the shell's code for a process ended by that signal.

@@ -21,14 +21,14 @@
 namespace {
 
 int error(const std::string& message, int code) {
-  // One line, always, and no control bytes from a file reaching the terminal.
-  std::cerr << "budjam: error: " << budjam::io::escape_control(message) << std::endl;
+  // One short line, always, and no control bytes from a file reaching the terminal.
+  std::cerr << "budjam: error: " << budjam::io::one_line(message) << std::endl;
   return code;
 }
 
 // An expected stop (a signal after a checkpoint) or a finding (a saddle): a notice, not an error.
 int notice(const std::string& message, int code) {
-  std::cerr << "budjam: " << budjam::io::escape_control(message) << std::endl;
+  std::cerr << "budjam: " << budjam::io::one_line(message) << std::endl;
   return code;
 }
 
@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
     return notice(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
-  } catch (const Finding& e) {
+  } catch (const budjam::NoResultError& e) {  // cli::Finding included
     return notice(e.what(), kExitRunFailed);
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace budjam::io {
@@ -75,9 +76,13 @@ class Reader {
     // The box rule with the default skin of the neighbour list every command builds: first for
     // mother lobes (before any position is judged against L), then for the largest bud.
     if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
-    read_rows(out.packing, cells_line);
+    read_rows(out.packing);
     read_end();
     if (const auto problem = box_problem(out.packing, Scene{}.skin)) fail(L_line_, *problem);
+    // Degenerate geometry: the density first, which bounds the cost of the pair check.
+    if (const auto problem = density_problem(out.packing)) fail(L_line_, *problem);
+    std::pair<std::size_t, std::size_t> cells;
+    if (const auto problem = overlap_problem(out.packing, &cells)) fail(cells_line + 1 + cells.second, *problem);
     return out;
   }
 
@@ -175,8 +180,7 @@ class Reader {
     }
   }
 
-  void read_rows(Packing& p, std::size_t cells_line) {
-    (void)cells_line;
+  void read_rows(Packing& p) {
     // Reserve no more than the file can hold: a corrupt N must not allocate gigabytes.
     const std::size_t cap = std::min(n_cells_, lines_.lines.size());
     p.q.resize(static_cast<Eigen::Index>(3 * cap));

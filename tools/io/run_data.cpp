@@ -154,9 +154,25 @@ std::uint64_t RunData::seed() const {
   return s.get<std::uint64_t>();
 }
 
+double json_double(const io::Json& j, const std::string& key, const fs::path& file, const std::string& shown) {
+  const auto it = j.find(key);
+  if (it != j.end() && it->is_number()) return it->get<double>();
+  throw InputError(file.string() + ": " + shown + (it == j.end() ? ": missing" : ": not a number"));
+}
+
+std::string RunData::status() const {
+  const auto it = summary.find("status");
+  if (it == summary.end()) return "?";
+  if (!it->is_string()) throw InputError((dir / io::run_files::summary).string() + ": status: not a string");
+  return it->get<std::string>();
+}
+
+double RunData::L() const { return json_double(summary, "L", dir / io::run_files::summary, "L"); }
+
 double RunData::get(const std::string& key) const {
-  if (!summary.contains(key) || !summary[key].is_number()) return std::numeric_limits<double>::quiet_NaN();
-  return summary[key].get<double>();
+  const auto it = summary.find(key);
+  if (it == summary.end() || it->is_null()) return std::numeric_limits<double>::quiet_NaN();
+  return json_double(summary, key, dir / io::run_files::summary, key);
 }
 
 RunData load_run(const fs::path& dir) {
@@ -166,8 +182,11 @@ RunData load_run(const fs::path& dir) {
   const fs::path s = dir / run_files::summary;
   if (!fs::exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
   r.summary = io::read_json(s);
-  if (r.summary.value("format", std::string()) != "budjam-summary")
-    throw InputError(s.string() + ": not a budjam run summary (format)");
+  if (!r.summary.is_object()) throw InputError(s.string() + ": not a budjam run summary (not a JSON object)");
+  if (const auto f = r.summary.find("format"); f == r.summary.end() || *f != "budjam-summary")
+    throw InputError(s.string() + ": format: not a budjam run summary (expected \"budjam-summary\")");
+  if (const fs::path packings = dir / io::run_files::packings; fs::exists(packings) && !fs::is_directory(packings))
+    throw InputError(packings.string() + ": not a directory (a run keeps its packings in one)");
   r.steps = read_csv(dir / run_files::steps);
   r.divisions = read_csv(dir / run_files::divisions);
   if (fs::exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);

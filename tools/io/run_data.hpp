@@ -46,12 +46,14 @@ struct RunData {
   CsvTable steps, divisions;
   std::optional<CsvTable> bud_events;  // absent when the scene turned bud events off
 
-  std::string status() const { return summary.value("status", std::string("?")); }
-  double L() const { return summary.at("L").get<double>(); }
+  // Typed fields of summary.json: InputError "<dir>/summary.json: <key>: ..." for a value of the
+  // wrong type (or a missing L).
+  std::string status() const;  // "?" when absent
+  double L() const;
   std::optional<double> P0() const;  // nullopt = no feedback
   std::string P0_label() const;      // "none" or the number as text
   std::uint64_t seed() const;        // InputError naming summary.json unless a non-negative integer
-  // A number from summary.json, NaN for null or absent.
+  // A number from summary.json, NaN for null or absent; InputError for any other type.
   double get(const std::string& key) const;
   bool jammed() const { return summary.contains("phi_J") && !summary["phi_J"].is_null(); }
 };
@@ -60,7 +62,12 @@ struct RunData {
 // for a fraction, a string or a number no long long holds.
 long long json_integer(const io::Json& j, const std::string& key, const std::filesystem::path& file);
 
-// Reads a finished run (summary.json present). InputError naming the file otherwise.
+// A number field of a JSON object read from `file`; InputError "<file>: <key>: not a number" for
+// anything else (or a missing key). `key` is the name shown (e.g. "targets[2].dphi").
+double json_double(const io::Json& j, const std::string& key, const std::filesystem::path& file,
+                   const std::string& shown);
+
+// Reads a finished run (summary.json present, a JSON object). InputError naming the file otherwise.
 RunData load_run(const std::filesystem::path& dir);
 
 // Completion records of the tagged buds of one jamming episode (the last one, -1): completed = event;

@@ -56,4 +56,20 @@ inline std::string escape_control(std::string_view s) {
   return out;
 }
 
+// A message as one short line: control bytes escaped as above, and a message longer than
+// kMaxMessageBytes (one that quotes a whole input, such as a list of 10⁶ targets) cut in the middle,
+// keeping its start (the file and key) and its end, with the number of bytes left out.
+inline constexpr std::size_t kMaxMessageBytes = 1000;
+inline std::string one_line(std::string_view s) {
+  if (s.size() <= kMaxMessageBytes) return escape_control(s);
+  // Cut on UTF-8 character boundaries (never before a continuation byte 10xxxxxx).
+  const auto boundary = [s](std::size_t k) {
+    while (k > 0 && k < s.size() && (static_cast<unsigned char>(s[k]) & 0xc0) == 0x80) --k;
+    return k;
+  };
+  const std::size_t head = boundary(kMaxMessageBytes * 3 / 4), tail = boundary(s.size() - kMaxMessageBytes / 5);
+  return escape_control(s.substr(0, head)) + " [... " + std::to_string(tail - head) + " bytes left out ...] " +
+         escape_control(s.substr(tail));
+}
+
 }  // namespace budjam::io
