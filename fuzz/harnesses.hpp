@@ -6,8 +6,8 @@
 // any other exception escapes.
 #include "budjam/moduli.hpp"
 #include "budjam/scene.hpp"
-#include "io/atomic_file.hpp"
 #include "budjam/spectrum.hpp"
+#include "io/atomic_file.hpp"
 #include "io/checkpoint.hpp"
 #include "io/packing_file.hpp"
 #include "io/run_data.hpp"
@@ -19,8 +19,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <istream>
-#include <sstream>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
