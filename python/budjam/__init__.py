@@ -22,6 +22,7 @@ The functions are the ones `budjam` (the command line) runs, so their results ar
 result of moduli() is the JSON of `budjam moduli --json`, key for key.
 """
 import functools
+import json
 import os
 import pathlib
 
@@ -123,6 +124,16 @@ class Run:
         import pandas
 
         self.dir = pathlib.Path(directory)
+        summary = self.dir / "summary.json"
+        if not summary.is_file():
+            raise _input_error(f"{self.dir}: not a finished run (no summary.json)")
+        try:
+            with open(summary, encoding="utf-8") as f:
+                document = json.load(f)
+        except (ValueError, OSError) as e:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+            raise _input_error(f"{summary}: invalid JSON: {e}") from None
+        if not isinstance(document, dict) or document.get("format") != "budjam-summary":
+            raise _input_error(f"{summary}: not a budjam run summary (a JSON object with format budjam-summary)")
         packings = self.dir / "packings"
         if packings.exists() and not packings.is_dir():
             raise _input_error(f"{packings}: not a directory (a run keeps its packings in one)")

@@ -41,7 +41,7 @@ def test_load_run_refuses_a_bad_summary_with_input_error_naming_the_file(tmp_pat
 
 @pytest.mark.parametrize("steps", [b"step,phi\n1,2,3,4\n\"unterminated\n", b"step,phi\n\xff\xfe,1\n"])
 def test_load_run_refuses_a_bad_table_with_input_error_naming_the_file(tmp_path, steps):
-    with pytest.raises(budjam.InputError, match="steps.csv: not a readable CSV table"):
+    with pytest.raises(budjam.InputError, match="steps.csv"):
         budjam.load_run(make_run(tmp_path / "run", steps=steps))
 
 
