@@ -211,8 +211,12 @@ def main():
     with open(a.survival or os.path.join(a.tables, "survival_main_L.json")) as f:
         surv = json.load(f)
     AJ = None
-    if a.jamming and os.path.exists(os.path.join(a.jamming, "analysis.json")):
-        with open(os.path.join(a.jamming, "analysis.json")) as f:
+    if a.jamming:
+        path = os.path.join(a.jamming, "analysis.json")
+        if not os.path.isfile(path):
+            sys.exit(f"report.py: --jamming {a.jamming}: no analysis.json there "
+                     "(make -f Makefile.analysis -j2 PRESET=jamming analysis writes one)")
+        with open(path) as f:
             AJ = json.load(f)
     U = A.get("unavailable", {})
 

@@ -56,3 +56,17 @@ def test_trend_confirmed_refuted_or_unresolved():
     bump = [(0.04, 0.001, 20), (0.05, 0.001, 20), (0.01, 0.001, 20)]
     assert v.trend(bump, increasing=False).word == "not confirmed"
     assert v.trend([(0.04, 0.001, 4), (0.01, 0.001, 20)], increasing=False).word == "inconclusive"
+
+
+def test_report_refuses_jamming_tables_that_are_not_there(tmp_path):
+    import subprocess
+    src = os.environ.get("BUDJAM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+    ref = os.path.join(src, "data", "reference", "paper")
+    out = tmp_path / "R.md"
+    r = subprocess.run([sys.executable, os.path.join(src, "scripts", "report.py"), "--tables",
+                        os.path.join(ref, "reanalysed"), "--survival", os.path.join(ref, "tables", "survival_main_L.json"),
+                        "--figures", os.path.join(ref, "figures"), "--preset", "paper", "--jamming", str(tmp_path / "none"),
+                        "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode != 0
+    assert r.stderr.count("\n") == 1 and "--jamming" in r.stderr
+    assert not out.exists()
