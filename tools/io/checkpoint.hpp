@@ -4,7 +4,7 @@
 //
 // A checkpoint is trusted only if all of these hold (else InputError "<file>:<line>: <problem>",
 // exit 2, nothing changed):
-//  - format `budjam-checkpoint 6`; its last line `checksum <FNV-1a 64 of everything before>`;
+//  - format `budjam-checkpoint 7`; its last line `checksum <FNV-1a 64 of everything before>`;
 //  - the hash of the effective scene it was written with equals that of the scene resuming it
 //    (an edited scene.toml — growth.P0, a target, an observer — is refused);
 //  - every number is finite and in range, every counter consistent with the others and with
@@ -23,7 +23,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 6;
+inline constexpr int kCheckpointVersion = 7;
 
 // FNV-1a, 64 bit: the content checksum of a checkpoint and the hash of its scene.
 std::uint64_t fnv1a64(std::string_view bytes);
