@@ -244,6 +244,11 @@ int main(int argc, char** argv) {
       "wall %9.2f s  peak RSS %ld KiB (at start %ld KiB)\n",
       r.accepted, r.rejected, r.force_evaluations, static_cast<double>(r.force_evaluations) / acc, cpu, cpu / acc, wall,
       rss_peak, rss_start);
+  std::printf(
+      "  cost     search trials %5ld  marginal relaxations %3ld  Newton factorisations %6ld  factor reuses %6ld  "
+      "evals initial %ld search %ld above %ld\n",
+      r.search_trials, r.marginal_relaxations, r.newton_factorisations, r.newton_factor_reuses,
+      r.force_evaluations_initial, r.force_evaluations_search, r.force_evaluations_above_jamming);
   approach.print("approach");
   bisect.print("bisect");
   above.print("above");

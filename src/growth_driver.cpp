@@ -168,7 +168,9 @@ TrialRelaxed trial_relaxed(const Trial& t, long attempt, double log_scale, Trial
                       t.start,
                       verdict,
                       iterations,
-                      evaluations};
+                      evaluations,
+                      nullptr,
+                      {}};
 }
 
 // Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires `field` to be current
@@ -226,6 +228,9 @@ struct GrowthDriver::Impl {
   StepStart next;             // where the next step starts, from the accepted state
 
   ForceField field;
+  // The start of the latest trial's relaxation and its parameters (when an observer needs them).
+  Packing trial_start;
+  FireParams trial_params;
   // The Newton factor kept from one minimisation to the next (arrested regime). Forgotten at every
   // checkpointed step, where a resumed run starts without one, so that it repeats the uninterrupted run.
   NewtonWorkspace newton;
@@ -250,6 +255,16 @@ struct GrowthDriver::Impl {
     return p.size() ? U / static_cast<double>(p.size()) : 0.0;
   }
 
+  // The cost of a minimisation (and of the evaluation that follows it), into the run's counters
+  // and the stage's evaluations.
+  void count(const FireResult& fr, long& stage_evaluations) {
+    result.force_evaluations += fr.evaluations + 1;
+    stage_evaluations += fr.evaluations + 1;
+    result.fire_iterations += fr.iterations;
+    result.newton_factorisations += fr.newton_iterations;
+    result.newton_factor_reuses += fr.newton_chord_steps;
+  }
+
   // FIRE on a trial, counted; false (and the run failed) if it did not converge. With a `budget`
   // below params.max_iterations, FIRE stops there without failing the run: `*spent` tells.
   bool relax(Packing& p, const FireParams& params, const std::string& where, long budget = 0, bool* spent = nullptr) {
@@ -258,8 +273,7 @@ struct GrowthDriver::Impl {
     const bool budgeted = budget > 0 && budget < params.max_iterations;
     if (budgeted) run.max_iterations = budget;
     const FireResult fr = minimise(p, field, run, &newton);
-    result.force_evaluations += fr.evaluations + 1;
-    result.fire_iterations += fr.iterations;
+    count(fr, phase == Phase::unjammed ? result.force_evaluations_search : result.force_evaluations_above_jamming);
     if (spent) *spent = budgeted && !fr.converged;
     if (!fr.converged && !budgeted)
       fail(RunStatus::minimiser_failed, "FIRE did not converge within minimiser.max_iterations = " +
@@ -320,8 +334,7 @@ struct GrowthDriver::Impl {
     packing = initial_state(scene, rng);
     field.invalidate();
     const FireResult fr = minimise(packing, field, scene.fire);
-    result.force_evaluations += fr.evaluations + 1;
-    result.fire_iterations += fr.iterations;
+    count(fr, result.force_evaluations_initial);
     started = true;
     if (!fr.converged) {
       E = fresh_energy_per_cell(packing);
@@ -394,6 +407,13 @@ struct GrowthDriver::Impl {
     return grow_trial(plan.dt);
   }
 
+  // Keeps where a trial's relaxation starts, for observers that replay it.
+  void note_start(const Packing& p) {
+    if (!needs.trial_starts) return;
+    trial_start = p;
+    trial_params = trial_minimiser();
+  }
+
   // A trial grown by `step` from the accepted state. One whose budget ran out far above the window
   // is set aside unrelaxed (deferred); near the window it is relaxed on: it may be the jamming point,
   // and a deferred trial there would only draw the next trials onto itself (docs/growth.md,
@@ -404,6 +424,7 @@ struct GrowthDriver::Impl {
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
     search->place(t);
+    note_start(t.packing);
     const std::string where =
         "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
     if (!relax(t.packing, trial_minimiser(), where, search->trial_budget(), &t.deferred)) return std::nullopt;
@@ -423,6 +444,7 @@ struct GrowthDriver::Impl {
   std::optional<Trial> resume_deferred(Trial t) {
     --result.rejected;
     t.deferred = false;
+    note_start(t.packing);
     if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, growth step " + std::to_string(attempts)))
       return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);
@@ -435,6 +457,7 @@ struct GrowthDriver::Impl {
   // trial was counted rejected when it narrowed the bracket; it is one attempt, now accepted
   // (accepted + rejected = attempts, which a checkpoint is checked against).
   std::optional<Trial> settle(Trial t) {
+    note_start(t.packing);
     if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
       return std::nullopt;
     --result.rejected;
@@ -577,13 +600,19 @@ struct GrowthDriver::Impl {
       return result.status;
     }
     const long evaluations = result.force_evaluations, iterations = result.fire_iterations;
+    const bool searching = phase == Phase::unjammed;
     std::optional<Trial> trial = make_trial();
     if (!trial) return result.status;
+    if (searching) ++result.search_trials;
+    if (result.force_evaluations - evaluations > kMarginalEvaluations) ++result.marginal_relaxations;
     const TrialVerdict verdict = judge(*trial);
     if (!observers.empty()) {
-      const TrialRelaxed relaxed =
-          trial_relaxed(*trial, attempts, next.log_scale, verdict, result.fire_iterations - iterations,
-                        result.force_evaluations - evaluations);
+      TrialRelaxed relaxed = trial_relaxed(*trial, attempts, next.log_scale, verdict,
+                                           result.fire_iterations - iterations, result.force_evaluations - evaluations);
+      if (needs.trial_starts) {
+        relaxed.start_packing = &trial_start;
+        relaxed.minimiser = trial_params;
+      }
       for (Observer* o : observers) o->on_trial(relaxed);
     }
     switch (verdict) {

@@ -176,6 +176,14 @@ TEST_CASE("a version 5 checkpoint (steps without their log scale) is refused by 
                                                                               Contains("start the run again"));
 }
 
+TEST_CASE("a version 6 checkpoint (without the cost counters) is refused by name", "[checkpoint]") {
+  std::string text = snapshot().text;
+  text.replace(0, text.find('\n'), "budjam-checkpoint 6");
+  Counter c;
+  CHECK_THROWS_WITH(parse_checkpoint(text, "cp", small_scene(), 3, {&c}),
+                    Contains("cp:1:") && Contains("version 6") && Contains("cost") && Contains("start the run again"));
+}
+
 TEST_CASE("a checkpoint is refused for another scene, seed or set of observers", "[checkpoint]") {
   const Snapshot& snap = snapshot();
   Counter c;

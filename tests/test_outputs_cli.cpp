@@ -2,6 +2,9 @@
 // the column reference ("Columns and units"): every column budjam writes is documented, and every
 // documented column is written.
 #include "io/json.hpp"
+#include "io/run_data.hpp"
+
+#include "budjam/growth_driver.hpp"
 
 #include <catch2/catch.hpp>
 #include "files_doc.hpp"
@@ -112,6 +115,41 @@ TEST_CASE("every key of summary.json and timing.json is in docs/files.md, and ev
   std::vector<std::string> timing_keys;
   for (const auto& [key, unused] : timing.items()) timing_keys.push_back(key);
   CHECK(timing_keys == documented_columns("`RUN/timing.json`"));
+}
+
+TEST_CASE("summary.json's cost counters agree with trials.csv: trials, marginal relaxations, evaluations by stage",
+          "[cli]") {
+  const budjam::io::Json summary = budjam::io::read_json(demo_run() / "summary.json");
+  const budjam::tools::CsvTable trials = budjam::tools::read_csv(demo_run() / "trials.csv");
+  const budjam::tools::CsvTable steps = budjam::tools::read_csv(demo_run() / "steps.csv");
+  REQUIRE(summary.at("unjammings").empty());
+  // The attempt that produced the jamming point: the search's trials are the rows up to it.
+  const long long step_J = summary.at("step_J").get<long long>();
+  long long attempt_J = -1;
+  for (std::size_t r = 0; r < steps.size(); ++r)
+    if (steps.integer(r, steps.column("step"), 0, 1LL << 40) == step_J)
+      attempt_J = steps.integer(r, steps.column("attempts"), 0, 1LL << 40);
+  REQUIRE(attempt_J > 0);
+  long long search_rows = 0, marginal = 0, search_evaluations = 0, above_evaluations = 0;
+  for (std::size_t r = 0; r < trials.size(); ++r) {
+    const long long evaluations = trials.integer(r, trials.column("evaluations"), 1, 1LL << 40);
+    const bool search = trials.integer(r, trials.column("attempt"), 1, 1LL << 40) <= attempt_J;
+    search_rows += search;
+    marginal += evaluations > budjam::kMarginalEvaluations;
+    (search ? search_evaluations : above_evaluations) += evaluations;
+  }
+  CHECK(search_rows > 0);
+  CHECK(search_rows < static_cast<long long>(trials.size()));  // the demo lands a target above jamming
+  CHECK(summary.at("search_trials").get<long long>() == search_rows);
+  CHECK(summary.at("marginal_relaxations").get<long long>() == marginal);
+  CHECK(summary.at("force_evaluations_search").get<long long>() == search_evaluations);
+  CHECK(summary.at("force_evaluations_above_jamming").get<long long>() == above_evaluations);
+  CHECK(summary.at("force_evaluations_initial").get<long long>() > 0);
+  CHECK(summary.at("force_evaluations_initial").get<long long>() + search_evaluations + above_evaluations ==
+        summary.at("force_evaluations").get<long long>());
+  // The demo scene finishes above jamming with Newton: its factorisations are counted.
+  CHECK(summary.at("newton_factorisations").get<long long>() > 0);
+  CHECK(summary.at("newton_factor_reuses").get<long long>() >= 0);
 }
 
 namespace {

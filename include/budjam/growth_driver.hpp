@@ -25,6 +25,7 @@
 #include "budjam/bud_events.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
+#include "budjam/fire.hpp"
 #include "budjam/growth.hpp"
 #include "budjam/jamming.hpp"
 #include "budjam/packing.hpp"
@@ -54,7 +55,9 @@ struct Needs {
   bool network = false;         // ContactNetwork (implies contacts)
   bool bud_pressures = false;   // p_i per cell (implies contacts); feedback runs always have them
   bool before_jamming = false;  // also at accepted states in the unjammed phase
+  bool trial_starts = false;    // TrialRelaxed::start_packing: where each trial's relaxation began
   Needs& operator|=(const Needs& o) {
+    trial_starts |= o.trial_starts;
     contacts |= o.contacts;
     network |= o.network;
     bud_pressures |= o.bud_pressures;
@@ -111,7 +114,18 @@ struct RunResult {
   long force_evaluations = 0, fire_iterations = 0;
   long divisions = 0;        // all divisions in accepted steps
   long saddles_relaxed = 0;  // jamming candidates found to be saddles and relaxed on
+  // Where the time goes (docs/growth.md, "Speed"). The force evaluations split by stage (the initial
+  // relaxation, the trials of the unjammed phase, the trials above jamming) add up to
+  // force_evaluations.
+  long search_trials = 0;         // relaxed trials in the unjammed phase: the search onto φ_J
+  long marginal_relaxations = 0;  // relaxed trials that cost more than kMarginalEvaluations
+  long newton_factorisations = 0, newton_factor_reuses = 0;  // Newton steps with a fresh / a kept factor
+  long force_evaluations_initial = 0, force_evaluations_search = 0, force_evaluations_above_jamming = 0;
 };
+
+// A trial whose relaxation costs more force evaluations than this is a marginal relaxation: FIRE
+// creeping near the jamming point, where the cost of a run concentrates.
+inline constexpr long kMarginalEvaluations = 100000;
 
 // Read-only view of an accepted state. Pointers are null when not computed for this state.
 struct StateView {
@@ -156,6 +170,10 @@ struct TrialRelaxed {
   TrialStart start = TrialStart::accepted_state;
   TrialVerdict verdict = TrialVerdict::accepted;
   long fire_iterations = 0, force_evaluations = 0;  // spent on this trial (saddle relaxation included)
+  // With Needs::trial_starts (else null): the packing its relaxation started from and the minimiser
+  // parameters of that relaxation, which replay it (bench/bench_replay.cpp).
+  const Packing* start_packing = nullptr;
+  FireParams minimiser;
 };
 
 struct StepAccepted {

@@ -185,6 +185,9 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
      << s.episodes << '\n';
   os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations << ' '
      << r.divisions << ' ' << r.saddles_relaxed << '\n';
+  os << "cost " << r.search_trials << ' ' << r.marginal_relaxations << ' ' << r.newton_factorisations << ' '
+     << r.newton_factor_reuses << ' ' << r.force_evaluations_initial << ' ' << r.force_evaluations_search << ' '
+     << r.force_evaluations_above_jamming << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
   for (const JammingOvershoot& o : s.search.overshoots)
     os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
@@ -253,6 +256,10 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       in.fail(
           "checkpoint version 5 was written before growth steps were stored with their log scale (the adaptive "
           "step out of the double range); start the run again");
+    if (version == 6)
+      in.fail(
+          "checkpoint version 6 was written before the run counted its cost by stage (search trials, marginal "
+          "relaxations, Newton factorisations); start the run again");
     if (version != kCheckpointVersion)
       in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
               std::to_string(kCheckpointVersion) + "); start the run again");
@@ -317,6 +324,19 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
     r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
     r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(scene)));
     r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
+  }
+  {
+    const auto w = in.next("cost", 7);
+    r.search_trials = in.integer(w[0], "search trials", 0, kLongMax);
+    r.marginal_relaxations = in.integer(w[1], "marginal relaxations", 0, kLongMax);
+    r.newton_factorisations = in.integer(w[2], "Newton factorisations", 0, kLongMax);
+    r.newton_factor_reuses = in.integer(w[3], "Newton factor reuses", 0, kLongMax);
+    r.force_evaluations_initial = in.integer(w[4], "initial force evaluations", 1, r.force_evaluations);
+    r.force_evaluations_search = in.integer(w[5], "search force evaluations", 0, r.force_evaluations);
+    r.force_evaluations_above_jamming = in.integer(w[6], "above-jamming force evaluations", 0, r.force_evaluations);
+    if (r.force_evaluations_initial + r.force_evaluations_search + r.force_evaluations_above_jamming !=
+        r.force_evaluations)
+      in.fail("cost: the force evaluations by stage do not add up to the force evaluations");
   }
   {
     const auto w = in.next("search", -1);

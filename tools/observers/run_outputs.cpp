@@ -255,6 +255,13 @@ Json summary_json(const GrowthDriver& driver) {
   j["force_evaluations"] = r.force_evaluations;
   j["fire_iterations"] = r.fire_iterations;
   j["saddles_relaxed"] = r.saddles_relaxed;
+  j["search_trials"] = r.search_trials;
+  j["marginal_relaxations"] = r.marginal_relaxations;
+  j["newton_factorisations"] = r.newton_factorisations;
+  j["newton_factor_reuses"] = r.newton_factor_reuses;
+  j["force_evaluations_initial"] = r.force_evaluations_initial;
+  j["force_evaluations_search"] = r.force_evaluations_search;
+  j["force_evaluations_above_jamming"] = r.force_evaluations_above_jamming;
   return j;
 }
 
