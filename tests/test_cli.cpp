@@ -8,11 +8,14 @@
 
 #include <sys/wait.h>
 #include <unistd.h>
+#include <algorithm>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <tuple>
+#include <vector>
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -189,4 +192,89 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
     CHECK(r.err.find("internal") == std::string::npos);
     CHECK(fs::is_empty(outputs));
   }
+}
+
+TEST_CASE("render stopped by SIGINT while its converter runs leaves neither a temporary nor the output", "[cli]") {
+  const fs::path dir = work_dir() / "render_sigint";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "bin");
+  // A converter that says it has started (with its pid) and waits to be stopped.
+  const fs::path converter = dir / "bin" / "rsvg-convert", mark = dir / "started";
+  std::ofstream(converter) << "#!/bin/sh\necho $$ > " << budjam::testing::shell_quoted(mark) << ".new\nmv "
+                           << budjam::testing::shell_quoted(mark) << ".new " << budjam::testing::shell_quoted(mark)
+                           << "\nexec sleep 60\n";
+  fs::permissions(converter, fs::perms::owner_all);
+  std::ofstream(dir / "p.pack")
+      << "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
+         "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n";
+  const char* exe = std::getenv("BUDJAM_EXE");
+  REQUIRE(exe);
+  const std::string path = (dir / "bin").string() + ":" + std::getenv("PATH");
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    ::setenv("PATH", path.c_str(), 1);
+    if (::chdir(dir.c_str()) == 0) ::execl(exe, "budjam", "render", "p.pack", "-o", "out.png", nullptr);
+    ::_exit(127);
+  }
+  for (int k = 0; k < 600 && !fs::exists(mark); ++k) ::usleep(50000);
+  REQUIRE(fs::exists(mark));
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ::kill(std::stoi(slurp(mark)), SIGKILL);
+  CHECK(WIFSIGNALED(status));
+  CHECK(WTERMSIG(status) == SIGINT);
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  CHECK(left == std::vector<std::string>{"bin", "p.pack", "started"});
+}
+
+TEST_CASE(
+    "render and export leave a user's files named like their temporaries alone; two exports to one base both land",
+    "[cli]") {
+  if (std::system("command -v rsvg-convert >/dev/null 2>&1") != 0 ||
+      std::system("/usr/bin/python3 -c 'import gsd.hoomd' >/dev/null 2>&1") != 0) {
+    WARN("rsvg-convert or python3-gsd not installed: skipped");
+    return;
+  }
+  const fs::path dir = work_dir() / "user_temporaries";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "p.pack")
+      << "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
+         "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n";
+  const std::vector<std::string> users{"out.png.tmp",         "out.svg.tmp", ".out.png.tmp-abcdef",
+                                       ".out.svg.tmp-abcdef", "out.gsd.tmp", "out.gsd.frames.json",
+                                       ".out.gsd.tmp-abcdef"};
+  for (const auto& name : users) std::ofstream(dir / name) << "the user's " << name << "\n";
+  for (const std::string args : {"render p.pack -o out.svg --png", "export p.pack --format gsd --out out"}) {
+    const Result r = budjam::testing::run_budjam_in(dir, args);
+    INFO(args << "\n" << r.err);
+    CHECK(r.code == 0);
+  }
+  for (const auto& name : users) CHECK(slurp(dir / name) == "the user's " + name + "\n");
+  for (const char* made : {"out.svg", "out.png", "out.gsd"}) CHECK(fs::file_size(dir / made) > 0);
+
+  // Two writers of one base at once: each writes through its own temporary and renames it.
+  const std::string exe = budjam::testing::shell_quoted(std::getenv("BUDJAM_EXE"));
+  const std::string both = "cd " + budjam::testing::shell_quoted(dir) + " && (" + exe +
+                           " export p.pack --format gsd --out both 2>one.err & one=$!; " + exe +
+                           " export p.pack --format gsd --out both 2>two.err & two=$!; wait $one && wait $two)";
+  CHECK(std::system(both.c_str()) == 0);
+  CHECK(slurp(dir / "one.err").empty());
+  CHECK(slurp(dir / "two.err").empty());
+  const std::string read_back =
+      "/usr/bin/python3 -c 'import gsd.hoomd, sys; f = gsd.hoomd.open(sys.argv[1]); "
+      "sys.exit(0 if len(f) == 1 and f[0].particles.N == 4 else 1)' " +
+      budjam::testing::shell_quoted(dir / "both.gsd");
+  CHECK(std::system(read_back.c_str()) == 0);
+  std::vector<std::string> left, expected = users;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  for (const char* name : {"p.pack", "out.svg", "out.png", "out.gsd", "both.gsd", "one.err", "two.err"})
+    expected.emplace_back(name);
+  std::sort(left.begin(), left.end());
+  std::sort(expected.begin(), expected.end());
+  CHECK(left == expected);
 }

@@ -55,6 +55,10 @@ class BudTracker {
   std::size_t completed() const;
   std::size_t divided() const;
   std::size_t touched() const;  // had their first contact
+  // The events tag, update and close have returned for the current tags: one `tagged` each, one
+  // `first_contact` for each that touched, one end (completed, divided or censored) for each
+  // no longer active.
+  std::size_t events() const { return 2 * tagged() + touched() - active(); }
   int episode() const { return episode_; }
 
   void save(std::ostream& os) const;

@@ -212,6 +212,8 @@ struct Finished {
   const RunResult& result;
 };
 
+struct GrowthState;
+
 class Observer {
  public:
   virtual ~Observer() = default;
@@ -243,6 +245,10 @@ class Observer {
   virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
   virtual void load_state(std::istream&) {}
+  // After every load_state passed: throws InputError naming the file if what the observer wrote
+  // outside the checkpoint (a log's rows) disagrees with the state the run resumes from, which
+  // the checkpoint records independently (its attempts, its tagged buds). Changes nothing.
+  virtual void check_resumed(const GrowthState&) const {}
   virtual void on_resumed() {}
 };
 

@@ -110,6 +110,7 @@ void run(const Options& o) {
     io::CheckpointLines lines;
     GrowthState state = io::read_checkpoint(root, run_files::checkpoint, scene, scene.seed, observers, &lines);
     log.check_resumed_state(state, scene, lines, (dir / run_files::checkpoint).string());
+    for (Observer* obs : observers) obs->check_resumed(state);
     run_dir->remove_recorded_temporaries();
     for (Observer* obs : observers) obs->on_resumed();
     driver.restore(std::move(state));

@@ -1,6 +1,7 @@
 // `budjam`: builds the command line from the self-registered subcommands (command.hpp), runs the
 // chosen one, and turns every failure into one line on stderr and an exit code.
 #include "commands/command.hpp"
+#include "commands/stop_signals.hpp"
 
 #include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
     c.setup(*sub);
   }
 
+  remove_temporaries_on_fatal_signals();  // `grow` replaces them with its own while it runs
   try {
     app.parse(argc, argv);  // runs the chosen subcommand's callback
     return kExitOk;

@@ -1,15 +1,22 @@
 #include "commands/stop_signals.hpp"
 
+#include "io/atomic_file.hpp"
+
 namespace budjam::cli {
 
 namespace {
 
 volatile std::sig_atomic_t g_received = 0;
 
+extern "C" void on_fatal_signal(int sig) {
+  io::remove_open_temporaries();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
 extern "C" void on_stop_signal(int sig) {
   if (g_received == sig) {  // asked twice: stop now
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
+    on_fatal_signal(sig);
     return;
   }
   g_received = sig;
@@ -37,5 +44,14 @@ StopSignals::~StopSignals() {
 }
 
 int StopSignals::received() { return g_received; }
+
+void remove_temporaries_on_fatal_signals() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction sa {};
+    sa.sa_handler = on_fatal_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(sig, &sa, nullptr);
+  }
+}
 
 }  // namespace budjam::cli

@@ -22,4 +22,9 @@ class StopSignals {
   }, old_int_{};
 };
 
+// SIGINT, SIGTERM and SIGHUP in every other command (and a second signal in `grow`) end the process
+// as they would without a handler, after removing the temporaries of outputs not yet committed
+// (io::remove_open_temporaries): a render or export stopped half-way leaves no file behind.
+void remove_temporaries_on_fatal_signals();
+
 }  // namespace budjam::cli

@@ -9,7 +9,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <fstream>
 #include <random>
@@ -242,6 +245,44 @@ void TemporaryManifest::remove_listed() {
 
 // ---- TempFile ------------------------------------------------------------------------------
 
+namespace {
+
+// The open temporaries as a signal handler can read them: a directory descriptor (-1: free, -2:
+// being filled) and a name. A temporary that finds no free slot is still removed by its
+// destructor; only a signal would leave it.
+struct OpenTemporary {
+  std::atomic<int> dir_fd{-1};
+  char name[NAME_MAX + 1];
+};
+static_assert(std::atomic<int>::is_always_lock_free);
+std::array<OpenTemporary, 32> g_open_temporaries;
+
+int list_temporary(int dir_fd, const std::string& name) {
+  if (name.size() > NAME_MAX) return -1;
+  for (std::size_t k = 0; k < g_open_temporaries.size(); ++k) {
+    int free = -1;
+    OpenTemporary& t = g_open_temporaries[k];
+    if (!t.dir_fd.compare_exchange_strong(free, -2)) continue;
+    std::memcpy(t.name, name.c_str(), name.size() + 1);
+    t.dir_fd.store(dir_fd);
+    return static_cast<int>(k);
+  }
+  return -1;
+}
+
+void unlist_temporary(int slot) {
+  if (slot >= 0) g_open_temporaries[static_cast<std::size_t>(slot)].dir_fd.store(-1);
+}
+
+}  // namespace
+
+void remove_open_temporaries() noexcept {
+  for (const OpenTemporary& t : g_open_temporaries) {
+    const int fd = t.dir_fd.load();
+    if (fd >= 0) ::unlinkat(fd, t.name, 0);
+  }
+}
+
 TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(dir)), final_(final_name) {
   static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
   static thread_local std::mt19937_64 rng{std::random_device{}()};
@@ -254,6 +295,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
     if (fd_ < 0 && errno != EEXIST) io_fail(dir_.path(), "cannot create a temporary file", errno);
   }
   if (fd_ < 0) io_fail(dir_.path(), "cannot create a temporary file", EEXIST);
+  slot_ = list_temporary(dir_.fd(), name_);
   // Recorded once it exists: the list never names a file this process did not create.
   if (dir_.manifest()) {
     try {
@@ -261,6 +303,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
     } catch (...) {
       ::close(fd_);
       ::unlinkat(dir_.fd(), name_.c_str(), 0);
+      unlist_temporary(slot_);
       throw;
     }
   }
@@ -269,6 +312,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
 TempFile::~TempFile() {
   if (fd_ >= 0) ::close(fd_);
   if (!committed_) ::unlinkat(dir_.fd(), name_.c_str(), 0);
+  unlist_temporary(slot_);  // after the name is gone: a signal in between finds nothing to remove
   if (dir_.manifest()) {
     try {
       dir_.manifest()->done();
@@ -291,6 +335,7 @@ void TempFile::commit() {
   if (!ok) io_fail(path(), "cannot sync", err);
   dir_.rename(name_, final_);
   committed_ = true;
+  unlist_temporary(std::exchange(slot_, -1));
   dir_.sync();
 }
 

@@ -123,7 +123,12 @@ class TempFile {
   std::string final_, name_;
   int fd_ = -1;
   bool committed_ = false;
+  int slot_ = -1;  // in the list remove_open_temporaries() reads, or -1
 };
+
+// Removes every TempFile of this process that is neither committed nor destroyed: for a handler
+// of a signal that ends the process (no destructor runs then). Async-signal-safe (unlinkat only).
+void remove_open_temporaries() noexcept;
 
 // Replaces `name` in `dir` by `content` atomically (a TempFile). On any failure the temporary is
 // removed, the previous file (if any) is untouched, and IoError is thrown.

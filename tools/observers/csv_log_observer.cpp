@@ -1,6 +1,7 @@
 #include "observers/csv_log_observer.hpp"
 
 #include "budjam/scene.hpp"
+#include "io/text.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -53,6 +54,19 @@ void CsvLogObserver::on_resumed() {
 const io::CsvLog::Cut& CsvLogObserver::resumed_cut(std::size_t k) const {
   if (k >= cuts_.size()) throw std::logic_error(name() + ": no checkpointed log lengths");
   return cuts_[k];
+}
+
+std::vector<std::string> CsvLogObserver::resumed_rows(std::size_t k) const {
+  const std::string text = io::read_text_file(dir_, specs_.at(k).name + ".partial").substr(0, resumed_cut(k).bytes);
+  std::vector<std::string> rows;
+  std::size_t at = text.find('\n') + 1;  // after the header
+  for (std::size_t end; (end = text.find('\n', at)) != std::string::npos; at = end + 1)
+    rows.push_back(text.substr(at, end - at));
+  return rows;
+}
+
+void CsvLogObserver::refuse_resumed(std::size_t k, const std::string& what) const {
+  throw InputError(io::escape_control((dir_ / (specs_.at(k).name + ".partial")).string() + ": " + what));
 }
 
 bool due_every(const Schedule& schedule, const StateView& s) {

@@ -3,7 +3,11 @@
 #include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
+#include "budjam/errors.hpp"
 #include "io/run_directory.hpp"
+
+#include <istream>
+#include <ostream>
 
 namespace {
 
@@ -17,10 +21,35 @@ class BudEventLog : public tools::CsvLogObserver {
   BudEventLog(const io::Directory& dir, bool resuming)
       : CsvLogObserver(dir, {{std::string(io::run_files::bud_events), kBudColumns}}, resuming) {}
   std::string name() const override { return "bud_events"; }
+  void on_jammed(const Jammed&) override { episode_start_ = rows_; }  // its buds are tagged next
   void on_bud_event(const BudEventHappened& e) override {
     const BudEvent& b = e.event;
     log().row({b.episode, b.cell_id, to_string(b.kind), b.step, b.phi, b.a});
+    ++rows_;
   }
+  // The rows of the current jamming episode are the bud tracker's events, which the checkpoint
+  // records on its own (its tags).
+  void check_resumed(const GrowthState& s) const override {
+    const std::size_t rows = resumed_cut(0).rows;
+    if (rows < episode_start_ || rows - episode_start_ != s.buds.events())
+      refuse_resumed(
+          0, std::to_string(rows) + " rows up to the recorded length, of which " +
+                 (rows < episode_start_ ? std::string("none") : std::to_string(rows - episode_start_)) + " after row " +
+                 std::to_string(episode_start_) + " where the current jamming episode began, " +
+                 "but the checkpoint's tagged buds account for " + std::to_string(s.buds.events()) + " events");
+  }
+  void on_resumed() override {
+    CsvLogObserver::on_resumed();
+    rows_ = resumed_cut(0).rows;
+  }
+
+ private:
+  void save_more(std::ostream& os) override { os << episode_start_ << '\n'; }
+  void load_more(std::istream& is) override {
+    if (!(is >> episode_start_)) throw InputError("bad bud_events state (the row where the jamming episode began)");
+  }
+  std::size_t rows_ = 0;           // rows written
+  std::size_t episode_start_ = 0;  // rows written before the current jamming episode
 };
 
 const tools::ObserverRegistration registration{"bud_events",
