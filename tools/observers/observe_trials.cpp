@@ -1,6 +1,6 @@
 // Observer "trials" (scene [observe] trials, off by default): every relaxed growth attempt, one row
 // each in trials.csv, whatever its verdict: the search onto φ_J and the landing on the targets,
-// which steps.csv (accepted states only) does not show (columns in docs/files.md).
+// which steps.csv (accepted states only) does not show (columns in docs/columns.md).
 #include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
