@@ -25,10 +25,12 @@ class TrialLog : public tools::CsvLogObserver {
   }
 };
 
-const tools::ObserverRegistration registration{
-    "trials", {std::string(io::run_files::trials)}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.trials) return nullptr;
-      return std::make_unique<TrialLog>(c.run_dir.root(), c.resuming);
-    }};
+const tools::ObserverRegistration registration{"trials",
+                                               "observe.trials",
+                                               {std::string(io::run_files::trials)},
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.trials) return nullptr;
+                                                 return std::make_unique<TrialLog>(c.run_dir.root(), c.resuming);
+                                               }};
 
 }  // namespace
