@@ -35,7 +35,7 @@ OKABE_ITO = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "
 BLUE, VERMILLION = OKABE_ITO[0], OKABE_ITO[1]
 plt.rcParams["axes.prop_cycle"] = matplotlib.cycler(color=OKABE_ITO)  # series without a colour of their own
 
-# Axis units (docs/files.md, "Columns and units"): stresses, pressures and 2D moduli in k, lengths
+# Axis units (docs/columns.md): stresses, pressures and 2D moduli in k, lengths
 # in D0, frequencies in sqrt(k/m0).
 K = r" [$k$]"
 OMEGA = r" [$\sqrt{k/m_0}$]"

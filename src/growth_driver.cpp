@@ -238,7 +238,7 @@ struct GrowthDriver::Impl {
   bool final_emitted = false;
   std::function<void()> checkpoint_hook;
 
-  Impl(const Scene& s, const DriverOptions& o) : scene(s), window(s.epsilon_U), field(s.skin, s.threads) {
+  Impl(const Scene& s, const DriverOptions& o) : scene(s), window(jamming_window(s)), field(s.skin, s.threads) {
     validate(scene);
     search = make_jamming_searcher(scene);
     seed = o.seed ? *o.seed : scene.seed;

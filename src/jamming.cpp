@@ -29,6 +29,8 @@ WindowSide JammingWindow::side(double E_per_cell) const {
 double JammingWindow::s_centre() const { return 0.5 * (1.0 + std::sqrt(kTopOverBottom)) * std::sqrt(bottom_); }
 double JammingWindow::s_top() const { return std::sqrt(top()); }
 
+JammingWindow jamming_window(const Scene& scene) { return JammingWindow(scene.epsilon_U); }
+
 JammingOvershoot overshoot_line(double phi, double E_per_cell, std::size_t N, double P, double L) {
   const double s = std::sqrt(E_per_cell), U = E_per_cell * static_cast<double>(N);
   const double dphi = 2.0 * U * phi / (U + L * L * P);
@@ -142,7 +144,7 @@ class Secant final : public JammingSearcher {
 class BracketSearch final : public JammingSearcher {
  public:
   explicit BracketSearch(const Scene& scene)
-      : window_(scene.epsilon_U),
+      : window_(jamming_window(scene)),
         dt_min_(scene.dt_min),
         jump_factor_(scene.jump_factor),
         start_across_divisions_(scene.start_across_divisions),
@@ -306,13 +308,23 @@ class BracketSearch final : public JammingSearcher {
 
 }  // namespace
 
+const std::vector<JammingSearchKind>& jamming_searches() {
+  static const std::vector<JammingSearchKind> searches = {
+      {JammingSearch::bisection, "bisection", "the paper's protocol: every overshoot halves Δt",
+       [](const Scene&) -> std::unique_ptr<JammingSearcher> { return std::make_unique<Bisection>(); }},
+      {JammingSearch::secant, "secant",
+       "each trial aimed at the window's middle by a secant in √(E/N), from each accepted state",
+       [](const Scene& scene) -> std::unique_ptr<JammingSearcher> {
+         return std::make_unique<Secant>(jamming_window(scene));
+       }},
+      {JammingSearch::bracket, "bracket", "the secant's aim, with φ_J bracketed in Δt from one fixed accepted state",
+       [](const Scene& scene) -> std::unique_ptr<JammingSearcher> { return std::make_unique<BracketSearch>(scene); }},
+  };
+  return searches;
+}
+
 std::unique_ptr<JammingSearcher> make_jamming_searcher(const Scene& scene) {
-  switch (scene.search) {
-    case JammingSearch::bisection: return std::make_unique<Bisection>();
-    case JammingSearch::secant: return std::make_unique<Secant>(JammingWindow(scene.epsilon_U));
-    case JammingSearch::bracket: return std::make_unique<BracketSearch>(scene);
-  }
-  return std::make_unique<Bisection>();
+  return jamming_searches().at(static_cast<std::size_t>(scene.search)).make(scene);
 }
 
 }  // namespace budjam

@@ -9,6 +9,7 @@
 #include "budjam/scene_keys.hpp"
 
 #include "budjam/errors.hpp"
+#include "budjam/jamming.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -28,6 +29,15 @@ std::string show(double v) {
 }
 
 }  // namespace
+
+std::string describe_choices(const std::vector<Choice>& choices) {
+  std::string text;
+  for (std::size_t k = 0; k < choices.size(); ++k) {
+    if (k > 0) text += k + 1 == choices.size() ? " or " : ", ";
+    text.append("\"").append(choices[k].name).append("\" (").append(choices[k].meaning).append(")");
+  }
+  return text;
+}
 
 std::string value_text(const SceneValue& value) {
   struct Visitor {
@@ -218,10 +228,14 @@ std::vector<SceneKey> make_keys() {
   e.push_back(flag("jamming", "check_minimum",
                    "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
                    BUDJAM_FIELD(check_minimum)));
-  e.push_back(choice("jamming", "search",
-                     "step choice near φ_J and the targets: \"bracket\" (secant in Δt from a fixed state), "
-                     "\"secant\" (from each accepted state) or \"bisection\" (the paper's halving)",
-                     {"bisection", "secant", "bracket"}, BUDJAM_FIELD(search)));
+  std::vector<Choice> searches;
+  std::vector<std::string> search_names;
+  for (const JammingSearchKind& k : jamming_searches()) {
+    searches.push_back({k.name, k.description});
+    search_names.emplace_back(k.name);
+  }
+  e.push_back(choice("jamming", "search", "step choice near φ_J and the targets: " + describe_choices(searches),
+                     search_names, BUDJAM_FIELD(search)));
   e.push_back(real("jamming", "jump_factor",
                    "bracket search: collapse the bracket when its two lowest overshoots, near its lower end, "
                    "extrapolate there to √(E/N) above this many times √(2ε_U) (0 = never)",

@@ -222,7 +222,7 @@ TEST_CASE(
   for (const auto& n : front) names.insert(n.get<std::string>());
   CHECK(names == std::set<std::string>{"default", "ftol_1e-11"});
   CHECK(acc["defaults_on_front"].get<bool>());
-  // The CSV carries the resolution column that docs/files.md documents.
+  // The CSV carries the resolution column that docs/columns.md documents.
   std::ifstream csv(dir / "out" / "accuracy.csv");
   std::string head;
   std::getline(csv, head);

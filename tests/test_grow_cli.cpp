@@ -177,7 +177,7 @@ TEST_CASE("steps.csv writes dt and chi_c beyond the double range as decimal text
   std::string line;
   std::getline(csv, line);
   REQUIRE(line.rfind("step,attempts,dt,", 0) == 0);
-  const std::size_t chi_column = 16;  // docs/files.md, steps.csv
+  const std::size_t chi_column = 16;  // docs/columns.md, steps.csv
   long huge_dt = 0, tiny_chi = 0;
   while (std::getline(csv, line)) {
     std::vector<std::string> f;

@@ -3,12 +3,15 @@
 #include "budjam/jamming.hpp"
 
 #include "budjam/scene.hpp"
+#include "budjam/scene_keys.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
+#include <vector>
 
 using namespace budjam;
 
@@ -105,6 +108,24 @@ TEST_CASE("dt_for_phi lands within its tolerance, and returns the lower end when
   const double at_jump = dt_for_phi(jump, 0.85, 0.0, 1.0, 1e-9);
   CHECK(at_jump < 0.5);
   CHECK(0.5 - at_jump < 1e-12);
+}
+
+TEST_CASE(
+    "search registry: one row per enumerator in its order, each making its search; the key's values are its names",
+    "[fast]") {
+  const auto& kinds = jamming_searches();
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    INFO(kinds[k].name);
+    CHECK(static_cast<std::size_t>(kinds[k].search) == k);
+    CHECK_FALSE(kinds[k].description.empty());
+    CHECK(make_jamming_searcher(scene_with(kinds[k].search)) != nullptr);
+    names.emplace_back(kinds[k].name);
+  }
+  const SceneKey* key = find_scene_key("jamming.search");
+  REQUIRE(key != nullptr);
+  CHECK(key->choices == names);
+  for (const std::string& name : names) CHECK(key->help.find('"' + name + '"') != std::string::npos);
 }
 
 TEST_CASE("bisection search: passes the driver's step on and keeps no overshoot", "[fast]") {

@@ -1,5 +1,5 @@
 // The output convention of the per-packing commands (docs/files.md, "Outputs of the commands") and
-// the column reference ("Columns and units"): every column budjam writes is documented, and every
+// the column reference (docs/columns.md): every column budjam writes is documented, and every
 // documented column is written.
 #include "io/json.hpp"
 #include "io/run_data.hpp"
@@ -55,7 +55,7 @@ std::string one_line(const std::string& s) {
 
 }  // namespace
 
-TEST_CASE("every column of every table budjam writes is in docs/files.md, and every column listed there is written",
+TEST_CASE("every column of every table budjam writes is in docs/columns.md, and every column listed there is written",
           "[cli]") {
   const fs::path run = demo_run(), out = work_dir() / "outputs";
   REQUIRE(
@@ -98,7 +98,7 @@ TEST_CASE("every column of every table budjam writes is in docs/files.md, and ev
   CHECK(slurp(out / "tables/runs.csv").find(",8,,1,") != std::string::npos);
 }
 
-TEST_CASE("every key of summary.json and timing.json is in docs/files.md, and every key listed there is written",
+TEST_CASE("every key of summary.json and timing.json is in docs/columns.md, and every key listed there is written",
           "[cli]") {
   const budjam::io::Json summary = budjam::io::read_json(demo_run() / "summary.json");
   std::vector<std::string> keys;

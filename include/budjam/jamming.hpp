@@ -12,11 +12,13 @@
 // states is JammingSearchState, which a checkpoint stores.
 #include "budjam/growth.hpp"
 #include "budjam/packing.hpp"
+#include "budjam/scene.hpp"
 
 #include <cstddef>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 namespace budjam {
@@ -58,6 +60,10 @@ class JammingWindow {
   double top() const { return kTopOverBottom * bottom_; }
   double bottom_;
 };
+
+// The window of a scene (jamming.epsilon_U): the driver's and the searches' alike, and the one place
+// that reads the criterion's scene keys.
+JammingWindow jamming_window(const Scene& scene);
 
 // Where a trial's relaxation started: the accepted state grown by Δt, the relaxed positions of the
 // bracket's lowest overshoot with the trial's sizes, or (a collapsed bracket's settle) the highest
@@ -153,6 +159,18 @@ class JammingSearcher {
   virtual JammingSearchState state() const { return {}; }
   virtual void restore(JammingSearchState) {}
 };
+
+// One row per jamming search, in the order of JammingSearch's enumerators: the name a scene gives it
+// (`jamming.search`), what it does in one line (the key's help and the table of docs/growth.md,
+// "Jamming search"), and how it is made from the scene. Adding a search is an enumerator of
+// JammingSearch, a JammingSearcher in jamming.cpp and its row here.
+struct JammingSearchKind {
+  JammingSearch search;
+  std::string_view name;
+  std::string_view description;
+  std::unique_ptr<JammingSearcher> (*make)(const Scene&);
+};
+const std::vector<JammingSearchKind>& jamming_searches();
 
 // The search scene.search names, with the scene's window and knobs.
 std::unique_ptr<JammingSearcher> make_jamming_searcher(const Scene& scene);

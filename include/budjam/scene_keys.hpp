@@ -73,6 +73,14 @@ const SceneKey* find_scene_key(std::string_view key);
 // The value of one key ("growth.P0") in a scene; InputError "<key>: unknown key".
 SceneValue scene_value(const Scene& scene, std::string_view key);
 
+// One value of an enumerated option (a choice key, an export format) and what it means.
+struct Choice {
+  std::string_view name;
+  std::string_view meaning;
+};
+// `"a" (meaning of a), "b" (...) or "c" (...)`: the values in order, for one-line help texts.
+std::string describe_choices(const std::vector<Choice>& choices);
+
 // A value as messages show it: numbers as the shortest text that reads back the same ("0.002"),
 // strings in quotes, lists in brackets.
 std::string value_text(const SceneValue& value);

@@ -2,7 +2,7 @@
 
 Units throughout: lengths in mother diameters D0 = 1, forces in k*D0 (spring constant k = 1),
 stresses, pressures and 2D moduli in k, eigenvalues in k/m (m = mother mass), angles in radians,
-time in the units of the growth rates (docs/files.md lists every file's columns and units).
+time in the units of the growth rates (docs/columns.md lists every file's columns and units).
 
     import budjam
     p = budjam.read_packing("run/packings/jammed.pack")

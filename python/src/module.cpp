@@ -458,8 +458,8 @@ its Greenwood variance, and at_risk / events / censored at each a; records and c
       "export",
       [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
          const std::string& network) {
-        if (format != "xyz" && format != "gsd" && format != "vtk")
-          throw py::value_error("format: must be 'xyz', 'gsd' or 'vtk' (got '" + format + "')");
+        if (!io::find_export_format(format))
+          throw py::value_error("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",

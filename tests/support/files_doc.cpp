@@ -18,14 +18,14 @@ std::vector<std::string> csv_header(const std::filesystem::path& file) {
 }
 
 std::vector<std::string> documented_columns(const std::string& key) {
-  std::istringstream doc(slurp(source_file("docs/files.md")));
+  std::istringstream doc(slurp(source_file("docs/columns.md")));
   std::string line;
   bool in_section = false;
   std::vector<std::string> names;
   while (std::getline(doc, line)) {
     if (line.rfind("#", 0) == 0) {
       if (in_section) break;
-      in_section = line.rfind("#### ", 0) == 0 && line.find(key) != std::string::npos;
+      in_section = line.rfind("## ", 0) == 0 && line.find(key) != std::string::npos;
     } else if (in_section && line.rfind("| `", 0) == 0) {
       names.push_back(line.substr(3, line.find('`', 3) - 3));
     }

@@ -25,17 +25,6 @@ struct Options {
   std::string network = "load-bearing";
 };
 
-// "xyz (extended XYZ: OVITO, ASE), gsd (...) or vtk (...)"
-std::string format_help() {
-  const auto& formats = io::export_formats();
-  std::string help;
-  for (std::size_t k = 0; k < formats.size(); ++k) {
-    if (k > 0) help += k + 1 == formats.size() ? " or " : ", ";
-    help += std::string(formats[k].name) + " (" + std::string(formats[k].description) + ")";
-  }
-  return help;
-}
-
 std::vector<std::string> format_names() {
   std::vector<std::string> names;
   for (const io::ExportFormat& f : io::export_formats()) names.emplace_back(f.name);
@@ -58,7 +47,9 @@ const bool registered = budjam::cli::register_command(
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
        sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
-       sub.add_option("--format", o->format, format_help())->required()->check(CLI::IsMember(format_names()));
+       sub.add_option("--format", o->format, io::export_formats_text())
+           ->required()
+           ->check(CLI::IsMember(format_names()));
        sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
            ->type_name("BASE");
        sub.add_option("--network", o->network,

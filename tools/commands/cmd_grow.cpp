@@ -178,6 +178,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_flag("--overwrite", o->overwrite,
                     "replace the budjam run already in --out (only the files budjam wrote are removed)");
        sub.add_flag("--quiet", o->quiet, "no progress on stderr");
+       sub.footer(budjam::tools::observers_help());
        sub.callback([o] { run(*o); });
      }});
 

@@ -1,13 +1,15 @@
 // `budjam validate FILE`: checks a scene (or a packing file) and prints what budjam would use.
 // For a scene: the effective scene, every key, as TOML (or JSON), after any --set overrides.
 // For a packing: its header, metadata and packing fraction. --keys-markdown prints the table of
-// scene keys (the one in docs/files.md) instead.
+// scene keys (the one in docs/files.md) instead, --observers-markdown the table of observers (the
+// one in docs/growth.md).
 #include "commands/command.hpp"
 
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 #include "io/scene_file.hpp"
+#include "observers/observers.hpp"
 
 #include <iostream>
 #include <memory>
@@ -20,6 +22,7 @@ struct Options {
   bool json = false;
   bool comments = false;
   bool keys_markdown = false;
+  bool observers_markdown = false;
 };
 
 void show_packing(const Options& o, const std::string& text) {
@@ -54,6 +57,10 @@ void run(const Options& o) {
     std::cout << budjam::io::scene_keys_markdown();
     return;
   }
+  if (o.observers_markdown) {
+    std::cout << budjam::tools::observers_markdown();
+    return;
+  }
   if (o.file.empty()) throw budjam::InputError("FILE: a scene or packing file is required");
   const std::string text = budjam::io::read_text_file(o.file);
   if (budjam::io::looks_like_packing(text)) return show_packing(o, text);
@@ -74,6 +81,10 @@ const bool registered = budjam::cli::register_command(
        sub.add_flag("--comments", o->comments, "explain every key in the printed TOML");
        sub.add_flag("--keys-markdown", o->keys_markdown,
                     "print every scene key (type, default, range, meaning) as a Markdown table")
+           ->excludes(file);
+       sub.add_flag("--observers-markdown", o->observers_markdown,
+                    "print every observer of a growth run (the keys that switch it on, the files it writes) as a "
+                    "Markdown table")
            ->excludes(file);
        sub.callback([o] { run(*o); });
      }});

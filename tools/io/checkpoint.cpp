@@ -234,271 +234,329 @@ void write_checkpoint(const Directory& dir, std::string_view name, const Scene& 
   write_atomically(dir, name, format_checkpoint(scene, state, observers));
 }
 
-GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
-                             const std::vector<Observer*>& observers, CheckpointLines* lines) {
-  CheckpointLines where;
-  Lines in(text, file);
-  {
-    const auto w = in.next(kMagic, 1);
-    const std::int64_t version = in.integer(w[0], "version", 0, kLongMax);
-    if (version == 1)
-      in.fail(
-          "checkpoint version 1 was written before jamming candidates were checked for saddles "
-          "(jamming.check_minimum); start the run again");
-    if (version == 2 || version == 3)
-      in.fail("checkpoint version " + std::to_string(version) +
-              " was written before the secant jamming search (jamming.search); start the run again");
-    if (version == 4)
-      in.fail(
-          "checkpoint version 4 was written before every record (jamming point, targets, phi_2) held the whole "
-          "contact-network summary; start the run again");
-    if (version == 5)
-      in.fail(
-          "checkpoint version 5 was written before growth steps were stored with their log scale (the adaptive "
-          "step out of the double range); start the run again");
-    if (version == 6)
-      in.fail(
-          "checkpoint version 6 was written before the run counted its cost by stage (search trials, marginal "
-          "relaxations, Newton factorisations); start the run again");
-    if (version != kCheckpointVersion)
-      in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
-              std::to_string(kCheckpointVersion) + "); start the run again");
-  }
-  // The checksum first: an edited or damaged file is refused before any of it is interpreted.
+// ---- parse_checkpoint: the framing, then one reader per line kind ---------------------------------
+
+namespace {
+
+// What the parse has read so far; each line kind's reader checks its line against it and fills
+// its part of the state.
+struct Parse {
+  Lines& in;
+  const Scene& scene;
+  std::uint64_t seed;
+  GrowthState s;
+  CheckpointLines where;  // where.buds: the tagged buds, checked against the packing
+
+  // Cell counts are bounded by the cells that ever existed (checked against next_id by the packing).
+  std::size_t cells_cap() const { return static_cast<std::size_t>(s.result.divisions) + 2 + scene.n_seeds; }
+};
+
+using Words = std::vector<std::string_view>;
+
+// Versions this budjam refuses, with what they were written before.
+constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
+    {1, "jamming candidates were checked for saddles (jamming.check_minimum)"},
+    {2, "the secant jamming search (jamming.search)"},
+    {3, "the secant jamming search (jamming.search)"},
+    {4, "every record (jamming point, targets, phi_2) held the whole contact-network summary"},
+    {5, "growth steps were stored with their log scale (the adaptive step out of the double range)"},
+    {6, "the run counted its cost by stage (search trials, marginal relaxations, Newton factorisations)"},
+};
+
+void read_version(Lines& in) {
+  const std::int64_t version = in.integer(in.next(kMagic, 1)[0], "version", 0, kLongMax);
+  for (const auto& [retired, before] : kRetiredVersions)
+    if (version == retired)
+      in.fail("checkpoint version " + std::to_string(version) + " was written before " + std::string(before) +
+              "; start the run again");
+  if (version != kCheckpointVersion)
+    in.fail("checkpoint version " + std::to_string(version) + " is not supported (this budjam writes " +
+            std::to_string(kCheckpointVersion) + "); start the run again");
+}
+
+// The checksum first: an edited or damaged file is refused before any of it is interpreted.
+void verify_checksum(const Lines& in, std::string_view text) {
   const std::size_t last = in.count();
   const std::string_view tail = in.raw(last);
   if (tail.substr(0, kChecksum.size()) != kChecksum) in.fail_at(last, "truncated: the last line is not the checksum");
   const std::string_view body = text.substr(0, text.size() - tail.size() - 1);
   if (tail.substr(kChecksum.size()) != hex64(fnv1a64(body)))
     in.fail_at(last, "checksum mismatch: the checkpoint was changed or damaged after it was written");
-  if (in.next("scene", 1)[0] != hex64(scene_hash(scene)))
-    in.fail(
+}
+
+void read_scene(Parse& p, const Words& w) {
+  if (w[0] != hex64(scene_hash(p.scene)))
+    p.in.fail(
         "the run's scene.toml has changed since this checkpoint was written (its effective scene differs); "
         "a run cannot continue under other parameters");
+}
 
-  GrowthState s;
-  const auto seed_w = in.next("seed", 1);
-  const auto parsed_seed = parse_int64(seed_w[0]);
-  if (seed_w[0] != std::to_string(seed) || !parsed_seed)
-    in.fail("seed " + std::string(seed_w[0]) + " does not match the run's seed " + std::to_string(seed));
-  s.seed = seed;
-  {
-    const auto w = in.next("rng", -1);
-    std::string words;
-    for (const auto& x : w) words.append(x).push_back(' ');
-    std::istringstream rs(words);
-    rs >> s.rng;
-    std::string rest;
-    if (!rs || (rs >> rest)) in.fail("rng: not the state of a mt19937_64 random stream");
-  }
+void read_seed(Parse& p, const Words& w) {
+  if (w[0] != std::to_string(p.seed) || !parse_int64(w[0]))
+    p.in.fail("seed " + std::string(w[0]) + " does not match the run's seed " + std::to_string(p.seed));
+  p.s.seed = p.seed;
+}
 
-  const std::int64_t max_steps = scene.max_steps;
-  {
-    const auto w = in.next("state", 9);
-    where.state = in.line();
-    if (w[0] == "jammed")
-      s.phase = Phase::jammed;
-    else if (w[0] == "unjammed")
-      s.phase = Phase::unjammed;
-    else
-      in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
-    // Steps are stored scaled (StepStart): the next one's scale follows from the state, so a dt
-    // below growth.dt_min is left to the driver's next attempt (status dt_underflow).
-    s.dt = in.positive(w[1], "dt");
-    s.last_dt = in.positive(w[2], "last dt");
-    s.last_log_scale = in.real(w[3], "last dt log scale");
-    if (!(s.last_log_scale >= 0)) in.fail("last dt log scale: must be >= 0");
-    s.attempts = in.integer(w[5], "attempts", 1, max_steps);
-    s.step = in.integer(w[4], "step", 1, s.attempts);
-    s.next_target = in.count_of(w[6], "next target", scene.targets.size());
-    s.divisions_since_jamming = in.integer(w[7], "divisions since jamming", 0, kLongMax);
-    s.episodes = static_cast<int>(in.integer(w[8], "episodes", 0, s.step));
-  }
-  RunResult& r = s.result;
-  {
-    const auto w = in.next("counters", 6);
-    where.counters = in.line();
-    r.accepted = in.integer(w[0], "accepted", s.step, s.step);
-    r.rejected = in.integer(w[1], "rejected", s.attempts - s.step, s.attempts - s.step);
-    r.force_evaluations = in.integer(w[2], "force evaluations", s.attempts, kLongMax);
-    r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
-    r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(scene)));
-    r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
-  }
-  {
-    const auto w = in.next("cost", 7);
-    r.search_trials = in.integer(w[0], "search trials", 0, kLongMax);
-    r.marginal_relaxations = in.integer(w[1], "marginal relaxations", 0, kLongMax);
-    r.newton_factorisations = in.integer(w[2], "Newton factorisations", 0, kLongMax);
-    r.newton_factor_reuses = in.integer(w[3], "Newton factor reuses", 0, kLongMax);
-    r.force_evaluations_initial = in.integer(w[4], "initial force evaluations", 1, r.force_evaluations);
-    r.force_evaluations_search = in.integer(w[5], "search force evaluations", 0, r.force_evaluations);
-    r.force_evaluations_above_jamming = in.integer(w[6], "above-jamming force evaluations", 0, r.force_evaluations);
-    if (r.force_evaluations_initial + r.force_evaluations_search + r.force_evaluations_above_jamming !=
-        r.force_evaluations)
-      in.fail("cost: the force evaluations by stage do not add up to the force evaluations");
-  }
-  {
-    const auto w = in.next("search", -1);
-    if (w.size() < 3) in.fail("search: expected slow trials, bracket width and the number of overshoots");
-    JammingSearchState& q = s.search;
-    q.slow_trials = static_cast<int>(in.integer(w[0], "slow trials", 0, 2));
-    q.bracket_width = in.real(w[1], "bracket width");
-    if (!(q.bracket_width >= 0)) in.fail("bracket width: must be >= 0");
-    const std::size_t n = in.count_of(w[2], "overshoots", static_cast<std::size_t>(s.attempts));
-    if (w.size() != 3 + 3 * n)
-      in.fail("search: expected " + std::to_string(3 + 3 * n) + " values, found " + std::to_string(w.size()));
-    for (std::size_t k = 0; k < n; ++k) {
-      JammingOvershoot o;
-      o.phi = in.positive(w[3 + 3 * k], "overshoot phi");
-      o.s = in.positive(w[4 + 3 * k], "overshoot sqrt(E/N)");
-      o.slope = in.real(w[5 + 3 * k], "overshoot slope");
-      if (k > 0 && o.phi < q.overshoots.back().phi) in.fail("overshoots: not sorted by phi");
-      q.overshoots.push_back(o);
-    }
-  }
-  // Cell counts are bounded by the cells that ever existed (checked against next_id below).
-  const std::size_t cells_cap = static_cast<std::size_t>(r.divisions) + 2 + scene.n_seeds;
-  {
-    auto w = in.next("jamming", -1);
-    where.jamming = in.line();
-    if (w.empty()) in.fail("jamming: expected 0 or 1");
-    const bool has = in.flag(w[0], "jamming");
-    if (has != (s.phase == Phase::jammed)) in.fail("jamming: a record is present if and only if the phase is jammed");
-    if (has) {
-      if (w.size() != 8 + kNetworkWords)
-        in.fail("jamming: expected " + std::to_string(8 + kNetworkWords) + " values, found " +
-                std::to_string(w.size()));
-      JammingRecord j;
-      j.episode = static_cast<int>(in.integer(w[1], "jamming episode", s.episodes - 1, s.episodes - 1));
-      j.step = in.integer(w[2], "jamming step", 1, s.step);
-      j.phi = in.positive(w[3], "phi_J"), j.P = in.real(w[4], "P_J"), j.E_per_cell = in.real(w[5], "E_J");
-      j.network = read_network(in, w, 6, cells_cap);
-      j.n_J = in.real(w[6 + kNetworkWords], "n_J");
-      j.tagged = in.count_of(w[7 + kNetworkWords], "tagged", j.network.N);
-      r.jamming = j;
-    } else if (w.size() != 1) {
-      in.fail("jamming: expected no values after 0");
-    }
-  }
-  {
-    const std::size_t n = in.count_of(in.next("targets", 1)[0], "targets", s.next_target);
-    if (n != s.next_target)
-      in.fail("targets: " + std::to_string(n) + " landed, but the next target is " + std::to_string(s.next_target));
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto w = in.next("", 9 + kNetworkWords);
-      where.targets.push_back(in.line());
-      TargetRecord t;
-      t.index = in.count_of(w[0], "target index", k);
-      if (t.index != k) in.fail("target index: expected " + std::to_string(k));
-      t.dphi = in.real(w[1], "dphi");
-      if (t.dphi != scene.targets[k]) in.fail("dphi: not jamming.targets[" + std::to_string(k) + "] of the scene");
-      t.phi_target = in.positive(w[2], "phi_target");
-      t.step = in.integer(w[3], "target step", 1, s.step);
-      t.phi = in.positive(w[4], "phi"), t.P = in.real(w[5], "P"), t.E_per_cell = in.real(w[6], "E_per_cell");
-      t.network = read_network(in, w, 7, cells_cap);
-      t.chi_c = in.real(w[7 + kNetworkWords], "chi_c");
-      t.divisions_since_jamming =
-          in.integer(w[8 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
-      r.targets.push_back(t);
-    }
-  }
-  {
-    const auto w = in.next("depletion", -1);
-    where.depletion = in.line();
-    if (w.empty()) in.fail("depletion: expected 0 or 1");
-    if (in.flag(w[0], "depletion")) {
-      if (s.phase != Phase::jammed) in.fail("depletion: recorded while unjammed");
-      if (w.size() != 6 + kNetworkWords)
-        in.fail("depletion: expected " + std::to_string(6 + kNetworkWords) + " values, found " +
-                std::to_string(w.size()));
-      DepletionRecord d;
-      d.step = in.integer(w[1], "phi_2 step", 1, s.step);
-      d.phi = in.positive(w[2], "phi_2"), d.P = in.real(w[3], "P_2");
-      d.network = read_network(in, w, 4, cells_cap);
-      d.still_unconstrained = in.count_of(w[4 + kNetworkWords], "still unconstrained", scene.phi2_tagged_left);
-      d.divisions_since_jamming =
-          in.integer(w[5 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
-      r.depletion = d;
-    } else if (w.size() != 1) {
-      in.fail("depletion: expected no values after 0");
-    }
-  }
-  {
-    const std::size_t ended = static_cast<std::size_t>(s.episodes - (s.phase == Phase::jammed ? 1 : 0));
-    const std::size_t n = in.count_of(in.next("unjammings", 1)[0], "unjammings", ended);
-    if (n != ended)
-      in.fail("unjammings: " + std::to_string(n) + " recorded, but " + std::to_string(ended) +
-              " jamming episodes have ended");
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto w = in.next("", 5);
-      UnjamRecord u;
-      u.episode =
-          static_cast<int>(in.integer(w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
-      u.step = in.integer(w[1], "unjamming step", 1, s.step);
-      u.phi = in.positive(w[2], "phi"), u.phi_J = in.positive(w[3], "phi_J");
-      u.targets_lost = in.count_of(w[4], "targets lost", scene.targets.size());
-      r.unjammings.push_back(u);
-    }
-  }
-  std::string buds_text;
-  std::vector<CheckpointLines::Tag> tags;  // checked against the packing below
-  {
-    const std::size_t buds_line = in.line() + 1;
-    const auto w = in.next("buds", 2);
-    const std::int64_t episode = in.integer(w[0], "buds episode", 0, s.episodes);
-    const std::size_t n = in.count_of(w[1], "tagged buds", cells_cap);
-    buds_text = "buds " + std::to_string(episode) + ' ' + std::to_string(n) + '\n';
-    std::int64_t previous = -1;
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto t = in.next("", 4);
-      const std::int64_t id = in.integer(t[0], "bud id", previous + 1, std::numeric_limits<std::int64_t>::max());
-      const double b2_J = in.real(t[1], "b_J squared");
-      in.flag(t[2], "touched");
-      in.integer(t[3], "bud state", 0, 3);
-      previous = id;
-      tags.push_back({id, b2_J, in.line()});
-      for (const auto& x : t) buds_text.append(x).push_back(' ');
-      buds_text.back() = '\n';
-    }
-    std::istringstream bs(buds_text);
-    try {
-      s.buds.load(bs);
-    } catch (const std::exception& e) {
-      in.fail_at(buds_line, std::string("buds: ") + e.what());
-    }
-  }
-  {
-    const auto w = in.next("packing", 4);
-    const std::size_t n = in.count_of(w[0], "cells", cells_cap);
-    if (n == 0) in.fail("packing: no cells");
-    Packing& p = s.packing;
-    p.box.L = in.positive(w[1], "L");
-    if (p.box.L != scene.L) in.fail("L: does not match the scene's box.L");
-    p.box.shear = in.real(w[2], "shear");
-    if (p.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
-    const std::int64_t next_id =
-        in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
-    std::unordered_set<std::int64_t> ids;
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto c = in.next("", 7);
-      const double x = in.real(c[0], "x"), y = in.real(c[1], "y"), th = in.real(c[2], "theta");
-      const double b = in.real(c[3], "b"), g0 = in.real(c[4], "gamma0");
-      const std::int64_t id = in.integer(c[5], "id", 0, next_id - 1);
-      const std::int64_t parent = in.integer(c[6], "parent", -1, next_id - 1);
-      if (!ids.insert(id).second) in.fail("id " + std::to_string(id) + ": duplicate");
-      if (parent == id) in.fail("parent: a cell is not its own mother");
-      p.add_cell(x, y, th, b, g0, parent);
-      p.id.back() = id;
-      if (const auto problem = cell_problem(p, i, max_bud_diameter(scene.alpha0))) in.fail(*problem);
-    }
-    p.next_id = next_id;
-    if (const auto problem = box_problem(p, scene.skin)) in.fail(*problem);
-    for (const auto& t : tags)
-      if (!ids.count(t.id)) in.fail_at(t.line, "bud id " + std::to_string(t.id) + ": no cell of the packing has it");
-  }
+void read_rng(Parse& p, const Words& w) {
+  std::string words;
+  for (const auto& x : w) words.append(x).push_back(' ');
+  std::istringstream rs(words);
+  rs >> p.s.rng;
+  std::string rest;
+  if (!rs || (rs >> rest)) p.in.fail("rng: not the state of a mt19937_64 random stream");
+}
 
-  // Observer sections; their load_state runs only once everything above has passed.
+void read_state(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  GrowthState& s = p.s;
+  p.where.state = in.line();
+  if (w[0] == "jammed")
+    s.phase = Phase::jammed;
+  else if (w[0] == "unjammed")
+    s.phase = Phase::unjammed;
+  else
+    in.fail("phase: expected jammed or unjammed, found '" + std::string(w[0]) + "'");
+  // Steps are stored scaled (StepStart): the next one's scale follows from the state, so a dt
+  // below growth.dt_min is left to the driver's next attempt (status dt_underflow).
+  s.dt = in.positive(w[1], "dt");
+  s.last_dt = in.positive(w[2], "last dt");
+  s.last_log_scale = in.real(w[3], "last dt log scale");
+  if (!(s.last_log_scale >= 0)) in.fail("last dt log scale: must be >= 0");
+  s.attempts = in.integer(w[5], "attempts", 1, p.scene.max_steps);
+  s.step = in.integer(w[4], "step", 1, s.attempts);
+  s.next_target = in.count_of(w[6], "next target", p.scene.targets.size());
+  s.divisions_since_jamming = in.integer(w[7], "divisions since jamming", 0, kLongMax);
+  s.episodes = static_cast<int>(in.integer(w[8], "episodes", 0, s.step));
+}
+
+void read_counters(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const GrowthState& s = p.s;
+  RunResult& r = p.s.result;
+  p.where.counters = in.line();
+  r.accepted = in.integer(w[0], "accepted", s.step, s.step);
+  r.rejected = in.integer(w[1], "rejected", s.attempts - s.step, s.attempts - s.step);
+  r.force_evaluations = in.integer(w[2], "force evaluations", s.attempts, kLongMax);
+  r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
+  r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(p.scene)));
+  r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
+}
+
+void read_cost(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  RunResult& r = p.s.result;
+  r.search_trials = in.integer(w[0], "search trials", 0, kLongMax);
+  r.marginal_relaxations = in.integer(w[1], "marginal relaxations", 0, kLongMax);
+  r.newton_factorisations = in.integer(w[2], "Newton factorisations", 0, kLongMax);
+  r.newton_factor_reuses = in.integer(w[3], "Newton factor reuses", 0, kLongMax);
+  r.force_evaluations_initial = in.integer(w[4], "initial force evaluations", 1, r.force_evaluations);
+  r.force_evaluations_search = in.integer(w[5], "search force evaluations", 0, r.force_evaluations);
+  r.force_evaluations_above_jamming = in.integer(w[6], "above-jamming force evaluations", 0, r.force_evaluations);
+  if (r.force_evaluations_initial + r.force_evaluations_search + r.force_evaluations_above_jamming !=
+      r.force_evaluations)
+    in.fail("cost: the force evaluations by stage do not add up to the force evaluations");
+}
+
+void read_search(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  if (w.size() < 3) in.fail("search: expected slow trials, bracket width and the number of overshoots");
+  JammingSearchState& q = p.s.search;
+  q.slow_trials = static_cast<int>(in.integer(w[0], "slow trials", 0, 2));
+  q.bracket_width = in.real(w[1], "bracket width");
+  if (!(q.bracket_width >= 0)) in.fail("bracket width: must be >= 0");
+  const std::size_t n = in.count_of(w[2], "overshoots", static_cast<std::size_t>(p.s.attempts));
+  if (w.size() != 3 + 3 * n)
+    in.fail("search: expected " + std::to_string(3 + 3 * n) + " values, found " + std::to_string(w.size()));
+  for (std::size_t k = 0; k < n; ++k) {
+    JammingOvershoot o;
+    o.phi = in.positive(w[3 + 3 * k], "overshoot phi");
+    o.s = in.positive(w[4 + 3 * k], "overshoot sqrt(E/N)");
+    o.slope = in.real(w[5 + 3 * k], "overshoot slope");
+    if (k > 0 && o.phi < q.overshoots.back().phi) in.fail("overshoots: not sorted by phi");
+    q.overshoots.push_back(o);
+  }
+}
+
+// The flag (0 or 1) that opens the line of an optional record `key`.
+bool record_flag(const Lines& in, const Words& w, const std::string& key) {
+  if (w.empty()) in.fail(key + ": expected 0 or 1");
+  return in.flag(w[0], key.c_str());
+}
+
+// A present record has `size` words with its flag, an absent one the flag alone.
+void check_record_size(const Lines& in, const Words& w, const std::string& key, bool present, std::size_t size) {
+  if (present && w.size() != size)
+    in.fail(key + ": expected " + std::to_string(size) + " values, found " + std::to_string(w.size()));
+  if (!present && w.size() != 1) in.fail(key + ": expected no values after 0");
+}
+
+void read_jamming(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const GrowthState& s = p.s;
+  p.where.jamming = in.line();
+  const bool has = record_flag(in, w, "jamming");
+  if (has != (s.phase == Phase::jammed)) in.fail("jamming: a record is present if and only if the phase is jammed");
+  check_record_size(in, w, "jamming", has, 8 + kNetworkWords);
+  if (!has) return;
+  JammingRecord j;
+  j.episode = static_cast<int>(in.integer(w[1], "jamming episode", s.episodes - 1, s.episodes - 1));
+  j.step = in.integer(w[2], "jamming step", 1, s.step);
+  j.phi = in.positive(w[3], "phi_J"), j.P = in.real(w[4], "P_J"), j.E_per_cell = in.real(w[5], "E_J");
+  j.network = read_network(in, w, 6, p.cells_cap());
+  j.n_J = in.real(w[6 + kNetworkWords], "n_J");
+  j.tagged = in.count_of(w[7 + kNetworkWords], "tagged", j.network.N);
+  p.s.result.jamming = j;
+}
+
+void read_targets(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const GrowthState& s = p.s;
+  const std::size_t n = in.count_of(w[0], "targets", s.next_target);
+  if (n != s.next_target)
+    in.fail("targets: " + std::to_string(n) + " landed, but the next target is " + std::to_string(s.next_target));
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto t_w = in.next("", 9 + kNetworkWords);
+    p.where.targets.push_back(in.line());
+    TargetRecord t;
+    t.index = in.count_of(t_w[0], "target index", k);
+    if (t.index != k) in.fail("target index: expected " + std::to_string(k));
+    t.dphi = in.real(t_w[1], "dphi");
+    if (t.dphi != p.scene.targets[k]) in.fail("dphi: not jamming.targets[" + std::to_string(k) + "] of the scene");
+    t.phi_target = in.positive(t_w[2], "phi_target");
+    t.step = in.integer(t_w[3], "target step", 1, s.step);
+    t.phi = in.positive(t_w[4], "phi"), t.P = in.real(t_w[5], "P"), t.E_per_cell = in.real(t_w[6], "E_per_cell");
+    t.network = read_network(in, t_w, 7, p.cells_cap());
+    t.chi_c = in.real(t_w[7 + kNetworkWords], "chi_c");
+    t.divisions_since_jamming =
+        in.integer(t_w[8 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
+    p.s.result.targets.push_back(t);
+  }
+}
+
+void read_depletion(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const GrowthState& s = p.s;
+  p.where.depletion = in.line();
+  const bool has = record_flag(in, w, "depletion");
+  if (has && s.phase != Phase::jammed) in.fail("depletion: recorded while unjammed");
+  check_record_size(in, w, "depletion", has, 6 + kNetworkWords);
+  if (!has) return;
+  DepletionRecord d;
+  d.step = in.integer(w[1], "phi_2 step", 1, s.step);
+  d.phi = in.positive(w[2], "phi_2"), d.P = in.real(w[3], "P_2");
+  d.network = read_network(in, w, 4, p.cells_cap());
+  d.still_unconstrained = in.count_of(w[4 + kNetworkWords], "still unconstrained", p.scene.phi2_tagged_left);
+  d.divisions_since_jamming = in.integer(w[5 + kNetworkWords], "divisions since jamming", 0, s.divisions_since_jamming);
+  p.s.result.depletion = d;
+}
+
+void read_unjammings(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const GrowthState& s = p.s;
+  const std::size_t ended = static_cast<std::size_t>(s.episodes - (s.phase == Phase::jammed ? 1 : 0));
+  const std::size_t n = in.count_of(w[0], "unjammings", ended);
+  if (n != ended)
+    in.fail("unjammings: " + std::to_string(n) + " recorded, but " + std::to_string(ended) +
+            " jamming episodes have ended");
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto u_w = in.next("", 5);
+    UnjamRecord u;
+    u.episode =
+        static_cast<int>(in.integer(u_w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
+    u.step = in.integer(u_w[1], "unjamming step", 1, s.step);
+    u.phi = in.positive(u_w[2], "phi"), u.phi_J = in.positive(u_w[3], "phi_J");
+    u.targets_lost = in.count_of(u_w[4], "targets lost", p.scene.targets.size());
+    p.s.result.unjammings.push_back(u);
+  }
+}
+
+// The tagged buds go through BudTags::load (as text) and are checked against the packing later.
+void read_buds(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const std::size_t buds_line = in.line();
+  const std::int64_t episode = in.integer(w[0], "buds episode", 0, p.s.episodes);
+  const std::size_t n = in.count_of(w[1], "tagged buds", p.cells_cap());
+  std::string buds_text = "buds " + std::to_string(episode) + ' ' + std::to_string(n) + '\n';
+  std::int64_t previous = -1;
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto t = in.next("", 4);
+    const std::int64_t id = in.integer(t[0], "bud id", previous + 1, std::numeric_limits<std::int64_t>::max());
+    const double b2_J = in.real(t[1], "b_J squared");
+    in.flag(t[2], "touched");
+    in.integer(t[3], "bud state", 0, 3);
+    previous = id;
+    p.where.buds.push_back({id, b2_J, in.line()});
+    for (const auto& x : t) buds_text.append(x).push_back(' ');
+    buds_text.back() = '\n';
+  }
+  std::istringstream bs(buds_text);
+  try {
+    p.s.buds.load(bs);
+  } catch (const std::exception& e) {
+    in.fail_at(buds_line, std::string("buds: ") + e.what());
+  }
+}
+
+void read_packing(Parse& p, const Words& w) {
+  Lines& in = p.in;
+  const Scene& scene = p.scene;
+  const std::size_t cells_cap = p.cells_cap();
+  const std::size_t n = in.count_of(w[0], "cells", cells_cap);
+  if (n == 0) in.fail("packing: no cells");
+  Packing& pk = p.s.packing;
+  pk.box.L = in.positive(w[1], "L");
+  if (pk.box.L != scene.L) in.fail("L: does not match the scene's box.L");
+  pk.box.shear = in.real(w[2], "shear");
+  if (pk.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
+  const std::int64_t next_id =
+      in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
+  std::unordered_set<std::int64_t> ids;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = in.next("", 7);
+    const double x = in.real(c[0], "x"), y = in.real(c[1], "y"), th = in.real(c[2], "theta");
+    const double b = in.real(c[3], "b"), g0 = in.real(c[4], "gamma0");
+    const std::int64_t id = in.integer(c[5], "id", 0, next_id - 1);
+    const std::int64_t parent = in.integer(c[6], "parent", -1, next_id - 1);
+    if (!ids.insert(id).second) in.fail("id " + std::to_string(id) + ": duplicate");
+    if (parent == id) in.fail("parent: a cell is not its own mother");
+    pk.add_cell(x, y, th, b, g0, parent);
+    pk.id.back() = id;
+    if (const auto problem = cell_problem(pk, i, max_bud_diameter(scene.alpha0))) in.fail(*problem);
+  }
+  pk.next_id = next_id;
+  if (const auto problem = box_problem(pk, scene.skin)) in.fail(*problem);
+  for (const auto& t : p.where.buds)
+    if (!ids.count(t.id)) in.fail_at(t.line, "bud id " + std::to_string(t.id) + ": no cell of the packing has it");
+}
+
+// The lines between the header and the observer sections, in the order format_checkpoint writes
+// them. A line `key w1 ... wn` is split into words, `key` checked, then `read` checks and stores
+// the words (and reads the rows that follow a count, if any).
+struct LineKind {
+  std::string_view key;
+  long words;  // after the key; -1: any number, checked by `read`
+  void (*read)(Parse&, const Words&);
+};
+
+constexpr LineKind kLineKinds[] = {
+    {"scene", 1, read_scene},
+    {"seed", 1, read_seed},
+    {"rng", -1, read_rng},
+    {"state", 9, read_state},
+    {"counters", 6, read_counters},
+    {"cost", 7, read_cost},
+    {"search", -1, read_search},
+    {"jamming", -1, read_jamming},
+    {"targets", 1, read_targets},
+    {"depletion", -1, read_depletion},
+    {"unjammings", 1, read_unjammings},
+    {"buds", 2, read_buds},
+    {"packing", 4, read_packing},
+};
+
+// The observer sections up to the line `end`, each observer named once.
+std::vector<Section> read_sections(Lines& in) {
+  const std::size_t last = in.count();
   std::vector<Section> sections;
   while (in.line() + 1 < last && in.raw(in.line() + 1).substr(0, 9) == "observer ") {
     const auto w = in.next("observer", 2);
@@ -511,7 +569,12 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
   }
   in.next("end", 0);
   if (in.line() + 1 != last) in.fail_at(in.line() + 1, "unexpected line after 'end'");
+  return sections;
+}
 
+// Hands each observer its section, once every section is known to belong to one.
+void load_observers(const Lines& in, const std::vector<Section>& sections, const std::vector<Observer*>& observers) {
+  const std::size_t last = in.count();
   std::vector<std::pair<Observer*, const Section*>> matched;
   for (Observer* o : observers) {
     const Section* found = nullptr;
@@ -536,9 +599,21 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
       in.fail_at(sec->line, "observer '" + sec->name + "': " + e.what());
     }
   }
-  where.buds = std::move(tags);
-  if (lines) *lines = std::move(where);
-  return s;
+}
+
+}  // namespace
+
+GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
+                             const std::vector<Observer*>& observers, CheckpointLines* lines) {
+  Lines in(text, file);
+  read_version(in);
+  verify_checksum(in, text);
+  Parse p{in, scene, seed, {}, {}};
+  for (const LineKind& kind : kLineKinds) kind.read(p, in.next(kind.key, kind.words));
+  // Observers' load_state runs only once everything above has passed.
+  load_observers(in, read_sections(in), observers);
+  if (lines) *lines = std::move(p.where);
+  return std::move(p.s);
 }
 
 // ---- the checkpoint against the run's logs and packings ----------------------------------------

@@ -3,6 +3,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/orientation.hpp"
+#include "budjam/scene_keys.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/run_data.hpp"
@@ -311,6 +312,12 @@ const std::vector<ExportFormat>& export_formats() {
        [](const std::filesystem::path& path, const ParticleFrame& f) { write_atomically(path, format_vtk(f)); }},
   };
   return formats;
+}
+
+std::string export_formats_text() {
+  std::vector<Choice> formats;
+  for (const ExportFormat& f : export_formats()) formats.push_back({f.name, f.description});
+  return describe_choices(formats);
 }
 
 const ExportFormat* find_export_format(std::string_view name) {

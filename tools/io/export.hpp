@@ -103,6 +103,8 @@ struct ExportFormat {
 // xyz, gsd, vtk.
 const std::vector<ExportFormat>& export_formats();
 const ExportFormat* find_export_format(std::string_view name);  // nullptr if there is none
+// `"xyz" (extended XYZ: OVITO, ASE), "gsd" (...) or "vtk" (...)`: the formats for help and messages.
+std::string export_formats_text();
 
 // The format named `format` writes `frame` to `path`; std::invalid_argument for an unknown name.
 void write_particles(const std::filesystem::path& path, const ParticleFrame& frame, const std::string& format);

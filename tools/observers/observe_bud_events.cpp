@@ -53,6 +53,7 @@ class BudEventLog : public tools::CsvLogObserver {
 };
 
 const tools::ObserverRegistration registration{"bud_events",
+                                               "observe.bud_events",
                                                {std::string(io::run_files::bud_events)},
                                                [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.bud_events) return nullptr;

@@ -80,6 +80,7 @@ class DosObserver : public tools::CsvLogObserver {
 };
 
 const tools::ObserverRegistration registration{"dos",
+                                               "observe.dos.*",
                                                {std::string(io::run_files::dos), "spectra/step_#.dos.*"},
                                                [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.dos.any()) return nullptr;

@@ -192,10 +192,14 @@ class ModuliLog : public tools::CsvLogObserver {
   std::string cached_error_;
 };
 
-const tools::ObserverRegistration registration{
-    "moduli", {std::string(io::run_files::moduli)}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.moduli.any()) return nullptr;  // not asked: never built, costs nothing
-      return std::make_unique<ModuliLog>(c.scene, c.run_dir.root(), c.resuming);
-    }};
+const tools::ObserverRegistration registration{"moduli",
+                                               "observe.moduli.*",
+                                               {std::string(io::run_files::moduli)},
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.moduli.any())
+                                                   return nullptr;  // not asked: never built, costs nothing
+                                                 return std::make_unique<ModuliLog>(c.scene, c.run_dir.root(),
+                                                                                    c.resuming);
+                                               }};
 
 }  // namespace

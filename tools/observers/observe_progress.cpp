@@ -76,7 +76,7 @@ class Progress : public Observer {
 };
 
 const tools::ObserverRegistration registration{
-    "progress", {}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+    "progress", "observe.progress", {}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
       if (c.quiet || !c.scene.progress) return nullptr;
       return std::make_unique<Progress>(c.run_dir.path());
     }};

@@ -110,6 +110,7 @@ class RigidityLog : public tools::CsvLogObserver {
 };
 
 const tools::ObserverRegistration registration{"rigidity",
+                                               "observe.rigidity_events",
                                                {std::string(io::run_files::rigidity)},
                                                [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                                  if (!c.scene.rigidity_events)

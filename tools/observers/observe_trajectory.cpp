@@ -107,6 +107,7 @@ class TrajectoryLog : public Observer {
 };
 
 const tools::ObserverRegistration reg{"trajectory",
+                                      "observe.trajectory_every",
                                       {std::string(io::run_files::trajectory)},
                                       [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
                                         if (c.scene.trajectory_every <= 0) return nullptr;

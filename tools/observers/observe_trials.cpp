@@ -1,6 +1,6 @@
 // Observer "trials" (scene [observe] trials, off by default): every relaxed growth attempt, one row
 // each in trials.csv, whatever its verdict: the search onto φ_J and the landing on the targets,
-// which steps.csv (accepted states only) does not show (columns in docs/files.md).
+// which steps.csv (accepted states only) does not show (columns in docs/columns.md).
 #include "observers/csv_log_observer.hpp"
 #include "observers/observers.hpp"
 
@@ -47,10 +47,12 @@ class TrialLog : public tools::CsvLogObserver {
   }
 };
 
-const tools::ObserverRegistration registration{
-    "trials", {std::string(io::run_files::trials)}, [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-      if (!c.scene.trials) return nullptr;
-      return std::make_unique<TrialLog>(c.run_dir.root(), c.resuming);
-    }};
+const tools::ObserverRegistration registration{"trials",
+                                               "observe.trials",
+                                               {std::string(io::run_files::trials)},
+                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+                                                 if (!c.scene.trials) return nullptr;
+                                                 return std::make_unique<TrialLog>(c.run_dir.root(), c.resuming);
+                                               }};
 
 }  // namespace
