@@ -2,6 +2,7 @@
 import json
 import os
 import pathlib
+import shutil
 import subprocess
 
 import pytest
@@ -44,6 +45,24 @@ def sheared_packing(tmp_path_factory):
     assert "\nshear 1\n" in text
     path = tmp_path_factory.mktemp("sheared") / "sheared.pack"
     path.write_text(text)
+    return path
+
+
+@pytest.fixture(scope="session")
+def run_dir(run_budjam, tmp_path_factory):
+    """A small growth run (L = 8, to the Δφ targets and φ_2) with moduli, rigidity events and trials."""
+    out = tmp_path_factory.mktemp("run") / "demo"
+    run_budjam("grow", SOURCE_DIR / "data" / "scenes" / "demo.toml", "--out", out, "--quiet",
+               "--set", "observe.moduli.at_targets=true", "--set", "observe.rigidity_events=true",
+               "--set", "observe.trials=true")
+    return out
+
+
+@pytest.fixture(scope="session")
+def relaxed(run_dir, tmp_path_factory):
+    """A relaxed packing above jamming, alone in a directory (dos writes beside it)."""
+    path = tmp_path_factory.mktemp("relaxed") / "target.pack"
+    shutil.copy(run_dir / "packings" / "target_1.pack", path)
     return path
 
 
