@@ -68,3 +68,29 @@ def relaxed(run_dir, tmp_path_factory):
 
 def rigidity_json(run_budjam, packing):
     return json.loads(run_budjam("rigidity", packing, "--json").stdout)
+
+
+def assert_gsd_frames_are_the_xyz_frames(gsd_path, xyz_path):
+    """Every frame of the GSD trajectory, as gsd reads it, is the XYZ frame ASE reads: step, N, box,
+    positions (float32, box centred on 0), kinds, diameters and the per-lobe fields."""
+    import ase.io
+    import gsd.hoomd
+    import numpy as np
+
+    xyz = ase.io.read(xyz_path, index=":", format="extxyz")
+    traj = gsd.hoomd.open(str(gsd_path), "rb")
+    assert len(traj) == len(xyz)
+    for frame, atoms in zip(traj, xyz):
+        L, xy = atoms.cell[0][0], atoms.cell[1][0] / atoms.cell[0][0]
+        assert frame.configuration.step == atoms.info["step"]
+        assert frame.particles.N == len(atoms)
+        np.testing.assert_allclose(frame.configuration.box, [L, L, 1, xy, 0, 0], rtol=1e-6)
+        centred = atoms.positions[:, :2] - [0.5 * L * (1 + xy), 0.5 * L]
+        np.testing.assert_allclose(frame.particles.position[:, :2], centred, rtol=0, atol=1e-6 * L)
+        kinds = np.array(frame.particles.types)[frame.particles.typeid]
+        np.testing.assert_array_equal(kinds, atoms.arrays["type"])
+        np.testing.assert_allclose(frame.particles.diameter, 2 * atoms.arrays["radius"], rtol=1e-6)
+        for name in ("cell_id", "id", "rigid_cluster", "rattler"):
+            np.testing.assert_array_equal(frame.log[f"particles/{name}"], atoms.arrays[name], err_msg=name)
+    return len(traj)
+
