@@ -247,18 +247,22 @@ py::dict frame_dict(const io::ParticleFrame& f) {
 }
 
 // The events of a growth run as Python dicts, in the order the driver emits them. Each carries the
-// state it happened in (step, phi, P, N, phase) and a copy of the packing.
+// state it happened in (step, phi, P, N, phase) and a copy of the packing. Fields that summary.json
+// also records have its names: the jamming's *_J keys, those of its targets, unjammings and φ_2.
 class EventQueue : public Observer {
  public:
   std::string name() const override { return "python"; }
   void on_jammed(const Jammed& e) override {
     const JammingRecord& j = e.jamming;
     push("jammed", e.state,
-         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.network.Z, "Z_iso"_a = j.network.Z_iso,
-                  "dZ"_a = j.network.dZ, "N_nr"_a = j.network.N_nr, "u_J"_a = j.network.u_buds, "tagged"_a = j.tagged));
+         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z_J"_a = j.network.Z, "Z_iso_J"_a = j.network.Z_iso,
+                  "dZ_J"_a = j.network.dZ, "N_nr_J"_a = j.network.N_nr, "u_J"_a = j.network.u_buds,
+                  "tagged_J"_a = j.tagged));
   }
   void on_unjammed(const Unjammed& e) override {
-    push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
+    const UnjamRecord& u = e.record;
+    push("unjammed", e.state,
+         py::dict("episode"_a = u.episode, "phi_J"_a = u.phi_J, "targets_lost"_a = u.targets_lost));
   }
   void on_target_reached(const TargetReached& e) override {
     const TargetRecord& t = e.target;
@@ -268,7 +272,7 @@ class EventQueue : public Observer {
   }
   void on_depleted(const Depleted& e) override {
     const DepletionRecord& d = e.depletion;
-    push("phi2", e.state, py::dict("phi_2"_a = d.phi, "Z"_a = d.network.Z, "dZ"_a = d.network.dZ));
+    push("phi2", e.state, py::dict("phi_2"_a = d.phi, "Z_2"_a = d.network.Z, "dZ_2"_a = d.network.dZ));
   }
   void on_divided(const Divided& e) override {
     const Division& d = e.division;
@@ -540,7 +544,11 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
 Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
 'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the status of an
 expected early stop such as 'step_limit'), the state it happened in (step = accepted steps, phi,
-P in k, N, phase) with a copy of the packing, and the fields of that event.)")
+P in k, N, phase) with a copy of the packing, and the fields of that event under the names
+summary.json gives them: jammed: episode, phi_J, Z_J, Z_iso_J, dZ_J, N_nr_J, u_J, tagged_J;
+unjammed: episode, phi_J (the one lost), targets_lost; target: index, dphi, Z, dZ, N_nr, chi_c
+(as an entry of its targets); phi2: phi_2, Z_2, dZ_2; division: mother_id, daughter_id, b (as
+divisions.csv); bud_*: cell_id, episode, a (as bud_events.csv).)")
       .def(py::init<const std::filesystem::path&, std::optional<std::uint64_t>, const std::vector<std::string>&>(),
            "scene"_a, "seed"_a = py::none(), "set"_a = std::vector<std::string>{})
       .def("__iter__", [](Growth& g) -> Growth& { return g; })

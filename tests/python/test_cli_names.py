@@ -9,6 +9,7 @@ import pandas
 import pytest
 
 import budjam
+from conftest import SOURCE_DIR
 
 # Keys of the Python results that the command line has no counterpart for (arrays it does not write).
 PYTHON_ONLY = {
@@ -75,3 +76,25 @@ def test_a_runs_summary_and_tables_are_named_as_its_files(run_dir):
         assert list(frame.columns) == list(table.columns), name
         for column in table.columns:
             np.testing.assert_array_equal(frame[column].to_numpy(), table[column].to_numpy(), err_msg=f"{name}: {column}")
+
+
+def test_growth_events_are_named_as_the_runs_summary(run_dir):
+    """The events of budjam.grow carry what summary.json records under its names, with its values."""
+    summary = json.loads((run_dir / "summary.json").read_text())
+    events = list(budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml"))
+    jammed = [e for e in events if e["kind"] == "jammed"][-1]
+    for key in ("phi_J", "Z_J", "Z_iso_J", "dZ_J", "N_nr_J", "u_J", "tagged_J"):
+        assert jammed[key] == summary[key], key
+    assert jammed["episode"] == summary["jamming_episode"]
+    unjammed = [e for e in events if e["kind"] == "unjammed"]
+    assert [{k: e[k] for k in ("episode", "phi_J", "targets_lost")} for e in unjammed] == \
+        [{k: u[k] for k in ("episode", "phi_J", "targets_lost")} for u in summary["unjammings"]]
+    lost = sum(u["targets_lost"] for u in summary["unjammings"])
+    targets = [e for e in events if e["kind"] == "target"][lost:]
+    assert len(targets) == len(summary["targets"]) > 0
+    for event, target in zip(targets, summary["targets"]):
+        for key in ("index", "dphi", "Z", "dZ", "N_nr", "chi_c"):
+            assert event[key] == target[key], key
+    if summary["phi_2"] is not None:
+        last = [e for e in events if e["kind"] == "phi2"][-1]
+        assert (last["phi_2"], last["Z_2"], last["dZ_2"]) == (summary["phi_2"], summary["Z_2"], summary["dZ_2"])
