@@ -26,7 +26,7 @@ def still_free(scene, P0, seed):
     settings = [f"growth.P0={P0}", "jamming.targets=[1e-4]", "jamming.continue_to_phi2=true", "jamming.max_dphi=0.1"]
     for event in budjam.grow(scene, seed=seed, set=settings):
         if event["kind"] == "jammed" and phi_J is None:
-            phi_J, tagged = event["phi_J"], event["tagged"]
+            phi_J, tagged = event["phi_J"], event["tagged_J"]
         elif event["kind"] == "unjammed":
             break  # the buds were tagged in an episode that ended
         elif event["kind"] in ("bud_completed", "bud_divided") and tagged:

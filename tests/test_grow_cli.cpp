@@ -791,6 +791,8 @@ TEST_CASE("--overwrite after a run with every observer on leaves no file of the 
     CHECK(first.count(f) == 1);
   }
   std::ofstream(dir / "notes.txt") << "mine\n";
+  // What `budjam export trajectory.xyz --format gsd` writes beside the trajectory belongs to the run.
+  std::ofstream(dir / "trajectory.gsd") << "frames\n";
   REQUIRE(grow(q(nothing) + " --quiet --overwrite --out " + q(dir)).code == 0);
   REQUIRE(grow(q(nothing) + " --quiet --out " + q(ref)).code == 0);
   auto after = snapshot(dir), expected = snapshot(ref);

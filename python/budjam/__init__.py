@@ -9,25 +9,27 @@ time in the units of the growth rates (docs/columns.md lists every file's column
     p.x, p.y, p.theta, p.b                 # numpy arrays, one entry per cell
     p.lobes()["radius"]                    # lobe 2i: mother of cell i, 2i+1: its bud
     budjam.rigidity(p)["lobe_cluster"]     # rigid cluster of every lobe
+    budjam.rigidity(p)["floppy_modes"]     # the keys of `budjam rigidity --json`, its CSV under "table"
     budjam.moduli("run/packings/target_1.pack")["G"]   # a path works wherever a packing does
     p.to_ase(), p.to_gsd_frame(), p.particles()        # ase.Atoms, gsd frame, pandas DataFrame
     budjam.export(p, "jammed.gsd", "gsd")  # for OVITO / HOOMD-blue
-    budjam.survival(["run"])["S"]          # Kaplan-Meier S(a) of the buds free at jamming
+    budjam.survival(["run"])["table"]["S"] # Kaplan-Meier S(a) of the buds free at jamming
     run = budjam.load_run("run")           # pandas DataFrames of budjam's tables of a growth run
     run.steps["phi"]
     for event in budjam.grow("scene.toml", seed=3, set={"growth.P0": 1e-3}):
         print(event["kind"], event["phi"])
 
-The functions are the ones `budjam` (the command line) runs, so their results are the same; the
-result of moduli() is the JSON of `budjam moduli --json`, key for key.
+The functions are the ones `budjam` (the command line) runs, so their results are the same, under
+the same names: the result of moduli(), rigidity(), spectrum() and survival() is the JSON of
+`budjam moduli`, `rigidity`, `dos` and `survival`, key for key, with the columns of the command's
+CSV table (if it writes one) under "table".
 """
 import functools
-import json
 import os
 import pathlib
 
 from . import _budjam
-from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, _one_line, read_packing,
+from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, read_packing,
                       survival)
 
 __all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "__version__", "contacts",
@@ -100,46 +102,23 @@ Packing.to_ase = _to_ase
 Packing.to_gsd_frame = gsd_frame
 
 
-def _input_error(message):
-    """InputError with the message as the command line prints it: one line, control bytes escaped."""
-    return InputError(_one_line(message))
-
-
-def _read_table(path, pandas):
-    try:
-        return pandas.read_csv(path, float_precision="round_trip", encoding="utf-8")
-    except (ValueError, OSError) as e:  # pandas' ParserError and EmptyDataError, UnicodeDecodeError are ValueErrors
-        raise _input_error(f"{path}: not a readable CSV table: {e}") from None
-
-
 class Run:
-    """A finished growth-run directory (`budjam grow`), checked as `budjam survival` checks it:
-    summary.json as a dict and each table budjam writes there as a pandas DataFrame, by name:
-    run.steps, run.divisions, run.bud_events, run.moduli, run.dos, run.rigidity_events, run.trials
-    (those the scene asked for; other files in the directory are not read). Empty fields (e.g. a P0
-    of "no feedback", a quantity not reached) are NaN; numbers are read back bit-identically
-    (float_precision="round_trip"). Packing files are listed in run.packings."""
+    """A finished growth-run directory (`budjam grow`), read by budjam's own reader (the one of
+    `budjam analyse`) and checked as it checks it: summary.json as a dict and each table budjam
+    writes there as a pandas DataFrame, by name: run.steps, run.divisions, run.bud_events, run.moduli,
+    run.dos, run.rigidity_events, run.trials (those the scene asked for; other files in the directory
+    are not read). Columns are int64 where every field is an integer, bool where every field is
+    true/false, float64 where every field is a number (numbers read back bit-identically; an empty
+    field, e.g. a P0 of "no feedback" or a quantity not reached, is NaN), text otherwise. Packing
+    files are listed in run.packings. A damaged file raises InputError naming it."""
 
     def __init__(self, directory):
         import pandas
 
         self.dir = pathlib.Path(directory)
-        summary = self.dir / "summary.json"
-        if not summary.is_file():
-            raise _input_error(f"{self.dir}: not a finished run (no summary.json)")
-        try:
-            with open(summary, encoding="utf-8") as f:
-                document = json.load(f)
-        except (ValueError, OSError) as e:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
-            raise _input_error(f"{summary}: invalid JSON: {e}") from None
-        if not isinstance(document, dict) or document.get("format") != "budjam-summary":
-            raise _input_error(f"{summary}: not a budjam run summary (a JSON object with format budjam-summary)")
-        packings = self.dir / "packings"
-        if packings.exists() and not packings.is_dir():
-            raise _input_error(f"{packings}: not a directory (a run keeps its packings in one)")
         self.summary, tables = _budjam.read_run(self.dir)
-        self.tables = {pathlib.Path(t).stem: _read_table(t, pandas) for t in tables}
-        self.packings = sorted(packings.glob("*.pack"))
+        self.tables = {name: pandas.DataFrame(columns) for name, columns in tables.items()}
+        self.packings = sorted((self.dir / "packings").glob("*.pack"))
 
     def __getattr__(self, name):
         tables = self.__dict__.get("tables", {})

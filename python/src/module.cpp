@@ -2,7 +2,10 @@
 // them, the same functions the command line calls (python/budjam/__init__.py adds load_run).
 // Units everywhere: lengths in mother diameters D0, forces in k·D0, stresses and moduli in k
 // (per unit area in 2D), eigenvalues λ in k/m (m = mother mass), angles in radians.
+#include "analysis/dos_report.hpp"
 #include "analysis/moduli_report.hpp"
+#include "analysis/rigidity_report.hpp"
+#include "analysis/survival_report.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/growth_driver.hpp"
@@ -30,6 +33,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -91,11 +95,70 @@ py::dict contacts_dict(const Packing& p) {
                   "u"_a = net.u, "u_buds"_a = net.u_buds);
 }
 
+// A JSON document of the command line as Python objects (null -> None), so that a Python result
+// has the keys and values of the CLI's --json output by construction.
+py::object python_of(const io::Json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+// A column of a budjam table as the numpy array pandas reads from it: int64 where every field is
+// an integer, bool where every field is true or false, float64 where every field is a number or
+// empty (NaN), text otherwise (an empty field NaN).
+py::object column_array(const tools::CsvTable& t, std::size_t c) {
+  const std::size_t n = t.size();
+  bool integers = n > 0, flags = n > 0, numbers = true;
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::string& f = t.text(r, c);
+    integers = integers && io::parse_int64(f).has_value();
+    flags = flags && (f == "true" || f == "false");
+    numbers = numbers && tools::csv_number(f).has_value();
+  }
+  if (integers) {
+    std::vector<std::int64_t> v(n);
+    for (std::size_t r = 0; r < n; ++r) v[r] = *io::parse_int64(t.text(r, c));
+    return array(v);
+  }
+  if (flags) {
+    std::vector<bool> v(n);
+    for (std::size_t r = 0; r < n; ++r) v[r] = t.text(r, c) == "true";
+    return array(v);
+  }
+  if (numbers) {
+    std::vector<double> v(n);
+    for (std::size_t r = 0; r < n; ++r) v[r] = *tools::csv_number(t.text(r, c));
+    return array(v);
+  }
+  py::list v;
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::string& f = t.text(r, c);
+    v.append(f.empty() ? py::object(py::float_(std::nan(""))) : py::object(py::str(f)));
+  }
+  return py::module_::import("numpy").attr("array")(v, "dtype"_a = "object");
+}
+
+// A table as {column: array}, in the order of its columns.
+py::dict table_dict(const tools::CsvTable& t) {
+  py::dict d;
+  for (std::size_t c = 0; c < t.columns.size(); ++c) d[py::str(t.columns[c])] = column_array(t, c);
+  return d;
+}
+
+// A result of the command line as Python objects: its JSON, and under "table" the columns of its
+// CSV, read back from the text the command line writes, so that both have one name per quantity
+// and the same values.
+py::dict result_dict(const io::CommandResult& result) {
+  py::dict d = python_of(result.json);
+  if (result.csv) {
+    std::ostringstream os;
+    result.csv(os);
+    d["table"] = table_dict(tools::parse_csv(os.str(), "table"));
+  }
+  return d;
+}
+
 py::dict rigidity_dict(const Packing& p, const std::string& network) {
-  const RigidityNetwork which = network_of(network);
   const Analysed a(p);
-  const RigidityState s = analyse_rigidity(p, a.lobes, a.pc.contacts, a.pc.network, which);
-  const Framework fw = build_framework(p, a.lobes, a.pc.contacts, a.pc.network, which);
+  const tools::RigidityReport r = tools::rigidity_report(p, a.lobes, a.pc.contacts, a.pc.network, network_of(network));
+  const RigidityState& s = r.state;
+  const Framework fw = build_framework(p, a.lobes, a.pc.contacts, a.pc.network, r.network);
   py::array_t<std::uint32_t> bars({static_cast<py::ssize_t>(fw.bars.size()), py::ssize_t{2}});
   auto b = bars.mutable_unchecked<2>();
   for (std::size_t k = 0; k < fw.bars.size(); ++k) {
@@ -109,21 +172,15 @@ py::dict rigidity_dict(const Packing& p, const std::string& network) {
     cluster_cells.push_back(c.cells);
     cluster_joints.push_back(c.joints);
   }
-  std::size_t buds_rigid = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) buds_rigid += s.bud_rigid(i);
-  return py::dict("network"_a = network, "cells"_a = s.cells, "joints"_a = s.joints, "bars"_a = bars,
-                  "contact_bars"_a = s.contact_bars, "independent_bars"_a = s.independent_bars,
-                  "redundant_bars"_a = s.redundant_bars, "free_pebbles"_a = s.free_pebbles,
-                  "floppy_plane"_a = s.floppy_plane, "floppy_periodic"_a = s.floppy_periodic,
-                  "cell_cluster"_a = array(s.cell_cluster), "lobe_cluster"_a = array(lobe_cluster),
-                  "cluster_cells"_a = array(cluster_cells), "cluster_joints"_a = array(cluster_joints),
-                  "largest"_a = s.largest, "largest_cells"_a = s.largest_cells(), "spans_x"_a = s.spans_x,
-                  "spans_y"_a = s.spans_y, "buds_rigid"_a = buds_rigid);
+  py::dict d = result_dict(tools::rigidity_result(r));
+  // What only the Python result has: per lobe, per bar and per cluster.
+  d["lobe_cluster"] = array(lobe_cluster);
+  d["bar_lobes"] = bars;
+  d["cluster_cells"] = array(cluster_cells);
+  d["cluster_joints"] = array(cluster_joints);
+  d["largest_cluster"] = s.largest;
+  return d;
 }
-
-// A JSON document of the command line as Python objects (null -> None), so that a Python result
-// has the keys and values of the CLI's --json output by construction.
-py::object python_of(const io::Json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
 py::object moduli_dict(const Packing& p, const std::string& solver) {
   const Analysed a(p);
@@ -150,43 +207,26 @@ std::string meta_text(const py::handle& value) {
 
 py::dict spectrum_dict(const Packing& p, const std::string& method, int modes) {
   const Analysed a(p);
-  SpectrumOptions options;
-  options.method = parse_spectrum_method(method);
+  tools::DosRequest request;
+  request.spectrum.method = parse_spectrum_method(method);
   if (modes < 0) throw InputError("modes: must be ≥ 0 (0 = as many as omega_star needs), got " + std::to_string(modes));
-  options.modes = modes;
-  const PackingSpectrum ps = packing_spectrum(p, a.pc.contacts, a.pc.network, options);
+  request.spectrum.modes = modes;
+  const tools::DosReport report = tools::dos_report(p, a.pc.contacts, a.pc.network, request);
+  const PackingSpectrum& ps = report.result;
   const Spectrum& s = ps.spectrum;
   Eigen::MatrixXd vectors(3 * ps.cells.size(), s.lambda.size());
   for (Eigen::Index k = 0; k < s.lambda.size(); ++k) vectors.col(k) = s.mode(k);
-  Eigen::VectorXd omega = s.lambda.unaryExpr([](double l) { return signed_omega(l); });
-  return py::dict("method"_a = to_string(s.method), "cells"_a = array(ps.cells), "n_dof"_a = s.n_dof,
-                  "complete"_a = s.complete(), "eigenvalues"_a = s.lambda, "omega"_a = omega,
-                  "eigenvectors"_a = vectors, "mass"_a = mass_diagonal(p), "participation"_a = ps.participation,
-                  "N_zero"_a = ps.summary.N_zero, "lambda_tol"_a = ps.summary.lambda_tol,
-                  "omega_star"_a = ps.summary.band.available ? py::object(py::float_(ps.summary.band.omega_star))
-                                                             : py::object(py::none()));
+  py::dict d = result_dict(tools::dos_result(report, request));
+  // What only the Python result has: the modes themselves.
+  d["cells"] = array(ps.cells);
+  d["eigenvectors"] = vectors;
+  d["mass"] = mass_diagonal(p);
+  return d;
 }
 
-// Kaplan–Meier curve of the buds free at jamming, pooled over runs, as `budjam survival` computes it.
-py::dict survival_dict(const std::vector<std::filesystem::path>& runs) {
-  std::vector<SurvivalRecord> records;
-  for (const auto& dir : runs) {
-    const tools::RunData r = tools::load_run(dir);
-    if (!r.bud_events) throw InputError(dir.string() + ": no bud_events.csv (the scene turned observe.bud_events off)");
-    const auto rec = tools::survival_records(*r.bud_events);
-    records.insert(records.end(), rec.begin(), rec.end());
-  }
-  const KaplanMeierCurve km = kaplan_meier(records);
-  // The curve starts at a = 0 with S = 1 and every record at risk, like the CSV of `budjam survival`.
-  std::vector<double> a{0.0}, S{1.0}, var{0.0};
-  std::vector<std::size_t> at_risk{km.records()}, events{0}, censored{0};
-  for (const auto& st : km.steps()) {
-    a.push_back(st.a), S.push_back(st.S), var.push_back(st.greenwood_var);
-    at_risk.push_back(st.at_risk), events.push_back(st.events), censored.push_back(st.censored);
-  }
-  return py::dict("a"_a = array(a), "S"_a = array(S), "greenwood_var"_a = array(var), "at_risk"_a = array(at_risk),
-                  "events"_a = array(events), "censored"_a = array(censored), "records"_a = km.records(),
-                  "completed"_a = km.events());
+// Kaplan–Meier survival of the buds free at jamming, pooled over runs, as `budjam survival`.
+py::dict survival_dict(const std::vector<std::filesystem::path>& runs, std::optional<double> epsilon) {
+  return result_dict(tools::survival_result(tools::survival_report(runs, epsilon)));
 }
 
 py::dict frame_dict(const io::ParticleFrame& f) {
@@ -207,18 +247,22 @@ py::dict frame_dict(const io::ParticleFrame& f) {
 }
 
 // The events of a growth run as Python dicts, in the order the driver emits them. Each carries the
-// state it happened in (step, phi, P, N, phase) and a copy of the packing.
+// state it happened in (step, phi, P, N, phase) and a copy of the packing. Fields that summary.json
+// also records have its names: the jamming's *_J keys, those of its targets, unjammings and φ_2.
 class EventQueue : public Observer {
  public:
   std::string name() const override { return "python"; }
   void on_jammed(const Jammed& e) override {
     const JammingRecord& j = e.jamming;
     push("jammed", e.state,
-         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z"_a = j.network.Z, "Z_iso"_a = j.network.Z_iso,
-                  "dZ"_a = j.network.dZ, "N_nr"_a = j.network.N_nr, "u_J"_a = j.network.u_buds, "tagged"_a = j.tagged));
+         py::dict("episode"_a = j.episode, "phi_J"_a = j.phi, "Z_J"_a = j.network.Z, "Z_iso_J"_a = j.network.Z_iso,
+                  "dZ_J"_a = j.network.dZ, "N_nr_J"_a = j.network.N_nr, "u_J"_a = j.network.u_buds,
+                  "tagged_J"_a = j.tagged));
   }
   void on_unjammed(const Unjammed& e) override {
-    push("unjammed", e.state, py::dict("episode"_a = e.record.episode, "phi_J_lost"_a = e.record.phi_J));
+    const UnjamRecord& u = e.record;
+    push("unjammed", e.state,
+         py::dict("episode"_a = u.episode, "phi_J"_a = u.phi_J, "targets_lost"_a = u.targets_lost));
   }
   void on_target_reached(const TargetReached& e) override {
     const TargetRecord& t = e.target;
@@ -228,7 +272,7 @@ class EventQueue : public Observer {
   }
   void on_depleted(const Depleted& e) override {
     const DepletionRecord& d = e.depletion;
-    push("phi2", e.state, py::dict("phi_2"_a = d.phi, "Z"_a = d.network.Z, "dZ"_a = d.network.dZ));
+    push("phi2", e.state, py::dict("phi_2"_a = d.phi, "Z_2"_a = d.network.Z, "dZ_2"_a = d.network.dZ));
   }
   void on_divided(const Divided& e) override {
     const Division& d = e.division;
@@ -405,12 +449,15 @@ Z, Z_iso, dZ, u, u_buds (paper Eqs. 1-5; docs/rigidity.md).)");
       "rigidity",
       [](const io::PackingFile& f, const std::string& network) { return rigidity_dict(f.packing, network); },
       "packing"_a, "network"_a = "load-bearing",
-      R"(Rigidity by the (2,3) pebble game, as `budjam rigidity` (docs/rigidity.md).
+      R"(Rigidity by the (2,3) pebble game: the result of `budjam rigidity` (docs/rigidity.md).
 
-network: 'load-bearing' (rattlers removed) or 'raw'. Returns counts (joints, bars as an (n, 2)
-array of lobe pairs, independent/redundant bars, free pebbles, floppy modes in the plane and
-periodic conventions), cell_cluster / lobe_cluster (rigid cluster of each cell's mother-bud bar,
--1 if not analysed), cluster_cells / cluster_joints per cluster, the largest cluster, spanning.)");
+network: 'load-bearing' (rattlers removed) or 'raw'. The dict of its JSON, key for key (without
+"file"): counts (joints, bars, independent_bars, redundant_bars, free_pebbles), floppy_modes in the
+plane and periodic conventions, rigid_clusters, spans_x / spans_y, ...; under "table" the columns
+of its CSV, per cell: cell, cluster (rigid cluster of the cell's mother-bud bar, -1 if not
+analysed), bud_rigid. Only here: lobe_cluster (per lobe), bar_lobes (the bars as an (n, 2) array
+of lobe pairs), cluster_cells / cluster_joints (per cluster), largest_cluster (its index, -1 for
+none).)");
   m.def(
       "moduli", [](const io::PackingFile& f, const std::string& solver) { return moduli_dict(f.packing, solver); },
       "packing"_a, "solver"_a = "ldlt",
@@ -430,21 +477,26 @@ NoResultError; a saddle is returned flagged, energy_minimum False and the relaxe
         return spectrum_dict(f.packing, method, modes);
       },
       "packing"_a, "method"_a = "auto", "modes"_a = 0,
-      R"(Vibrational spectrum of the non-rattlers, as `budjam dos` (docs/spectrum.md).
+      R"(Vibrational spectrum of the non-rattlers: the result of `budjam dos` (docs/spectrum.md).
 
-eigenvalues lambda (k/m, ascending) and omega = sign(lambda) sqrt|lambda|; eigenvectors as the
-orthonormal columns of a (3n, k) array: the mass-weighted modes e = M^(1/2) u of the dynamical
-matrix M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the displacement is
+The dict of its JSON, key for key: method, n_dof, N_zero below lambda_tol, omega_star (None if not
+available), the counts N_u and floppy_modes, the histogram D(omega) under "dos", ...; under "table"
+the columns of its CSV, per computed mode: mode, lambda (k/m, ascending), omega =
+sign(lambda) sqrt|lambda|, participation, quasi_zero. Only here: eigenvectors as the orthonormal
+columns of a (3n, k) array, the mass-weighted modes e = M^(1/2) u of the dynamical matrix
+M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the displacement is
 u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
-translations are removed); participation ratios, N_zero below lambda_tol,
-the band edge omega_star (None if not available). method: auto | dense | arpack; modes:
-ARPACK modes (0: as many as omega_star needs). An unjammed packing raises InputError; an
-eigensolver that does not converge raises NoResultError saying what to try.)");
-  m.def("survival", &survival_dict, "runs"_a,
-        R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories, as
-`budjam survival` (each run's last jamming episode; completion is the event, division and the
-end of the run censor). a = b^2 - b_J^2 in D0^2 (diameter squared; times pi/4 for the area), S,
-its Greenwood variance, and at_risk / events / censored at each a; records and completed in all.)");
+translations are removed). method: auto | dense | arpack; modes: ARPACK modes (0: as many as
+omega_star needs). An unjammed packing raises InputError; an eigensolver that does not converge
+raises NoResultError saying what to try.)");
+  m.def("survival", &survival_dict, "runs"_a, "epsilon"_a = py::none(),
+        R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories: the
+result of `budjam survival` (each run's last jamming episode; completion is the event, division and
+the end of the run censor; a run given twice is one sample). The dict of its JSON, key for key:
+runs, records, events (completed buds), censored, u_J, N_nr_J, epsilon, a_eps, integral_S, ...,
+and under "table" the columns of its CSV: a = b^2 - b_J^2 in D0^2 (diameter squared), a_area
+(pi/4 times it), S, se (Greenwood), lo, hi (95 % band), at_risk, events, censored at each a.
+epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
   m.def(
       "particle_frame",
       [](const io::PackingFile& f, const std::string& network) {
@@ -478,24 +530,25 @@ its Greenwood variance, and at_risk / events / censored at each a; records and c
   m.def(
       "read_run",
       [](const std::filesystem::path& dir) {
-        namespace rf = io::run_files;
         const tools::RunData run = tools::load_run(dir);
-        py::list tables;
-        for (const std::string_view name :
-             {rf::steps, rf::divisions, rf::bud_events, rf::moduli, rf::dos, rf::rigidity, rf::trials})
-          if (std::filesystem::is_regular_file(dir / name)) tables.append(dir / name);
+        py::dict tables;
+        for (const auto& [name, table] : tools::run_tables(run)) tables[py::str(name)] = table_dict(table);
         return py::make_tuple(python_of(run.summary), tables);
       },
       "directory"_a,
-      "A finished run directory read and checked as `budjam survival` reads it: (summary.json as a dict, "
-      "the paths of the CSV tables budjam wrote there). budjam.load_run builds on it.");
+      "A finished run directory read and checked as `budjam analyse` reads it: (summary.json as a dict, "
+      "{table name: {column: array}} of the CSV tables budjam wrote there). budjam.load_run builds on it.");
 
   py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
 
 Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
 'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the status of an
 expected early stop such as 'step_limit'), the state it happened in (step = accepted steps, phi,
-P in k, N, phase) with a copy of the packing, and the fields of that event.)")
+P in k, N, phase) with a copy of the packing, and the fields of that event under the names
+summary.json gives them: jammed: episode, phi_J, Z_J, Z_iso_J, dZ_J, N_nr_J, u_J, tagged_J;
+unjammed: episode, phi_J (the one lost), targets_lost; target: index, dphi, Z, dZ, N_nr, chi_c
+(as an entry of its targets); phi2: phi_2, Z_2, dZ_2; division: mother_id, daughter_id, b (as
+divisions.csv); bud_*: cell_id, episode, a (as bud_events.csv).)")
       .def(py::init<const std::filesystem::path&, std::optional<std::uint64_t>, const std::vector<std::string>&>(),
            "scene"_a, "seed"_a = py::none(), "set"_a = std::vector<std::string>{})
       .def("__iter__", [](Growth& g) -> Growth& { return g; })

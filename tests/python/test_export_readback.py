@@ -11,7 +11,7 @@ import meshio
 import numpy as np
 import pytest
 
-from conftest import PACKING, rigidity_json
+from conftest import PACKING, assert_gsd_frames_are_the_xyz_frames, rigidity_json
 
 
 # The independent reader of each format.
@@ -164,3 +164,39 @@ def test_gsd_without_its_writer_is_an_output_error_leaving_nothing(budjam_exe, t
     assert r.returncode == 3
     assert r.stderr.count("\n") == 1 and "python3-gsd" in r.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_trajectory_exports_to_one_gsd_file_with_every_frame(run_budjam, sheared_packing, tmp_path):
+    """Two frames (unsheared, then sheared) as a run's trajectory.xyz holds them, converted by
+    `budjam export trajectory.xyz --format gsd`, written beside it by default."""
+    for name, packing in (("a", PACKING), ("b", sheared_packing)):
+        run_budjam("export", packing, "--format", "xyz", "--out", tmp_path / name)
+    trajectory = tmp_path / "trajectory.xyz"
+    trajectory.write_bytes((tmp_path / "a.xyz").read_bytes() + (tmp_path / "b.xyz").read_bytes())
+    run_budjam("export", trajectory, "--format", "gsd")
+    assert assert_gsd_frames_are_the_xyz_frames(tmp_path / "trajectory.gsd", trajectory) == 2
+
+
+@pytest.mark.parametrize("damage, args, message", [
+    (lambda text: text[: text.index("\n", text.index("\n", text.index("mother")) + 1)], (),
+     r"trajectory\.xyz:5: the file ends inside a frame"),
+    (lambda text: text.replace("mother", "bud", 1), (), r"trajectory\.xyz:3: type: lobe 0 is a mother"),
+    (lambda text: re.sub(r"step=\d+", "step=x", text), (), r"trajectory\.xyz:2: step: not a non-negative integer"),
+    (lambda text: text, ("--network", "raw"), r"--network: a trajectory's frames keep"),
+])
+def test_a_trajectory_budjam_did_not_write_is_refused_and_nothing_is_written(run_budjam, tmp_path, damage, args,
+                                                                              message):
+    run_budjam("export", PACKING, "--format", "xyz", "--out", tmp_path / "trajectory")
+    trajectory = tmp_path / "trajectory.xyz"
+    trajectory.write_text(damage(trajectory.read_text()))
+    (tmp_path / "trajectory.gsd").write_bytes(b"earlier")
+    r = run_budjam("export", trajectory, "--format", "gsd", *args, check=False)
+    assert r.returncode == 2 and re.search(message, r.stderr) and len(r.stderr.splitlines()) == 1, r.stderr
+    assert (tmp_path / "trajectory.gsd").read_bytes() == b"earlier"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["trajectory.gsd", "trajectory.xyz"]
+
+
+def test_a_trajectory_exports_to_gsd_only(run_budjam, tmp_path):
+    run_budjam("export", PACKING, "--format", "xyz", "--out", tmp_path / "trajectory")
+    r = run_budjam("export", tmp_path / "trajectory.xyz", "--format", "vtk", check=False)
+    assert r.returncode == 2 and "exports to gsd only" in r.stderr

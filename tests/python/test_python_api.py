@@ -4,6 +4,7 @@ pandas that equal what those packages read from budjam's files, and result dicts
 command line's JSON."""
 import json
 import pathlib
+import shutil
 
 import ase.io
 import gsd.hoomd
@@ -43,7 +44,7 @@ def test_version_is_the_command_lines(run_budjam):
 @pytest.mark.parametrize("as_path", [str, pathlib.Path])
 def test_every_function_of_a_packing_accepts_its_path(as_path):
     p = budjam.read_packing(PACKING)
-    np.testing.assert_array_equal(budjam.rigidity(as_path(PACKING))["cell_cluster"], budjam.rigidity(p)["cell_cluster"])
+    np.testing.assert_array_equal(budjam.rigidity(as_path(PACKING))["lobe_cluster"], budjam.rigidity(p)["lobe_cluster"])
     np.testing.assert_array_equal(budjam.contacts(as_path(PACKING))["force"], budjam.contacts(p)["force"])
     np.testing.assert_array_equal(budjam.particle_frame(as_path(PACKING))["x"], budjam.particle_frame(p)["x"])
     assert budjam.moduli(as_path(PACKING)) == budjam.moduli(p)
@@ -97,21 +98,41 @@ def test_buds_tagged_at_a_jamming_come_after_its_jammed_event():
             assert before["kind"] == "jammed" and before["step"] == e["step"]
 
 
-def test_load_run_reads_only_the_tables_budjam_wrote(run_budjam, tmp_path):
-    out = tmp_path / "demo"
+@pytest.fixture(scope="module")
+def demo_run(run_budjam, tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo") / "demo"
     run_budjam("grow", DEMO, "--out", out, "--quiet")
-    (out / "my_notes.csv").write_text("not, a\n budjam, table, at all\n")
+    return out
+
+
+def test_load_run_reads_only_the_tables_budjam_wrote(demo_run, tmp_path):
+    """A user's own CSV in the run directory, even one no CSV reader accepts, is not read."""
+    out = shutil.copytree(demo_run, tmp_path / "demo")
+    (out / "my_notes.csv").write_bytes(b"not, a\n budjam, table, at all\n\xff\n")
     run = budjam.load_run(out)
-    assert "my_notes" not in run.tables
-    assert {"steps", "divisions", "bud_events"} <= set(run.tables)
+    assert set(run.tables) == {"steps", "divisions", "bud_events"}
     assert run.summary == json.loads((out / "summary.json").read_text())
+    steps = pandas.read_csv(out / "steps.csv", float_precision="round_trip")
+    pandas.testing.assert_frame_equal(run.steps, steps)
 
 
-def test_load_run_names_a_damaged_table(run_budjam, tmp_path):
-    out = tmp_path / "demo"
-    run_budjam("grow", DEMO, "--out", out, "--quiet")
-    (out / "steps.csv").write_text("step,phi\n1,2,3\n")
-    with pytest.raises(budjam.InputError, match="steps.csv"):
+def test_load_run_names_a_damaged_log_with_control_bytes_escaped(demo_run, tmp_path):
+    out = shutil.copytree(demo_run, tmp_path / "demo\x1b[2J")
+    with open(out / "bud_events.csv", "a") as log:
+        log.write("1,2\n")
+    with pytest.raises(budjam.InputError, match=r"demo\\x1b\[2J/bud_events\.csv:\d+: 2 fields, header has") as e:
+        budjam.load_run(out)
+    assert not any(ord(c) < 0x20 for c in str(e.value))
+
+
+def test_load_run_refuses_a_short_row_that_pandas_would_fill_with_nan(demo_run, tmp_path):
+    """budjam's reader (that of `budjam analyse`) reads the tables, not pandas' more lenient one."""
+    out = shutil.copytree(demo_run, tmp_path / "demo")
+    columns = (out / "divisions.csv").read_text().splitlines()[0].split(",")
+    with open(out / "divisions.csv", "a") as log:
+        log.write(",".join(["1"] * (len(columns) - 1)) + "\n")
+    assert pandas.read_csv(out / "divisions.csv").iloc[-1].isna().sum() == 1
+    with pytest.raises(budjam.InputError, match=r"divisions\.csv:\d+: \d+ fields, header has"):
         budjam.load_run(out)
 
 

@@ -10,7 +10,7 @@ import ase.io
 import numpy as np
 import pytest
 
-from conftest import SOURCE_DIR
+from conftest import SOURCE_DIR, assert_gsd_frames_are_the_xyz_frames
 
 SCENE = SOURCE_DIR / "data" / "scenes" / "demo.toml"
 SETTINGS = ["--set", "observe.trajectory_every=100", "--set", "observe.checkpoint_every=50"]
@@ -65,3 +65,9 @@ def test_killed_and_resumed_run_writes_the_same_trajectory(reference, budjam_exe
     assert not (out / "trajectory.xyz").exists()
     run_budjam("grow", "--resume", out, "--quiet")
     assert (out / "trajectory.xyz").read_bytes() == (reference / "trajectory.xyz").read_bytes()
+
+
+def test_the_trajectory_exports_to_one_gsd_file_with_every_frame(reference, run_budjam, tmp_path):
+    """N changes from frame to frame (divisions); gsd reads every frame as ASE reads the XYZ."""
+    run_budjam("export", reference / "trajectory.xyz", "--format", "gsd", "--out", tmp_path / "traj")
+    assert assert_gsd_frames_are_the_xyz_frames(tmp_path / "traj.gsd", reference / "trajectory.xyz") > 3

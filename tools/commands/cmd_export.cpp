@@ -2,9 +2,11 @@
 // io::export_formats()
 // Writes a packing as particles and bonds for OVITO, ASE, ParaView and HOOMD-blue
 // (io/export.hpp, docs/files.md "Export"): BASE.<format>, BASE defaulting to the packing's path
-// without its extension. Nothing is printed.
+// without its extension. `budjam export RUN/trajectory.xyz --format gsd` writes the run's trajectory
+// as one multi-frame GSD file (RUN/trajectory.gsd). Nothing is printed.
 #include "commands/command.hpp"
 
+#include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
@@ -23,6 +25,7 @@ struct Options {
   std::string format;
   std::string out;
   std::string network = "load-bearing";
+  bool network_given = false;
 };
 
 std::vector<std::string> format_names() {
@@ -31,14 +34,24 @@ std::vector<std::string> format_names() {
   return names;
 }
 
+// A run's trajectory.xyz (any extended XYZ budjam wrote) becomes one multi-frame GSD file; its
+// frames keep the rigid clusters the run labelled them with.
+void export_trajectory(const Options& o, const std::filesystem::path& out) {
+  if (o.format != "gsd")
+    throw InputError("--format: a trajectory (" + o.packing + ") exports to gsd only (got " + o.format + ")");
+  if (o.network_given) throw InputError("--network: a trajectory's frames keep the rigid clusters the run gave them");
+  io::write_gsd(out, io::read_extxyz(o.packing));
+}
+
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
   if (!o.out.empty()) io::check_output_name("--out", o.out);
-  const io::PackingFile file = io::read_packing(o.packing);
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
   io::check_output_name("--out", out);
+  if (std::filesystem::path(o.packing).extension() == ".xyz") return export_trajectory(o, out);
+  const io::PackingFile file = io::read_packing(o.packing);
   io::write_particles(out, io::particle_frame(file, which), o.format);
 }
 
@@ -46,15 +59,21 @@ const bool registered = budjam::cli::register_command(
     {"export", "Write a packing as particles (lobes) and bonds for OVITO, ASE, ParaView, HOOMD (--format)",
      [](CLI::App& sub) {
        auto o = std::make_shared<Options>();
-       sub.add_option("PACKING", o->packing, "packing file (.pack), taken as it is")->required();
+       sub.add_option("PACKING", o->packing,
+                      "packing file (.pack), taken as it is, or a run's trajectory.xyz (to --format gsd: one frame "
+                      "per frame)")
+           ->required();
        sub.add_option("--format", o->format, io::export_formats_text())
            ->required()
            ->check(CLI::IsMember(format_names()));
        sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
            ->type_name("BASE");
-       sub.add_option("--network", o->network,
-                      "network whose rigid clusters label the lobes: load-bearing (default) or raw");
-       sub.callback([o] { run(*o); });
+       const CLI::Option* network = sub.add_option(
+           "--network", o->network, "network whose rigid clusters label the lobes: load-bearing (default) or raw");
+       sub.callback([o, network] {
+         o->network_given = network->count() > 0;
+         run(*o);
+       });
      }});
 
 }  // namespace

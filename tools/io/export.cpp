@@ -2,6 +2,7 @@
 
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
+#include "budjam/errors.hpp"
 #include "budjam/orientation.hpp"
 #include "budjam/scene_keys.hpp"
 #include "io/atomic_file.hpp"
@@ -10,10 +11,13 @@
 #include "io/run_program.hpp"
 #include "io/text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #ifndef BUDJAM_PYTHON_EXECUTABLE
 #define BUDJAM_PYTHON_EXECUTABLE "python3"
@@ -125,14 +129,27 @@ ParticleFrame particle_frame(const PackingFile& file, RigidityNetwork which) {
   return f;
 }
 
+namespace {
+
+// The columns of budjam's extended XYZ, as its header line declares them.
+std::string extxyz_properties() {
+  std::string p = "Properties=type:S:1:pos:R:3:radius:R:1";
+  for (const LobeField& field : lobe_fields()) {
+    p += ':';
+    p += field.name;
+    p += field.flag ? ":L:1" : ":I:1";
+  }
+  return p;
+}
+
+}  // namespace
+
 std::string format_extxyz(const ParticleFrame& f) {
   std::ostringstream out;
   const std::string L = format_double(f.L);
   out << f.size() << '\n';
   out << "Lattice=\"" << L << " 0 0 " << format_double(f.shear * f.L) << ' ' << L << " 0 0 0 1\" "
-      << "Properties=type:S:1:pos:R:3:radius:R:1";
-  for (const LobeField& field : lobe_fields()) out << ':' << field.name << (field.flag ? ":L:1" : ":I:1");
-  out << " pbc=\"T T F\" step=" << f.step << '\n';
+      << extxyz_properties() << " pbc=\"T T F\" step=" << f.step << '\n';
   for (std::size_t k = 0; k < f.size(); ++k) {
     out << (is_bud(k) ? "bud" : "mother") << ' ' << format_double(f.wrapped_x[k]) << ' '
         << format_double(f.wrapped_y[k]) << " 0 " << format_double(f.radius[k]);
@@ -147,6 +164,112 @@ std::string format_extxyz(const ParticleFrame& f) {
     out << '\n';
   }
   return out.str();
+}
+
+namespace {
+
+// One line of a text read line by line, numbered from 1, for the messages of read_extxyz.
+class Lines {
+ public:
+  Lines(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {}
+  bool done() const { return pos_ >= text_.size(); }
+  std::string next() {
+    if (done()) {
+      ++line_;
+      fail("the file ends inside a frame");
+    }
+    const std::size_t end = std::min(text_.find('\n', pos_), text_.size());
+    std::string line = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    ++line_;
+    return line;
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(source_ + ":" + std::to_string(line_) + ": " + what);
+  }
+
+ private:
+  const std::string& text_;
+  std::string source_;
+  std::size_t pos_ = 0, line_ = 0;
+};
+
+std::vector<std::string> words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> out;
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+// The frame header "Lattice="L 0 0 γL L 0 0 0 1" Properties=... pbc="T T F" step=S".
+void read_extxyz_header(const std::string& line, ParticleFrame& f, const Lines& lines) {
+  const std::string lattice = "Lattice=\"", tail = "\" " + extxyz_properties() + " pbc=\"T T F\" step=";
+  const std::size_t close = line.find(tail);
+  if (line.rfind(lattice, 0) != 0 || close == std::string::npos)
+    lines.fail("not a frame header of budjam's extended XYZ (Lattice=\"...\" " + extxyz_properties() +
+               " pbc=\"T T F\" step=...)");
+  const std::vector<std::string> v = words(line.substr(lattice.size(), close - lattice.size()));
+  std::vector<double> a;
+  for (const std::string& w : v)
+    if (const auto d = parse_double(w)) a.push_back(*d);
+  if (a.size() != 9 || v.size() != 9 || !(a[0] > 0) || a[0] != a[4] || a[1] != 0 || a[2] != 0 || a[5] != 0 ||
+      a[6] != 0 || a[7] != 0 || a[8] != 1)
+    lines.fail("Lattice: expected \"L 0 0 shear*L L 0 0 0 1\" with L > 0");
+  const auto step = parse_int64(line.substr(close + tail.size()));
+  if (!step || *step < 0) lines.fail("step: not a non-negative integer");
+  f.L = a[0];
+  f.shear = a[3] / a[0];
+  f.step = *step;
+}
+
+// One lobe line: type x y z radius, then the lobe fields.
+void read_extxyz_lobe(const std::string& line, std::size_t k, ParticleFrame& f, const Lines& lines) {
+  const std::vector<std::string> v = words(line);
+  const std::size_t columns = 5 + lobe_fields().size();
+  if (v.size() != columns) lines.fail(std::to_string(v.size()) + " fields, a lobe line has " + std::to_string(columns));
+  if (v[0] != (is_bud(k) ? "bud" : "mother"))
+    lines.fail("type: lobe " + std::to_string(k) + " is a " + (is_bud(k) ? "bud" : "mother") + " (got " + v[0] + ")");
+  double pos[4];
+  for (int c = 0; c < 4; ++c) {
+    const auto d = parse_double(v[1 + c]);
+    if (!d || !std::isfinite(*d)) lines.fail("not a finite number (got " + v[1 + c] + ")");
+    pos[c] = *d;
+  }
+  f.x.push_back(pos[0]), f.wrapped_x.push_back(pos[0]), f.image_x.push_back(0);
+  f.y.push_back(pos[1]), f.wrapped_y.push_back(pos[1]), f.image_y.push_back(0);
+  f.radius.push_back(pos[3]);
+  for (std::size_t c = 0; c < lobe_fields().size(); ++c) {
+    const LobeField& field = lobe_fields()[c];
+    const std::string& w = v[5 + c];
+    const auto n =
+        field.flag ? (w == "T" || w == "F" ? std::optional<std::int64_t>(w == "T") : std::nullopt) : parse_int64(w);
+    if (!n)
+      lines.fail(std::string(field.name) + ": not " + (field.flag ? "T or F" : "an integer") + " (got " + w + ")");
+    if (field.name == "cell_id" && *n != static_cast<std::int64_t>(cell_of(k)))
+      lines.fail("cell_id: lobe " + std::to_string(k) + " belongs to cell " + std::to_string(cell_of(k)));
+    if (field.name == "id") f.id.push_back(*n);
+    if (field.name == "rigid_cluster") f.cluster.push_back(static_cast<int>(*n));
+    if (field.name == "rattler") f.rattler.push_back(*n != 0);
+  }
+}
+
+}  // namespace
+
+std::vector<ParticleFrame> read_extxyz(const std::filesystem::path& path) {
+  const std::string text = read_text_file(path);
+  Lines lines(text, path.string());
+  std::vector<ParticleFrame> frames;
+  while (!lines.done()) {
+    const std::string count = lines.next();
+    const auto n = parse_int64(count);
+    if (!n || *n < 0 || *n % 2 != 0) lines.fail("not a lobe count (an even number: two lobes a cell)");
+    ParticleFrame f;
+    read_extxyz_header(lines.next(), f, lines);
+    for (std::int64_t k = 0; k < *n; ++k) read_extxyz_lobe(lines.next(), static_cast<std::size_t>(k), f, lines);
+    frames.push_back(std::move(f));
+  }
+  if (frames.empty()) throw InputError(path.string() + ": no frame (an empty trajectory)");
+  return frames;
 }
 
 std::string format_vtk(const ParticleFrame& f) {

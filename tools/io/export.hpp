@@ -83,6 +83,11 @@ inline constexpr std::string_view kBondCrossesBoundary = "crosses_boundary";
 // Bonds are not part of the format (use GSD or VTK). Frames concatenate into a trajectory.
 std::string format_extxyz(const ParticleFrame& frame);
 
+// The frames of an extended XYZ file budjam wrote (format_extxyz; a run's trajectory.xyz), as far
+// as the format holds them: positions wrapped (image 0), radius, the lobe fields, box and step; no
+// bonds. InputError "<path>:<line>: ..." for anything else.
+std::vector<ParticleFrame> read_extxyz(const std::filesystem::path& path);
+
 // Legacy VTK unstructured grid (ParaView, meshio, VisIt): unwrapped points, bonds as line cells,
 // per-lobe point data and per-bond cell data.
 std::string format_vtk(const ParticleFrame& frame);

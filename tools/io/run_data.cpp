@@ -27,8 +27,7 @@ bool CsvTable::has_column(const std::string& name) const {
   return false;
 }
 
-double CsvTable::number(std::size_t row, std::size_t col) const {
-  const std::string& t = rows.at(row).at(col);
+std::optional<double> csv_number(const std::string& t) {
   if (t.empty()) return std::numeric_limits<double>::quiet_NaN();
   if (auto v = io::parse_double(t)) return *v;
   // A number beyond the double range (steps.csv writes Δt and χ_c exactly at any size): ±∞ or 0.
@@ -36,6 +35,12 @@ double CsvTable::number(std::size_t row, std::size_t col) const {
   char* end = nullptr;
   const double beyond = std::strtod(t.c_str(), &end);
   if (errno == ERANGE && end == t.c_str() + t.size()) return beyond;
+  return std::nullopt;
+}
+
+double CsvTable::number(std::size_t row, std::size_t col) const {
+  const std::string& t = rows.at(row).at(col);
+  if (const auto v = csv_number(t)) return *v;
   // line numbers: header is line 1
   throw InputError(source + ":" + std::to_string(row + 2) + ": " + columns[col] + ": not a number (got \"" + t + "\")");
 }
@@ -110,12 +115,15 @@ std::vector<std::string> parse_record(const std::string& text, std::size_t& pos,
 
 }  // namespace
 
-CsvTable read_csv(const fs::path& path) {
+CsvTable read_csv(const fs::path& path) { return parse_csv(io::read_text_file(path), path.string()); }
+
+CsvTable parse_csv(const std::string& text, const std::string& source) {
   CsvTable t;
-  t.source = path.string();
-  const std::string text = io::read_text_file(path);
+  t.source = source;
   std::size_t pos = 0, line = 1;
   if (text.empty()) throw InputError(t.source + ": empty file (no header)");
+  if (const std::string at = io::first_invalid_utf8(text); !at.empty())
+    throw InputError(t.source + ":" + at + ": not valid UTF-8 (budjam's tables are UTF-8 text)");
   t.columns = parse_record(text, pos, t.source + ":1");
   while (pos < text.size()) {
     ++line;
@@ -191,6 +199,16 @@ RunData load_run(const fs::path& dir) {
   r.divisions = read_csv(dir / run_files::divisions);
   if (fs::exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);
   return r;
+}
+
+std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run) {
+  namespace run_files = io::run_files;
+  std::vector<std::pair<std::string, CsvTable>> tables{{"steps", run.steps}, {"divisions", run.divisions}};
+  if (run.bud_events) tables.emplace_back("bud_events", *run.bud_events);
+  for (const std::string_view name : {run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
+    if (const fs::path path = run.dir / name; fs::exists(path))
+      tables.emplace_back(path.stem().string(), read_csv(path));
+  return tables;
 }
 
 namespace {

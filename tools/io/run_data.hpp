@@ -13,6 +13,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace budjam::tools {
@@ -36,8 +37,15 @@ struct CsvTable {
   std::size_t size() const { return rows.size(); }
 };
 
-// InputError "<path>:<line>: ..." for a malformed file (wrong field count, unterminated quote).
+// A field as a number: NaN for an empty field, ±∞ or 0 beyond the double range, nullopt for
+// anything else.
+std::optional<double> csv_number(const std::string& field);
+
+// InputError "<path>:<line>: ..." for a malformed file (wrong field count, unterminated quote,
+// text that is not UTF-8).
 CsvTable read_csv(const std::filesystem::path& path);
+// The same for CSV text read from `source`.
+CsvTable parse_csv(const std::string& text, const std::string& source);
 
 // One finished run directory.
 struct RunData {
@@ -69,6 +77,11 @@ double json_double(const io::Json& j, const std::string& key, const std::filesys
 
 // Reads a finished run (summary.json present, a JSON object). InputError naming the file otherwise.
 RunData load_run(const std::filesystem::path& dir);
+
+// The tables budjam wrote in a run directory, named by their file without .csv: steps, divisions,
+// and bud_events, moduli, dos, rigidity_events, trials where the scene asked for them (docs/files.md).
+// Other files in the directory are not read. InputError naming a malformed table.
+std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run);
 
 // Completion records of the tagged buds of one jamming episode (the last one, -1): completed = event;
 // divided / censored_end / censored_unjam = censored; a bud with no terminal row is censored at its

@@ -46,6 +46,8 @@ inline constexpr std::string_view dos = "dos.csv";
 inline constexpr std::string_view rigidity = "rigidity_events.csv";
 inline constexpr std::string_view trials = "trials.csv";
 inline constexpr std::string_view trajectory = "trajectory.xyz";
+// `budjam export` of trajectory.xyz to GSD
+inline constexpr std::string_view trajectory_gsd = "trajectory.gsd";
 inline constexpr std::string_view packings = "packings";  // <name>.pack and their sidecars
 inline constexpr std::string_view spectra = "spectra";    // step_<n>.dos.{json,csv}
 inline constexpr std::string_view jammed = "jammed";      // packings/jammed.pack

@@ -197,47 +197,11 @@ void read_table(const toml::table& table, const std::string& prefix, Scene& scen
   }
 }
 
-// Where the first byte that is not well-formed UTF-8 (Unicode 15, Table 3-7: no overlong forms,
-// no surrogates, nothing above U+10FFFF) sits, as "<line>:<column>" (column in bytes), or "".
-// toml++ 3.3 must not see such text: on some of it, it reaches TOML_UNREACHABLE.
-std::string first_invalid_utf8(std::string_view text) {
-  std::size_t line = 1, line_start = 0;
-  for (std::size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    std::size_t len = 0;
-    unsigned char lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-    if (c < 0x80)
-      len = 1;
-    else if (c >= 0xC2 && c <= 0xDF)
-      len = 2;
-    else if (c >= 0xE0 && c <= 0xEF) {
-      len = 3;
-      if (c == 0xE0) lo = 0xA0;  // overlong
-      if (c == 0xED) hi = 0x9F;  // surrogates
-    } else if (c >= 0xF0 && c <= 0xF4) {
-      len = 4;
-      if (c == 0xF0) lo = 0x90;  // overlong
-      if (c == 0xF4) hi = 0x8F;  // above U+10FFFF
-    }
-    bool ok = len > 0 && i + len <= text.size();
-    for (std::size_t k = 1; ok && k < len; ++k) {
-      const auto b = static_cast<unsigned char>(text[i + k]);
-      ok = k == 1 ? (b >= lo && b <= hi) : (b >= 0x80 && b <= 0xBF);
-    }
-    if (!ok) return std::to_string(line) + ":" + std::to_string(i - line_start + 1);
-    if (c == '\n') {
-      ++line;
-      line_start = i + 1;
-    }
-    i += len;
-  }
-  return "";
-}
-
 toml::table parse_toml(std::string_view text, const std::string& source) {
   if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
     throw InputError(source +
                      ": empty scene file (a scene names at least one section; [run] alone gives the defaults)");
+  // toml++ 3.3 must not see text that is not UTF-8: on some of it, it reaches TOML_UNREACHABLE.
   if (const std::string at = first_invalid_utf8(text); !at.empty())
     throw InputError(source + ":" + at + ": not valid UTF-8 (scene files are UTF-8 text)");
   try {

@@ -37,20 +37,67 @@ inline std::optional<std::int64_t> parse_int64(std::string_view s) {
   return v;
 }
 
-// `s` with every control byte (below 0x20, and 0x7f) written as \xNN, so that text taken from a
-// file or an exception cannot move the cursor, clear the terminal or break a one-line message.
+// The length of the well-formed UTF-8 sequence that starts at text[i] (Unicode 15, Table 3-7: no
+// overlong forms, no surrogates, nothing above U+10FFFF), 0 if none starts there.
+inline std::size_t utf8_sequence_length(std::string_view text, std::size_t i) {
+  const auto c = static_cast<unsigned char>(text[i]);
+  std::size_t len = 0;
+  unsigned char lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+  if (c < 0x80)
+    len = 1;
+  else if (c >= 0xC2 && c <= 0xDF)
+    len = 2;
+  else if (c >= 0xE0 && c <= 0xEF) {
+    len = 3;
+    if (c == 0xE0) lo = 0xA0;  // overlong
+    if (c == 0xED) hi = 0x9F;  // surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    len = 4;
+    if (c == 0xF0) lo = 0x90;  // overlong
+    if (c == 0xF4) hi = 0x8F;  // above U+10FFFF
+  }
+  if (len == 0 || i + len > text.size()) return 0;
+  for (std::size_t k = 1; k < len; ++k) {
+    const auto b = static_cast<unsigned char>(text[i + k]);
+    if (k == 1 ? (b < lo || b > hi) : (b < 0x80 || b > 0xBF)) return 0;
+  }
+  return len;
+}
+
+// Where the first byte that is not well-formed UTF-8 sits, as "<line>:<column>" (column in
+// bytes), or "".
+inline std::string first_invalid_utf8(std::string_view text) {
+  std::size_t line = 1, line_start = 0;
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t len = utf8_sequence_length(text, i);
+    if (len == 0) return std::to_string(line) + ":" + std::to_string(i - line_start + 1);
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+    i += len;
+  }
+  return "";
+}
+
+// `s` with every control byte (below 0x20, and 0x7f) and every byte that is not part of
+// well-formed UTF-8 written as \xNN, so that text taken from a file or an exception cannot move
+// the cursor, clear the terminal or break a one-line message, and is valid text (a Python str).
 inline std::string escape_control(std::string_view s) {
   static constexpr char hex[] = "0123456789abcdef";
   std::string out;
   out.reserve(s.size());
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    if (u >= 0x20 && u != 0x7f) {
-      out += c;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto u = static_cast<unsigned char>(s[i]);
+    const std::size_t len = utf8_sequence_length(s, i);
+    if (len > 0 && u >= 0x20 && u != 0x7f) {
+      out.append(s.substr(i, len));
+      i += len;
     } else {
       out += "\\x";
       out += hex[u >> 4];
       out += hex[u & 15];
+      ++i;
     }
   }
   return out;

@@ -106,13 +106,13 @@ class TrajectoryLog : public Observer {
   long last_step_ = -1;
 };
 
-const tools::ObserverRegistration reg{"trajectory",
-                                      "observe.trajectory_every",
-                                      {std::string(io::run_files::trajectory)},
-                                      [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                        if (c.scene.trajectory_every <= 0) return nullptr;
-                                        return std::make_unique<TrajectoryLog>(c.scene.trajectory_every,
-                                                                               c.run_dir.root(), c.resuming);
-                                      }};
+const tools::ObserverRegistration reg{
+    "trajectory", "observe.trajectory_every",
+    // trajectory.gsd: a conversion of an earlier run's trajectory.xyz
+    {std::string(io::run_files::trajectory), std::string(io::run_files::trajectory_gsd)},
+    [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (c.scene.trajectory_every <= 0) return nullptr;
+      return std::make_unique<TrajectoryLog>(c.scene.trajectory_every, c.run_dir.root(), c.resuming);
+    }};
 
 }  // namespace

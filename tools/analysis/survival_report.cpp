@@ -1,0 +1,100 @@
+#include "analysis/survival_report.hpp"
+
+#include "analysis/jamming_states.hpp"
+#include "budjam/depletion.hpp"
+#include "budjam/errors.hpp"
+#include "budjam/statistics.hpp"
+#include "io/run_data.hpp"
+#include "io/text.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace budjam::tools {
+
+using io::Json;
+
+SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std::optional<double> epsilon) {
+  const DistinctRuns loaded = load_distinct_runs(runs);
+  SurvivalReport report;
+  report.duplicates = Json::array();
+  for (const auto& group : loaded.copy_groups) report.duplicates.push_back(group);
+  std::vector<SurvivalRecord> records;
+  std::vector<double> uJ, nrJ;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (loaded.later_copy[k]) continue;
+    const std::string d = runs[k].string();
+    const RunData& r = loaded.runs[k];
+    if (!r.jammed()) throw InputError(d + ": the run never jammed (phi_J is null)");
+    if (!r.bud_events) throw InputError(d + ": no bud_events.csv (the scene turned observe.bud_events off)");
+    const auto rec = survival_records(*r.bud_events);
+    records.insert(records.end(), rec.begin(), rec.end());
+    uJ.push_back(r.get("u_J"));
+    nrJ.push_back(r.get("N_nr_J"));
+  }
+  report.runs = uJ.size();
+  report.copies = runs.size() - report.runs;
+  report.u_J = mean(uJ);
+  report.N_nr_J = mean(nrJ);
+  report.epsilon = epsilon.value_or(1.0 / report.N_nr_J);
+  if (!(report.epsilon >= 0)) throw InputError("--epsilon: must be >= 0");
+  report.km = kaplan_meier(records);
+  if (report.u_J > 0) report.a_eps = a_epsilon(report.km, report.u_J, report.epsilon);
+  return report;
+}
+
+Json survival_json(const SurvivalReport& r) {
+  const KaplanMeierCurve& km = r.km;
+  Json j;
+  j["runs"] = r.runs;
+  j["duplicates"] = r.duplicates;
+  j["records"] = km.records();
+  j["events"] = km.events();
+  j["censored"] = km.records() - km.events();
+  j["u_J"] = io::number_or_null(r.u_J);
+  j["N_nr_J"] = io::number_or_null(r.N_nr_J);
+  j["epsilon"] = r.epsilon;
+  j["S_level"] = r.u_J > 0 ? Json(r.epsilon / r.u_J) : Json(nullptr);
+  j["a_eps"] = io::number_or_null(r.a_eps);
+  j["a_eps_area"] = r.a_eps ? Json(kDiameterSquaredToArea * *r.a_eps) : Json(nullptr);
+  j["integral_S"] = r.a_eps ? Json(km.integral(*r.a_eps)) : Json(nullptr);
+  j["integral_S_area"] = r.a_eps ? Json(kDiameterSquaredToArea * km.integral(*r.a_eps)) : Json(nullptr);
+  j["a_last"] = km.last_observation();
+  j["note"] = "a = b^2 - b_J^2 (diameter squared); *_area = pi/4 times it (true area)";
+  return j;
+}
+
+namespace {
+
+std::string summary_line(const SurvivalReport& r) {
+  const KaplanMeierCurve& km = r.km;
+  std::string line = "survival: " + std::to_string(r.runs) + " runs";
+  if (r.copies > 0) line += " (" + std::to_string(r.copies) + " duplicate copies left out)";
+  line += ", " + std::to_string(km.records()) + " buds, " + std::to_string(km.events()) + " completed; a_eps = ";
+  line += r.a_eps ? io::format_double(*r.a_eps) + ", integral of S = " + io::format_double(km.integral(*r.a_eps))
+                  : std::string("not reached");
+  return line + " (diameter squared)";
+}
+
+}  // namespace
+
+io::CommandResult survival_result(const SurvivalReport& r) {
+  io::CommandResult result{survival_json(r), {}, summary_line(r)};
+  result.csv = [&km = r.km](std::ostream& os) {
+    os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
+    auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
+      const double se = std::sqrt(var);
+      os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ',' << io::format_double(S)
+         << ',' << io::format_double(se) << ',' << io::format_double(std::max(0.0, S - 1.96 * se)) << ','
+         << io::format_double(std::min(1.0, S + 1.96 * se)) << ',' << n << ',' << d << ',' << c << '\n';
+    };
+    row(0.0, 1.0, 0.0, km.records(), 0, 0);
+    for (const auto& st : km.steps()) row(st.a, st.S, st.greenwood_var, st.at_risk, st.events, st.censored);
+  };
+  return result;
+}
+
+}  // namespace budjam::tools
