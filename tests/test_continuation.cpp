@@ -45,22 +45,6 @@ std::vector<Contact> contacts_of(const Packing& p, ForceField& field) {
   return find_contacts(p, field.lobes(), field.neighbours());
 }
 
-// Largest difference in the position of a lobe carrying a contact of `net` between two states, the
-// mean translation of those lobes removed (a zero mode of U).
-double lobe_difference(const Packing& a, const Packing& b, const ContactNetwork& net) {
-  Lobes la, lb;
-  place_lobes(a, la);
-  place_lobes(b, lb);
-  double mx = 0, my = 0, n = 0;
-  for (std::size_t l = 0; l < la.size(); ++l)
-    if (net.lobe_contacts[l] > 0) mx += lb.x[l] - la.x[l], my += lb.y[l] - la.y[l], n += 1;
-  double d = 0;
-  for (std::size_t l = 0; l < la.size(); ++l)
-    if (net.lobe_contacts[l] > 0)
-      d = std::max({d, std::abs(lb.x[l] - la.x[l] - mx / n), std::abs(lb.y[l] - la.y[l] - my / n)});
-  return d;
-}
-
 // The relaxed state at t on `sizes` by Newton alone from p (p relaxed nearby): the same minimum.
 Packing relaxed_at(const Packing& p, const BranchSizes& sizes, double t) {
   Packing r = p;
@@ -104,7 +88,8 @@ TEST_CASE("the predicted tangent agrees with a finite difference of relaxed stat
     Packing predicted = p;
     predicted.q += dt * dq;
     predicted.b = relaxed.b;
-    const double moved = lobe_difference(p, relaxed, net), error = lobe_difference(predicted, relaxed, net);
+    const double moved = testing::largest_lobe_difference(p, relaxed, net),
+                 error = testing::largest_lobe_difference(predicted, relaxed, net);
     REQUIRE(moved > 0);
     CHECK(error < 0.05 * moved);
     if (previous_error > 0) CHECK(error < 0.35 * previous_error);  // second order in δ
@@ -201,7 +186,7 @@ TEST_CASE("continuation reaches the state FIRE relaxes to at the same sizes, wit
   const ContactNetwork net = analyse_network(p.size(), a);
   const double Ua = field.energy(branch), Ub = fire_field.energy(fire);
   CHECK(std::abs(Ua - Ub) < 1e-9 * Ub);
-  CHECK(lobe_difference(branch, fire, net) < 1e-8);
+  CHECK(testing::largest_lobe_difference(branch, fire, net) < 1e-8);
   CHECK(run.factorisations < 20);
 }
 
