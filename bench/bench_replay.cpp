@@ -7,15 +7,19 @@
 //     cost more than E force evaluations (default 100000, summary.json's marginal relaxations) as
 //     DIR/trial-<attempt>-<k>.pack: the packing its relaxation started from, with the trial's Δt,
 //     its recorded cost and verdict, and the minimiser parameters of that relaxation in the meta
-//     lines (`replay.*`).
+//     lines (`replay.*`). A trial on the branch of a relaxed state (the bracket's lowest overshoot
+//     with the same divisions) also gets DIR/trial-<attempt>-<k>.branch: that relaxed state.
 //   bench_replay run SCENE DIR|FILE... [--set section.key=value]...
 //     relaxes each saved start with the recorded parameters (to convergence: a trial deferred at its
 //     budget is relaxed on) with SCENE's force field, and prints per trial the recorded and the
 //     replayed FIRE iterations, force evaluations, Newton factorisations, CPU seconds and E/N, then
-//     the totals.
+//     the totals. With jamming.continuation = true a trial with a .branch file first follows that
+//     branch to its sizes (as the growth driver does) and FIRE goes on from where it ended; the
+//     continuation's steps, events and how the branch ended are printed too.
 //
 // The saved starts are exact (round-trip text), so a replay with an unchanged minimiser repeats the
 // recorded relaxation evaluation for evaluation (an undeferred trial without saddle relaxation).
+#include "budjam/continuation.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/growth_driver.hpp"
 #include "io/packing_file.hpp"
@@ -71,6 +75,7 @@ class Recorder : public Observer {
     meta.set_number("replay.force_tol", t.minimiser.force_tol);
     const fs::path file = dir_ / ("trial-" + std::to_string(t.attempt) + "-" + std::to_string(k) + ".pack");
     io::write_packing(file, *t.start_packing, meta);
+    if (t.branch_start) io::write_packing(fs::path(file).replace_extension(".branch"), *t.branch_start, {});
     std::printf("saved %s: dt %.10g  N %zu  phi %.10g  %s  evaluations %ld\n", file.c_str(), t.dt, t.N, t.phi,
                 to_string(t.verdict), t.force_evaluations);
     std::fflush(stdout);
@@ -127,19 +132,35 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
     params.newton_force = pf.meta.number("replay.newton_force");
     params.force_tol = pf.meta.number("replay.force_tol");
     ForceField field(scene.skin, scene.threads);
+    const fs::path branch_file = fs::path(file).replace_extension(".branch");
+    const bool follow = scene.continuation && fs::exists(branch_file);
+    const Packing branch = follow ? io::read_packing(branch_file).packing : Packing{};
     const double c0 = cpu_seconds();
+    ContinuationResult cr;
+    if (follow) {
+      ContinuationParams cp;
+      cp.energy_floor = params.energy_floor * static_cast<double>(pf.packing.size());
+      cr = start_on_branch(pf.packing, branch, field, cp);
+    }
     const FireResult fr = minimise(pf.packing, field, params);
     const double c = cpu_seconds() - c0;
+    if (follow)
+      std::printf(
+          "  branch: %s at t = %.6g, %ld steps (%ld halved), %zu events, %ld factorisations, %ld chord steps, "
+          "%ld evaluations, E/N there %.4e\n",
+          to_string(cr.end), cr.t, cr.steps, cr.rejected_steps, cr.events.size(), cr.factorisations, cr.chord_steps,
+          cr.evaluations, cr.energy / static_cast<double>(pf.packing.size()));
     const double n = static_cast<double>(pf.packing.size());
     std::printf("%-28s %8s %6zu %10lld %10lld %10ld %10ld %7ld %9.3f %11.4e %11.4e\n", file.filename().c_str(),
                 pf.meta.get("replay.verdict").value_or("?").c_str(), pf.packing.size(),
                 static_cast<long long>(pf.meta.integer("replay.iterations")),
-                static_cast<long long>(pf.meta.integer("replay.evaluations")), fr.iterations, fr.evaluations,
-                fr.newton_iterations, c, pf.meta.number("replay.E_per_cell"), fr.energy / n);
+                static_cast<long long>(pf.meta.integer("replay.evaluations")), fr.iterations,
+                fr.evaluations + cr.evaluations, fr.newton_iterations + cr.factorisations, c,
+                pf.meta.number("replay.E_per_cell"), fr.energy / n);
     std::fflush(stdout);
     rec_evals += pf.meta.integer("replay.evaluations");
-    evals += fr.evaluations;
-    factorisations += fr.newton_iterations;
+    evals += fr.evaluations + cr.evaluations;
+    factorisations += fr.newton_iterations + cr.factorisations;
     cpu += c;
   }
   std::printf("total: %zu trials, recorded evaluations %ld, replayed evaluations %ld, factorisations %ld, CPU %.3f s\n",

@@ -1,5 +1,6 @@
 #include "budjam/growth_driver.hpp"
 
+#include "budjam/continuation.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/jamming.hpp"
@@ -231,6 +232,7 @@ struct GrowthDriver::Impl {
   // The start of the latest trial's relaxation and its parameters (when an observer needs them).
   Packing trial_start;
   FireParams trial_params;
+  std::optional<Packing> trial_branch;  // the relaxed state whose branch the trial lies on
   // The Newton factor kept from one minimisation to the next (arrested regime). Forgotten at every
   // checkpointed step, where a resumed run starts without one, so that it repeats the uninterrupted run.
   NewtonWorkspace newton;
@@ -408,10 +410,12 @@ struct GrowthDriver::Impl {
   }
 
   // Keeps where a trial's relaxation starts, for observers that replay it.
-  void note_start(const Packing& p) {
+  void note_start(const Packing& p, const Packing* branch = nullptr) {
     if (!needs.trial_starts) return;
     trial_start = p;
     trial_params = trial_minimiser();
+    trial_branch.reset();
+    if (branch) trial_branch = *branch;
   }
 
   // A trial grown by `step` from the accepted state. One whose budget ran out far above the window
@@ -424,7 +428,8 @@ struct GrowthDriver::Impl {
     t.divisions = grow_step(t.packing, rates, t.dt, scene, t.rng);
     ++attempts;
     search->place(t);
-    note_start(t.packing);
+    note_start(t.packing, search->branch_start(t));
+    follow_branch_from(search->branch_start(t), t.packing);
     const std::string where =
         "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
     if (!relax(t.packing, trial_minimiser(), where, search->trial_budget(), &t.deferred)) return std::nullopt;
@@ -437,6 +442,21 @@ struct GrowthDriver::Impl {
     if (t.deferred) return t;
     if (!relax_if_saddle(t)) return std::nullopt;
     return t;
+  }
+
+  // With jamming.continuation, a trial on the branch of a relaxed state (the bracket's lowest
+  // overshoot) starts where the continuation along it ends: its relaxed state when the branch
+  // reaches its sizes, else the last point before the network lost stability. Counted with the
+  // trial's relaxation.
+  void follow_branch_from(const Packing* relaxed, Packing& p) {
+    if (!scene.continuation || !relaxed) return;
+    ContinuationParams params;
+    params.energy_floor = trial_minimiser().energy_floor * static_cast<double>(p.size());
+    const ContinuationResult r = start_on_branch(p, *relaxed, field, params);
+    result.force_evaluations += r.evaluations;
+    result.force_evaluations_search += r.evaluations;
+    result.newton_factorisations += r.factorisations;
+    result.newton_factor_reuses += r.chord_steps;
   }
 
   // A deferred trial, relaxed on to convergence from where its budget ended, is judged again as the
@@ -612,6 +632,7 @@ struct GrowthDriver::Impl {
       if (needs.trial_starts) {
         relaxed.start_packing = &trial_start;
         relaxed.minimiser = trial_params;
+        relaxed.branch_start = trial_branch ? &*trial_branch : nullptr;
       }
       for (Observer* o : observers) o->on_trial(relaxed);
     }

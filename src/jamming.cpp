@@ -185,6 +185,16 @@ class BracketSearch final : public JammingSearcher {
     t.start = TrialStart::lowest_overshoot;
   }
 
+  // The lowest overshoot, relaxed, when the trial starts from it with the same divisions: the same
+  // cells, grown further, so the trial's relaxed state is on its branch (continuation.hpp).
+  const Packing* branch_start(const Trial& t) const override {
+    if (!open_ || t.start != TrialStart::lowest_overshoot) return nullptr;
+    const Trial& top = open_->above[0].trial;
+    const auto same = [](const Division& a, const Division& b) { return a.mother_index == b.mother_index; };
+    if (top.deferred || !std::ranges::equal(t.divisions, top.divisions, same)) return nullptr;
+    return &top.packing;
+  }
+
   // Inside an open bracket a trial only has to be placed above or below the window: one that creeps
   // on past the budget far above the window is set aside as a deferred upper end.
   long trial_budget() const override { return open_ ? budget_ : 0; }

@@ -248,6 +248,10 @@ std::vector<SceneKey> make_keys() {
                       "bracket search: FIRE iterations after which a trial still above the window becomes a "
                       "deferred upper end, relaxed on only if the bracket closes in on it (0 = never)",
                       kZeroOrPositive, BUDJAM_FIELD(trial_budget)));
+  e.push_back(flag("jamming", "continuation",
+                   "bracket search: a trial starting from the lowest overshoot with the same divisions follows its "
+                   "relaxed branch to the trial's sizes (Newton continuation) before FIRE (false = FIRE alone)",
+                   BUDJAM_FIELD(continuation)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

@@ -1285,3 +1285,25 @@ TEST_CASE(
   CHECK(std::abs(early_result.jamming->phi - late_result.jamming->phi) < 1e-8);
   CHECK(early_result.force_evaluations < late_result.force_evaluations);
 }
+
+TEST_CASE(
+    "with jamming.continuation a trial on the lowest overshoot's branch is relaxed from where the branch ends: "
+    "the search is FIRE's until the first such trial, and runs repeat bit for bit",
+    "[driver]") {
+  Scene s = bracket_scene(23);
+  s.continuation = true;
+  const auto [branch, branch_result] = audited_run(s);
+  const auto [again, again_result] = audited_run(s);
+  CHECK(same_result(branch_result, again_result));
+  s.continuation = false;
+  const auto [fire, fire_result] = audited_run(s);
+  const auto cost = [](const TrialRelaxed& a, const TrialRelaxed& b) {
+    return a.dt == b.dt && a.force_evaluations == b.force_evaluations;
+  };
+  const auto [t, u] = std::ranges::mismatch(branch.trials, fire.trials, cost);
+  REQUIRE(t != branch.trials.end());
+  REQUIRE(u != fire.trials.end());
+  CHECK(t->start == TrialStart::lowest_overshoot);
+  CHECK(t->dt == u->dt);
+  CHECK(t->N == u->N);
+}

@@ -29,23 +29,6 @@ Packing swollen(const Packing& p) {
   return s;
 }
 
-// Largest difference between two relaxations of the same packing in the position of a lobe that
-// carries a contact in `net`, after removing the mean translation (a zero mode of U). Free lobes
-// are left out: a rattler, or a contact-free bud turning about its mother, moves at no cost.
-double largest_difference(const Packing& a, const Packing& b, const ContactNetwork& net) {
-  Lobes la, lb;
-  place_lobes(a, la);
-  place_lobes(b, lb);
-  double mx = 0, my = 0, n = 0;
-  for (std::size_t l = 0; l < la.size(); ++l)
-    if (net.lobe_contacts[l] > 0) mx += lb.x[l] - la.x[l], my += lb.y[l] - la.y[l], n += 1;
-  double d = 0;
-  for (std::size_t l = 0; l < la.size(); ++l)
-    if (net.lobe_contacts[l] > 0)
-      d = std::max({d, std::abs(lb.x[l] - la.x[l] - mx / n), std::abs(lb.y[l] - la.y[l] - my / n)});
-  return d;
-}
-
 }  // namespace
 
 TEST_CASE("Newton finish lands on FIRE's minimum of a jammed packing: same energy and positions", "[newton]") {
@@ -68,7 +51,7 @@ TEST_CASE("Newton finish lands on FIRE's minimum of a jammed packing: same energ
   Eigen::VectorXd F;
   f1.evaluate(fire_only, F);
   const std::vector<Contact> c = find_contacts(fire_only, f1.lobes(), f1.neighbours());
-  CHECK(largest_difference(fire_only, with_newton, analyse_network(fire_only.size(), c)) < 1e-7);
+  CHECK(testing::largest_lobe_difference(fire_only, with_newton, analyse_network(fire_only.size(), c)) < 1e-7);
   CHECK(b.iterations < a.iterations);
 }
 
@@ -135,7 +118,8 @@ TEST_CASE("a kept Newton factor relaxes a sequence of slowly grown packings to F
     Eigen::VectorXd F;
     f1.evaluate(fire_state, F);
     const std::vector<Contact> contacts = find_contacts(fire_state, f1.lobes(), f1.neighbours());
-    CHECK(largest_difference(fire_state, reuse_state, analyse_network(fire_state.size(), contacts)) < 1e-7);
+    CHECK(testing::largest_lobe_difference(fire_state, reuse_state, analyse_network(fire_state.size(), contacts)) <
+          1e-7);
     chord_steps += b.newton_chord_steps;
     factorisations_reuse += b.newton_iterations;
     factorisations_no_reuse += c.newton_iterations;

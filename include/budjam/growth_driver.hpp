@@ -174,6 +174,9 @@ struct TrialRelaxed {
   // parameters of that relaxation, which replay it (bench/bench_replay.cpp).
   const Packing* start_packing = nullptr;
   FireParams minimiser;
+  // With Needs::trial_starts: the relaxed state whose branch the trial lies on (the bracket's lowest
+  // overshoot, JammingSearcher::branch_start), from which jamming.continuation follows it; else null.
+  const Packing* branch_start = nullptr;
 };
 
 struct StepAccepted {

@@ -140,6 +140,9 @@ class JammingSearcher {
   virtual NextTrial next_trial(const SearchFrom& from) = 0;
   // A trial grown by next_trial's dt, before it is relaxed: the search may move its start.
   virtual void place(Trial&) const {}
+  // The relaxed state a trial placed by place() lies on the branch of (the same cells at other bud
+  // sizes), from which its relaxed state can be followed by continuation; null if none.
+  virtual const Packing* branch_start(const Trial&) const { return nullptr; }
   // FIRE iterations a trial may spend before it is deferred; 0 = relaxed to convergence.
   virtual long trial_budget() const { return 0; }
   // Whether trials are only placed above or below the window (an open bracket): their relaxation

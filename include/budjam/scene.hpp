@@ -89,6 +89,10 @@ struct Scene {
   // search"). 0 = every trial relaxed to convergence, the default: at L = 100 a budget of 2·10⁵
   // cut one seed's search 4.7 times in force evaluations and made another's slower.
   long trial_budget = 0;
+  // Bracket search: a trial that starts from the lowest overshoot with the same divisions follows
+  // the overshoot's relaxed branch down to its own sizes by continuation (continuation.hpp) before
+  // FIRE (docs/growth.md, "Jamming search"). false = FIRE from the overshoot's positions.
+  bool continuation = false;
 
   // [minimiser]: the library's defaults are the scene's (fire.hpp).
   FireParams fire;

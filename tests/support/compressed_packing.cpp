@@ -187,4 +187,18 @@ CompressionResult compress_to_pressure(Packing start, double P_target, const Fir
   return res;
 }
 
+double largest_lobe_difference(const Packing& a, const Packing& b, const ContactNetwork& net) {
+  Lobes la, lb;
+  place_lobes(a, la);
+  place_lobes(b, lb);
+  double mx = 0, my = 0, n = 0;
+  for (std::size_t l = 0; l < la.size(); ++l)
+    if (net.lobe_contacts[l] > 0) mx += lb.x[l] - la.x[l], my += lb.y[l] - la.y[l], n += 1;
+  double d = 0;
+  for (std::size_t l = 0; l < la.size(); ++l)
+    if (net.lobe_contacts[l] > 0)
+      d = std::max({d, std::abs(lb.x[l] - la.x[l] - mx / n), std::abs(lb.y[l] - la.y[l] - my / n)});
+  return d;
+}
+
 }  // namespace budjam::testing

@@ -64,4 +64,9 @@ struct CompressionResult {
 CompressionResult compress_to_pressure(Packing start, double P_target, const FireParams& fire, double ratio = 1.5,
                                        int max_rescalings = 200);
 
+// Largest difference between two relaxations of the same packing in the position of a lobe that
+// carries a contact in `net`, after removing the mean translation (a zero mode of U). Free lobes
+// are left out: a rattler, or a contact-free bud turning about its mother, moves at no cost.
+double largest_lobe_difference(const Packing& a, const Packing& b, const ContactNetwork& net);
+
 }  // namespace budjam::testing
