@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Ensemble of two protocols (docs/growth.md, "Jamming search"): the same seeds grown with two values
+"""Ensemble of two protocols (docs/jamming.md): the same seeds grown with two values
 of one scene key (jamming.search unless --key says otherwise), and the mean ± standard error over
 seeds of φ_J, u_J, Z_J, P, Z and G (`budjam moduli` on the packing saved there) at every target, φ_2,
 with whether each difference is within the combined standard error |Δ| ≤ √(se_a² + se_b²) (runs are not paired: φ_J depends on the path, which the protocol changes).

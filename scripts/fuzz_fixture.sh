@@ -3,7 +3,8 @@
 # checkpoint format: the run directory fuzz/fixtures/resume/ (a run of the harnesses' scene,
 # checkpoint_scene() in fuzz/harnesses.hpp, killed after a checkpoint of its jammed phase) and the
 # seeds fuzz/corpus/{checkpoint,resume}/{unjammed,jammed}.txt (its first checkpoint before jamming,
-# and the one the fixture holds).
+# and the one the fixture holds); and the checkpoint reproducers fuzz/reproducers/checkpoint/*.txt,
+# each with its defect made again in the new jammed seed.
 #   bash scripts/fuzz_fixture.sh [BUDJAM]   (default build/budjam)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -48,3 +49,28 @@ for corpus in checkpoint resume; do
 done
 echo "fuzz_fixture: $(grep -c . fuzz/fixtures/resume/steps.csv.partial) rows of steps.csv;" \
      "checkpoint at $(sed -n 's/^state \([a-z]*\) [^ ]* [^ ]* [^ ]* \([0-9]*\) .*/\1, step \2/p' fuzz/fixtures/resume/checkpoint.txt)" >&2
+# The checkpoint reproducers, each its defect made again in the new jammed seed.
+/usr/bin/python3 - <<'PY'
+seed = open('fuzz/corpus/checkpoint/jammed.txt').read().split('\n')
+def line(lines, word):
+    return next(k for k, x in enumerate(lines) if x.startswith(word + ' '))
+def remade(name, edit):
+    lines = list(seed)
+    edit(lines)
+    open('fuzz/reproducers/checkpoint/' + name, 'w').write('\n'.join(lines))
+def field(word, index, value):
+    def edit(lines):
+        k = line(lines, word)
+        w = lines[k].split()
+        w[index] = value
+        lines[k] = ' '.join(w)
+    return edit
+def without_section(name):
+    def edit(lines):
+        k = line(lines, 'observer ' + name)
+        del lines[k:k + 1 + int(lines[k].split()[2])]
+    return edit
+remade('huge-next-target.txt', field('state', 7, '9223372036854775807'))
+remade('shear-1e308.txt', field('packing', 2, '1e308'))
+remade('no-run-log-section.txt', without_section('run_log'))
+PY

@@ -420,8 +420,7 @@ struct GrowthDriver::Impl {
 
   // A trial grown by `step` from the accepted state. One whose budget ran out far above the window
   // is set aside unrelaxed (deferred); near the window it is relaxed on: it may be the jamming point,
-  // and a deferred trial there would only draw the next trials onto itself (docs/growth.md,
-  // "Jamming search").
+  // and a deferred trial there would only draw the next trials onto itself (docs/jamming.md).
   std::optional<Trial> grow_trial(double step) {
     Trial t{packing, rng, {}, step, 0};
     if (fail_below_dt_min(t.dt)) return std::nullopt;
@@ -689,50 +688,6 @@ struct GrowthDriver::Impl {
     if (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) newton.clear();
     if (checkpoint_hook) checkpoint_hook();
   }
-
-  // ---- checkpoints ---------------------------------------------------------------------------
-  // The fields a checkpoint holds besides the seed and the search, from the driver to a GrowthState
-  // or back (moved out of a non-const source).
-  template <class To, class From>
-  static void transfer(To& to, From& from) {
-    to.rng = from.rng;
-    to.phase = from.phase;
-    to.dt = from.dt;
-    to.last_dt = from.last_dt;
-    to.last_log_scale = from.last_log_scale;
-    to.step = from.step;
-    to.attempts = from.attempts;
-    to.next_target = from.next_target;
-    to.divisions_since_jamming = from.divisions_since_jamming;
-    to.episodes = from.episodes;
-    to.result = std::move(from.result);
-    to.buds = std::move(from.buds);
-    to.packing = std::move(from.packing);
-  }
-
-  GrowthState state() const {
-    if (!started) throw std::logic_error("GrowthDriver::state: the run has not started");
-    GrowthState s;
-    s.seed = seed;
-    transfer(s, *this);
-    s.search = search->state();
-    return s;
-  }
-
-  void restore(GrowthState s) {
-    if (s.seed != seed)
-      throw InputError("checkpoint: seed " + std::to_string(s.seed) + " does not match the run's seed " +
-                       std::to_string(seed));
-    if (s.packing.box.L != scene.L) throw InputError("checkpoint: box side does not match the scene");
-    transfer(*this, s);
-    result.status = RunStatus::running;
-    search->restore(std::move(s.search));
-    started = true;
-    final_emitted = false;
-    newton.clear();
-    E = fresh_energy_per_cell(packing);
-    derive();
-  }
 };
 
 GrowthDriver::GrowthDriver(const Scene& scene, const DriverOptions& options)
@@ -754,9 +709,58 @@ RunStatus GrowthDriver::run() {
 }
 
 void GrowthDriver::set_checkpoint_hook(std::function<void()> hook) { impl_->checkpoint_hook = std::move(hook); }
-GrowthState GrowthDriver::state() const { return impl_->state(); }
 bool GrowthDriver::state_is_complete() const { return !impl_->newton.factored; }
-void GrowthDriver::restore(GrowthState state) { impl_->restore(std::move(state)); }
+
+// ---- checkpoints ---------------------------------------------------------------------------------
+
+namespace {
+
+// The fields a checkpoint holds besides the seed and the search, from the driver to a GrowthState
+// or back (moved out of a non-const source).
+template <class To, class From>
+void transfer(To& to, From& from) {
+  to.rng = from.rng;
+  to.phase = from.phase;
+  to.dt = from.dt;
+  to.last_dt = from.last_dt;
+  to.last_log_scale = from.last_log_scale;
+  to.step = from.step;
+  to.attempts = from.attempts;
+  to.next_target = from.next_target;
+  to.divisions_since_jamming = from.divisions_since_jamming;
+  to.episodes = from.episodes;
+  to.result = std::move(from.result);
+  to.buds = std::move(from.buds);
+  to.packing = std::move(from.packing);
+}
+
+}  // namespace
+
+GrowthState GrowthDriver::state() const {
+  const Impl& d = *impl_;
+  if (!d.started) throw std::logic_error("GrowthDriver::state: the run has not started");
+  GrowthState s;
+  s.seed = d.seed;
+  transfer(s, d);
+  s.search = d.search->state();
+  return s;
+}
+
+void GrowthDriver::restore(GrowthState s) {
+  Impl& d = *impl_;
+  if (s.seed != d.seed)
+    throw InputError("checkpoint: seed " + std::to_string(s.seed) + " does not match the run's seed " +
+                     std::to_string(d.seed));
+  if (s.packing.box.L != d.scene.L) throw InputError("checkpoint: box side does not match the scene");
+  transfer(d, s);
+  d.result.status = RunStatus::running;
+  d.search->restore(std::move(s.search));
+  d.started = true;
+  d.final_emitted = false;
+  d.newton.clear();
+  d.E = d.fresh_energy_per_cell(d.packing);
+  d.derive();
+}
 
 const Scene& GrowthDriver::scene() const { return impl_->scene; }
 std::uint64_t GrowthDriver::seed() const { return impl_->seed; }

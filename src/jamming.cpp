@@ -287,7 +287,7 @@ class BracketSearch final : public JammingSearcher {
   // meets the lower end far above the window, the branch does not come down to the window before
   // the lower end: s jumps there. Without this test the bracket would halve towards the lower end
   // with overshoots whose E/N levels off above the window, each a marginal relaxation, until its
-  // width decides (docs/growth.md, "Jamming search").
+  // width decides (docs/jamming.md).
   bool jumps_at_lower_end(double phi) const {
     constexpr double kNearLowerEnd = 4.0;
     const std::vector<End>& above = open_->above;

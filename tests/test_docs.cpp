@@ -121,8 +121,8 @@ TEST_CASE("every budjam subcommand the documentation names exists", "[docs]") {
   CHECK(named > 30);
 }
 
-TEST_CASE("docs/growth.md's table of jamming searches names exactly the registry's searches, in its order", "[docs]") {
-  const std::string doc = slurp(source_file("docs/growth.md"));
+TEST_CASE("docs/jamming.md's table of jamming searches names exactly the registry's searches, in its order", "[docs]") {
+  const std::string doc = slurp(source_file("docs/jamming.md"));
   const std::string header = "| `jamming.search` | what it does |\n|---|---|\n";
   const auto at = doc.find(header);
   REQUIRE(at != std::string::npos);

@@ -1,5 +1,5 @@
 #pragma once
-// Continuation of a relaxed branch under growth (docs/growth.md, "Jamming search"). Between contact
+// Continuation of a relaxed branch under growth (docs/jamming.md). Between contact
 // events the relaxed state x*(t) of a packing whose bud sizes change with a parameter t is smooth:
 // it is followed by a linear-response predictor and a Newton corrector instead of relaxing each
 // state from scratch with FIRE, whose cost near jamming grows as the lowest Hessian eigenvalue

@@ -1,5 +1,5 @@
 #pragma once
-// The jamming criterion and the searches onto it (docs/growth.md, "Protocol" and "Jamming search").
+// The jamming criterion and the searches onto it (docs/growth.md, "Protocol", and docs/jamming.md).
 //
 // JammingWindow is the criterion: where a relaxed E/N lies against the window [ε_U, 2ε_U]. Every
 // comparison of an energy with ε_U goes through JammingWindow::side(); the quantities the searches
@@ -164,9 +164,8 @@ class JammingSearcher {
 };
 
 // One row per jamming search, in the order of JammingSearch's enumerators: the name a scene gives it
-// (`jamming.search`), what it does in one line (the key's help and the table of docs/growth.md,
-// "Jamming search"), and how it is made from the scene. Adding a search is an enumerator of
-// JammingSearch, a JammingSearcher in jamming.cpp and its row here.
+// (`jamming.search`), what it does in one line (the key's help and the table of docs/jamming.md), and how it is made
+// from the scene. Adding a search is an enumerator of JammingSearch, a JammingSearcher in jamming.cpp and its row here.
 struct JammingSearchKind {
   JammingSearch search;
   std::string_view name;

@@ -14,7 +14,7 @@ namespace budjam {
 
 enum class DivisionRule { random, aligned, opposite };
 enum class InitialState { two_cells, random_seeds };
-// How a growth step is chosen near φ_J and the Δφ targets (docs/growth.md, "Jamming search").
+// How a growth step is chosen near φ_J and the Δφ targets (docs/jamming.md).
 // bisection: the paper's protocol, halve Δt after every overshoot, restart from the nominal Δt.
 // secant: aim each trial at the middle of the jamming window by extrapolating √(E/N), which grows
 // linearly in φ − φ_J, and land a target by solving φ(Δt) = φ_J + Δφ before relaxing.
@@ -78,11 +78,11 @@ struct Scene {
   // Bracket search: collapse the bracket at once when the line through its two lowest overshoots,
   // both close to its lower end, meets that end at s = √(E/N) above jump_factor × √(2ε_U): s jumps
   // across the window there, and further trials would only creep down onto the jump
-  // (docs/growth.md, "Jamming search"). 0 = only the bracket's width decides.
+  // (docs/jamming.md). 0 = only the bracket's width decides.
   double jump_factor = 3.0;
   // Bracket search: a trial starts from the lowest overshoot's relaxed configuration also when that
   // overshoot's larger step divided more cells (they are put back together from their newborns);
-  // false = only when both divided the same cells (docs/growth.md, "Jamming search").
+  // false = only when both divided the same cells (docs/jamming.md).
   bool start_across_divisions = true;
   // Bracket search: FIRE iterations a trial inside the bracket may spend before it is set aside as
   // a deferred upper end (relaxed on only if the bracket closes in on it; docs/growth.md, "Jamming
@@ -91,7 +91,7 @@ struct Scene {
   long trial_budget = 0;
   // Bracket search: a trial that starts from the lowest overshoot with the same divisions follows
   // the overshoot's relaxed branch down to its own sizes by continuation (continuation.hpp) before
-  // FIRE (docs/growth.md, "Jamming search"). false = FIRE from the overshoot's positions.
+  // FIRE (docs/jamming.md). false = FIRE from the overshoot's positions.
   bool continuation = false;
 
   // [minimiser]: the library's defaults are the scene's (fire.hpp).
