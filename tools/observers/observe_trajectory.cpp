@@ -107,7 +107,8 @@ class TrajectoryLog : public Observer {
 };
 
 const tools::ObserverRegistration reg{
-    "trajectory", "observe.trajectory_every",
+    "trajectory",
+    "observe.trajectory_every",
     // trajectory.gsd: a conversion of an earlier run's trajectory.xyz
     {std::string(io::run_files::trajectory), std::string(io::run_files::trajectory_gsd)},
     [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
