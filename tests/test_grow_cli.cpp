@@ -256,14 +256,17 @@ TEST_CASE("a second writer of the same run directory is refused with the holder'
   const auto t0 = std::chrono::steady_clock::now();
   while (slurp(dir / ".budjam-lock").empty() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  // The first writer is held (SIGSTOP) while the others try, so that it still holds the directory
+  // however fast it would have finished.
+  ::kill(pid, SIGSTOP);
   const Result second = grow(q(scene) + " --quiet --seed 9 --overwrite --out " + q(dir));
   const Result resumer = grow("--resume " + q(dir) + " --quiet");
+  ::kill(pid, SIGCONT);
   int status = 0;
   ::waitpid(pid, &status, 0);
   REQUIRE(WIFEXITED(status));
   REQUIRE(WEXITSTATUS(status) == 0);
   for (const Result& r : {second, resumer}) {
-    // (if the first run already finished, the second is refused anyway: a finished run)
     CHECK(r.code == 2);
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
