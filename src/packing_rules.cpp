@@ -1,21 +1,13 @@
 #include "budjam/packing_rules.hpp"
 
+#include "budjam/number_text.hpp"
+
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 namespace budjam {
-
-namespace {
-// Shortest text that reads back to v.
-std::string show(double v) {
-  char buf[32];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
-}  // namespace
 
 std::optional<std::string> cell_problem(const Packing& p, std::size_t i, double b_max) {
   const std::string cell = "cell " + std::to_string(i) + ": ";
@@ -23,23 +15,26 @@ std::optional<std::string> cell_problem(const Packing& p, std::size_t i, double 
   if (!std::isfinite(p.x(i)) || !std::isfinite(p.y(i)) || !std::isfinite(p.theta(i)))
     return cell + "position or angle not finite";
   if (!(std::abs(p.x(i)) <= far && std::abs(p.y(i)) <= far))
-    return cell + "position more than " + show(kMaxBoxesAway) + " box sides from the origin";
+    return cell + "position more than " + shortest_text(kMaxBoxesAway) + " box sides from the origin";
   if (!(p.b[i] >= 0 && p.b[i] <= b_max))
-    return cell + "bud diameter b = " + show(p.b[i]) + " outside [0, " + show(b_max) + "]";
+    return cell + "bud diameter b = " + shortest_text(p.b[i]) + " outside [0, " + shortest_text(b_max) + "]";
   if (!(std::isfinite(p.gamma0[i]) && p.gamma0[i] >= 0))
-    return cell + "innate rate gamma0 = " + show(p.gamma0[i]) + " must be finite and not negative";
+    return cell + "innate rate gamma0 = " + shortest_text(p.gamma0[i]) + " must be finite and not negative";
   return std::nullopt;
 }
 
 std::optional<std::string> box_problem(const Packing& p, double skin) {
-  if (!(std::isfinite(p.box.L) && p.box.L > 0)) return "box side L = " + show(p.box.L) + " must be finite and positive";
+  if (!(std::isfinite(p.box.L) && p.box.L > 0))
+    return "box side L = " + shortest_text(p.box.L) + " must be finite and positive";
   if (!(std::abs(p.box.shear) <= kMaxBoxesAway))
-    return "box shear = " + show(p.box.shear) + " must be finite and at most " + show(kMaxBoxesAway) + " in size";
+    return "box shear = " + shortest_text(p.box.shear) + " must be finite and at most " + shortest_text(kMaxBoxesAway) +
+           " in size";
   double sigma_max = kMotherDiameter;
   for (double b : p.b) sigma_max = std::max(sigma_max, b);
   const double L_min = 2.0 * (sigma_max + skin);
   if (!(p.box.L > L_min))
-    return "box side L = " + show(p.box.L) + " must exceed 2 (largest lobe diameter + skin) = " + show(L_min) +
+    return "box side L = " + shortest_text(p.box.L) +
+           " must exceed 2 (largest lobe diameter + skin) = " + shortest_text(L_min) +
            " so that each neighbour pair has one periodic image";
   return std::nullopt;
 }
@@ -47,7 +42,7 @@ std::optional<std::string> box_problem(const Packing& p, double skin) {
 std::optional<std::string> density_problem(const Packing& p) {
   const double phi = p.packing_fraction();
   if (!(phi < kMaxPackingFraction))
-    return "packing fraction phi = " + show(phi) + " must be below " + show(kMaxPackingFraction) +
+    return "packing fraction phi = " + shortest_text(phi) + " must be below " + shortest_text(kMaxPackingFraction) +
            " (the bound that lobes overlapping by less than half their contact distance allow)";
   return std::nullopt;
 }
@@ -110,8 +105,8 @@ std::optional<std::string> overlap_problem(const Packing& p, std::pair<std::size
       return std::string(is_bud(l) ? "bud" : "mother") + " of cell " + std::to_string(cell_of(l));
     };
     if (first) *first = {cell_of(a), cell_of(worst)};
-    return "the " + lobe(a) + " and the " + lobe(worst) + " are r = " + show(r_worst) +
-           " apart, not more than half their contact distance sigma = " + show(sigma_worst) +
+    return "the " + lobe(a) + " and the " + lobe(worst) + " are r = " + shortest_text(r_worst) +
+           " apart, not more than half their contact distance sigma = " + shortest_text(sigma_worst) +
            " (stacked or interpenetrating cells)";
   }
   return std::nullopt;

@@ -10,25 +10,13 @@
 
 #include "budjam/errors.hpp"
 #include "budjam/jamming.hpp"
+#include "budjam/number_text.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <type_traits>
 
 namespace budjam {
-namespace {
-
-// Shortest text that reads back as the same double (so "(got 0.002)", not "0.0020000000000000001").
-std::string show(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[32];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
-
-}  // namespace
 
 std::string describe_choices(const std::vector<Choice>& choices) {
   std::string text;
@@ -43,7 +31,7 @@ std::string value_text(const SceneValue& value) {
   struct Visitor {
     std::string operator()(bool b) const { return b ? "true" : "false"; }
     std::string operator()(std::int64_t i) const { return std::to_string(i); }
-    std::string operator()(double d) const { return show(d); }
+    std::string operator()(double d) const { return shortest_text(d); }
     std::string operator()(const std::string& s) const { return "\"" + s + "\""; }
     // A long list (10⁶ targets, say) as its first and last values and its length: one short line.
     std::string operator()(const std::vector<double>& v) const {
@@ -55,7 +43,7 @@ std::string value_text(const SceneValue& value) {
           i = v.size() - kTail - 1;
           continue;
         }
-        s += (i ? ", " : "") + show(v[i]);
+        s += (i ? ", " : "") + shortest_text(v[i]);
       }
       return s + "]";
     }
@@ -333,9 +321,9 @@ std::string Range::requirement() const {
   else if (has_lo && lo == 0)
     r = lo_open ? "must be positive" : "must be zero or positive";
   else if (has_lo)
-    r = std::string(lo_open ? "must exceed " : "must be at least ") + show(lo);
+    r = std::string(lo_open ? "must exceed " : "must be at least ") + shortest_text(lo);
   else if (has_hi)
-    r = std::string(hi_open ? "must be below " : "must be at most ") + show(hi);
+    r = std::string(hi_open ? "must be below " : "must be at most ") + shortest_text(hi);
   else
     return "";
   return r + why;
@@ -343,9 +331,10 @@ std::string Range::requirement() const {
 
 std::string Range::interval() const {
   const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
-  if (has_lo && has_hi) return std::string(lo_open ? "(" : "[") + show(lo) + ", " + show(hi) + (hi_open ? ")" : "]");
-  if (has_lo) return std::string(lo_open ? "> " : "≥ ") + show(lo);
-  if (has_hi) return std::string(hi_open ? "< " : "≤ ") + show(hi);
+  if (has_lo && has_hi)
+    return std::string(lo_open ? "(" : "[") + shortest_text(lo) + ", " + shortest_text(hi) + (hi_open ? ")" : "]");
+  if (has_lo) return std::string(lo_open ? "> " : "≥ ") + shortest_text(lo);
+  if (has_hi) return std::string(hi_open ? "< " : "≤ ") + shortest_text(hi);
   return "";
 }
 

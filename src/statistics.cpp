@@ -8,7 +8,6 @@
 namespace budjam {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double sum_sq_dev(std::span<const double> x, double m) {
   double s = 0;

@@ -6,11 +6,15 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <random>
 #include <span>
 #include <vector>
 
 namespace budjam {
+
+// What a statistic is without the data it needs (and a missing value in a table of them).
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Arithmetic mean; NaN for no data.
 double mean(std::span<const double> x);

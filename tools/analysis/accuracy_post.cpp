@@ -23,8 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 // 1e-06 → "1e-6", 0 → "0", 1.25 → "1.25" (variant names).
 std::string label(double v) {
   if (v == 0) return "0";

@@ -25,8 +25,6 @@ using io::Json;
 
 namespace {
 
-constexpr double kNaN = SweepRow::kNaN;
-
 // Quantities in table order; which family can change which.
 const std::vector<std::string> kQuantities{"phi_J", "u_J", "Z_J", "phi_2", "P", "B", "G", "omega_star", "band"};
 const std::map<std::string, std::vector<std::string>> kFamilyQuantities{

@@ -5,21 +5,19 @@
 // (ensemble_tables.hpp); the estimators see no difference. The column lists name each record field
 // in runs.csv and targets.csv, for the writer and the tables reader alike.
 #include "budjam/scene.hpp"
+#include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
-#include <limits>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace budjam::tools {
-
-inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct TargetRow {
   double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -14,8 +13,6 @@ namespace budjam::tools {
 namespace {
 
 using io::Json;
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A quantity of an analysis.json entry: the key and which of its fields holds the value (a mean, or
 // the median for the skewed ones); the standard error is always "se".

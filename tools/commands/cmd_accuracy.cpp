@@ -12,9 +12,8 @@
 #include <utility>
 #include <vector>
 
+namespace budjam::cli::accuracy_command {
 namespace {
-
-using namespace budjam;
 
 struct Options {
   tools::SweepOptions sweep;
@@ -59,3 +58,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::accuracy_command

@@ -8,9 +8,8 @@
 #include <iostream>
 #include <memory>
 
+namespace budjam::cli::analyse_command {
 namespace {
-
-using namespace budjam;
 
 struct Options {
   tools::EnsembleOptions ensemble;
@@ -50,3 +49,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::analyse_command

@@ -16,9 +16,8 @@
 #include <memory>
 #include <string>
 
+namespace budjam::cli::dos_command {
 namespace {
-
-using namespace budjam;
 
 struct Options {
   std::string packing;
@@ -97,3 +96,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::dos_command

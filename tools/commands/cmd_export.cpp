@@ -16,9 +16,8 @@
 #include <string>
 #include <vector>
 
+namespace budjam::cli::export_command {
 namespace {
-
-using namespace budjam;
 
 struct Options {
   std::string packing;
@@ -77,3 +76,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::export_command

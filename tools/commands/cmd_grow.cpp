@@ -27,10 +27,10 @@
 #include <optional>
 #include <string>
 
+namespace budjam::cli::grow_command {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace budjam;
 namespace run_files = io::run_files;
 
 struct Options {
@@ -183,3 +183,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::grow_command

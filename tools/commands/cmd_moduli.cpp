@@ -24,9 +24,9 @@
 #include <optional>
 #include <string>
 
+namespace budjam::cli::moduli_command {
 namespace {
 
-using namespace budjam;
 using io::Json;
 
 struct Options {
@@ -149,3 +149,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::moduli_command

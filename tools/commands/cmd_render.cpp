@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
+namespace budjam::cli::render_command {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace budjam;
 
 struct Options {
   std::string packing;
@@ -106,3 +106,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::render_command

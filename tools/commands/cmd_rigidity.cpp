@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
+namespace budjam::cli::rigidity_command {
 namespace {
 
-using namespace budjam;
 using io::Json;
 
 struct Options {
@@ -66,3 +66,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::rigidity_command

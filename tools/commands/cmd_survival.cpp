@@ -14,9 +14,8 @@
 #include <string>
 #include <vector>
 
+namespace budjam::cli::survival_command {
 namespace {
-
-using namespace budjam;
 
 struct Options {
   std::vector<std::string> runs;
@@ -42,3 +41,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::survival_command

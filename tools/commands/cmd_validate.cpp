@@ -14,6 +14,7 @@
 #include <iostream>
 #include <memory>
 
+namespace budjam::cli::validate_command {
 namespace {
 
 struct Options {
@@ -90,3 +91,4 @@ const bool registered = budjam::cli::register_command(
      }});
 
 }  // namespace
+}  // namespace budjam::cli::validate_command

@@ -33,14 +33,14 @@ std::string hex64(std::uint64_t v) {
   return buf;
 }
 
-constexpr std::string_view kMagic = "budjam-checkpoint";
+constexpr std::string_view kCheckpointMagic = "budjam-checkpoint";
 constexpr std::string_view kChecksum = "checksum ";
 
 // ---- reading: one line at a time, every problem named by file and line --------------------------
 
-class Lines {
+class CheckpointText {
  public:
-  Lines(std::string_view text, std::string file) : file_(std::move(file)) {
+  CheckpointText(std::string_view text, std::string file) : file_(std::move(file)) {
     while (!text.empty()) {
       const std::size_t end = text.find('\n');
       if (end == std::string_view::npos) fail_at(lines_.size() + 1, "the last line does not end with a newline");
@@ -144,7 +144,7 @@ std::string network_text(const NetworkSummary& n) {
 
 // The summary from the words w[at], ..., w[at + kNetworkWords − 1]; counts are bounded by the cells
 // (N by `cells_cap`), lobes (2N) and ordered contact pairs (4N²).
-NetworkSummary read_network(const Lines& in, const std::vector<std::string_view>& w, std::size_t at,
+NetworkSummary read_network(const CheckpointText& in, const std::vector<std::string_view>& w, std::size_t at,
                             std::size_t cells_cap) {
   NetworkSummary n;
   n.N = in.count_of(w[at], "N", cells_cap);
@@ -176,7 +176,7 @@ std::uint64_t scene_hash(const Scene& scene) {
 std::string format_checkpoint(const Scene& scene, const GrowthState& s, const std::vector<Observer*>& observers) {
   const RunResult& r = s.result;
   std::ostringstream os;
-  os << kMagic << ' ' << kCheckpointVersion << '\n';
+  os << kCheckpointMagic << ' ' << kCheckpointVersion << '\n';
   os << "scene " << hex64(scene_hash(scene)) << '\n';
   os << "seed " << s.seed << '\n';
   os << "rng " << s.rng << '\n';
@@ -241,7 +241,7 @@ namespace {
 // What the parse has read so far; each line kind's reader checks its line against it and fills
 // its part of the state.
 struct Parse {
-  Lines& in;
+  CheckpointText& in;
   const Scene& scene;
   std::uint64_t seed;
   GrowthState s;
@@ -263,8 +263,8 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {6, "the run counted its cost by stage (search trials, marginal relaxations, Newton factorisations)"},
 };
 
-void read_version(Lines& in) {
-  const std::int64_t version = in.integer(in.next(kMagic, 1)[0], "version", 0, kLongMax);
+void read_version(CheckpointText& in) {
+  const std::int64_t version = in.integer(in.next(kCheckpointMagic, 1)[0], "version", 0, kLongMax);
   for (const auto& [retired, before] : kRetiredVersions)
     if (version == retired)
       in.fail("checkpoint version " + std::to_string(version) + " was written before " + std::string(before) +
@@ -275,7 +275,7 @@ void read_version(Lines& in) {
 }
 
 // The checksum first: an edited or damaged file is refused before any of it is interpreted.
-void verify_checksum(const Lines& in, std::string_view text) {
+void verify_checksum(const CheckpointText& in, std::string_view text) {
   const std::size_t last = in.count();
   const std::string_view tail = in.raw(last);
   if (tail.substr(0, kChecksum.size()) != kChecksum) in.fail_at(last, "truncated: the last line is not the checksum");
@@ -307,7 +307,7 @@ void read_rng(Parse& p, const Words& w) {
 }
 
 void read_state(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   GrowthState& s = p.s;
   p.where.state = in.line();
   if (w[0] == "jammed")
@@ -330,7 +330,7 @@ void read_state(Parse& p, const Words& w) {
 }
 
 void read_counters(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const GrowthState& s = p.s;
   RunResult& r = p.s.result;
   p.where.counters = in.line();
@@ -343,7 +343,7 @@ void read_counters(Parse& p, const Words& w) {
 }
 
 void read_cost(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   RunResult& r = p.s.result;
   r.search_trials = in.integer(w[0], "search trials", 0, kLongMax);
   r.marginal_relaxations = in.integer(w[1], "marginal relaxations", 0, kLongMax);
@@ -358,7 +358,7 @@ void read_cost(Parse& p, const Words& w) {
 }
 
 void read_search(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   if (w.size() < 3) in.fail("search: expected slow trials, bracket width and the number of overshoots");
   JammingSearchState& q = p.s.search;
   q.slow_trials = static_cast<int>(in.integer(w[0], "slow trials", 0, 2));
@@ -378,20 +378,21 @@ void read_search(Parse& p, const Words& w) {
 }
 
 // The flag (0 or 1) that opens the line of an optional record `key`.
-bool record_flag(const Lines& in, const Words& w, const std::string& key) {
+bool record_flag(const CheckpointText& in, const Words& w, const std::string& key) {
   if (w.empty()) in.fail(key + ": expected 0 or 1");
   return in.flag(w[0], key.c_str());
 }
 
 // A present record has `size` words with its flag, an absent one the flag alone.
-void check_record_size(const Lines& in, const Words& w, const std::string& key, bool present, std::size_t size) {
+void check_record_size(const CheckpointText& in, const Words& w, const std::string& key, bool present,
+                       std::size_t size) {
   if (present && w.size() != size)
     in.fail(key + ": expected " + std::to_string(size) + " values, found " + std::to_string(w.size()));
   if (!present && w.size() != 1) in.fail(key + ": expected no values after 0");
 }
 
 void read_jamming(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const GrowthState& s = p.s;
   p.where.jamming = in.line();
   const bool has = record_flag(in, w, "jamming");
@@ -409,7 +410,7 @@ void read_jamming(Parse& p, const Words& w) {
 }
 
 void read_targets(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const GrowthState& s = p.s;
   const std::size_t n = in.count_of(w[0], "targets", s.next_target);
   if (n != s.next_target)
@@ -434,7 +435,7 @@ void read_targets(Parse& p, const Words& w) {
 }
 
 void read_depletion(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const GrowthState& s = p.s;
   p.where.depletion = in.line();
   const bool has = record_flag(in, w, "depletion");
@@ -451,7 +452,7 @@ void read_depletion(Parse& p, const Words& w) {
 }
 
 void read_unjammings(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const GrowthState& s = p.s;
   const std::size_t ended = static_cast<std::size_t>(s.episodes - (s.phase == Phase::jammed ? 1 : 0));
   const std::size_t n = in.count_of(w[0], "unjammings", ended);
@@ -472,7 +473,7 @@ void read_unjammings(Parse& p, const Words& w) {
 
 // The tagged buds go through BudTags::load (as text) and are checked against the packing later.
 void read_buds(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const std::size_t buds_line = in.line();
   const std::int64_t episode = in.integer(w[0], "buds episode", 0, p.s.episodes);
   const std::size_t n = in.count_of(w[1], "tagged buds", p.cells_cap());
@@ -498,7 +499,7 @@ void read_buds(Parse& p, const Words& w) {
 }
 
 void read_packing(Parse& p, const Words& w) {
-  Lines& in = p.in;
+  CheckpointText& in = p.in;
   const Scene& scene = p.scene;
   const std::size_t cells_cap = p.cells_cap();
   const std::size_t n = in.count_of(w[0], "cells", cells_cap);
@@ -555,7 +556,7 @@ constexpr LineKind kLineKinds[] = {
 };
 
 // The observer sections up to the line `end`, each observer named once.
-std::vector<Section> read_sections(Lines& in) {
+std::vector<Section> read_sections(CheckpointText& in) {
   const std::size_t last = in.count();
   std::vector<Section> sections;
   while (in.line() + 1 < last && in.raw(in.line() + 1).substr(0, 9) == "observer ") {
@@ -573,7 +574,8 @@ std::vector<Section> read_sections(Lines& in) {
 }
 
 // Hands each observer its section, once every section is known to belong to one.
-void load_observers(const Lines& in, const std::vector<Section>& sections, const std::vector<Observer*>& observers) {
+void load_observers(const CheckpointText& in, const std::vector<Section>& sections,
+                    const std::vector<Observer*>& observers) {
   const std::size_t last = in.count();
   std::vector<std::pair<Observer*, const Section*>> matched;
   for (Observer* o : observers) {
@@ -605,7 +607,7 @@ void load_observers(const Lines& in, const std::vector<Section>& sections, const
 
 GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
                              const std::vector<Observer*>& observers, CheckpointLines* lines) {
-  Lines in(text, file);
+  CheckpointText in(text, file);
   read_version(in);
   verify_checksum(in, text);
   Parse p{in, scene, seed, {}, {}};

@@ -169,9 +169,9 @@ std::string format_extxyz(const ParticleFrame& f) {
 namespace {
 
 // One line of a text read line by line, numbered from 1, for the messages of read_extxyz.
-class Lines {
+class XyzLines {
  public:
-  Lines(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {}
+  XyzLines(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {}
   bool done() const { return pos_ >= text_.size(); }
   std::string next() {
     if (done()) {
@@ -202,7 +202,7 @@ std::vector<std::string> words(const std::string& line) {
 }
 
 // The frame header "Lattice="L 0 0 γL L 0 0 0 1" Properties=... pbc="T T F" step=S".
-void read_extxyz_header(const std::string& line, ParticleFrame& f, const Lines& lines) {
+void read_extxyz_header(const std::string& line, ParticleFrame& f, const XyzLines& lines) {
   const std::string lattice = "Lattice=\"", tail = "\" " + extxyz_properties() + " pbc=\"T T F\" step=";
   const std::size_t close = line.find(tail);
   if (line.rfind(lattice, 0) != 0 || close == std::string::npos)
@@ -223,7 +223,7 @@ void read_extxyz_header(const std::string& line, ParticleFrame& f, const Lines& 
 }
 
 // One lobe line: type x y z radius, then the lobe fields.
-void read_extxyz_lobe(const std::string& line, std::size_t k, ParticleFrame& f, const Lines& lines) {
+void read_extxyz_lobe(const std::string& line, std::size_t k, ParticleFrame& f, const XyzLines& lines) {
   const std::vector<std::string> v = words(line);
   const std::size_t columns = 5 + lobe_fields().size();
   if (v.size() != columns) lines.fail(std::to_string(v.size()) + " fields, a lobe line has " + std::to_string(columns));
@@ -257,7 +257,7 @@ void read_extxyz_lobe(const std::string& line, std::size_t k, ParticleFrame& f, 
 
 std::vector<ParticleFrame> read_extxyz(const std::filesystem::path& path) {
   const std::string text = read_text_file(path);
-  Lines lines(text, path.string());
+  XyzLines lines(text, path.string());
   std::vector<ParticleFrame> frames;
   while (!lines.done()) {
     const std::string count = lines.next();

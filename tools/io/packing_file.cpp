@@ -17,8 +17,8 @@
 namespace budjam::io {
 namespace {
 
-constexpr std::string_view kMagic = "budjam-packing";
-constexpr std::array<std::string_view, 7> kColumns = {"id", "parent", "x", "y", "theta", "b", "gamma0"};
+constexpr std::string_view kPackingMagic = "budjam-packing";
+constexpr std::array<std::string_view, 7> kCellColumns = {"id", "parent", "x", "y", "theta", "b", "gamma0"};
 
 bool valid_meta_key(std::string_view key) {
   return !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {
@@ -50,9 +50,9 @@ std::string shown(std::string_view s) {
 }
 
 // Splits into lines without their terminators; remembers whether the text ended with '\n'.
-struct Lines {
+struct PackingLines {
   std::vector<std::string_view> lines;
-  explicit Lines(std::string_view text) {
+  explicit PackingLines(std::string_view text) {
     std::size_t start = 0;
     while (start < text.size()) {
       std::size_t end = text.find('\n', start);
@@ -96,7 +96,7 @@ class Reader {
   void read_magic() {
     if (at_eof()) fail(1, "empty file, not a budjam packing file");
     const auto t = tokens_of(lines_.lines[0]);
-    if (t.empty() || t[0] != kMagic)
+    if (t.empty() || t[0] != kPackingMagic)
       fail(1, "not a budjam packing file (the first line must be \"budjam-packing " +
                   std::to_string(kPackingFormatVersion) + "\")");
     if (t.size() != 2) fail(1, "the first line must be \"budjam-packing <version>\"");
@@ -164,7 +164,7 @@ class Reader {
         if (!valid_meta_value(value)) fail(n, "meta " + mkey + ": the value holds a carriage return");
         if (!out.meta.values.emplace(mkey, value).second) fail(n, "duplicate meta key \"" + mkey + "\"");
       } else if (key == "cells") {
-        if (t.size() != kColumns.size() + 1 || !std::equal(kColumns.begin(), kColumns.end(), t.begin() + 1))
+        if (t.size() != kCellColumns.size() + 1 || !std::equal(kCellColumns.begin(), kCellColumns.end(), t.begin() + 1))
           fail(n, "the cells line must be \"cells id parent x y theta b gamma0\"");
         for (auto [have, name] : {std::pair{L.has_value(), "L"}, std::pair{shear.has_value(), "shear"},
                                   std::pair{N.has_value(), "N"}, std::pair{next_id.has_value(), "next_id"}})
@@ -198,21 +198,21 @@ class Reader {
       const auto t = tokens_of(lines_.lines[next_++]);
       if (t.size() == 1 && t[0] == "end")
         fail(n, "expected N = " + std::to_string(n_cells_) + " cell rows, found " + std::to_string(k));
-      if (t.size() != kColumns.size())
-        fail(n, "expected " + std::to_string(kColumns.size()) + " columns (id parent x y theta b gamma0), found " +
+      if (t.size() != kCellColumns.size())
+        fail(n, "expected " + std::to_string(kCellColumns.size()) + " columns (id parent x y theta b gamma0), found " +
                     std::to_string(t.size()));
       std::int64_t ids[2];
       for (int c = 0; c < 2; ++c) {
         const auto v = parse_int64(t[c]);
-        if (!v) fail(n, "column " + std::string(kColumns[c]) + ": not an integer (got " + shown(t[c]) + ")");
+        if (!v) fail(n, "column " + std::string(kCellColumns[c]) + ": not an integer (got " + shown(t[c]) + ")");
         ids[c] = *v;
       }
       double val[5];
       for (int c = 0; c < 5; ++c) {
         const auto v = parse_double(t[c + 2]);
-        if (!v) fail(n, "column " + std::string(kColumns[c + 2]) + ": not a number (got " + shown(t[c + 2]) + ")");
+        if (!v) fail(n, "column " + std::string(kCellColumns[c + 2]) + ": not a number (got " + shown(t[c + 2]) + ")");
         if (!std::isfinite(*v))
-          fail(n, "column " + std::string(kColumns[c + 2]) + ": not finite (got " + std::string(t[c + 2]) + ")");
+          fail(n, "column " + std::string(kCellColumns[c + 2]) + ": not finite (got " + std::string(t[c + 2]) + ")");
         val[c] = *v;
       }
       const auto [id, parent] = ids;
@@ -243,7 +243,7 @@ class Reader {
     const std::size_t n = line_number();
     const auto t = tokens_of(lines_.lines[next_++]);
     if (!(t.size() == 1 && t[0] == "end")) {
-      if (t.size() == kColumns.size()) fail(n, "more cell rows than N = " + std::to_string(n_cells_));
+      if (t.size() == kCellColumns.size()) fail(n, "more cell rows than N = " + std::to_string(n_cells_));
       fail(n, "expected \"end\" after the cell rows");
     }
     while (!at_eof()) {
@@ -252,7 +252,7 @@ class Reader {
     }
   }
 
-  Lines lines_;
+  PackingLines lines_;
   const std::string& source_;
   std::size_t next_ = 0;  // index of the next line to read
   std::size_t n_cells_ = 0;
@@ -305,7 +305,7 @@ std::string format_packing(const Packing& p, const PackingMeta& meta) {
 
   std::string s;
   s.reserve(64 * n + 256);
-  s += std::string(kMagic) + " " + std::to_string(kPackingFormatVersion) + "\n";
+  s += std::string(kPackingMagic) + " " + std::to_string(kPackingFormatVersion) + "\n";
   s += "L " + format_double(p.box.L) + "\n";
   s += "shear " + format_double(p.box.shear) + "\n";
   s += "N " + std::to_string(n) + "\n";
@@ -353,6 +353,6 @@ PackingFile read_packing(const std::filesystem::path& path) {
   return parse_packing(read_text_file(path), path.string());
 }
 
-bool looks_like_packing(std::string_view text) { return text.substr(0, kMagic.size()) == kMagic; }
+bool looks_like_packing(std::string_view text) { return text.substr(0, kPackingMagic.size()) == kPackingMagic; }
 
 }  // namespace budjam::io

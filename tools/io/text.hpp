@@ -1,8 +1,9 @@
 #pragma once
 // Number <-> text for every file budjam writes. Doubles are written as the shortest text that
 // reads back bit-identically (std::to_chars), so files round-trip exactly and are locale-free.
+#include "budjam/number_text.hpp"
+
 #include <charconv>
-#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -10,14 +11,8 @@
 
 namespace budjam::io {
 
-// Shortest round-trip text of a double: "0.002", "1e-16", "-0"; non-finite as "nan", "inf", "-inf".
-inline std::string format_double(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[32];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
+// Shortest round-trip text of a double (budjam::shortest_text): "0.002", "1e-16", "nan".
+inline std::string format_double(double v) { return shortest_text(v); }
 
 // The whole token must be a number (no leading/trailing junk, no leading '+'). Accepts "nan"
 // and "inf" — callers that refuse non-finite values check std::isfinite themselves.

@@ -9,9 +9,9 @@
 #include <istream>
 #include <ostream>
 
+namespace budjam::tools::bud_events_observer {
 namespace {
 
-using namespace budjam;
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kBudColumns{"episode", "cell_id", "event", "step", "phi", "a"};
@@ -61,3 +61,4 @@ const tools::ObserverRegistration registration{"bud_events",
                                                }};
 
 }  // namespace
+}  // namespace budjam::tools::bud_events_observer

@@ -16,10 +16,10 @@
 #include <optional>
 #include <string>
 
+namespace budjam::tools::dos_observer {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace budjam;
 
 const std::vector<std::string> kColumns{"episode",  "step",         "kind",       "dphi",     "phi",    "N",
                                         "N_nr",     "method",       "n_dof",      "computed", "N_zero", "N_u",
@@ -88,3 +88,4 @@ const tools::ObserverRegistration registration{"dos",
                                                }};
 
 }  // namespace
+}  // namespace budjam::tools::dos_observer

@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
+namespace budjam::tools::moduli_observer {
 namespace {
 
-using namespace budjam;
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kColumns{"event",
@@ -203,3 +203,4 @@ const tools::ObserverRegistration registration{"moduli",
                                                }};
 
 }  // namespace
+}  // namespace budjam::tools::moduli_observer

@@ -10,9 +10,8 @@
 #include <filesystem>
 #include <iostream>
 
+namespace budjam::tools::progress_observer {
 namespace {
-
-using namespace budjam;
 
 class Progress : public Observer {
  public:
@@ -82,3 +81,4 @@ const tools::ObserverRegistration registration{
     }};
 
 }  // namespace
+}  // namespace budjam::tools::progress_observer

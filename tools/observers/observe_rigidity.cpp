@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
+namespace budjam::tools::rigidity_observer {
 namespace {
 
-using namespace budjam;
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kColumns{"step",           "phi",           "episode",
@@ -119,3 +119,4 @@ const tools::ObserverRegistration registration{"rigidity",
                                                }};
 
 }  // namespace
+}  // namespace budjam::tools::rigidity_observer

@@ -23,9 +23,8 @@
 #include <ostream>
 #include <string>
 
+namespace budjam::tools::trajectory_observer {
 namespace {
-
-using namespace budjam;
 
 class TrajectoryLog : public Observer {
  public:
@@ -117,3 +116,4 @@ const tools::ObserverRegistration reg{
     }};
 
 }  // namespace
+}  // namespace budjam::tools::trajectory_observer

@@ -8,9 +8,9 @@
 
 #include <cstdlib>
 
+namespace budjam::tools::trials_observer {
 namespace {
 
-using namespace budjam;
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kTrialColumns{"attempt", "dt",      "N",          "phi",        "E_per_cell",
@@ -56,3 +56,4 @@ const tools::ObserverRegistration registration{"trials",
                                                }};
 
 }  // namespace
+}  // namespace budjam::tools::trials_observer
