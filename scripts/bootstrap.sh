@@ -47,7 +47,7 @@ install_build() { cmake --install build >/dev/null; }
 case "${1:-}" in
   demo)
     echo "bootstrap: demo set-up: the missing packages, then budjam and the Python module:" \
-      "about 11 CPU-minutes of compiling (about 5.5 min on 2 idle cores, longer on a busy machine; README)" >&2
+      "about 4 CPU-minutes of compiling (about 2 min on 2 idle cores, longer on a busy machine; README)" >&2
     install_missing "${demo_packages[@]}"
     build build "${demo_options[@]}"
     install_build

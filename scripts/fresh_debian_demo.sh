@@ -25,12 +25,13 @@ LIST
 cp /etc/resolv.conf "$DIR/etc/"
 git clone -q . "$DIR/root/budjam"
 
-unmount() { umount "$DIR/proc" "$DIR/dev" "$DIR/sys" 2>/dev/null || true; }
+unmount() { umount "$DIR/proc" "$DIR/dev/pts" "$DIR/dev" "$DIR/sys" 2>/dev/null || true; }
 trap unmount EXIT
 mount -t proc proc "$DIR/proc"
 mount --bind /dev "$DIR/dev"
+mount --bind /dev/pts "$DIR/dev/pts"
 mount --bind /sys "$DIR/sys"
-echo "fresh_debian_demo.sh: $(git rev-parse --short HEAD) in $DIR; load: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+echo "fresh_debian_demo.sh: $(git rev-parse --short HEAD) in $DIR, set-up starts $(date +%T); load: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
 chroot "$DIR" /usr/bin/env -i PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/root \
   bash -c 'cd /root/budjam && time bash scripts/bootstrap.sh demo'
 echo "fresh_debian_demo.sh: packages installed by $(grep 'status installed' "$DIR/var/log/dpkg.log" | tail -1 | cut -d' ' -f2);" \

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -55,6 +56,22 @@ double factor_from_log(double log_factor) {
 
 double growth_factor(double bud_pressure, std::optional<double> P0) {
   return factor_from_log(log_growth_factor(bud_pressure, P0));
+}
+
+CompressedFactor mean_compressed_factor(const std::vector<double>& pressures, std::optional<double> P0) {
+  double sum = 0, log_top = -std::numeric_limits<double>::infinity();
+  std::size_t n = 0;
+  for (double p : pressures) {
+    if (!(p > 0)) continue;
+    sum += growth_factor(p, P0);
+    log_top = std::max(log_top, log_growth_factor(p, P0));
+    ++n;
+  }
+  if (!n) return {};
+  double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
+  for (double p : pressures)
+    if (p > 0) relative += std::exp(log_growth_factor(p, P0) - log_top);
+  return {sum / static_cast<double>(n), log_top + std::log(relative / static_cast<double>(n))};
 }
 
 std::vector<double> growth_rates(const Packing& p, const std::vector<double>* bud_pressures, std::optional<double> P0,

@@ -69,27 +69,6 @@ std::size_t compressed_buds(std::size_t cells, const std::vector<Contact>& conta
   return static_cast<std::size_t>(std::ranges::count(touched, 1));
 }
 
-// χ_c = ⟨exp(−p/P0)⟩ over compressed buds, and ln χ_c by log-sum-exp about the largest factor, which
-// survives when every factor underflows. (1, 0) when no bud is compressed.
-struct CompressedFactor {
-  double chi = 1.0, log_chi = 0.0;
-};
-CompressedFactor mean_compressed_factor(const std::vector<double>& pressures, std::optional<double> P0) {
-  double sum = 0, log_top = -std::numeric_limits<double>::infinity();
-  std::size_t n = 0;
-  for (double p : pressures) {
-    if (!(p > 0)) continue;
-    sum += growth_factor(p, P0);
-    log_top = std::max(log_top, log_growth_factor(p, P0));
-    ++n;
-  }
-  if (!n) return {};
-  double relative = 0;  // Σ exp(ln g_i − ln g_top) ≥ 1
-  for (double p : pressures)
-    if (p > 0) relative += std::exp(log_growth_factor(p, P0) - log_top);
-  return {sum / static_cast<double>(n), log_top + std::log(relative / static_cast<double>(n))};
-}
-
 // Δt that the next step starts from (before any bisection halving), from the accepted state with
 // its bud `pressures` (null below jamming or when not computed).
 // The nominal growth.dt (docs/model.md, "Growth protocol"). With growth.adaptive_dt, above jamming with feedback:

@@ -127,6 +127,23 @@ TEST_CASE("the log growth factor is -p/P0 exactly where the factor underflows, a
   CHECK_THROWS_AS(log_growth_factor(std::nan(""), 1.0), std::domain_error);
 }
 
+// χ_c averages exp(−p/P0) over the compressed buds only; its logarithm is exact where every factor
+// underflows: buds at p/P0 = 800 and 802 give ln χ_c = −800 + ln((1 + e^−2)/2).
+TEST_CASE("chi_c is the mean growth factor of the compressed buds, and ln chi_c survives underflow", "[growth]") {
+  const CompressedFactor none = mean_compressed_factor({0.0, -1.0}, 1e-3);
+  CHECK(none.chi == 1.0);
+  CHECK(none.log_chi == 0.0);
+  const CompressedFactor mild = mean_compressed_factor({1e-3, 0.0, 2e-3}, 1e-3);
+  CHECK(mild.chi == Approx((std::exp(-1.0) + std::exp(-2.0)) / 2).epsilon(1e-15));
+  CHECK(mild.log_chi == Approx(std::log(mild.chi)).epsilon(1e-14));
+  const CompressedFactor deep = mean_compressed_factor({400.0, 401.0}, 0.5);
+  CHECK(deep.chi == 0.0);
+  CHECK(deep.log_chi == Approx(-800.0 + std::log((1.0 + std::exp(-2.0)) / 2)).epsilon(1e-15));
+  const CompressedFactor free_growth = mean_compressed_factor({1.0, 2.0}, std::nullopt);
+  CHECK(free_growth.chi == 1.0);
+  CHECK(free_growth.log_chi == 0.0);
+}
+
 // P0 = 1/2 makes p/P0 exact: 800 and 801. Both factors underflow (e^-800 < DBL_MIN), so the plain
 // rates are 0; taken relative to e^-800 the two differ by e^-1 to the last bit.
 TEST_CASE("rates scaled by e^800 keep the ratio of buds at p/P0 = 800 and 801 at exactly e^-1", "[growth]") {

@@ -40,6 +40,13 @@ double factor_from_log(double log_factor);
 // (never a denormal, never NaN, also for p = +∞). Errors as log_growth_factor.
 double growth_factor(double bud_pressure, std::optional<double> P0);
 
+// χ_c = ⟨exp(−p/P0)⟩ over the compressed buds (p > 0), and ln χ_c by log-sum-exp about the largest
+// factor, which survives when every factor underflows. (1, 0) when no bud is compressed.
+struct CompressedFactor {
+  double chi = 1.0, log_chi = 0.0;
+};
+CompressedFactor mean_compressed_factor(const std::vector<double>& bud_pressures, std::optional<double> P0);
+
 // γ_i·e^{log_scale} for the next step: γ0_i, times exp(−p_i/P0) when `bud_pressures` is given
 // (feedback on: above jamming and P0 set; one entry per cell), each factor taken in log space as
 // exp(log_scale − p_i/P0). A step of Δt·e^{−log_scale} with these rates grows every cell as Δt with
