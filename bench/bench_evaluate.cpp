@@ -1,4 +1,4 @@
-// Cost of one force evaluation inside FIRE (docs/growth.md, "Speed"). Not a
+// Cost of one force evaluation inside FIRE (docs/speed.md). Not a
 // test: prints a table.
 //
 //   bench_evaluate [--threads T] [--sizes N1,N2,...] [--work W]

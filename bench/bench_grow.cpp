@@ -1,4 +1,4 @@
-// Speed of growth runs (docs/growth.md, "Speed"). Not a test: prints a table.
+// Speed of growth runs (docs/speed.md). Not a test: prints a table.
 //
 //   bench_grow [SCENE_DIR]        whole runs with each jamming search (demo scene; L = 15,
 //                                 P0 = 1e-3, Δφ = 1e-4, 1e-3, 1e-2 and φ_2) and the

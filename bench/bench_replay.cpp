@@ -1,4 +1,4 @@
-// Replay of the trials that cost (docs/growth.md, "Speed"): the marginal relaxations of a run,
+// Replay of the trials that cost (docs/speed.md): the marginal relaxations of a run,
 // saved once, relaxed again with the current minimiser, so that an idea is measured on exactly the
 // relaxations where a run's time goes. Not a test.
 //

@@ -1,4 +1,4 @@
-// Scaling of whole growth runs with the number of cells (docs/growth.md, "Speed").
+// Scaling of whole growth runs with the number of cells (docs/speed.md).
 // Not a test: prints one summary line per run (and, optionally, one CSV row per growth attempt).
 //
 //   bench_scaling [options] [--set section.key=value]...

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Whole growth runs of two budjam builds side by side, in CPU seconds (docs/growth.md, "Speed").
+# Whole growth runs of two budjam builds side by side, in CPU seconds (docs/speed.md).
 #
 #   bench/whole_runs.sh OLD_BUDJAM NEW_BUDJAM [options] [-- extra grow arguments for NEW only]
 #     --L "15 20"          box sides (default 15)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tables and log-log fits for the scaling benchmark (docs/growth.md, "Speed").
+"""Tables and log-log fits for the scaling benchmark (docs/speed.md).
 
 Reads runs of build/bench_scaling, each as a pair DIR/NAME.csv (its --csv, one row per growth
 attempt) and DIR/NAME.txt (its standard output: box side, status, peak RSS), and prints

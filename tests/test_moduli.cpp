@@ -38,7 +38,7 @@ namespace {
 
 FireParams tight_fire() {
   FireParams f;
-  f.dt_max = 0.4;       // stable for the stiffest lobe contacts (docs/growth.md, "Speed")
+  f.dt_max = 0.4;       // stable for the stiffest lobe contacts (docs/speed.md)
   f.force_tol = 1e-14;  // floored by FIRE at its force resolution
   return f;
 }

@@ -114,7 +114,7 @@ struct RunResult {
   long force_evaluations = 0, fire_iterations = 0;
   long divisions = 0;        // all divisions in accepted steps
   long saddles_relaxed = 0;  // jamming candidates found to be saddles and relaxed on
-  // Where the time goes (docs/growth.md, "Speed"). The force evaluations split by stage (the initial
+  // Where the time goes (docs/speed.md). The force evaluations split by stage (the initial
   // relaxation, the trials of the unjammed phase, the trials above jamming) add up to
   // force_evaluations.
   long search_trials = 0;         // relaxed trials in the unjammed phase: the search onto φ_J
