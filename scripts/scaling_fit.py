@@ -16,6 +16,7 @@ Standard library only.
 import csv
 import math
 import re
+import statistics
 import sys
 
 
@@ -48,6 +49,8 @@ def load(path, lo, hi, last):
     run["status"] = re.search(r"^status (\w+)", txt, re.M).group(1)
     m = re.search(r"peak RSS (\d+) KiB \(at start (\d+) KiB\)", txt)
     run["rss"], run["rss0"] = int(m.group(1)), int(m.group(2))
+    m = re.search(r"search trials\s+(\d+)\s+marginal relaxations\s+(\d+)", txt)
+    run["search_trials"], run["marginal"] = (int(m.group(1)), int(m.group(2))) if m else (None, None)
     m = re.search(r"N_J (\d+)", txt)
     run["N_J"] = int(m.group(1)) if m else None
     run["stages"] = {m.group(1): {"accepted": int(m.group(2)), "rejected": int(m.group(3)), "evals": int(m.group(4)),
@@ -84,7 +87,7 @@ def show_fit(label, xs, ys):
     if len(xs) < 2:
         return
     k, se, c = fit(xs, ys)
-    print(f"  {label:<44s} ~ N^{k:.2f} ± {se:.2f}   (prefactor {c:.3g}, {len(xs)} sizes, N = {min(xs):.0f}..{max(xs):.0f})")
+    print(f"  {label:<44s} ~ N^{k:.2f} ± {se:.2f}   (prefactor {c:.3g}, {len(xs)} runs, N = {min(xs):.0f}..{max(xs):.0f})")
 
 
 def main(argv):
@@ -120,6 +123,17 @@ def main(argv):
             print(f"  {r['name']:<10s} " + "  ".join(
                 f"{k} {st[k]['accepted']}+{st[k]['rejected']} steps, {st[k]['evals']} evals, {st[k]['cpu']:.2f} s "
                 f"({100 * st[k]['cpu'] / r['cpu']:.0f} %)" for k in ("approach", "bisect", "above")))
+        print("  by box side: runs, median CPU s (range), median search trials and marginal relaxations "
+              "(trials above 1e5 evaluations) per run")
+        for side in sorted({r["L"] for r in whole}):
+            at = [r for r in whole if r["L"] == side]
+            cpu = [r["cpu"] for r in at]
+            counted = [r for r in at if r["marginal"] is not None]
+            counts = (f"{statistics.median(r['search_trials'] for r in counted):g} trials, "
+                      f"{statistics.median(r['marginal'] for r in counted):g} marginal "
+                      f"({', '.join(str(r['marginal']) for r in counted)})" if counted else "no cost line")
+            print(f"    L = {side:<5g} {len(at):3d} runs  CPU {statistics.median(cpu):9.2f} s "
+                  f"({min(cpu):.2f}-{max(cpu):.2f})  {counts}")
         n = [r["N_J"] for r in whole]
         show_fit("whole run: CPU s per accepted step", n, [r["cpu"] / r["accepted"] for r in whole])
         show_fit("whole run: evaluations per accepted step", n, [r["evals"] / r["accepted"] for r in whole])
