@@ -435,6 +435,11 @@ struct GrowthDriver::Impl {
     result.force_evaluations_search += r.evaluations;
     result.newton_factorisations += r.factorisations;
     result.newton_factor_reuses += r.chord_steps;
+    ++result.branches;
+    result.branches_reached += r.end == BranchEnd::reached;
+    result.branch_stability_losses += r.end == BranchEnd::stability_lost;
+    result.branch_steps += r.steps;
+    result.branch_events += static_cast<long>(r.events.size());
   }
 
   // A deferred trial, relaxed on to convergence from where its budget ended, is judged again as the

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -150,6 +151,33 @@ TEST_CASE("summary.json's cost counters agree with trials.csv: trials, marginal 
   // The demo scene finishes above jamming with Newton: its factorisations are counted.
   CHECK(summary.at("newton_factorisations").get<long long>() > 0);
   CHECK(summary.at("newton_factor_reuses").get<long long>() >= 0);
+  // Without jamming.continuation no branch is followed.
+  for (const char* key : {"branches", "branches_reached", "branch_stability_losses", "branch_steps", "branch_events"})
+    CHECK(summary.at(key).get<long long>() == 0);
+}
+
+TEST_CASE("with jamming.continuation, summary.json counts one branch per trial started on the lowest overshoot",
+          "[cli]") {
+  const fs::path run = work_dir() / "continuation";
+  REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --out " +
+                     shell_quoted(run) + " --set jamming.continuation=true --set observe.trials=true")
+              .code == 0);
+  const budjam::io::Json summary = budjam::io::read_json(run / "summary.json");
+  const budjam::tools::CsvTable trials = budjam::tools::read_csv(run / "trials.csv");
+  // A deferred trial relaxed on appears again under its attempt: its branch was followed once.
+  std::set<long long> on_branch;
+  for (std::size_t r = 0; r < trials.size(); ++r)
+    if (trials.text(r, trials.column("start")) == "lowest_overshoot")
+      on_branch.insert(trials.integer(r, trials.column("attempt"), 1, 1LL << 40));
+  const auto count = [&](const char* key) { return summary.at(key).get<long long>(); };
+  REQUIRE(!on_branch.empty());  // the demo's search starts trials on its lowest overshoot
+  CHECK(count("branches") == static_cast<long long>(on_branch.size()));
+  CHECK(count("branches_reached") + count("branch_stability_losses") <= count("branches"));
+  // A branch that reached the trial's sizes took at least one step; the others may have taken none.
+  CHECK(count("branch_steps") >= count("branches_reached"));
+  CHECK(count("branch_events") >= 0);
+  // Each branch step factorises at least once, and those factorisations are Newton's.
+  CHECK(count("newton_factorisations") >= count("branch_steps"));
 }
 
 namespace {

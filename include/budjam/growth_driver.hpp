@@ -121,6 +121,11 @@ struct RunResult {
   long marginal_relaxations = 0;  // relaxed trials that cost more than kMarginalEvaluations
   long newton_factorisations = 0, newton_factor_reuses = 0;  // Newton steps with a fresh / a kept factor
   long force_evaluations_initial = 0, force_evaluations_search = 0, force_evaluations_above_jamming = 0;
+  // The relaxed branches followed before trials' relaxations (jamming.continuation): how many, how
+  // many reached the trial's sizes and how many ended where the network lost stability, their
+  // accepted steps and the contact events (openings and closings) found along them. Their
+  // factorisations are among newton_factorisations.
+  long branches = 0, branches_reached = 0, branch_stability_losses = 0, branch_steps = 0, branch_events = 0;
 };
 
 // A trial whose relaxation costs more force evaluations than this is a marginal relaxation: FIRE

@@ -188,6 +188,8 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << "cost " << r.search_trials << ' ' << r.marginal_relaxations << ' ' << r.newton_factorisations << ' '
      << r.newton_factor_reuses << ' ' << r.force_evaluations_initial << ' ' << r.force_evaluations_search << ' '
      << r.force_evaluations_above_jamming << '\n';
+  os << "branches " << r.branches << ' ' << r.branches_reached << ' ' << r.branch_stability_losses << ' '
+     << r.branch_steps << ' ' << r.branch_events << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
   for (const JammingOvershoot& o : s.search.overshoots)
     os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
@@ -261,6 +263,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {4, "every record (jamming point, targets, phi_2) held the whole contact-network summary"},
     {5, "growth steps were stored with their log scale (the adaptive step out of the double range)"},
     {6, "the run counted its cost by stage (search trials, marginal relaxations, Newton factorisations)"},
+    {7, "the run counted the relaxed branches it followed (jamming.continuation)"},
 };
 
 void read_version(CheckpointText& in) {
@@ -355,6 +358,16 @@ void read_cost(Parse& p, const Words& w) {
   if (r.force_evaluations_initial + r.force_evaluations_search + r.force_evaluations_above_jamming !=
       r.force_evaluations)
     in.fail("cost: the force evaluations by stage do not add up to the force evaluations");
+}
+
+void read_branches(Parse& p, const Words& w) {
+  CheckpointText& in = p.in;
+  RunResult& r = p.s.result;
+  r.branches = in.integer(w[0], "branches", 0, p.s.attempts);
+  r.branches_reached = in.integer(w[1], "branches reached", 0, r.branches);
+  r.branch_stability_losses = in.integer(w[2], "branches that lost stability", 0, r.branches - r.branches_reached);
+  r.branch_steps = in.integer(w[3], "branch steps", 0, kLongMax);
+  r.branch_events = in.integer(w[4], "branch events", 0, kLongMax);
 }
 
 void read_search(Parse& p, const Words& w) {
@@ -546,6 +559,7 @@ constexpr LineKind kLineKinds[] = {
     {"state", 9, read_state},
     {"counters", 6, read_counters},
     {"cost", 7, read_cost},
+    {"branches", 5, read_branches},
     {"search", -1, read_search},
     {"jamming", -1, read_jamming},
     {"targets", 1, read_targets},

@@ -262,6 +262,11 @@ Json summary_json(const GrowthDriver& driver) {
   j["force_evaluations_initial"] = r.force_evaluations_initial;
   j["force_evaluations_search"] = r.force_evaluations_search;
   j["force_evaluations_above_jamming"] = r.force_evaluations_above_jamming;
+  j["branches"] = r.branches;
+  j["branches_reached"] = r.branches_reached;
+  j["branch_stability_losses"] = r.branch_stability_losses;
+  j["branch_steps"] = r.branch_steps;
+  j["branch_events"] = r.branch_events;
   return j;
 }
 
