@@ -8,9 +8,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # What the demo needs: the compilers, the libraries, the Python module's build and runtime.
+# OpenBLAS becomes the system's libblas.so.3: CHOLMOD's supernodal factors and ARPACK run on its
+# kernels (held on one thread, docs/speed.md "Threads"), 1.7x less CPU than the reference BLAS's.
 demo_packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
-               libtomlplusplus-dev libcli11-dev nlohmann-json3-dev librsvg2-bin pybind11-dev python3-dev
-               python3-numpy python3-pandas help2man bash-completion)
+               libopenblas0-openmp libtomlplusplus-dev libcli11-dev nlohmann-json3-dev librsvg2-bin
+               pybind11-dev python3-dev python3-numpy python3-pandas help2man bash-completion)
 # What the whole test suite needs on top: Catch2, the independent readers of every file format,
 # `pip install .` into a venv, the notebook, Slurm, the sanitizer and fuzzing compilers, clang-format.
 test_packages=(catch2 python3-matplotlib python3-gsd python3-pytest python3-ase python3-meshio

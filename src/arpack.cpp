@@ -1,5 +1,7 @@
 #include "budjam/arpack.hpp"
 
+#include "budjam/blas_threads.hpp"
+
 #include <arpack/arpack.h>  // arpack-ng's ISO-C bindings dsaupd_c / dseupd_c
 
 #include <algorithm>
@@ -96,6 +98,7 @@ LanczosResult run(int n, int mode, const char* which, double sigma, const Linear
   int ido = 0, info = 1;  // info = 1: resid holds the starting vector
 
   std::lock_guard<std::mutex> lock(arpack_mutex());
+  const SerialBlas serial_blas;  // ARPACK's dense steps call the BLAS and LAPACK (blas_threads.hpp)
   for (;;) {
     dsaupd_c(&ido, "I", n, which, nev, opt.tol, resid.data(), ncv, v.data(), n, iparam, ipntr, workd.data(),
              workl.data(), lworkl, &info);

@@ -1,5 +1,7 @@
 #include "budjam/cholmod_solver.hpp"
 
+#include "budjam/blas_threads.hpp"
+
 #include <cholmod.h>
 
 #include <algorithm>
@@ -10,6 +12,9 @@
 namespace budjam {
 
 struct CholmodSolver::Impl {
+  // A supernodal factor and its solves call the BLAS: on one thread, so that the factor's bits do
+  // not depend on the thread count (blas_threads.hpp).
+  SerialBlas serial_blas;
   cholmod_common common{};
   cholmod_factor* L = nullptr;
   // Upper-triangle pattern of the last analysed matrix, to reuse the ordering.

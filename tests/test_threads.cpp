@@ -1,5 +1,9 @@
 // Threaded force evaluations (energy.hpp, docs/minimiser.md "Threads"): results are bit-identical
-// for every thread count, and to one thread, from a single evaluation to a whole growth run.
+// for every thread count, and to one thread, from a single evaluation to a whole growth run. The
+// BLAS under the sparse factorisation is held on one thread (blas_threads.hpp): a factor's bits do
+// not depend on how many threads the BLAS was given.
+#include "budjam/blas_threads.hpp"
+#include "budjam/cholmod_solver.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
@@ -11,7 +15,9 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -69,6 +75,39 @@ void compare_with_one_thread(Run run, Check check) {
     INFO("threads = " << threads);
     check(run(threads), one);
   }
+}
+
+// The stiffness matrix of a periodic triangular spring network of n × n nodes (two degrees of
+// freedom each, random spring constants in [0.5, 1.5], a weak on-site spring 10⁻³ that removes the
+// translations): symmetric positive definite, and large enough (n = 120: 28 800 rows) for CHOLMOD
+// to factor it supernodally, with the BLAS.
+Eigen::SparseMatrix<double> spring_network_stiffness(int n) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> spring(0.5, 1.5);
+  std::vector<Eigen::Triplet<double>> t;
+  const auto node = [n](int i, int j) { return ((i + n) % n) * n + (j + n) % n; };
+  const double bonds[3][2] = {{1.0, 0.0}, {0.5, std::sqrt(3.0) / 2.0}, {-0.5, std::sqrt(3.0) / 2.0}};
+  const int steps[3][2] = {{1, 0}, {0, 1}, {-1, 1}};
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const int a = node(i, j);
+      for (int d = 0; d < 2; ++d) t.emplace_back(2 * a + d, 2 * a + d, 1e-3);
+      for (int b = 0; b < 3; ++b) {
+        const int c = node(i + steps[b][0], j + steps[b][1]);
+        const double k = spring(rng);
+        for (int x = 0; x < 2; ++x)
+          for (int y = 0; y < 2; ++y) {
+            const double kxy = k * bonds[b][x] * bonds[b][y];  // k ê êᵀ
+            t.emplace_back(2 * a + x, 2 * a + y, kxy);
+            t.emplace_back(2 * c + x, 2 * c + y, kxy);
+            t.emplace_back(2 * a + x, 2 * c + y, -kxy);
+            t.emplace_back(2 * c + x, 2 * a + y, -kxy);
+          }
+      }
+    }
+  Eigen::SparseMatrix<double> K(2 * n * n, 2 * n * n);
+  K.setFromTriplets(t.begin(), t.end());
+  return K;
 }
 
 bool same_packing(const Packing& a, const Packing& b) {
@@ -145,6 +184,30 @@ TEST_CASE("a growth run of 600 cells is bit-identical on 1, 2, 3 and 4 threads",
     CHECK(threaded.first.force_evaluations == serial.first.force_evaluations);
     CHECK(same_packing(threaded.second, serial.second));
   });
+}
+
+TEST_CASE("a supernodal factorisation solves to the same bits whatever the BLAS's thread count", "[fast]") {
+  if (threaded_blas().empty())
+    WARN("the BLAS of this process has no threads budjam can set (reference BLAS): the comparison is trivial");
+  const Eigen::SparseMatrix<double> K = spring_network_stiffness(120);
+  const Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(K.rows(), -1.0, 1.0);
+  const auto solve_with_blas_threads = [&](int threads) {
+    set_blas_threads(threads);
+    CholmodSolver solver;
+    REQUIRE(solver.factor(K));
+    CHECK(solver.supernodal());
+    return Eigen::VectorXd(solver.solve(f));
+  };
+  const int before = blas_threads();
+  const Eigen::VectorXd one = solve_with_blas_threads(1);
+  for (int threads : kThreadCounts) {
+    INFO("BLAS threads = " << threads);
+    CHECK(solve_with_blas_threads(threads) == one);
+    // The process's own thread count is back once the solver is gone.
+    if (!threaded_blas().empty()) CHECK(blas_threads() == threads);
+  }
+  set_blas_threads(before);
+  CHECK((K * one - f).norm() < 1e-8 * f.norm());
 }
 
 TEST_CASE("minimiser.threads accepts 0 and positive counts and rejects negative ones", "[fast]") {
