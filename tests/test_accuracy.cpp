@@ -4,6 +4,7 @@
 #include "compressed_packing.hpp"
 #include "random_packing.hpp"
 
+#include "analysis/accuracy_sweep.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 
@@ -227,4 +228,30 @@ TEST_CASE(
   std::string head;
   std::getline(csv, head);
   CHECK(head.find(",res_phi_2,") != std::string::npos);
+}
+
+TEST_CASE("the growth cost rates are the least-squares CPU per force evaluation and per factorisation", "[fast]") {
+  const auto run = [](double evaluations, double factorisations, double seconds, std::size_t n = 3) {
+    tools::SweepRow r;
+    r.family = "growth";
+    r.force_evaluations = evaluations;
+    r.newton_factorisations = factorisations;
+    r.seconds = seconds;
+    r.n = n;
+    return r;
+  };
+  // CPU = 2 µs per evaluation + 3 ms per factorisation, exactly: the fit recovers both.
+  const std::vector<tools::SweepRow> mixed{run(1e5, 10, 0.23), run(2e5, 0, 0.4), run(1.2e5, 4e4, 120.24),
+                                           run(3e5, 2e3, 6.6)};
+  const tools::GrowthCostRates rates = tools::growth_cost_rates(mixed);
+  CHECK(rates.per_evaluation == Approx(2e-6).epsilon(1e-9));
+  CHECK(rates.per_factorisation == Approx(3e-3).epsilon(1e-9));
+  // No factorisations anywhere: the evaluations carry the whole CPU time (the n-weighted fit).
+  const std::vector<tools::SweepRow> fire_only{run(1e5, 0, 0.2, 2), run(2e5, 0, 0.5, 1)};
+  const tools::GrowthCostRates fire = tools::growth_cost_rates(fire_only);
+  CHECK(fire.per_factorisation == 0.0);
+  CHECK(fire.per_evaluation == Approx((2 * 1e5 * 0.2 + 2e5 * 0.5) / (2 * 1e10 + 4e10)).epsilon(1e-12));
+  // A fit that would make factorisations free of cost (or negative) falls back to evaluations alone.
+  const std::vector<tools::SweepRow> cheap{run(1e5, 1e3, 0.2), run(2e5, 0, 0.5)};
+  CHECK(tools::growth_cost_rates(cheap).per_factorisation == 0.0);
 }

@@ -38,7 +38,7 @@ const std::map<std::string, std::string> kKnobLabel{
     {"arpack_ncv", "ARPACK ncv"},         {"search", "jamming.search"},
     {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"},
     {"jump", "jamming.jump_factor"},      {"across", "jamming.start_across_divisions"},
-    {"budget", "jamming.trial_budget"}};
+    {"budget", "jamming.trial_budget"},   {"continuation", "jamming.continuation"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -84,7 +84,8 @@ double sidecar_number(const fs::path& pack, const std::string& kind, const char*
 }
 
 struct Measured {
-  double cpu = kNaN, wall = kNaN, evaluations = kNaN, phi_J = kNaN, u_J = kNaN, Z_J = kNaN, phi_2 = kNaN;
+  double cpu = kNaN, wall = kNaN, evaluations = kNaN, factorisations = kNaN;
+  double phi_J = kNaN, u_J = kNaN, Z_J = kNaN, phi_2 = kNaN;
   std::map<double, double> P, B, G, omega;  // by Δφ
 };
 
@@ -100,6 +101,7 @@ Measured measure(const fs::path& run) {
     const Json t = io::read_json(run / "cpu_time.json");
     m.cpu = t.value("user_seconds", kNaN) + t.value("system_seconds", kNaN);
   }
+  m.factorisations = r.summary.contains("newton_factorisations") ? r.get("newton_factorisations") : kNaN;
   m.phi_J = r.get("phi_J");
   m.u_J = r.get("u_J");
   m.Z_J = r.get("Z_J");
@@ -134,6 +136,38 @@ double finite_mean(const std::vector<double>& v) {
 
 }  // namespace
 
+// The cost of a growth setting is its counted work at the sweep's CPU rates: force evaluations
+// (FIRE) and factorisations (the Newton finish, the continuation), counts that the same seeds repeat
+// exactly, while the CPU time of one ~1-s run on a shared machine varies by 15–30 % with the load.
+// The two rates are the least-squares fit of every run's CPU time (rows weighted by their runs),
+// kept non-negative: with too few factorisations to resolve their rate, it is 0 and the evaluations
+// carry the whole CPU time.
+GrowthCostRates growth_cost_rates(const std::vector<SweepRow>& rows) {
+  double ee = 0, ef = 0, ff = 0, ec = 0, fc = 0;
+  for (const SweepRow& r : rows) {
+    if (!std::isfinite(r.seconds) || !std::isfinite(r.force_evaluations) || r.force_evaluations <= 0) continue;
+    const double w = static_cast<double>(r.n), e = r.force_evaluations;
+    const double f = std::isfinite(r.newton_factorisations) ? r.newton_factorisations : 0.0;
+    ee += w * e * e;
+    ef += w * e * f;
+    ff += w * f * f;
+    ec += w * e * r.seconds;
+    fc += w * f * r.seconds;
+  }
+  GrowthCostRates rates;
+  if (ee <= 0) return rates;
+  const double det = ee * ff - ef * ef;
+  if (det > 1e-12 * ee * ff) {
+    rates.per_evaluation = (ec * ff - fc * ef) / det;
+    rates.per_factorisation = (fc * ee - ec * ef) / det;
+  }
+  if (!(rates.per_evaluation > 0) || !(rates.per_factorisation > 0)) {
+    rates.per_evaluation = ec / ee;  // the evaluations alone
+    rates.per_factorisation = 0;
+  }
+  return rates;
+}
+
 std::vector<SweepRow> growth_rows(const SweepOptions& o) {
   const auto ref_runs = seeds_of(o.reference);
   std::map<std::string, Measured> ref;
@@ -152,9 +186,9 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
       throw InputError(dir.string() +
                        ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, jump, "
-                       "across, budget, newton or adaptive, or default");
+                       "across, budget, newton, continuation or adaptive, or default");
     std::map<std::string, std::vector<double>> per;
-    std::vector<double> cpu, wall, evals;
+    std::vector<double> cpu, wall, evals, factorisations;
     for (const auto& [s, d] : seeds_of(dir)) {
       if (!ref.count(s)) throw InputError(d.string() + ": the reference has no run " + s);
       const Measured m = measure(d);
@@ -162,6 +196,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
       cpu.push_back(m.cpu);
       wall.push_back(m.wall);
       evals.push_back(m.evaluations);
+      factorisations.push_back(m.factorisations);
       ++row.n;
       if (is_ref) continue;
       per["phi_J"].push_back(std::abs(m.phi_J - R.phi_J));
@@ -175,6 +210,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     }
     row.wall_seconds = finite_mean(wall);
     row.force_evaluations = finite_mean(evals);
+    row.newton_factorisations = finite_mean(factorisations);
     row.seconds = std::isfinite(finite_mean(cpu)) ? finite_mean(cpu) : row.wall_seconds;
     for (const auto& [q, v] : per) {
       row.err[q] = std::abs(finite_mean(v));
@@ -188,17 +224,13 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
   };
   for (const auto& v : o.variants) add(fs::path(v).filename().string(), v, false);
   add("reference", o.reference, true);
-  // Cost of a growth setting: its force evaluations per run (deterministic: same seeds, same count)
-  // at the sweep's mean CPU time per evaluation. The CPU time of one ~1-s run on a shared machine
-  // varies by 15–30 % with the load; the evaluation count does not, and FIRE is the cost of growth.
-  double cpu = 0, evals = 0;
-  for (const SweepRow& r : rows)
-    if (std::isfinite(r.seconds) && std::isfinite(r.force_evaluations) && r.force_evaluations > 0) {
-      cpu += r.seconds * static_cast<double>(r.n);
-      evals += r.force_evaluations * static_cast<double>(r.n);
-    }
+  const GrowthCostRates rates = growth_cost_rates(rows);
   for (SweepRow& r : rows)
-    r.cost = evals > 0 && std::isfinite(r.force_evaluations) ? r.force_evaluations * cpu / evals : r.seconds;
+    r.cost =
+        std::isfinite(r.force_evaluations) && rates.per_evaluation > 0
+            ? rates.per_evaluation * r.force_evaluations +
+                  rates.per_factorisation * (std::isfinite(r.newton_factorisations) ? r.newton_factorisations : 0.0)
+            : r.seconds;
   return rows;
 }
 
@@ -520,6 +552,7 @@ Json row_json(const SweepRow& r) {
   if (r.family == "growth") {
     x["wall_seconds"] = io::number_or_null(r.wall_seconds);
     x["force_evaluations"] = io::number_or_null(r.force_evaluations);
+    x["newton_factorisations"] = io::number_or_null(r.newton_factorisations);
   } else {
     x["failures"] = r.failures;
   }

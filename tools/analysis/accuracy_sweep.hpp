@@ -52,8 +52,8 @@ struct SweepRow {
   bool is_default = false, is_reference = false;
   std::size_t n = 0, failures = 0;
   double seconds = kNaN;  // measured: CPU seconds per run / per computation
-  double cost = kNaN;     // what the front compares (seconds; growth: force evaluations at a common rate)
-  double wall_seconds = kNaN, force_evaluations = kNaN;
+  double cost = kNaN;     // what the front compares (seconds; growth: counted work at common rates)
+  double wall_seconds = kNaN, force_evaluations = kNaN, newton_factorisations = kNaN;
   std::map<std::string, double> err;      // by quantity; absent = n/a
   std::map<std::string, double> max_err;  // post-processing: the worst packing
   // Ensemble quantities (φ_2): err is |mean over seeds of the signed difference|, and this its
@@ -71,6 +71,13 @@ struct SweepVerdict {
   std::vector<std::string> off_front;  // "<set>: <knob>" whose default a variant dominates
   std::string noise_md, joint_md;      // Markdown lines for accuracy.md
 };
+
+// CPU seconds per force evaluation and per factorisation of the growth runs, fitted to their CPU
+// times by least squares (non-negative; per_factorisation = 0 when the runs do not resolve it).
+struct GrowthCostRates {
+  double per_evaluation = 0, per_factorisation = 0;
+};
+GrowthCostRates growth_cost_rates(const std::vector<SweepRow>& rows);
 
 // Throws InputError for an inconsistent or empty request.
 void check_sweep_options(const SweepOptions& options);
