@@ -28,14 +28,14 @@ const OpenBlas& openblas() {
 }
 
 // The holders alive and the thread count to restore after the last.
-struct Holders {
+struct SerialBlasHolders {
   std::mutex mutex;
   long alive = 0;
   int restore = 1;
 };
 
-Holders& holders() {
-  static Holders h;
+SerialBlasHolders& serial_blas_holders() {
+  static SerialBlasHolders h;
   return h;
 }
 
@@ -51,7 +51,7 @@ void set_blas_threads(int threads) {
 
 SerialBlas::SerialBlas() {
   if (!openblas().present()) return;
-  Holders& h = holders();
+  SerialBlasHolders& h = serial_blas_holders();
   const std::lock_guard<std::mutex> lock(h.mutex);
   if (h.alive++ == 0) {
     h.restore = openblas().get();
@@ -61,7 +61,7 @@ SerialBlas::SerialBlas() {
 
 SerialBlas::~SerialBlas() {
   if (!openblas().present()) return;
-  Holders& h = holders();
+  SerialBlasHolders& h = serial_blas_holders();
   const std::lock_guard<std::mutex> lock(h.mutex);
   if (--h.alive == 0 && h.restore != 1) openblas().set(h.restore);
 }
