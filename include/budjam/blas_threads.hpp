@@ -4,12 +4,11 @@
 // Debian's libblas.so.3 is an alternative: the reference BLAS (one thread) or OpenBLAS, which splits
 // the dense kernels of a supernodal factor among its threads. Its rounding then depends on how many:
 // the same factorisation solved with one and with two OpenBLAS threads differs in the last bits
-// (docs/speed.md, "Threads"), and on a shared machine the second thread costs more CPU than it
-// saves. budjam's results must not depend on the thread count, so its factorisations, solves and
-// Lanczos iterations run the BLAS on one thread: a SerialBlas holds OpenBLAS there while it lives,
-// and the thread count the process had is restored when the last one ends, so that other users of
-// the BLAS in the same process (numpy's, in the Python module) keep theirs. Single-threaded,
-// OpenBLAS's kernels still pay: they are faster than the reference BLAS's.
+// (docs/speed.md, "Large packings"). budjam's results must not depend on the thread count, so its
+// factorisations, solves and Lanczos iterations run the BLAS on one thread: a SerialBlas holds
+// OpenBLAS there while it lives, and the thread count the process had is restored when the last one
+// ends, so that other users of the BLAS in the same process (numpy's, in the Python module) keep
+// theirs. Single-threaded, OpenBLAS's kernels still pay: they are faster than the reference BLAS's.
 #include <string>
 
 namespace budjam {
