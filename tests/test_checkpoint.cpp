@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <istream>
 #include <ostream>
 #include <sstream>
@@ -203,6 +204,15 @@ TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the 
   CHECK(r.branch_events == uninterrupted.branch_events);
   CHECK(r.newton_factorisations == uninterrupted.newton_factorisations);
   CHECK(r.jamming->phi == uninterrupted.jamming->phi);
+  // More branches reached than followed is refused at the line, naming the counter.
+  std::vector<std::string> lines = split_lines(text);
+  const auto at =
+      std::find_if(lines.begin(), lines.end(), [](const std::string& l) { return l.rfind("branches ", 0) == 0; });
+  REQUIRE(at != lines.end());
+  *at = "branches 1 2 0 0 0";
+  const std::string line = std::to_string(at - lines.begin() + 1);
+  CHECK_THROWS_WITH(parse_checkpoint(resealed(join_lines(lines)), "cp", scene, 3, {}),
+                    Contains("cp:" + line + ":") && Contains("branches reached: 2 is outside [0, 1]"));
 }
 
 TEST_CASE("a checkpoint is refused for another scene, seed or set of observers", "[checkpoint]") {
