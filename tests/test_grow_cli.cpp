@@ -43,11 +43,11 @@ using Result = budjam::testing::BudjamRun;
 
 Result grow(const std::string& args) { return budjam::testing::run_budjam("grow " + args); }
 
-// A small scene: L = 6, two targets, bud events, quick.
-fs::path small_scene(const std::string& name, const std::string& extra = "") {
+// A small scene: L = 6, two targets (or `targets`), bud events, quick.
+fs::path small_scene(const std::string& name, const std::string& extra = "", const std::string& targets = "[1e-3, 1e-2]") {
   const fs::path p = work_dir() / (name + ".toml");
   std::ofstream(p) << "[run]\nname = \"" << name << "\"\nseed = 3\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
-                   << "[jamming]\ntargets = [1e-3, 1e-2]\n"
+                   << "[jamming]\ntargets = " << targets << "\n"
                    << extra;
   return p;
 }
@@ -512,14 +512,19 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   return out;
 }
 
-// A run (box.L = 6, trials and trajectory on) stopped by SIGTERM as soon as it has jammed: its
-// checkpoint holds a jamming record and tagged buds.
+// A run (box.L = 6, trials and trajectory on) stopped by SIGTERM past jamming: its checkpoint holds a
+// jamming record and tagged buds. The signal must land after the first checkpoint past jamming and
+// before the run ends. With small_scene's two targets that window was 4 steps, which a loaded
+// machine missed in one try of four; a third target Δφ = 5e-2 (reached ~12 000 steps after the
+// second) and a signal once target_1.pack exists (past the checkpoint of step 1420) widen it to
+// seconds.
 fs::path stopped_after_jamming(const std::string& name) {
-  const fs::path scene = small_scene(name, "[observe]\ncheckpoint_every = 20\ntrials = true\ntrajectory_every = 40\n");
+  const fs::path scene = small_scene(name, "[observe]\ncheckpoint_every = 20\ntrials = true\ntrajectory_every = 40\n",
+                                     "[1e-3, 1e-2, 5e-2]");
   const fs::path dir = work_dir() / name;
   for (int attempt = 0; attempt < 5; ++attempt) {
     fs::remove_all(dir);
-    const int status = grow_and_signal(scene, dir, 0.0, SIGTERM, "packings/jammed.pack", "6");
+    const int status = grow_and_signal(scene, dir, 0.0, SIGTERM, "packings/target_1.pack", "6");
     REQUIRE(WIFEXITED(status));
     if (WEXITSTATUS(status) == 143 && slurp(dir / "checkpoint.txt").find("\njamming 1 ") != std::string::npos)
       return dir;
