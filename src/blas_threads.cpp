@@ -5,6 +5,10 @@
 
 #include <mutex>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace budjam {
 
 namespace {
@@ -64,6 +68,20 @@ SerialBlas::~SerialBlas() {
   SerialBlasHolders& h = serial_blas_holders();
   const std::lock_guard<std::mutex> lock(h.mutex);
   if (--h.alive == 0 && h.restore != 1) openblas().set(h.restore);
+}
+
+// No active level allowed: a region then gets one thread, whatever its num_threads clause asks.
+SerialOpenMp::SerialOpenMp() {
+#ifdef _OPENMP
+  levels_ = omp_get_max_active_levels();
+  omp_set_max_active_levels(0);
+#endif
+}
+
+SerialOpenMp::~SerialOpenMp() {
+#ifdef _OPENMP
+  omp_set_max_active_levels(levels_);
+#endif
 }
 
 }  // namespace budjam

@@ -117,6 +117,7 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
   S.sorted = 1;
   S.packed = 1;
 
+  const SerialOpenMp serial_openmp;  // CHOLMOD's own OpenMP regions (blas_threads.hpp)
   const bool same_pattern = m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
                             std::equal(m.outer.begin(), m.outer.end(), C.outerIndexPtr()) &&
                             static_cast<Eigen::Index>(m.inner.size()) == C.nonZeros() &&

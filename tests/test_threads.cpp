@@ -1,7 +1,7 @@
 // Threaded force evaluations (energy.hpp, docs/minimiser.md "Threads"): results are bit-identical
 // for every thread count, and to one thread, from a single evaluation to a whole growth run. The
 // BLAS under the sparse factorisation is held on one thread (blas_threads.hpp): a factor's bits do
-// not depend on how many threads the BLAS was given.
+// not depend on how many threads the BLAS was given, and CHOLMOD's own OpenMP regions start none.
 #include "budjam/blas_threads.hpp"
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/contacts.hpp"
@@ -17,8 +17,10 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <filesystem>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #ifdef _OPENMP
@@ -208,6 +210,43 @@ TEST_CASE("a supernodal factorisation solves to the same bits whatever the BLAS'
   }
   set_blas_threads(before);
   CHECK((K * one - f).norm() < 1e-8 * f.norm());
+}
+
+namespace {
+
+long threads_of_this_process() {
+  long n = 0;
+  for ([[maybe_unused]] const auto& task : std::filesystem::directory_iterator("/proc/self/task")) ++n;
+  return n;
+}
+
+}  // namespace
+
+// libgomp keeps a pool of threads per thread that opened a region; a fresh thread has none, so any
+// thread the factorisation starts is still there when it returns.
+TEST_CASE("a supernodal factorisation starts no OpenMP threads, and budjam's own regions keep theirs", "[fast]") {
+  const Eigen::SparseMatrix<double> K = spring_network_stiffness(120);
+  long before = 0, after = 0;
+  bool supernodal = false, factored = false;
+  std::thread fresh([&] {
+    before = threads_of_this_process();
+    CholmodSolver solver;
+    factored = solver.factor(K);
+    supernodal = solver.supernodal();
+    after = threads_of_this_process();
+  });
+  fresh.join();
+  REQUIRE(factored);
+  CHECK(supernodal);
+  CHECK(after == before);
+#ifdef _OPENMP
+  // The hold ends with the call: a region of budjam's own still gets the threads it asks for.
+  int team = 0;
+#pragma omp parallel num_threads(2)
+#pragma omp single
+  team = omp_get_num_threads();
+  CHECK(team == 2);
+#endif
 }
 
 TEST_CASE("minimiser.threads accepts 0 and positive counts and rejects negative ones", "[fast]") {

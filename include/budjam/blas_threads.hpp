@@ -9,6 +9,12 @@
 // OpenBLAS there while it lives, and the thread count the process had is restored when the last one
 // ends, so that other users of the BLAS in the same process (numpy's, in the Python module) keep
 // theirs. Single-threaded, OpenBLAS's kernels still pay: they are faster than the reference BLAS's.
+//
+// CHOLMOD's supernodal factorisation also opens OpenMP regions of its own, with a team size fixed
+// when Debian built it (CHOLMOD_OMP_NUM_THREADS = 4) and no run-time setting: they only clear
+// workspace, so they change no bit, but on every factorisation they wake three threads that then
+// wait on futexes (an L = 15 run with the Newton finish: 4.3 → 3.6 CPU s without them, the same
+// packings). A SerialOpenMp makes every OpenMP region its thread opens run on that thread alone.
 #include <string>
 
 namespace budjam {
@@ -27,6 +33,19 @@ class SerialBlas {
   ~SerialBlas();
   SerialBlas(const SerialBlas&) = delete;
   SerialBlas& operator=(const SerialBlas&) = delete;
+};
+
+// While it lives, the OpenMP regions that the thread holding it opens (in a library it calls) run
+// on that thread alone; held around a call, not across budjam's own threaded force loops.
+class SerialOpenMp {
+ public:
+  SerialOpenMp();
+  ~SerialOpenMp();
+  SerialOpenMp(const SerialOpenMp&) = delete;
+  SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+
+ private:
+  int levels_ = 0;  // the max-active-levels setting to restore
 };
 
 }  // namespace budjam
