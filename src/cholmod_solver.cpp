@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <vector>
 
 namespace budjam {
@@ -137,9 +138,17 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
     return false;
   }
   if (!good || m.common.status < CHOLMOD_OK) throw CholmodError("CHOLMOD factorisation failed: " + m.status_text());
-  supernodal_ = m.L->is_super != 0;
   factor_nonzeros_ = static_cast<long>(m.common.lnz);
+  read_factor();
+  ok_ = true;
+  return true;
+}
+
+void CholmodSolver::read_factor() {
+  Impl& m = *impl_;
+  supernodal_ = m.L->is_super != 0;
   rcond_ = cholmod_rcond(m.L, &m.common);
+  negative_pivots_ = 0;
   if (kind_ == Factorisation::ldlt) {
     if (m.L->is_super || m.L->is_ll) throw CholmodError("CHOLMOD returned an LLᵀ factor where LDLᵀ was asked");
     const int* Lp = static_cast<const int*>(m.L->p);
@@ -147,8 +156,46 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
     for (size_t j = 0; j < m.L->n; ++j)
       if (Lx[Lp[j]] < 0) ++negative_pivots_;  // the diagonal D_jj is stored first in column j
   }
-  ok_ = true;
-  return true;
+}
+
+void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
+  if (!ok_) throw CholmodError("CholmodSolver::update: no successful factorisation");
+  if (kind_ != Factorisation::ldlt) throw CholmodError("CholmodSolver::update: needs Factorisation::ldlt");
+  if (C.rows() != n_ || C.cols() < 1 || C.cols() > 8)
+    throw CholmodError("CholmodSolver::update: C must have rows() rows and 1 to 8 columns");
+  Impl& m = *impl_;
+  // The factor is of P A Pᵀ (P = L->Perm): row i of C goes to the position k with Perm[k] = i.
+  const int* perm = static_cast<const int*>(m.L->Perm);
+  std::vector<int> position(static_cast<size_t>(n_));
+  for (Eigen::Index k = 0; k < n_; ++k) position[static_cast<size_t>(perm[k])] = static_cast<int>(k);
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<size_t>(C.nonZeros()));
+  for (Eigen::Index j = 0; j < C.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(C, j); it; ++it)
+      t.emplace_back(position[static_cast<size_t>(it.row())], static_cast<int>(j), it.value());
+  Eigen::SparseMatrix<double> PC(n_, C.cols());
+  PC.setFromTriplets(t.begin(), t.end());  // compressed, rows sorted within each column
+  cholmod_sparse S{};
+  S.nrow = static_cast<size_t>(n_);
+  S.ncol = static_cast<size_t>(PC.cols());
+  S.nzmax = static_cast<size_t>(PC.nonZeros());
+  S.p = PC.outerIndexPtr();
+  S.i = PC.innerIndexPtr();
+  S.x = PC.valuePtr();
+  S.stype = 0;  // unsymmetric: every entry of C
+  S.itype = CHOLMOD_INT;
+  S.xtype = CHOLMOD_REAL;
+  S.dtype = CHOLMOD_DOUBLE;
+  S.sorted = 1;
+  S.packed = 1;
+  if (!cholmod_updown(add ? 1 : 0, &S, m.L, &m.common) || m.common.status < CHOLMOD_OK)
+    throw CholmodError("CHOLMOD update failed: " + m.status_text());
+  // The updated factor's pattern is no longer the analysed one: the next factor() starts afresh.
+  m.outer.clear();
+  m.inner.clear();
+  const int* column_nonzeros = static_cast<const int*>(m.L->nz);
+  factor_nonzeros_ = std::accumulate(column_nonzeros, column_nonzeros + n_, 0L);
+  read_factor();
 }
 
 void CholmodSolver::solve(const double* b, double* x) const {

@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace budjam;
 
 namespace {
@@ -84,4 +86,95 @@ TEST_CASE("Factoring A - sigma M with a sparse M equals the diagonal-mass overlo
   CHECK((a.solve(rhs) - b.solve(rhs)).norm() < 1e-12 * a.solve(rhs).norm());
   const Eigen::MatrixXd shifted = A + 0.6 * Eigen::MatrixXd::Identity(30, 30);
   CHECK((shifted * a.solve(rhs) - rhs).norm() < 1e-10);
+}
+
+namespace {
+
+// A contact's rank-1 term: √k g with g supported on the six dofs of two cells (i, j), g_j = −g_i,
+// as k_c (Jᵀn)(Jᵀn)ᵀ of a contact at zero force.
+Eigen::SparseMatrix<double> contact_column(int n, int i, int j, double k, double angle, double arm) {
+  const double c = std::cos(angle), s = std::sin(angle), r = std::sqrt(k);
+  const double gi[3] = {c, s, arm * (c * 0.3 - s * 0.7)};
+  Eigen::SparseMatrix<double> C(n, 1);
+  for (int a = 0; a < 3; ++a) {
+    C.insert(3 * i + a, 0) = r * gi[a];
+    C.insert(3 * j + a, 0) = -r * gi[a];
+  }
+  C.makeCompressed();
+  return C;
+}
+
+}  // namespace
+
+TEST_CASE("an LDLT factor updated by contact terms solves as the factor of the changed matrix", "[fast]") {
+  const int cells = 40, n = 3 * cells;
+  Eigen::MatrixXd A = banded_spd(n, 5);
+  const Eigen::SparseMatrix<double> C1 = contact_column(n, 3, 17, 2.0, 0.4, 0.6);
+  const Eigen::SparseMatrix<double> C2 = contact_column(n, 30, 8, 0.5, 2.1, 0.2);
+  const Eigen::MatrixXd D1 = Eigen::MatrixXd(C1), D2 = Eigen::MatrixXd(C2);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 1.0);
+  auto fresh_solve = [&](const Eigen::MatrixXd& M) {
+    CholmodSolver f(Factorisation::ldlt);
+    REQUIRE(f.factor(Eigen::SparseMatrix<double>(M.sparseView())));
+    return Eigen::VectorXd(f.solve(b));
+  };
+
+  CholmodSolver s(Factorisation::ldlt);
+  REQUIRE(s.factor(Eigen::SparseMatrix<double>(A.sparseView())));
+  // A contact closes: A + c cᵀ.
+  s.update(C1, true);
+  const Eigen::MatrixXd closed = A + D1 * D1.transpose();
+  CHECK((s.solve(b) - fresh_solve(closed)).norm() < 1e-10 * fresh_solve(closed).norm());
+  CHECK((closed * s.solve(b) - b).norm() < 1e-10 * b.norm());
+  // Two contacts change at once (one opens, one closes): a rank-2 update in two calls.
+  s.update(C2, true);
+  s.update(C1, false);
+  const Eigen::MatrixXd swapped = A + D2 * D2.transpose();
+  CHECK((swapped * s.solve(b) - b).norm() < 1e-10 * b.norm());
+  CHECK(s.negative_pivots() == 0);
+  CHECK(s.factor_nonzeros() > 0);
+}
+
+TEST_CASE("a downdate that makes the matrix indefinite shows in the inertia (Sylvester)", "[fast]") {
+  // A = B + t ccᵀ with B having one negative eigenvalue along c: A is positive definite, and the
+  // downdate by t ccᵀ leaves B, whose inertia the updated factor must report.
+  const int n = 60;
+  const Eigen::MatrixXd P = banded_spd(n, 6);
+  const Eigen::SparseMatrix<double> C = contact_column(n, 4, 11, 1.0, 0.9, 0.5);
+  const Eigen::VectorXd c = Eigen::MatrixXd(C).col(0);
+  // P − s ccᵀ loses definiteness at s = 1/(cᵀP⁻¹c) and has one negative eigenvalue past it.
+  const double q = c.dot(P.ldlt().solve(c));
+  const Eigen::MatrixXd B = P - (2.0 / q) * c * c.transpose();
+  const Eigen::MatrixXd A = B + (4.0 / q) * c * c.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eb(B), ea(A);
+  REQUIRE(ea.eigenvalues()[0] > 0);
+  REQUIRE(eb.eigenvalues()[0] < 0);
+  REQUIRE(eb.eigenvalues()[1] > 0);
+
+  CholmodSolver s(Factorisation::ldlt);
+  REQUIRE(s.factor(Eigen::SparseMatrix<double>(A.sparseView())));
+  CHECK(s.negative_pivots() == 0);
+  const Eigen::SparseMatrix<double> scaled = std::sqrt(4.0 / q) * C;
+  s.update(scaled, false);
+  CHECK(s.negative_pivots() == 1);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(n);
+  CHECK((B * s.solve(b) - b).norm() < 1e-8 * b.norm());
+}
+
+TEST_CASE("an update needs a successful LDLT factor and a C of the factor's size", "[fast]") {
+  const int n = 30;
+  const Eigen::SparseMatrix<double> A = Eigen::MatrixXd(banded_spd(n, 7)).sparseView();
+  const Eigen::SparseMatrix<double> C = contact_column(n, 1, 5, 1.0, 0.2, 0.3);
+  CholmodSolver ldlt(Factorisation::ldlt), llt(Factorisation::llt);
+  CHECK_THROWS_AS(ldlt.update(C, true), CholmodError);  // nothing factored yet
+  REQUIRE(ldlt.factor(A));
+  REQUIRE(llt.factor(A));
+  CHECK_THROWS_AS(llt.update(C, true), CholmodError);
+  CHECK_THROWS_AS(ldlt.update(Eigen::SparseMatrix<double>(n + 3, 1), true), CholmodError);
+  CHECK_THROWS_AS(ldlt.update(Eigen::SparseMatrix<double>(n, 9), true), CholmodError);
+  // A refactorisation after an update analyses afresh and solves the new matrix.
+  ldlt.update(C, true);
+  REQUIRE(ldlt.factor(A));
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(n);
+  CHECK((Eigen::MatrixXd(A) * ldlt.solve(b) - b).norm() < 1e-10 * b.norm());
 }

@@ -44,7 +44,8 @@ using Result = budjam::testing::BudjamRun;
 Result grow(const std::string& args) { return budjam::testing::run_budjam("grow " + args); }
 
 // A small scene: L = 6, two targets (or `targets`), bud events, quick.
-fs::path small_scene(const std::string& name, const std::string& extra = "", const std::string& targets = "[1e-3, 1e-2]") {
+fs::path small_scene(const std::string& name, const std::string& extra = "",
+                     const std::string& targets = "[1e-3, 1e-2]") {
   const fs::path p = work_dir() / (name + ".toml");
   std::ofstream(p) << "[run]\nname = \"" << name << "\"\nseed = 3\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
                    << "[jamming]\ntargets = " << targets << "\n"

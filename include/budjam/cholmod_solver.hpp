@@ -7,6 +7,7 @@
 //   Eigen::MatrixXd X = s.solve(B);        // many right-hand sides at once
 //   s.factor(H, sigma, mass);              // H − σ diag(mass): the fill-reducing ordering of the
 //                                          // previous call is reused when the pattern is the same
+//   s.update(C, false);                    // ldlt: the factor of A − C Cᵀ, from the factor of A
 //
 // With Factorisation::ldlt the factor is a simplicial LDLᵀ without pivoting: it accepts symmetric
 // indefinite matrices (fails only on an exactly zero or NaN pivot), and negative_pivots() is the
@@ -50,6 +51,15 @@ class CholmodSolver {
   // Factors A − σ M for a sparse symmetric M.
   bool factor(const Eigen::SparseMatrix<double>& A, double sigma, const Eigen::SparseMatrix<double>& M);
 
+  // Changes the factored matrix A to A + C Cᵀ (add) or A − C Cᵀ, C a sparse rows() × k matrix
+  // (k ≤ 8 per call), by updating the factor in place (cholmod_updown) instead of factoring
+  // again: a contact that opens or closes at zero force changes the Hessian by k_c g gᵀ, one rank-1
+  // term (g = Jᵀn, six entries), so an event costs an update where it would cost a factorisation.
+  // ldlt only; the factor stays simplicial LDLᵀ and negative_pivots() and rcond() follow it (the
+  // inertia of the changed matrix). The next factor() analyses its matrix again. Throws
+  // CholmodError without a successful factor, for llt, or for a C of the wrong size.
+  void update(const Eigen::SparseMatrix<double>& C, bool add);
+
   // x = (A − σM)⁻¹ b. Throws CholmodError unless the last factor() succeeded.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
@@ -71,6 +81,7 @@ class CholmodSolver {
  private:
   struct Impl;
   bool factor_matrix(const Eigen::SparseMatrix<double>& C);
+  void read_factor();  // inertia and condition estimate of the current factor
   std::unique_ptr<Impl> impl_;
   Factorisation kind_;
   bool ok_ = false;

@@ -1,0 +1,145 @@
+// What a contact event costs the sparse factor of the Hessian (docs/speed.md, "Where the time
+// goes"): an event-driven continuation changes the network one contact at a time, and a contact that
+// opens or closes at zero force changes the non-rattler Hessian by one rank-1 term k_c g gᵀ
+// (g = Jᵀn). Whether such a continuation can beat FIRE at marginality depends on how much cheaper
+// updating the factor for that term is than factoring again. Not a test.
+//
+//   bench_factor_update PACKING [--events K]
+//
+// On the non-rattler Hessian H of PACKING's load-bearing contacts (both terms) plus δ1 (δ = 10⁻¹⁰ ×
+// its largest diagonal entry, as the stability test): the CPU seconds of the first LDLᵀ factor
+// (ordering and numeric factorisation), of a numeric refactorisation with the ordering kept, of a
+// solve, and of the downdate and update that open and close again each of K load-bearing contacts
+// (default 100; CholmodSolver::update). Printed with the relative difference between the solve
+// after one downdate and a fresh factor of the downdated matrix, and the residual of a solve before
+// the events and after all K round trips.
+#include "budjam/cholmod_solver.hpp"
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/hessian.hpp"
+#include "io/packing_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <exception>
+#include <string>
+#include <vector>
+
+using namespace budjam;
+
+namespace {
+
+double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+// √k (Jᵀn) of contact c in the reduced dofs of `map`: the column whose outer product the contact
+// adds to H at zero force.
+SparseMatrix contact_term(const Packing& p, const Contact& c, const DofMap& map) {
+  const Eigen::Matrix<double, 2, 6> J = contact_jacobian(p, c);
+  const Eigen::Matrix<double, 6, 1> g = J.transpose() * Eigen::Vector2d(c.nx, c.ny) * std::sqrt(kSpring);
+  const long cells[2] = {map.block[c.i / 2], map.block[c.j / 2]};
+  std::vector<Eigen::Triplet<double>> t;
+  for (int side = 0; side < 2; ++side)
+    if (cells[side] >= 0)
+      for (int a = 0; a < 3; ++a) t.emplace_back(static_cast<int>(3 * cells[side] + a), 0, g[3 * side + a]);
+  SparseMatrix C(map.size(), 1);
+  C.setFromTriplets(t.begin(), t.end());
+  return C;
+}
+
+int run(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_factor_update PACKING [--events K]\n");
+    return 2;
+  }
+  long events = 100;
+  for (int k = 2; k < argc; ++k) {
+    const std::string a = argv[k];
+    if (a == "--events" && k + 1 < argc) {
+      events = std::atol(argv[++k]);
+    } else {
+      std::fprintf(stderr, "bench_factor_update: unknown argument %s\n", argv[k]);
+      return 2;
+    }
+  }
+  Packing p = io::read_packing(argv[1]).packing;
+  ForceField field;
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  const std::vector<Contact> contacts = find_contacts(p, field.lobes(), field.neighbours());
+  const ContactNetwork net = analyse_network(p.size(), contacts);
+  const std::vector<Contact> lb = load_bearing(contacts, net);
+  if (lb.empty()) {
+    std::fprintf(stderr, "bench_factor_update: %s has no load-bearing contact\n", argv[1]);
+    return 1;
+  }
+  const DofMap map = non_rattler_dofs(net);
+  SparseMatrix H = restrict_matrix(hessian(p, lb), map);
+  const double delta = 1e-10 * H.diagonal().cwiseAbs().maxCoeff();
+  for (Eigen::Index k = 0; k < H.rows(); ++k) H.coeffRef(k, k) += delta;
+
+  CholmodSolver ldl(Factorisation::ldlt);
+  double t0 = cpu_seconds();
+  if (!ldl.factor(H)) throw std::runtime_error("zero pivot in the LDLᵀ factor of H + δ1");
+  const double first = cpu_seconds() - t0;
+  const int repeats = 3;
+  t0 = cpu_seconds();
+  for (int r = 0; r < repeats; ++r) ldl.factor(H);
+  const double numeric = (cpu_seconds() - t0) / repeats;
+  const long nnz_L = ldl.factor_nonzeros();
+
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(H.rows(), -1.0, 1.0);
+  t0 = cpu_seconds();
+  Eigen::VectorXd x0;
+  for (int r = 0; r < repeats; ++r) x0 = ldl.solve(b);
+  const double solve = (cpu_seconds() - t0) / repeats;
+  const double residual0 = (H * x0 - b).norm() / b.norm();
+  events = std::min<long>(events, static_cast<long>(lb.size()));
+  const std::size_t stride = lb.size() / static_cast<std::size_t>(events);
+  double down = 0, up = 0, agreement = 0;
+  for (long e = 0; e < events; ++e) {
+    const SparseMatrix C = contact_term(p, lb[static_cast<std::size_t>(e) * stride], map);
+    t0 = cpu_seconds();
+    ldl.update(C, false);
+    down += cpu_seconds() - t0;
+    if (e == 0) {
+      // The downdated factor against a fresh factor of the downdated matrix.
+      CholmodSolver fresh(Factorisation::ldlt);
+      const SparseMatrix opened = H - SparseMatrix(C * SparseMatrix(C.transpose()));
+      if (!fresh.factor(opened)) throw std::runtime_error("zero pivot in the factor of the opened network");
+      const Eigen::VectorXd x = fresh.solve(b);
+      agreement = (ldl.solve(b) - x).norm() / x.norm();
+    }
+    t0 = cpu_seconds();
+    ldl.update(C, true);
+    up += cpu_seconds() - t0;
+  }
+  const double residual = (H * ldl.solve(b) - b).norm() / b.norm();
+  std::printf("packing %s: N %zu, non-rattler dofs %ld, load-bearing contacts %zu\n", argv[1], p.size(),
+              static_cast<long>(H.rows()), lb.size());
+  std::printf("first factor (ordering + numeric)   %.4f CPU s, nnz(L) %ld\n", first, nnz_L);
+  std::printf("numeric refactorisation              %.4f CPU s (mean of %d)\n", numeric, repeats);
+  std::printf("solve                                %.4f CPU s (mean of %d)\n", solve, repeats);
+  std::printf("contact opened (rank-1 downdate)     %.6f CPU s (mean of %ld)\n", down / events, events);
+  std::printf("contact closed (rank-1 update)       %.6f CPU s (mean of %ld)\n", up / events, events);
+  std::printf("refactorisation / event              %.0fx\n", numeric / (0.5 * (down + up) / events));
+  std::printf(
+      "downdate vs fresh factor: relative difference of a solve %.2e; residual %.2e before the events, "
+      "%.2e after %ld round trips\n",
+      agreement, residual0, residual, events);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_factor_update: %s\n", e.what());
+    return 1;
+  }
+}
