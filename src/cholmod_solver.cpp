@@ -12,6 +12,29 @@
 
 namespace budjam {
 
+namespace {
+
+// CHOLMOD's view of a compressed Eigen matrix with sorted columns (no copy; `A` must outlive it).
+// stype 1: symmetric, upper triangle stored; 0: every entry.
+cholmod_sparse cholmod_view(Eigen::SparseMatrix<double>& A, int stype) {
+  cholmod_sparse S{};
+  S.nrow = static_cast<size_t>(A.rows());
+  S.ncol = static_cast<size_t>(A.cols());
+  S.nzmax = static_cast<size_t>(A.nonZeros());
+  S.p = A.outerIndexPtr();
+  S.i = A.innerIndexPtr();
+  S.x = A.valuePtr();
+  S.stype = stype;
+  S.itype = CHOLMOD_INT;
+  S.xtype = CHOLMOD_REAL;
+  S.dtype = CHOLMOD_DOUBLE;
+  S.sorted = 1;
+  S.packed = 1;
+  return S;
+}
+
+}  // namespace
+
 struct CholmodSolver::Impl {
   // A supernodal factor and its solves call the BLAS: on one thread, so that the factor's bits do
   // not depend on the thread count (blas_threads.hpp).
@@ -104,19 +127,7 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
   rcond_ = 0;
   n_ = C.rows();
 
-  cholmod_sparse S{};
-  S.nrow = static_cast<size_t>(C.rows());
-  S.ncol = static_cast<size_t>(C.cols());
-  S.nzmax = static_cast<size_t>(C.nonZeros());
-  S.p = C.outerIndexPtr();
-  S.i = C.innerIndexPtr();
-  S.x = C.valuePtr();
-  S.stype = 1;  // symmetric, upper triangle
-  S.itype = CHOLMOD_INT;
-  S.xtype = CHOLMOD_REAL;
-  S.dtype = CHOLMOD_DOUBLE;
-  S.sorted = 1;
-  S.packed = 1;
+  cholmod_sparse S = cholmod_view(C, 1);  // symmetric, upper triangle
 
   const SerialOpenMp serial_openmp;  // CHOLMOD's own OpenMP regions (blas_threads.hpp)
   const bool same_pattern = m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
@@ -175,19 +186,7 @@ void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
       t.emplace_back(position[static_cast<size_t>(it.row())], static_cast<int>(j), it.value());
   Eigen::SparseMatrix<double> PC(n_, C.cols());
   PC.setFromTriplets(t.begin(), t.end());  // compressed, rows sorted within each column
-  cholmod_sparse S{};
-  S.nrow = static_cast<size_t>(n_);
-  S.ncol = static_cast<size_t>(PC.cols());
-  S.nzmax = static_cast<size_t>(PC.nonZeros());
-  S.p = PC.outerIndexPtr();
-  S.i = PC.innerIndexPtr();
-  S.x = PC.valuePtr();
-  S.stype = 0;  // unsymmetric: every entry of C
-  S.itype = CHOLMOD_INT;
-  S.xtype = CHOLMOD_REAL;
-  S.dtype = CHOLMOD_DOUBLE;
-  S.sorted = 1;
-  S.packed = 1;
+  cholmod_sparse S = cholmod_view(PC, 0);  // unsymmetric: every entry of C
   if (!cholmod_updown(add ? 1 : 0, &S, m.L, &m.common) || m.common.status < CHOLMOD_OK)
     throw CholmodError("CHOLMOD update failed: " + m.status_text());
   // The updated factor's pattern is no longer the analysed one: the next factor() starts afresh.
