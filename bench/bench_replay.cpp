@@ -15,7 +15,9 @@
 //     replayed FIRE iterations, force evaluations, Newton factorisations, CPU seconds and E/N, then
 //     the totals. With jamming.continuation = true a trial with a .branch file first follows that
 //     branch to its sizes (as the growth driver does) and FIRE goes on from where it ended; the
-//     continuation's steps, events and how the branch ended are printed too.
+//     continuation's steps, events and how the branch ended are printed too; with
+//     jamming.crossing_step > 0 the branch crosses its stability losses by FIRE rearrangements, and
+//     their number and force evaluations are printed with it.
 //
 // The saved starts are exact (round-trip text), so a replay with an unchanged minimiser repeats the
 // recorded relaxation evaluation for evaluation (an undeferred trial without saddle relaxation).
@@ -140,6 +142,10 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
     if (follow) {
       ContinuationParams cp;
       cp.energy_floor = params.energy_floor * static_cast<double>(pf.packing.size());
+      if (scene.crossing_step > 0) {
+        cp.rearrangement = params;
+        cp.crossing_step = scene.crossing_step;
+      }
       cr = start_on_branch(pf.packing, branch, field, cp);
     }
     const FireResult fr = minimise(pf.packing, field, params);
@@ -147,9 +153,10 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
     if (follow)
       std::printf(
           "  branch: %s at t = %.6g, %ld steps (%ld halved), %zu events, %ld factorisations, %ld chord steps, "
-          "%ld evaluations, E/N there %.4e\n",
+          "%ld evaluations, %ld rearrangements (%ld evaluations), E/N there %.4e\n",
           to_string(cr.end), cr.t, cr.steps, cr.rejected_steps, cr.events.size(), cr.factorisations, cr.chord_steps,
-          cr.evaluations, cr.energy / static_cast<double>(pf.packing.size()));
+          cr.evaluations, cr.rearrangements, cr.rearrangement_evaluations,
+          cr.energy / static_cast<double>(pf.packing.size()));
     const double n = static_cast<double>(pf.packing.size());
     std::printf("%-28s %8s %6zu %10lld %10lld %10ld %10ld %7ld %9.3f %11.4e %11.4e\n", file.filename().c_str(),
                 pf.meta.get("replay.verdict").value_or("?").c_str(), pf.packing.size(),

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -164,6 +165,38 @@ ContinuationResult follow_branch(Packing& p, ForceField& field, const BranchSize
     ++res.evaluations;
     return res;
   };
+  // Where the branch ends (the corrector fails down to min_step, or a point's tangent is not
+  // stable), the rearrangement: the minimiser relaxes the packing crossing_step further along the
+  // path, at fixed sizes, and the branch goes on from that minimum. nullopt: it does; else how the
+  // branch ends.
+  const auto cross = [&]() -> std::optional<BranchEnd> {
+    do {
+      res.t = std::min(1.0, res.t + prm.crossing_step);
+      p.b = sizes.at(res.t);
+      field.invalidate();
+      FireParams fire = *prm.rearrangement;
+      fire.energy_floor = prm.energy_floor / static_cast<double>(p.size());
+      const FireResult fr = minimise(p, field, fire);
+      ++res.rearrangements;
+      res.rearrangement_evaluations += fr.evaluations;
+      res.evaluations += fr.evaluations;
+      res.factorisations += fr.newton_iterations;
+      res.chord_steps += fr.newton_chord_steps;
+      if (!fr.converged) return BranchEnd::step_underflow;  // FIRE's iteration cap
+      if (fr.energy < prm.energy_floor) return BranchEnd::energy_floor;
+      if (res.t >= 1.0) return BranchEnd::reached;
+      contacts = find_contacts(p, field.lobes(), field.neighbours());
+      pairs = network(contacts, corrector.force_tol);
+      workspace.clear();
+    } while (!stable_tangent());
+    return std::nullopt;
+  };
+  // The branch ends at `why` unless a rearrangement crosses to where it goes on.
+  const auto end_or_cross = [&](BranchEnd why) -> std::optional<ContinuationResult> {
+    if (!prm.rearrangement) return end(why);
+    if (const auto stop = cross()) return end(*stop);
+    return std::nullopt;
+  };
   if (U < prm.energy_floor) return end(BranchEnd::energy_floor);
   if (res.t >= 1.0) return end(BranchEnd::reached);
   if (!stable_tangent()) return end(BranchEnd::stability_lost);
@@ -194,7 +227,11 @@ ContinuationResult follow_branch(Packing& p, ForceField& field, const BranchSize
       p.q = q0;
       p.b = sizes.at(res.t);
       h = 0.5 * (t1 - res.t);
-      if (h < prm.min_step) return end(indefinite ? BranchEnd::stability_lost : BranchEnd::step_underflow);
+      if (h < prm.min_step) {
+        if (auto ended = end_or_cross(indefinite ? BranchEnd::stability_lost : BranchEnd::step_underflow))
+          return *ended;
+        h = std::min(prm.crossing_step, 1.0 - res.t);
+      }
       continue;
     }
     ++res.steps;
@@ -205,7 +242,11 @@ ContinuationResult follow_branch(Packing& p, ForceField& field, const BranchSize
     pairs = std::move(next_pairs);
     if (nr.energy < prm.energy_floor) return end(BranchEnd::energy_floor);
     if (res.t >= 1.0) return end(BranchEnd::reached);
-    if (!stable_tangent()) return end(BranchEnd::stability_lost);
+    if (!stable_tangent()) {
+      if (auto ended = end_or_cross(BranchEnd::stability_lost)) return *ended;
+      h = std::min(prm.crossing_step, 1.0 - res.t);
+      continue;
+    }
     // An easy step (no event, few corrector steps) doubles the next one.
     const bool easy = !changed && nr.iterations + nr.chord_steps <= 2;
     h = std::min(easy ? 2.0 * taken : taken, 1.0 - res.t);

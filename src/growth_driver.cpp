@@ -430,6 +430,10 @@ struct GrowthDriver::Impl {
     if (!scene.continuation || !relaxed) return;
     ContinuationParams params;
     params.energy_floor = trial_minimiser().energy_floor * static_cast<double>(p.size());
+    if (scene.crossing_step > 0) {
+      params.rearrangement = trial_minimiser();
+      params.crossing_step = scene.crossing_step;
+    }
     const ContinuationResult r = start_on_branch(p, *relaxed, field, params);
     result.force_evaluations += r.evaluations;
     result.force_evaluations_search += r.evaluations;
@@ -440,6 +444,7 @@ struct GrowthDriver::Impl {
     result.branch_stability_losses += r.end == BranchEnd::stability_lost;
     result.branch_steps += r.steps;
     result.branch_events += static_cast<long>(r.events.size());
+    result.branch_rearrangements += r.rearrangements;
   }
 
   // A deferred trial, relaxed on to convergence from where its budget ended, is judged again as the

@@ -64,6 +64,8 @@ void validate(const Scene& s) {
   if (!(s.dt_min < s.dt)) fail("growth.dt_min", "must be smaller than growth.dt = " + value_text(s.dt), s.dt_min);
 
   // [jamming]
+  if (s.crossing_step > 0 && !s.continuation)
+    fail("jamming.crossing_step", "is only used with jamming.continuation = true", s.crossing_step);
   if (s.targets.size() > kMaxTargets)
     fail("jamming.targets", "at most " + std::to_string(kMaxTargets) + " targets (each writes a packing file)",
          s.targets);

@@ -240,6 +240,10 @@ std::vector<SceneKey> make_keys() {
                    "bracket search: a trial starting from the lowest overshoot with the same divisions follows its "
                    "relaxed branch to the trial's sizes (Newton continuation) before FIRE (false = FIRE alone)",
                    BUDJAM_FIELD(continuation)));
+  e.push_back(real("jamming", "crossing_step",
+                   "with continuation: where the branch loses stability, FIRE relaxes the packing this much further "
+                   "along the trial's path (fraction of it) and the branch goes on from there (0 = the branch ends)",
+                   kZeroOrPositive, BUDJAM_FIELD(crossing_step)));
 
   // FIRE 2.0 (Guénolé et al. 2020, Table 1 gives the usual values).
   e.push_back(real("minimiser", "dt_start", "FIRE initial time step", kPositive, BUDJAM_FIELD(fire.dt_start)));

@@ -166,7 +166,7 @@ TEST_CASE("a checkpoint of a retired version is refused at line 1, naming what i
     const char* lacks;
   };
   for (const Retired& r : {Retired{"4", "network summary"}, Retired{"5", "log scale"}, Retired{"6", "cost"},
-                           Retired{"7", "relaxed branches"}}) {
+                           Retired{"7", "relaxed branches"}, Retired{"8", "stability losses its branches crossed"}}) {
     INFO("version " << r.version);
     std::string text = snapshot().text;
     text.replace(0, text.find('\n'), std::string("budjam-checkpoint ") + r.version);
@@ -177,10 +177,11 @@ TEST_CASE("a checkpoint of a retired version is refused at line 1, naming what i
   }
 }
 
-TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the same relaxed branches",
+TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the same relaxed branches and crossings",
           "[checkpoint]") {
   Scene scene = small_scene();
   scene.continuation = true;
+  scene.crossing_step = 0.01;
   std::string text;
   RunResult uninterrupted;
   {
@@ -202,6 +203,8 @@ TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the 
   CHECK(r.branch_stability_losses == uninterrupted.branch_stability_losses);
   CHECK(r.branch_steps == uninterrupted.branch_steps);
   CHECK(r.branch_events == uninterrupted.branch_events);
+  CHECK(uninterrupted.branch_rearrangements > 0);
+  CHECK(r.branch_rearrangements == uninterrupted.branch_rearrangements);
   CHECK(r.newton_factorisations == uninterrupted.newton_factorisations);
   CHECK(r.jamming->phi == uninterrupted.jamming->phi);
   // More branches reached than followed is refused at the line, naming the counter.
@@ -209,7 +212,7 @@ TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the 
   const auto at =
       std::find_if(lines.begin(), lines.end(), [](const std::string& l) { return l.rfind("branches ", 0) == 0; });
   REQUIRE(at != lines.end());
-  *at = "branches 1 2 0 0 0";
+  *at = "branches 1 2 0 0 0 0";
   const std::string line = std::to_string(at - lines.begin() + 1);
   CHECK_THROWS_WITH(parse_checkpoint(resealed(join_lines(lines)), "cp", scene, 3, {}),
                     Contains("cp:" + line + ":") && Contains("branches reached: 2 is outside [0, 1]"));

@@ -6,6 +6,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/newton.hpp"
+#include "budjam/stability.hpp"
 #include "support/compressed_packing.hpp"
 
 #include <algorithm>
@@ -54,6 +55,18 @@ Packing relaxed_at(const Packing& p, const BranchSizes& sizes, double t) {
   params.force_tol = force_resolution(r);
   REQUIRE(newton_finish(r, field, params).stop == NewtonStop::converged);
   return r;
+}
+
+// p followed along `sizes`: where the branch ended (the field current for it) and how.
+struct Followed {
+  Packing packing;
+  ForceField field;
+  ContinuationResult run;
+};
+Followed followed(const Packing& p, const BranchSizes& sizes, const ContinuationParams& params) {
+  Followed f{p, ForceField(), {}};
+  f.run = follow_branch(f.packing, f.field, sizes, params);
+  return f;
 }
 
 }  // namespace
@@ -139,9 +152,7 @@ TEST_CASE("an opening event is located where the contact force crosses zero", "[
   ContinuationParams params;
   params.event_tol = 1e-4;
   params.first_step = 0.01;
-  Packing branch = p;
-  ForceField field;
-  const ContinuationResult run = follow_branch(branch, field, sizes, params);
+  const ContinuationResult run = followed(p, sizes, params).run;
   const auto opening =
       std::ranges::find_if(run.events, [](const BranchEvent& e) { return e.kind == BranchEvent::Kind::opening; });
   REQUIRE(opening != run.events.end());
@@ -169,10 +180,7 @@ TEST_CASE("an opening event is located where the contact force crosses zero", "[
 TEST_CASE("continuation reaches the state FIRE relaxes to at the same sizes, with the same network", "[continuation]") {
   const Packing& p = jammed();
   const BranchSizes sizes = path(p, 1.00002);
-  ContinuationParams params;
-  Packing branch = p;
-  ForceField field;
-  const ContinuationResult run = follow_branch(branch, field, sizes, params);
+  auto [branch, field, run] = followed(p, sizes, {});
   REQUIRE(run.end == BranchEnd::reached);
   CHECK(run.events.empty());
   Packing fire = p;
@@ -196,4 +204,40 @@ TEST_CASE("start_on_branch refuses packings of different cells", "[continuation]
   other.q.conservativeResize(other.q.size() - 3);
   ForceField field;
   CHECK_THROWS_AS(start_on_branch(trial, other, field, {}), std::invalid_argument);
+}
+
+TEST_CASE(
+    "a stability loss is crossed by a rearrangement and the branch goes on to a stable minimum at the trial's sizes",
+    "[continuation]") {
+  const Packing& p = jammed();
+  const BranchSizes sizes = path(p, 0.99);
+  ContinuationParams params;
+  const ContinuationResult lost = followed(p, sizes, params).run;
+  REQUIRE(lost.end == BranchEnd::stability_lost);
+  REQUIRE(lost.t < 1.0);
+
+  params.rearrangement = FireParams{};
+  auto [crossed, field, run] = followed(p, sizes, params);
+  REQUIRE(run.end == BranchEnd::reached);
+  CHECK(run.rearrangements >= 1);
+  CHECK(run.rearrangement_evaluations > 0);
+  CHECK(run.rearrangement_evaluations < run.evaluations);
+  CHECK(crossed.b == sizes.at(1.0));
+  // Up to the first loss the two followed the same branch.
+  const auto before_loss = [&](const BranchEvent& e) { return e.t <= lost.t; };
+  CHECK(std::ranges::count_if(run.events, before_loss) == std::ranges::count_if(lost.events, before_loss));
+  // A minimum: no force above the tolerance, no unstable mode, and FIRE started there stays.
+  Eigen::VectorXd F;
+  field.invalidate();
+  const double U = field.evaluate(crossed, F);
+  CHECK(max_scaled_force(crossed, F) <= std::max(params.force_tol, force_resolution(crossed)));
+  const std::vector<Contact> contacts = contacts_of(crossed, field);
+  CHECK(stability(crossed, contacts, analyse_network(crossed.size(), contacts)).minimum());
+  Packing again = crossed;
+  ForceField fire_field;
+  FireParams fp;
+  fp.newton_force = 0;
+  const FireResult fr = minimise(again, fire_field, fp);
+  CHECK(fr.iterations <= 1);
+  CHECK(std::abs(fr.energy - U) <= 1e-12 * U);
 }

@@ -744,17 +744,21 @@ TEST_CASE("resume refuses a scene with any key edited, and a P0 edit even with t
       if (!l->empty()) candidates.push_back(std::vector<double>(l->begin(), l->end() - 1));
     }
     if (k.type == KeyType::real_or_none && std::holds_alternative<double>(v)) candidates.push_back(std::string("none"));
-    // init.kind and init.cells are only valid together: random seeds need at least one cell.
-    auto with_seeds = [](Scene& s) {
-      find_scene_key("init.kind")->set(s, std::string("random_seeds"));
-      if (s.n_seeds == 0) s.n_seeds = 1;
-    };
+    // Keys valid only with another: random seeds need at least one cell, a crossing step the continuation.
+    const std::vector<std::function<void(Scene&)>> companions{
+        [](Scene&) {},
+        [](Scene& s) {
+          find_scene_key("init.kind")->set(s, std::string("random_seeds"));
+          if (s.n_seeds == 0) s.n_seeds = 1;
+        },
+        [](Scene& s) { s.continuation = true; }};
     for (const SceneValue& c : candidates) {
-      for (bool seeds : {false, true}) {
+      if (c == v) continue;  // 0 × 1.25 is no edit
+      for (const auto& companion : companions) {
         Scene s = original;
         try {
           k.set(s, c);
-          if (seeds) with_seeds(s);
+          companion(s);
           validate(s);
           changed = s;
           break;

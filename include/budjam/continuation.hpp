@@ -19,13 +19,17 @@
 // network (the contacts with a force above the corrector's tolerance) differs from the previous
 // point's is an event: a contact opened (its force reached zero) or closed (a new overlap). With event_tol > 0 a step
 // containing one is halved until it is at most event_tol long, so the event's t is known within event_tol.
+// Where the branch ends (a fold, or an opening that leaves the network unstable) a minimiser may cross
+// to the next branch (ContinuationParams::rearrangement).
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
 #include "budjam/newton.hpp"
 #include "budjam/packing.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace budjam {
@@ -69,6 +73,11 @@ struct ContinuationParams {
   double tangent_shift = 1e-10;         // μ of the tangent's H + μ1
   int corrector_iterations = 12;        // Newton iterations per step (factorisations and chord steps)
   long max_steps = 10000;
+  // Where the branch ends (the corrector fails down to min_step, or the network loses stability),
+  // with a minimiser: the packing is relaxed by it crossing_step further along the path at fixed
+  // sizes (a rearrangement) and the branch goes on from that minimum. Without one the branch ends.
+  std::optional<FireParams> rearrangement;
+  double crossing_step = 1e-2;
 };
 
 struct BranchEvent {
@@ -86,7 +95,9 @@ struct ContinuationResult {
   long rejected_steps = 0;  // halved for a failed corrector or to locate an event
   long factorisations = 0;  // tangents and corrector refactorisations
   long chord_steps = 0;
-  long evaluations = 0;  // force evaluations
+  long evaluations = 0;                // force evaluations
+  long rearrangements = 0;             // crossings relaxed by the minimiser
+  long rearrangement_evaluations = 0;  // their force evaluations (among `evaluations`)
   std::vector<BranchEvent> events;
 };
 

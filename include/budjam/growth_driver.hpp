@@ -124,8 +124,10 @@ struct RunResult {
   // The relaxed branches followed before trials' relaxations (jamming.continuation): how many, how
   // many reached the trial's sizes and how many ended where the network lost stability, their
   // accepted steps and the contact events (openings and closings) found along them. Their
-  // factorisations are among newton_factorisations.
+  // factorisations are among newton_factorisations; branch_rearrangements counts the stability losses
+  // crossed by FIRE (jamming.crossing_step), whose evaluations are the branches'.
   long branches = 0, branches_reached = 0, branch_stability_losses = 0, branch_steps = 0, branch_events = 0;
+  long branch_rearrangements = 0;
 };
 
 // A trial whose relaxation costs more force evaluations than this is a marginal relaxation: FIRE

@@ -93,6 +93,10 @@ struct Scene {
   // the overshoot's relaxed branch down to its own sizes by continuation (continuation.hpp) before
   // FIRE (docs/jamming.md). false = FIRE from the overshoot's positions.
   bool continuation = false;
+  // With continuation: where the branch ends (a stability loss), FIRE relaxes the packing this much
+  // further along the trial's path of sizes (a rearrangement) and the branch goes on from there
+  // (continuation.hpp). 0 = the branch ends and FIRE relaxes at the trial's sizes.
+  double crossing_step = 0;
 
   // [minimiser]: the library's defaults are the scene's (fire.hpp).
   FireParams fire;

@@ -38,7 +38,8 @@ const std::map<std::string, std::string> kKnobLabel{
     {"arpack_ncv", "ARPACK ncv"},         {"search", "jamming.search"},
     {"newton", "minimiser.newton_force"}, {"adaptive", "growth.adaptive_dt"},
     {"jump", "jamming.jump_factor"},      {"across", "jamming.start_across_divisions"},
-    {"budget", "jamming.trial_budget"},   {"continuation", "jamming.continuation"}};
+    {"budget", "jamming.trial_budget"},   {"continuation", "jamming.continuation"},
+    {"crossing", "jamming.crossing_step"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -186,7 +187,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
       throw InputError(dir.string() +
                        ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, jump, "
-                       "across, budget, newton, continuation or adaptive, or default");
+                       "across, budget, newton, continuation, crossing or adaptive, or default");
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals, factorisations;
     for (const auto& [s, d] : seeds_of(dir)) {

@@ -189,7 +189,7 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
      << r.newton_factor_reuses << ' ' << r.force_evaluations_initial << ' ' << r.force_evaluations_search << ' '
      << r.force_evaluations_above_jamming << '\n';
   os << "branches " << r.branches << ' ' << r.branches_reached << ' ' << r.branch_stability_losses << ' '
-     << r.branch_steps << ' ' << r.branch_events << '\n';
+     << r.branch_steps << ' ' << r.branch_events << ' ' << r.branch_rearrangements << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
   for (const JammingOvershoot& o : s.search.overshoots)
     os << ' ' << num(o.phi) << ' ' << num(o.s) << ' ' << num(o.slope);
@@ -264,6 +264,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {5, "growth steps were stored with their log scale (the adaptive step out of the double range)"},
     {6, "the run counted its cost by stage (search trials, marginal relaxations, Newton factorisations)"},
     {7, "the run counted the relaxed branches it followed (jamming.continuation)"},
+    {8, "the run counted the stability losses its branches crossed (jamming.crossing_step)"},
 };
 
 void read_version(CheckpointText& in) {
@@ -368,6 +369,7 @@ void read_branches(Parse& p, const Words& w) {
   r.branch_stability_losses = in.integer(w[2], "branches that lost stability", 0, r.branches - r.branches_reached);
   r.branch_steps = in.integer(w[3], "branch steps", 0, kLongMax);
   r.branch_events = in.integer(w[4], "branch events", 0, kLongMax);
+  r.branch_rearrangements = in.integer(w[5], "branch rearrangements", 0, kLongMax);
 }
 
 void read_search(Parse& p, const Words& w) {
@@ -559,7 +561,7 @@ constexpr LineKind kLineKinds[] = {
     {"state", 9, read_state},
     {"counters", 6, read_counters},
     {"cost", 7, read_cost},
-    {"branches", 5, read_branches},
+    {"branches", 6, read_branches},
     {"search", -1, read_search},
     {"jamming", -1, read_jamming},
     {"targets", 1, read_targets},

@@ -265,6 +265,7 @@ Json summary_json(const GrowthDriver& driver) {
   j["branches"] = r.branches;
   j["branches_reached"] = r.branches_reached;
   j["branch_stability_losses"] = r.branch_stability_losses;
+  j["branch_rearrangements"] = r.branch_rearrangements;
   j["branch_steps"] = r.branch_steps;
   j["branch_events"] = r.branch_events;
   return j;
