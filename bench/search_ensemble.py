@@ -72,9 +72,10 @@ def mean_se(values):
 
 def print_tsv(args, table, values, seeds):
     """Rows of bench/results/search_ensemble.tsv: date, host, L, protocol, seeds, quantity, mean, SE, command."""
+    compared = [("builds", args.builds)] if args.builds else [("key", args.key), ("values", args.values)]
     command = "python3 bench/search_ensemble.py OUT " + " ".join(
         f"--{k.replace('_', '-')} {v}" for k, v in [("L", args.L), ("seeds", args.seeds), ("first_seed", args.first_seed),
-                                                     ("P0", args.P0), ("key", args.key), ("values", args.values)])
+                                                     ("P0", args.P0)] + compared)
     command += " --jamming-only" if args.jamming_only else f" --targets '{args.targets}'"
     names = list(dict.fromkeys(name for s in values for q in table[s] for name in q))
     for s in values:

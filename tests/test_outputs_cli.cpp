@@ -152,7 +152,8 @@ TEST_CASE("summary.json's cost counters agree with trials.csv: trials, marginal 
   CHECK(summary.at("newton_factorisations").get<long long>() > 0);
   CHECK(summary.at("newton_factor_reuses").get<long long>() >= 0);
   // Without jamming.continuation no branch is followed.
-  for (const char* key : {"branches", "branches_reached", "branch_stability_losses", "branch_steps", "branch_events"})
+  for (const char* key : {"branches", "branches_reached", "branch_stability_losses", "branch_steps", "branch_events",
+                          "branch_rearrangements"})
     CHECK(summary.at(key).get<long long>() == 0);
 }
 
@@ -176,6 +177,7 @@ TEST_CASE("with jamming.continuation, summary.json counts one branch per trial s
   // A branch that reached the trial's sizes took at least one step; the others may have taken none.
   CHECK(count("branch_steps") >= count("branches_reached"));
   CHECK(count("branch_events") >= 0);
+  CHECK(count("branch_rearrangements") == 0);  // jamming.crossing_step = 0: a branch ends at a stability loss
   // Each branch step factorises at least once, and those factorisations are Newton's.
   CHECK(count("newton_factorisations") >= count("branch_steps"));
 }
