@@ -157,17 +157,20 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
           to_string(cr.end), cr.t, cr.steps, cr.rejected_steps, cr.events.size(), cr.factorisations, cr.chord_steps,
           cr.evaluations, cr.rearrangements, cr.rearrangement_evaluations,
           cr.energy / static_cast<double>(pf.packing.size()));
+    if (fr.active_set_steps > 0)
+      std::printf("  active set: %ld steps, %ld factorisations, %ld rank-1 updates\n", fr.active_set_steps,
+                  fr.active_set_factorisations, fr.active_set_updates);
+    const long factored = fr.newton_iterations + fr.active_set_factorisations + cr.factorisations;
     const double n = static_cast<double>(pf.packing.size());
     std::printf("%-28s %8s %6zu %10lld %10lld %10ld %10ld %7ld %9.3f %11.4e %11.4e\n", file.filename().c_str(),
                 pf.meta.get("replay.verdict").value_or("?").c_str(), pf.packing.size(),
                 static_cast<long long>(pf.meta.integer("replay.iterations")),
                 static_cast<long long>(pf.meta.integer("replay.evaluations")), fr.iterations,
-                fr.evaluations + cr.evaluations, fr.newton_iterations + cr.factorisations, c,
-                pf.meta.number("replay.E_per_cell"), fr.energy / n);
+                fr.evaluations + cr.evaluations, factored, c, pf.meta.number("replay.E_per_cell"), fr.energy / n);
     std::fflush(stdout);
     rec_evals += pf.meta.integer("replay.evaluations");
     evals += fr.evaluations + cr.evaluations;
-    factorisations += fr.newton_iterations + cr.factorisations;
+    factorisations += factored;
     cpu += c;
   }
   std::printf("total: %zu trials, recorded evaluations %ld, replayed evaluations %ld, factorisations %ld, CPU %.3f s\n",

@@ -2,6 +2,7 @@
 // semi-implicit Euler integrator) over the scaled coordinates (x, y, θ̃ = r_g θ).
 #include "budjam/fire.hpp"
 
+#include "budjam/active_set.hpp"
 #include "budjam/newton.hpp"
 
 #include <algorithm>
@@ -124,7 +125,34 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
   NewtonParams newton{tol, floor_total};
   newton.reuse_factor = prm.newton_reuse;
   std::optional<NewtonWorkspace> own_workspace;
+  long next_active_set = prm.active_set_after > 0 ? prm.active_set_after : std::numeric_limits<long>::max();
+  long active_set_tries = 0;
+  // FIRE resumes from rest at the packing a second-order method left (the field is current for it).
+  auto restart_fire = [&]() {
+    U = field.evaluate(p, F);
+    ++res.evaluations;
+    fmax = scale_forces();
+    v.setZero();
+    dt = prm.dt_start;
+    alpha = prm.alpha_start;
+    n_positive = 0;
+  };
   for (long it = 1; !stopped(U, fmax); ++it) {
+    if (res.evaluations >= next_active_set) {
+      ActiveSetParams as;
+      as.force_tol = tol;
+      as.energy_floor = floor_total;
+      const ActiveSetResult ar = active_set_minimise(p, field, as);
+      res.active_set_steps += ar.steps;
+      res.active_set_factorisations += ar.factorisations;
+      res.active_set_updates += ar.updates;
+      res.evaluations += ar.evaluations;
+      restart_fire();
+      // Each new try waits twice as long as the last: where the steps stall (a large rearrangement
+      // whose prestress the model leaves out), they cost at most a few tries per minimisation.
+      next_active_set = res.evaluations + (prm.active_set_after << std::min(++active_set_tries, 20L));
+      if (stopped(U, fmax)) break;
+    }
     if (fmax < newton_below) {
       if (!newton_workspace) newton_workspace = &own_workspace.emplace();
       const NewtonResult nr = newton_finish(p, field, newton, *newton_workspace);
@@ -140,13 +168,7 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
       // indefinite Hessian means FIRE is not near a minimum (typically an unjammed packing whose
       // last overlaps are being pushed apart): Newton is not tried again in this minimisation.
       newton_below = nr.stop == NewtonStop::indefinite ? 0.0 : 0.1 * nr.max_force;
-      U = field.evaluate(p, F);
-      ++res.evaluations;
-      fmax = scale_forces();
-      v.setZero();
-      dt = prm.dt_start;
-      alpha = prm.alpha_start;
-      n_positive = 0;
+      restart_fire();
     }
     if (it > prm.max_iterations) break;
     res.iterations = it;

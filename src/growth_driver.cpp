@@ -244,6 +244,9 @@ struct GrowthDriver::Impl {
     result.fire_iterations += fr.iterations;
     result.newton_factorisations += fr.newton_iterations;
     result.newton_factor_reuses += fr.newton_chord_steps;
+    result.active_set_steps += fr.active_set_steps;
+    result.active_set_factorisations += fr.active_set_factorisations;
+    result.active_set_updates += fr.active_set_updates;
   }
 
   // FIRE on a trial, counted; false (and the run failed) if it did not converge. With a `budget`

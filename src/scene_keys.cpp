@@ -272,6 +272,11 @@ std::vector<SceneKey> make_keys() {
                    "keep a Newton factorisation while the contacts are unchanged (also from one growth step to the "
                    "next), refactoring when its steps contract the force too slowly",
                    BUDJAM_FIELD(fire.newton_reuse)));
+  e.push_back(integer(
+      "minimiser", "active_set_after",
+      "after this many force evaluations of one minimisation, active-set Gauss-Newton steps on the "
+      "contact model with every listed pair take over (again after twice as many more, and so on); 0 = FIRE alone",
+      kZeroOrPositive, BUDJAM_FIELD(fire.active_set_after)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));
   e.push_back(integer("minimiser", "threads",

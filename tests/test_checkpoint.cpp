@@ -166,7 +166,8 @@ TEST_CASE("a checkpoint of a retired version is refused at line 1, naming what i
     const char* lacks;
   };
   for (const Retired& r : {Retired{"4", "network summary"}, Retired{"5", "log scale"}, Retired{"6", "cost"},
-                           Retired{"7", "relaxed branches"}, Retired{"8", "stability losses its branches crossed"}}) {
+                           Retired{"7", "relaxed branches"}, Retired{"8", "stability losses its branches crossed"},
+                           Retired{"9", "active-set steps"}}) {
     INFO("version " << r.version);
     std::string text = snapshot().text;
     text.replace(0, text.find('\n'), std::string("budjam-checkpoint ") + r.version);
@@ -177,27 +178,57 @@ TEST_CASE("a checkpoint of a retired version is refused at line 1, naming what i
   }
 }
 
+// A run of `scene` uninterrupted, and the same run resumed from its first checkpoint at which
+// `ready` holds: the checkpoint, both results, and whether the restored state wrote it again.
+struct Resumed {
+  std::string text;
+  RunResult uninterrupted, resumed;
+  bool rewritten = false;
+};
+template <class Ready>
+Resumed resumed_from_checkpoint(const Scene& scene, Ready ready) {
+  Resumed out;
+  {
+    GrowthDriver d(scene);
+    d.set_checkpoint_hook([&] {
+      if (ready(d.result()) && out.text.empty()) out.text = format_checkpoint(scene, d.state(), {});
+    });
+    d.run();
+    out.uninterrupted = d.result();
+  }
+  REQUIRE_FALSE(out.text.empty());
+  GrowthDriver d(scene);
+  d.restore(parse_checkpoint(out.text, "cp", scene, 3, {}));
+  out.rewritten = format_checkpoint(scene, d.state(), {}) == out.text;
+  d.run();
+  out.resumed = d.result();
+  return out;
+}
+
+TEST_CASE("a run with active-set steps resumed from a checkpoint counts the same steps and ends the same",
+          "[checkpoint]") {
+  Scene scene = small_scene();
+  scene.fire.active_set_after = 500;
+  const Resumed run = resumed_from_checkpoint(scene, [](const RunResult& r) { return r.active_set_steps > 0; });
+  CHECK(run.rewritten);
+  const RunResult &r = run.resumed, &uninterrupted = run.uninterrupted;
+  CHECK(r.active_set_steps == uninterrupted.active_set_steps);
+  CHECK(r.active_set_factorisations == uninterrupted.active_set_factorisations);
+  CHECK(r.active_set_updates == uninterrupted.active_set_updates);
+  CHECK(r.force_evaluations == uninterrupted.force_evaluations);
+  REQUIRE(r.jamming);
+  CHECK(r.jamming->phi == uninterrupted.jamming->phi);
+}
+
 TEST_CASE("a run with jamming.continuation resumed from a checkpoint counts the same relaxed branches and crossings",
           "[checkpoint]") {
   Scene scene = small_scene();
   scene.continuation = true;
   scene.crossing_step = 0.01;
-  std::string text;
-  RunResult uninterrupted;
-  {
-    GrowthDriver d(scene);
-    d.set_checkpoint_hook([&] {
-      if (d.result().branches > 0 && text.empty()) text = format_checkpoint(scene, d.state(), {});
-    });
-    d.run();
-    uninterrupted = d.result();
-  }
-  REQUIRE_FALSE(text.empty());
-  GrowthDriver d(scene);
-  d.restore(parse_checkpoint(text, "cp", scene, 3, {}));
-  CHECK(format_checkpoint(scene, d.state(), {}) == text);
-  d.run();
-  const RunResult& r = d.result();
+  const Resumed run = resumed_from_checkpoint(scene, [](const RunResult& r) { return r.branches > 0; });
+  CHECK(run.rewritten);
+  const std::string& text = run.text;
+  const RunResult &r = run.resumed, &uninterrupted = run.uninterrupted;
   CHECK(r.branches == uninterrupted.branches);
   CHECK(r.branches_reached == uninterrupted.branches_reached);
   CHECK(r.branch_stability_losses == uninterrupted.branch_stability_losses);

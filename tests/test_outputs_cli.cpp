@@ -157,6 +157,20 @@ TEST_CASE("summary.json's cost counters agree with trials.csv: trials, marginal 
     CHECK(summary.at(key).get<long long>() == 0);
 }
 
+TEST_CASE("with minimiser.active_set_after, summary.json counts the active-set steps and their factor work", "[cli]") {
+  const fs::path run = work_dir() / "active_set";
+  REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --out " +
+                     shell_quoted(run) + " --set minimiser.active_set_after=300")
+              .code == 0);
+  const budjam::io::Json summary = budjam::io::read_json(run / "summary.json");
+  const auto count = [&](const char* key) { return summary.at(key).get<long long>(); };
+  CHECK(count("active_set_steps") > 0);
+  // Every step factors its model at least once; the set's later changes are mostly updates.
+  CHECK(count("active_set_factorisations") >= count("active_set_steps"));
+  CHECK(count("active_set_updates") > 0);
+  CHECK(summary.at("status").get<std::string>() == "finished");
+}
+
 TEST_CASE("with jamming.continuation, summary.json counts one branch per trial started on the lowest overshoot",
           "[cli]") {
   const fs::path run = work_dir() / "continuation";

@@ -35,6 +35,11 @@ struct FireParams {
   // Keep a Newton factor as a modified-Newton approximation of H while the contacts do not change
   // (newton.hpp), across minimisations when the caller passes a NewtonWorkspace.
   bool newton_reuse = true;
+  // Active-set Gauss–Newton steps (active_set.hpp) once a minimisation has spent this many force
+  // evaluations without converging, and again after twice, four times … as many more: the
+  // second-order way through a marginal relaxation, where FIRE creeps from one contact change to
+  // the next. 0 = FIRE alone.
+  long active_set_after = 0;
 };
 
 // Why a minimisation stopped.
@@ -47,13 +52,16 @@ const char* to_string(MinimiserStop stop);
 
 struct FireResult {
   MinimiserStop stop = MinimiserStop::iteration_cap;
-  bool converged = false;       // stop != iteration_cap
-  long iterations = 0;          // FIRE iterations
-  long newton_iterations = 0;   // Newton steps (one Hessian factorisation each)
-  long newton_chord_steps = 0;  // Newton steps with a reused factor
-  long evaluations = 0;         // force evaluations made by this call
-  double energy = 0.0;          // U at the end
-  double max_force = 0.0;       // largest |F| component at the end (θ component as F_θ / r_g)
+  bool converged = false;              // stop != iteration_cap
+  long iterations = 0;                 // FIRE iterations
+  long newton_iterations = 0;          // Newton steps (one Hessian factorisation each)
+  long newton_chord_steps = 0;         // Newton steps with a reused factor
+  long active_set_steps = 0;           // active-set linearisations (active_set.hpp)
+  long active_set_factorisations = 0;  // their LDLᵀ factorisations
+  long active_set_updates = 0;         // their rank-1 factor changes
+  long evaluations = 0;                // force evaluations made by this call
+  double energy = 0.0;                 // U at the end
+  double max_force = 0.0;              // largest |F| component at the end (θ component as F_θ / r_g)
 };
 
 // Relaxes p in place. A centroid lying more than L/2 outside the box is first moved back by whole

@@ -120,6 +120,9 @@ struct RunResult {
   long search_trials = 0;         // relaxed trials in the unjammed phase: the search onto φ_J
   long marginal_relaxations = 0;  // relaxed trials that cost more than kMarginalEvaluations
   long newton_factorisations = 0, newton_factor_reuses = 0;  // Newton steps with a fresh / a kept factor
+  // Active-set steps (minimiser.active_set_after): linearisations, their factorisations and their
+  // rank-1 factor changes.
+  long active_set_steps = 0, active_set_factorisations = 0, active_set_updates = 0;
   long force_evaluations_initial = 0, force_evaluations_search = 0, force_evaluations_above_jamming = 0;
   // The relaxed branches followed before trials' relaxations (jamming.continuation): how many, how
   // many reached the trial's sizes and how many ended where the network lost stability, their

@@ -187,7 +187,8 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
      << r.divisions << ' ' << r.saddles_relaxed << '\n';
   os << "cost " << r.search_trials << ' ' << r.marginal_relaxations << ' ' << r.newton_factorisations << ' '
      << r.newton_factor_reuses << ' ' << r.force_evaluations_initial << ' ' << r.force_evaluations_search << ' '
-     << r.force_evaluations_above_jamming << '\n';
+     << r.force_evaluations_above_jamming << ' ' << r.active_set_steps << ' ' << r.active_set_factorisations << ' '
+     << r.active_set_updates << '\n';
   os << "branches " << r.branches << ' ' << r.branches_reached << ' ' << r.branch_stability_losses << ' '
      << r.branch_steps << ' ' << r.branch_events << ' ' << r.branch_rearrangements << '\n';
   os << "search " << s.search.slow_trials << ' ' << num(s.search.bracket_width) << ' ' << s.search.overshoots.size();
@@ -265,6 +266,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {6, "the run counted its cost by stage (search trials, marginal relaxations, Newton factorisations)"},
     {7, "the run counted the relaxed branches it followed (jamming.continuation)"},
     {8, "the run counted the stability losses its branches crossed (jamming.crossing_step)"},
+    {9, "the run counted its active-set steps (minimiser.active_set_after)"},
 };
 
 void read_version(CheckpointText& in) {
@@ -356,6 +358,9 @@ void read_cost(Parse& p, const Words& w) {
   r.force_evaluations_initial = in.integer(w[4], "initial force evaluations", 1, r.force_evaluations);
   r.force_evaluations_search = in.integer(w[5], "search force evaluations", 0, r.force_evaluations);
   r.force_evaluations_above_jamming = in.integer(w[6], "above-jamming force evaluations", 0, r.force_evaluations);
+  r.active_set_steps = in.integer(w[7], "active-set steps", 0, kLongMax);
+  r.active_set_factorisations = in.integer(w[8], "active-set factorisations", 0, kLongMax);
+  r.active_set_updates = in.integer(w[9], "active-set updates", 0, kLongMax);
   if (r.force_evaluations_initial + r.force_evaluations_search + r.force_evaluations_above_jamming !=
       r.force_evaluations)
     in.fail("cost: the force evaluations by stage do not add up to the force evaluations");
@@ -560,7 +565,7 @@ constexpr LineKind kLineKinds[] = {
     {"rng", -1, read_rng},
     {"state", 9, read_state},
     {"counters", 6, read_counters},
-    {"cost", 7, read_cost},
+    {"cost", 10, read_cost},
     {"branches", 6, read_branches},
     {"search", -1, read_search},
     {"jamming", -1, read_jamming},

@@ -24,7 +24,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 9;
+inline constexpr int kCheckpointVersion = 10;
 
 // Where parse_checkpoint found the records that other files can confirm (1-based lines), so that
 // a disagreement names the checkpoint's line.

@@ -259,6 +259,9 @@ Json summary_json(const GrowthDriver& driver) {
   j["marginal_relaxations"] = r.marginal_relaxations;
   j["newton_factorisations"] = r.newton_factorisations;
   j["newton_factor_reuses"] = r.newton_factor_reuses;
+  j["active_set_steps"] = r.active_set_steps;
+  j["active_set_factorisations"] = r.active_set_factorisations;
+  j["active_set_updates"] = r.active_set_updates;
   j["force_evaluations_initial"] = r.force_evaluations_initial;
   j["force_evaluations_search"] = r.force_evaluations_search;
   j["force_evaluations_above_jamming"] = r.force_evaluations_above_jamming;

@@ -1,0 +1,63 @@
+#pragma once
+// Active-set Gauss–Newton minimisation of U = (k/2) Σ [δ_c]₊² (δ = σ − r, the overlap of a listed
+// pair of lobes) at fixed sizes: the second-order method for the marginal relaxations that FIRE
+// creeps through (docs/minimiser.md, "Active-set steps").
+//
+// Near marginal jamming a relaxation is a path of contact changes: weak contacts open, pairs a
+// hair apart (gaps of 10⁻⁸–10⁻⁷) close, and a first-order minimiser escapes one shallow saddle
+// after another. Newton on the current contacts fails there (its quadratic model ignores the pairs
+// about to close). Each step here linearises every listed pair, δ_c(q + u) ≈ δ_c + g_cᵀu with
+// g_c = ∂δ_c/∂q = −nᵀ J_c, and minimises the convex piecewise-quadratic model
+//
+//     m(u) = (k/2) Σ_c [δ_c + g_cᵀu]₊² + (μ/2) uᵀDu        (D: 1 on x, y and r_g² on θ)
+//
+// over all listed pairs, open or closed: the pairs that would close on the way are in the model.
+// m is minimised exactly by a semismooth Newton iteration on its active set {c : δ_c + g_cᵀu > 0}
+// with an exact line search along each Newton direction (m is convex along it). Between two of
+// its iterations the set changes by a few contacts; the LDLᵀ factor of μD + k Σ_active g gᵀ is then
+// updated by rank-1 terms (CholmodSolver::update) instead of factored again. The model drops the
+// prestress part of the Hessian (the Gauss–Newton approximation of this least-squares energy), so
+// it is convex for every μ > 0 and its minimiser is unique. Levenberg–Marquardt control of μ: a
+// step is taken when it lowers U, and μ shrinks when U falls as the model predicted, grows when it
+// does not; a step that would move a lobe further than a quarter of the neighbour list's skin is
+// shortened to that (the model lists only the pairs within the skin).
+//
+// The method returns a packing at which FIRE (and its Newton finish) converge at once when the
+// model's minimum is the energy's; it never raises U.
+#include "budjam/energy.hpp"
+#include "budjam/packing.hpp"
+
+namespace budjam {
+
+struct ActiveSetParams {
+  double force_tol = 0.0;     // stop when the largest scaled force (θ as τ / r_g) is below this
+  double energy_floor = 0.0;  // stop when the total U is below this (certainly unjammed)
+  double damping = 1e-4;      // μ of the first step, in units of k
+  long max_steps = 100;       // Levenberg–Marquardt steps (one linearisation each)
+  long max_inner = 60;        // semismooth Newton iterations per step
+  int max_refused = 4;        // consecutive steps that did not lower U before giving up
+};
+
+enum class ActiveSetStop {
+  converged,     // largest force below force_tol
+  energy_floor,  // U below the floor
+  stalled,       // max_refused steps in a row did not lower U (the rounding floor, or a saddle)
+  step_cap       // max_steps steps
+};
+const char* to_string(ActiveSetStop stop);
+
+struct ActiveSetResult {
+  ActiveSetStop stop = ActiveSetStop::step_cap;
+  long steps = 0;           // linearisations (accepted or refused)
+  long inner = 0;           // semismooth Newton iterations, all steps
+  long factorisations = 0;  // LDLᵀ factorisations
+  long updates = 0;         // rank-1 changes of a factor (a contact entering or leaving the set)
+  long evaluations = 0;     // force evaluations
+  double energy = 0.0;
+  double max_force = 0.0;
+};
+
+// Minimises U from p in place at fixed sizes; `field` is current for p on return.
+ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveSetParams& params);
+
+}  // namespace budjam

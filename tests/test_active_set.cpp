@@ -1,0 +1,131 @@
+// Active-set Gauss–Newton minimisation (active_set.hpp) against FIRE on packings whose sizes
+// changed under them: the same minimum, a stable one, reached without raising the energy.
+#include "budjam/active_set.hpp"
+#include "budjam/contact_network.hpp"
+#include "budjam/contacts.hpp"
+#include "budjam/energy.hpp"
+#include "budjam/fire.hpp"
+#include "budjam/stability.hpp"
+#include "support/compressed_packing.hpp"
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+
+using namespace budjam;
+
+namespace {
+
+// A jammed packing of 60 random dumbbells relaxed just above its jamming point, then every bud's
+// area multiplied by `factor`: the start of a relaxation at fixed sizes, as a growth trial is.
+Packing resized(double factor) {
+  static const Packing jammed = [] {
+    Packing q = testing::compress_random_dumbbells(60, 5).packing;
+    ForceField field;
+    REQUIRE(minimise(q, field).converged);
+    return q;
+  }();
+  Packing p = jammed;
+  for (double& b : p.b) b *= std::sqrt(factor);
+  return p;
+}
+
+double energy(const Packing& p) {
+  ForceField field;
+  return field.energy(p);
+}
+
+double largest_contact_force(const Packing& p) {
+  ForceField field;
+  Eigen::VectorXd F;
+  field.evaluate(p, F);
+  double f = 0;
+  for (const Contact& c : find_contacts(p, field.lobes(), field.neighbours())) f = std::max(f, c.force());
+  return f;
+}
+
+ActiveSetParams params_for(const Packing& p) {
+  ActiveSetParams a;
+  a.force_tol = force_resolution(p);
+  a.energy_floor = 1e-20 * static_cast<double>(p.size());
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("active-set steps reach the minimum FIRE reaches, and FIRE started there moves nothing", "[active_set]") {
+  for (const double factor : {1.002, 0.9995}) {
+    CAPTURE(factor);
+    Packing by_fire = resized(factor), by_active_set = resized(factor);
+    const double start = energy(by_active_set);
+    ForceField fire_field;
+    FireParams fire;
+    fire.newton_force = 0;
+    REQUIRE(minimise(by_fire, fire_field, fire).converged);
+
+    ForceField field;
+    const ActiveSetResult r = active_set_minimise(by_active_set, field, params_for(by_active_set));
+    // Gauss–Newton steps may stall short of the force tolerance, where the prestress they leave
+    // out is what is left of the gradient: at forces a millionth of the contact forces or less.
+    CHECK(r.stop != ActiveSetStop::step_cap);
+    CHECK(r.max_force < 1e-6 * largest_contact_force(by_active_set));
+    CHECK(r.energy < start);
+    CHECK(r.energy == Approx(fire_field.energy(by_fire)).epsilon(1e-9));
+    CHECK(r.factorisations >= 1);
+
+    const FireResult after = minimise(by_active_set, field, fire);
+    CHECK(after.converged);
+    CHECK(after.evaluations < 1000);
+    CHECK(after.energy == Approx(r.energy).epsilon(1e-12));
+
+    // A stable minimum: no eigenvalue of the Hessian of the non-rattlers below zero.
+    Eigen::VectorXd F;
+    field.invalidate();
+    field.evaluate(by_active_set, F);
+    const std::vector<Contact> contacts = find_contacts(by_active_set, field.lobes(), field.neighbours());
+    CHECK(stability(by_active_set, contacts, analyse_network(by_active_set.size(), contacts)).minimum());
+  }
+}
+
+TEST_CASE("a packing shrunk below jamming is relaxed to the energy floor", "[active_set]") {
+  Packing p = resized(0.9);
+  ForceField field;
+  const ActiveSetResult r = active_set_minimise(p, field, params_for(p));
+  CHECK(r.stop == ActiveSetStop::energy_floor);
+  CHECK(r.energy < 1e-20 * static_cast<double>(p.size()));
+  CHECK(energy(p) == r.energy);
+}
+
+TEST_CASE("the steps change the factor by rank-1 updates between factorisations", "[active_set]") {
+  Packing p = resized(1.002);
+  ForceField field;
+  const ActiveSetResult r = active_set_minimise(p, field, params_for(p));
+  REQUIRE(r.stop != ActiveSetStop::step_cap);
+  // Contacts enter and leave the active set one by one: most of its changes are updates.
+  CHECK(r.updates > 0);
+  CHECK(r.inner > r.factorisations);
+}
+
+TEST_CASE("FIRE hands a minimisation to active-set steps after active_set_after evaluations", "[active_set]") {
+  Packing alone = resized(1.002), handed = resized(1.002);
+  FireParams fire;
+  fire.newton_force = 0;
+  ForceField f1, f2;
+  const FireResult a = minimise(alone, f1, fire);
+  fire.active_set_after = 50;
+  const FireResult b = minimise(handed, f2, fire);
+  REQUIRE(a.converged);
+  REQUIRE(b.converged);
+  CHECK(a.active_set_steps == 0);
+  CHECK(b.active_set_steps > 0);
+  CHECK(b.active_set_factorisations >= 1);
+  CHECK(b.energy == Approx(a.energy).epsilon(1e-9));
+}
+
+TEST_CASE("active-set minimisation is deterministic", "[active_set]") {
+  Packing p1 = resized(1.002), p2 = resized(1.002);
+  ForceField f1, f2;
+  active_set_minimise(p1, f1, params_for(p1));
+  active_set_minimise(p2, f2, params_for(p2));
+  CHECK(p1.q == p2.q);
+}
