@@ -125,7 +125,8 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
   NewtonParams newton{tol, floor_total};
   newton.reuse_factor = prm.newton_reuse;
   std::optional<NewtonWorkspace> own_workspace;
-  long next_active_set = prm.active_set_after > 0 ? prm.active_set_after : std::numeric_limits<long>::max();
+  constexpr long kNever = std::numeric_limits<long>::max();
+  long next_active_set = prm.active_set_after > 0 ? prm.active_set_after : kNever;
   long active_set_tries = 0;
   // FIRE resumes from rest at the packing a second-order method left (the field is current for it).
   auto restart_fire = [&]() {
@@ -150,7 +151,10 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
       restart_fire();
       // Each new try waits twice as long as the last: where the steps stall (a large rearrangement
       // whose prestress the model leaves out), they cost at most a few tries per minimisation.
-      next_active_set = res.evaluations + (prm.active_set_after << std::min(++active_set_tries, 20L));
+      // Saturating: a huge active_set_after means never again.
+      const int doublings = static_cast<int>(std::min(++active_set_tries, 20L));
+      const long wait = prm.active_set_after > (kNever >> doublings) ? kNever : prm.active_set_after << doublings;
+      next_active_set = wait > kNever - res.evaluations ? kNever : res.evaluations + wait;
       if (stopped(U, fmax)) break;
     }
     if (fmax < newton_below) {

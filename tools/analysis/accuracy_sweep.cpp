@@ -56,7 +56,7 @@ const std::map<std::string, std::string> kPinnedByModel{
     {"epsU", "the model fixes epsilon_U = 1e-16 (the jamming criterion the paper's numbers came from)"},
     {"activeset",
      "the protocol's minimiser is FIRE: active-set steps reach other minima and shift the jamming ensemble "
-     "(over 100 paired seeds at L = 15: phi_J z = -2.4, Z_J z = +3.3), which per-seed errors do not measure"}};
+     "(docs/minimiser.md, \"Active-set steps\"), which per-seed errors do not measure"}};
 
 // Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp).
 const std::set<std::string> kEnsembleQuantities{"phi_2"};
