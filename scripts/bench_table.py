@@ -32,6 +32,7 @@ README_TOPICS = [
     "whole_runs_vs_bisection",
     "whole_run_scaling",
     "L100_run",
+    "L100_run_active_set",
     "jammed_1e5",
     "moduli_speed",
     "spectrum_speed",

@@ -275,7 +275,8 @@ std::vector<SceneKey> make_keys() {
   e.push_back(integer(
       "minimiser", "active_set_after",
       "after this many force evaluations of one minimisation, active-set Gauss-Newton steps on the "
-      "contact model with every listed pair take over (again after twice as many more, and so on); 0 = FIRE alone",
+      "contact model with every listed pair take over (again after twice as many more, and so on); 0 = FIRE alone, "
+      "the paper's minimiser",
       kZeroOrPositive, BUDJAM_FIELD(fire.active_set_after)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));

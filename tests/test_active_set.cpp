@@ -110,6 +110,7 @@ TEST_CASE("FIRE hands a minimisation to active-set steps after active_set_after 
   Packing alone = resized(1.002), handed = resized(1.002);
   FireParams fire;
   fire.newton_force = 0;
+  fire.active_set_after = 0;
   ForceField f1, f2;
   const FireResult a = minimise(alone, f1, fire);
   fire.active_set_after = 50;
@@ -120,6 +121,21 @@ TEST_CASE("FIRE hands a minimisation to active-set steps after active_set_after 
   CHECK(b.active_set_steps > 0);
   CHECK(b.active_set_factorisations >= 1);
   CHECK(b.energy == Approx(a.energy).epsilon(1e-9));
+}
+
+TEST_CASE("by default a minimisation FIRE finishes within active_set_after evaluations is FIRE's, bit for bit",
+          "[active_set]") {
+  Packing by_default = resized(1.002), alone = resized(1.002);
+  FireParams defaults, fire_alone;
+  fire_alone.active_set_after = 0;
+  ForceField f1, f2;
+  const FireResult a = minimise(by_default, f1, defaults);
+  const FireResult b = minimise(alone, f2, fire_alone);
+  REQUIRE(a.converged);
+  REQUIRE(b.evaluations < defaults.active_set_after);
+  CHECK(a.active_set_steps == 0);
+  CHECK(a.evaluations == b.evaluations);
+  CHECK(by_default.q == alone.q);
 }
 
 TEST_CASE("active-set minimisation is deterministic", "[active_set]") {
