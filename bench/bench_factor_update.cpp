@@ -4,13 +4,18 @@
 // (g = Jᵀn). Whether such a continuation can beat FIRE at marginality depends on how much cheaper
 // updating the factor for that term is than factoring again. Not a test.
 //
-//   bench_factor_update PACKING [--events K]
+//   bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T]
 //
-// On the non-rattler Hessian H of PACKING's load-bearing contacts (both terms) plus δ1 (δ = 10⁻¹⁰ ×
-// its largest diagonal entry, as the stability test): the CPU seconds of the first LDLᵀ factor
-// (ordering and numeric factorisation), of a numeric refactorisation with the ordering kept, of a
-// supernodal LLᵀ refactorisation of the same matrix, of a solve, and of the downdate and update that
-// open and close again each of K load-bearing contacts (default 100; CholmodSolver::update). Printed
+// On the non-rattler Hessian H of PACKING's load-bearing contacts (both terms; with
+// --stiffness-only without the prestress term: the positive semidefinite Gauss–Newton matrix of the
+// active-set steps) plus δ1 (δ = 10⁻¹⁰ × its largest diagonal entry, as the stability test): the CPU
+// seconds of the first LDLᵀ factor (ordering and numeric factorisation), of a numeric
+// refactorisation with the ordering kept, of a supernodal LLᵀ refactorisation of the same matrix and
+// of the first update of that supernodal factor (CHOLMOD turns it into a simplicial LDLᵀ first), of
+// a solve, and of the downdate and update that open and close again each of K load-bearing contacts
+// (default 100; CholmodSolver::update). --tile T first replaces PACKING by its T × T periodic images
+// in a box T times as wide (unsheared): the same network, T² times as large — a large 2D network of
+// the same local structure for the sizes that no replay set reaches. Printed
 // with the relative difference between the solve after one downdate and a fresh factor of the
 // downdated matrix, and the residual of a solve before the events and after all K round trips.
 #include "budjam/cholmod_solver.hpp"
@@ -26,6 +31,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -50,22 +56,52 @@ SparseMatrix contact_term(const Packing& p, const Contact& c, const DofMap& map)
   return C;
 }
 
+// The T × T periodic images of an unsheared packing, in a box T times as wide.
+Packing tiled(const Packing& p, int T) {
+  if (p.box.shear != 0.0) throw std::runtime_error("--tile needs an unsheared packing");
+  Packing t;
+  t.box.L = T * p.box.L;
+  const std::size_t n = p.size();
+  t.q.resize(3 * static_cast<Eigen::Index>(n) * T * T);
+  Eigen::Index k = 0;
+  for (int a = 0; a < T; ++a)
+    for (int c = 0; c < T; ++c)
+      for (std::size_t i = 0; i < n; ++i, ++k) {
+        const auto at = 3 * static_cast<Eigen::Index>(i);
+        t.q.segment<3>(3 * k) << p.q[at] + a * p.box.L, p.q[at + 1] + c * p.box.L, p.q[at + 2];
+        t.b.push_back(p.b[i]);
+        t.gamma0.push_back(p.gamma0[i]);
+        t.id.push_back(k);
+        t.parent.push_back(-1);
+      }
+  t.next_id = k;
+  return t;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: bench_factor_update PACKING [--events K]\n");
     return 2;
   }
   long events = 100;
+  int tile = 1;
+  HessianTerms terms;
   for (int k = 2; k < argc; ++k) {
     const std::string a = argv[k];
     if (a == "--events" && k + 1 < argc) {
       events = std::atol(argv[++k]);
+    } else if (a == "--tile" && k + 1 < argc) {
+      tile = std::atoi(argv[++k]);
+      if (tile < 1) throw std::runtime_error("--tile needs a positive integer");
+    } else if (a == "--stiffness-only") {
+      terms.prestress = false;
     } else {
       std::fprintf(stderr, "bench_factor_update: unknown argument %s\n", argv[k]);
       return 2;
     }
   }
   Packing p = io::read_packing(argv[1]).packing;
+  if (tile > 1) p = tiled(p, tile);
   ForceField field;
   Eigen::VectorXd F;
   field.evaluate(p, F);
@@ -77,7 +113,7 @@ int run(int argc, char** argv) {
     return 1;
   }
   const DofMap map = non_rattler_dofs(net);
-  SparseMatrix H = restrict_matrix(hessian(p, lb), map);
+  SparseMatrix H = restrict_matrix(hessian(p, lb, terms), map);
   const double delta = 1e-10 * H.diagonal().cwiseAbs().maxCoeff();
   for (Eigen::Index k = 0; k < H.rows(); ++k) H.coeffRef(k, k) += delta;
 
@@ -92,12 +128,18 @@ int run(int argc, char** argv) {
   const long nnz_L = ldl.factor_nonzeros();
   // The same matrix in CHOLMOD's supernodal LLᵀ (BLAS-3 kernels): the cheapest fresh factor.
   // cholmod_updown works on a simplicial LDLᵀ factor and converts any other to one first.
-  CholmodSolver llt(Factorisation::llt);
-  double supernodal = -1.0;
-  if (llt.factor(H)) {
+  CholmodSolver llt(Factorisation::updatable);
+  double supernodal = -1.0, first_update = -1.0;
+  if (llt.factor(H) && llt.negative_pivots() == 0) {
     t0 = cpu_seconds();
     for (int r = 0; r < repeats; ++r) llt.factor(H);
     supernodal = (cpu_seconds() - t0) / repeats;
+    const bool was_supernodal = llt.supernodal();
+    const SparseMatrix C = contact_term(p, lb.front(), map);
+    t0 = cpu_seconds();
+    llt.update(C, false);
+    first_update = cpu_seconds() - t0;
+    if (!was_supernodal) first_update = -1.0;  // the ordinary rank-1 update timed below
   }
 
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(H.rows(), -1.0, 1.0);
@@ -131,10 +173,11 @@ int run(int argc, char** argv) {
               static_cast<long>(H.rows()), lb.size());
   std::printf("first factor (ordering + numeric)   %.4f CPU s, nnz(L) %ld\n", first, nnz_L);
   std::printf("numeric refactorisation              %.4f CPU s (mean of %d)\n", numeric, repeats);
-  if (supernodal >= 0.0)
+  if (supernodal >= 0.0) {
     std::printf("supernodal LLT refactorisation       %.4f CPU s (mean of %d; %s)\n", supernodal, repeats,
-                llt.supernodal() ? "supernodal" : "CHOLMOD chose simplicial");
-  else
+                first_update >= 0.0 ? "supernodal" : "CHOLMOD chose simplicial");
+    if (first_update >= 0.0) std::printf("its first update (to LDLT + rank-1)  %.4f CPU s\n", first_update);
+  } else
     std::printf("supernodal LLT refactorisation       not positive definite\n");
   std::printf("solve                                %.4f CPU s (mean of %d)\n", solve, repeats);
   std::printf("contact opened (rank-1 downdate)     %.6f CPU s (mean of %ld)\n", down / events, events);

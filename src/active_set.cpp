@@ -72,8 +72,12 @@ double along(const PairModel& m, const Eigen::VectorXd& u) {
 // The model m(u) of one linearisation, minimised by semismooth Newton on its active set.
 class ContactModel {
  public:
-  ContactModel(std::vector<PairModel> pairs, Eigen::VectorXd damping)
-      : pairs_(std::move(pairs)), D_(std::move(damping)), solver_(Factorisation::ldlt) {}
+  // `solver` is kept from one linearisation to the next: every active set lies within the listed
+  // pairs, so the ordering made for all of them serves until the neighbour list changes.
+  ContactModel(std::vector<PairModel> pairs, Eigen::VectorXd damping, CholmodSolver& solver)
+      : pairs_(std::move(pairs)), D_(std::move(damping)), solver_(solver) {
+    solver_.keep_ordering_for(assemble([](std::size_t) { return true; }));
+  }
 
   // Minimises m from u = 0; returns the minimiser. `result` counts the work.
   Eigen::VectorXd minimise(long max_inner, ActiveSetResult& result) {
@@ -123,21 +127,28 @@ class ContactModel {
  private:
   static constexpr std::size_t kMaxUpdates = 64;
 
-  void factor() {
+  // μD + k Σ g gᵀ over the pairs that `in` selects.
+  template <class Selected>
+  SparseMatrix assemble(Selected in) const {
     const Eigen::Index n = D_.size();
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(static_cast<std::size_t>(n) + 36 * pairs_.size());
     for (Eigen::Index i = 0; i < n; ++i) t.emplace_back(i, i, D_[i]);
     for (std::size_t c = 0; c < pairs_.size(); ++c) {
-      if (!active_[c]) continue;
+      if (!in(c)) continue;
       const PairModel& m = pairs_[c];
       for (int a = 0; a < 6; ++a)
         for (int b = 0; b < 6; ++b) t.emplace_back(m.dof[a], m.dof[b], kSpring * m.g[a] * m.g[b]);
     }
     SparseMatrix K(n, n);
     K.setFromTriplets(t.begin(), t.end());
+    return K;
+  }
+
+  void factor() {
     // μD + k Σ g gᵀ is positive definite for μ > 0: a failure is a NaN, not a model property.
-    if (!solver_.factor(K)) throw CholmodError("active_set: the contact model's matrix could not be factored");
+    if (!solver_.factor(assemble([&](std::size_t c) { return active_[c] != 0; })))
+      throw CholmodError("active_set: the contact model's matrix could not be factored");
   }
 
   // ±√k g_c for each changed pair, up to eight columns per CHOLMOD call, additions and removals apart.
@@ -200,7 +211,7 @@ class ContactModel {
 
   std::vector<PairModel> pairs_;
   Eigen::VectorXd D_;
-  CholmodSolver solver_;
+  CholmodSolver& solver_;
   std::vector<double> residual_;  // δ_c + g_cᵀu
   std::vector<Crossing> crossings_;
   std::vector<char> active_;
@@ -227,6 +238,7 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     lever = std::max({lever, db.mother_offset, db.bud_offset});
   }
   const double max_move = 0.25 * field.neighbours().skin();
+  CholmodSolver solver(Factorisation::updatable);
   double mu = prm.damping * kSpring;
   int refused = 0;
   while (true) {
@@ -244,7 +256,7 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     }
     if (res.steps >= prm.max_steps) break;
     ++res.steps;
-    ContactModel model(linearise(p, field), mu * D);
+    ContactModel model(linearise(p, field), mu * D, solver);
     Eigen::VectorXd u = model.minimise(prm.max_inner, res);
     double moved = 0.0;
     for (std::size_t i = 0; i < n; ++i) {

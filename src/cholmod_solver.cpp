@@ -14,6 +14,34 @@ namespace budjam {
 
 namespace {
 
+// Upper-triangle pattern of a compressed matrix (column pointers and sorted row indices).
+struct Pattern {
+  std::vector<int> outer, inner;
+  static Pattern of(const Eigen::SparseMatrix<double>& C) {
+    return {{C.outerIndexPtr(), C.outerIndexPtr() + C.outerSize() + 1},
+            {C.innerIndexPtr(), C.innerIndexPtr() + C.nonZeros()}};
+  }
+  bool equals(const Eigen::SparseMatrix<double>& C) const {
+    return static_cast<Eigen::Index>(outer.size()) == C.outerSize() + 1 &&
+           std::equal(outer.begin(), outer.end(), C.outerIndexPtr()) &&
+           static_cast<Eigen::Index>(inner.size()) == C.nonZeros() &&
+           std::equal(inner.begin(), inner.end(), C.innerIndexPtr());
+  }
+  // Whether every entry of C (sorted rows per column) is in this pattern.
+  bool contains(const Eigen::SparseMatrix<double>& C) const {
+    if (static_cast<Eigen::Index>(outer.size()) != C.outerSize() + 1) return false;
+    for (Eigen::Index j = 0; j < C.outerSize(); ++j) {
+      auto mine = inner.begin() + outer[static_cast<std::size_t>(j)];
+      const auto end = inner.begin() + outer[static_cast<std::size_t>(j) + 1];
+      for (int k = C.outerIndexPtr()[j]; k < C.outerIndexPtr()[j + 1]; ++k) {
+        mine = std::lower_bound(mine, end, C.innerIndexPtr()[k]);
+        if (mine == end || *mine != C.innerIndexPtr()[k]) return false;
+      }
+    }
+    return true;
+  }
+};
+
 // CHOLMOD's view of a compressed Eigen matrix with sorted columns (no copy; `A` must outlive it).
 // stype 1: symmetric, upper triangle stored; 0: every entry.
 cholmod_sparse cholmod_view(Eigen::SparseMatrix<double>& A, int stype) {
@@ -41,8 +69,11 @@ struct CholmodSolver::Impl {
   SerialBlas serial_blas;
   cholmod_common common{};
   cholmod_factor* L = nullptr;
-  // Upper-triangle pattern of the last analysed matrix, to reuse the ordering.
-  std::vector<int> outer, inner;
+  // Upper-triangle pattern of the last analysed matrix, to reuse its analysis.
+  Pattern analysed;
+  // keep_ordering_for: a fill-reducing permutation and the pattern it was computed for.
+  Pattern ordered;
+  std::vector<int> ordering;
   // Solve workspace, reused between calls (cholmod_solve2).
   cholmod_dense* X = nullptr;
   cholmod_dense* Y = nullptr;
@@ -53,6 +84,9 @@ struct CholmodSolver::Impl {
     common.print = 0;  // the library never prints; errors come back as exceptions
     if (kind == Factorisation::ldlt) {
       common.supernodal = CHOLMOD_SIMPLICIAL;  // supernodal CHOLMOD is LLᵀ only
+      common.final_ll = 0;
+    } else if (kind == Factorisation::updatable) {
+      common.supernodal = CHOLMOD_AUTO;  // a supernodal factor is LLᵀ; a simplicial one stays LDLᵀ
       common.final_ll = 0;
     } else {
       common.supernodal = CHOLMOD_AUTO;
@@ -73,8 +107,19 @@ struct CholmodSolver::Impl {
   }
   void drop_factor() {
     if (L) cholmod_free_factor(&L, &common);
-    outer.clear();
-    inner.clear();
+    analysed = {};
+  }
+  // Symbolic analysis of S, with the kept ordering when it was computed for a pattern containing
+  // S's; otherwise CHOLMOD's own choice (AMD, and METIS where AMD fills in much).
+  cholmod_factor* analyse(cholmod_sparse& S, const Eigen::SparseMatrix<double>& C) {
+    if (ordering.empty() || !ordered.contains(C)) return cholmod_analyze(&S, &common);
+    const int methods = common.nmethods, method = common.method[0].ordering;
+    common.nmethods = 1;  // only the given ordering (by default CHOLMOD also tries AMD and METIS)
+    common.method[0].ordering = CHOLMOD_GIVEN;
+    cholmod_factor* F = cholmod_analyze_p(&S, ordering.data(), nullptr, 0, &common);
+    common.nmethods = methods;
+    common.method[0].ordering = method;
+    return F;
   }
   std::string status_text() const {
     switch (common.status) {
@@ -130,16 +175,11 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
   cholmod_sparse S = cholmod_view(C, 1);  // symmetric, upper triangle
 
   const SerialOpenMp serial_openmp;  // CHOLMOD's own OpenMP regions (blas_threads.hpp)
-  const bool same_pattern = m.L != nullptr && static_cast<Eigen::Index>(m.outer.size()) == C.outerSize() + 1 &&
-                            std::equal(m.outer.begin(), m.outer.end(), C.outerIndexPtr()) &&
-                            static_cast<Eigen::Index>(m.inner.size()) == C.nonZeros() &&
-                            std::equal(m.inner.begin(), m.inner.end(), C.innerIndexPtr());
-  if (!same_pattern) {
+  if (!m.L || !m.analysed.equals(C)) {
     m.drop_factor();
-    m.L = cholmod_analyze(&S, &m.common);
+    m.L = m.analyse(S, C);
     if (!m.L) throw CholmodError("CHOLMOD analyse failed: " + m.status_text());
-    m.outer.assign(C.outerIndexPtr(), C.outerIndexPtr() + C.outerSize() + 1);
-    m.inner.assign(C.innerIndexPtr(), C.innerIndexPtr() + C.nonZeros());
+    m.analysed = Pattern::of(C);
     ++analyses_;
   }
   const int good = cholmod_factorize(&S, m.L, &m.common);
@@ -160,8 +200,9 @@ void CholmodSolver::read_factor() {
   supernodal_ = m.L->is_super != 0;
   rcond_ = cholmod_rcond(m.L, &m.common);
   negative_pivots_ = 0;
-  if (kind_ == Factorisation::ldlt) {
-    if (m.L->is_super || m.L->is_ll) throw CholmodError("CHOLMOD returned an LLᵀ factor where LDLᵀ was asked");
+  if (kind_ == Factorisation::ldlt && (m.L->is_super || m.L->is_ll))
+    throw CholmodError("CHOLMOD returned an LLᵀ factor where LDLᵀ was asked");
+  if (!m.L->is_super && !m.L->is_ll) {
     const int* Lp = static_cast<const int*>(m.L->p);
     const double* Lx = static_cast<const double*>(m.L->x);
     for (size_t j = 0; j < m.L->n; ++j)
@@ -171,7 +212,8 @@ void CholmodSolver::read_factor() {
 
 void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
   if (!ok_) throw CholmodError("CholmodSolver::update: no successful factorisation");
-  if (kind_ != Factorisation::ldlt) throw CholmodError("CholmodSolver::update: needs Factorisation::ldlt");
+  if (kind_ == Factorisation::llt)
+    throw CholmodError("CholmodSolver::update: needs Factorisation::ldlt or Factorisation::updatable");
   if (C.rows() != n_ || C.cols() < 1 || C.cols() > 8)
     throw CholmodError("CholmodSolver::update: C must have rows() rows and 1 to 8 columns");
   Impl& m = *impl_;
@@ -190,11 +232,27 @@ void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
   if (!cholmod_updown(add ? 1 : 0, &S, m.L, &m.common) || m.common.status < CHOLMOD_OK)
     throw CholmodError("CHOLMOD update failed: " + m.status_text());
   // The updated factor's pattern is no longer the analysed one: the next factor() starts afresh.
-  m.outer.clear();
-  m.inner.clear();
+  m.analysed = {};
   const int* column_nonzeros = static_cast<const int*>(m.L->nz);
   factor_nonzeros_ = std::accumulate(column_nonzeros, column_nonzeros + n_, 0L);
   read_factor();
+}
+
+void CholmodSolver::keep_ordering_for(const Eigen::SparseMatrix<double>& A) {
+  if (A.rows() != A.cols()) throw CholmodError("CholmodSolver::keep_ordering_for: matrix is not square");
+  Eigen::SparseMatrix<double> C = A.triangularView<Eigen::Upper>();
+  C.makeCompressed();
+  Impl& m = *impl_;
+  if (!m.ordering.empty() && m.ordered.contains(C)) return;
+  cholmod_sparse S = cholmod_view(C, 1);
+  const SerialOpenMp serial_openmp;
+  cholmod_factor* F = cholmod_analyze(&S, &m.common);
+  if (!F) throw CholmodError("CHOLMOD analyse failed: " + m.status_text());
+  const int* perm = static_cast<const int*>(F->Perm);
+  m.ordering.assign(perm, perm + C.rows());
+  cholmod_free_factor(&F, &m.common);
+  m.ordered = Pattern::of(C);
+  ++orderings_;
 }
 
 void CholmodSolver::solve(const double* b, double* x) const {

@@ -178,3 +178,96 @@ TEST_CASE("an update needs a successful LDLT factor and a C of the factor's size
   const Eigen::VectorXd b = Eigen::VectorXd::Ones(n);
   CHECK((Eigen::MatrixXd(A) * ldlt.solve(b) - b).norm() < 1e-10 * b.norm());
 }
+
+namespace {
+
+// μI + Σ_contacts c cᵀ on a periodic m × m lattice of cells (three dofs each), every cell in contact
+// with its right and upper neighbours — the matrix of a 2D contact network; `skip` drops every
+// skip-th contact (0: none), so that two calls give two networks with different patterns.
+Eigen::SparseMatrix<double> lattice_network(int m, int skip) {
+  const int n = 3 * m * m;
+  Eigen::SparseMatrix<double> A(n, n);
+  for (int k = 0; k < n; ++k) A.insert(k, k) = 1e-3;
+  int contact = 0;
+  for (int x = 0; x < m; ++x)
+    for (int y = 0; y < m; ++y)
+      for (int dir = 0; dir < 2; ++dir) {
+        ++contact;
+        if (skip > 0 && contact % skip == 0) continue;
+        const int i = x * m + y, j = dir == 0 ? ((x + 1) % m) * m + y : x * m + (y + 1) % m;
+        const Eigen::SparseMatrix<double> C = contact_column(n, i, j, 1.0 + 0.1 * (contact % 7), 0.3 * contact, 0.5);
+        A += Eigen::SparseMatrix<double>(C * C.transpose());
+      }
+  A.makeCompressed();
+  return A;
+}
+
+double relative_residual(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
+  return (A * x - b).norm() / b.norm();
+}
+
+}  // namespace
+
+TEST_CASE("an updatable factor is the LDLT factor, bit for bit, where CHOLMOD keeps it simplicial", "[fast]") {
+  const Eigen::SparseMatrix<double> A = Eigen::MatrixXd(banded_spd(60, 8)).sparseView();
+  CholmodSolver ldlt(Factorisation::ldlt), updatable(Factorisation::updatable);
+  REQUIRE(ldlt.factor(A));
+  REQUIRE(updatable.factor(A));
+  CHECK_FALSE(updatable.supernodal());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(60, -1.0, 1.0);
+  CHECK(ldlt.solve(b) == updatable.solve(b));
+  const Eigen::SparseMatrix<double> C = contact_column(60, 2, 13, 1.5, 0.7, 0.4);
+  ldlt.update(C, true);
+  updatable.update(C, true);
+  CHECK(ldlt.solve(b) == updatable.solve(b));
+}
+
+TEST_CASE("an updatable factor of a large 2D network is supernodal, and updated it solves the changed matrix",
+          "[fast]") {
+  const int m = 40, n = 3 * m * m;
+  const Eigen::SparseMatrix<double> A = lattice_network(m, 0);
+  CholmodSolver s(Factorisation::updatable);
+  REQUIRE(s.factor(A));
+  CHECK(s.supernodal());
+  CHECK(s.negative_pivots() == 0);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  CHECK(relative_residual(A, s.solve(b), b) < 1e-10);
+  // Contact 11 (cells 5 and m + 5) opens, a new one closes: the factor becomes a simplicial LDLᵀ.
+  const Eigen::SparseMatrix<double> opened = contact_column(n, 5, m + 5, 1.0 + 0.1 * (11 % 7), 0.3 * 11, 0.5);
+  const Eigen::SparseMatrix<double> closed = contact_column(n, 0, 2 * m + 3, 2.0, 1.1, 0.3);
+  s.update(opened, false);
+  s.update(closed, true);
+  CHECK_FALSE(s.supernodal());
+  CHECK(s.negative_pivots() == 0);
+  const Eigen::SparseMatrix<double> changed = A - Eigen::SparseMatrix<double>(opened * opened.transpose()) +
+                                              Eigen::SparseMatrix<double>(closed * closed.transpose());
+  CHECK(relative_residual(changed, s.solve(b), b) < 1e-10);
+}
+
+TEST_CASE("a kept ordering serves every sub-pattern: no new ordering, no more fill, the same solution", "[fast]") {
+  const int m = 24, n = 3 * m * m;
+  const Eigen::SparseMatrix<double> all = lattice_network(m, 0), some = lattice_network(m, 5);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 0.5, 1.5);
+  for (Factorisation kind : {Factorisation::ldlt, Factorisation::updatable}) {
+    CholmodSolver kept(kind), fresh(kind);
+    kept.keep_ordering_for(all);
+    kept.keep_ordering_for(some);  // within the kept pattern: the ordering stays
+    CHECK(kept.orderings() == 1);
+    REQUIRE(kept.factor(all));
+    const long fill_all = kept.factor_nonzeros();
+    REQUIRE(kept.factor(some));
+    CHECK(kept.analyses() == 2);
+    CHECK(kept.factor_nonzeros() <= fill_all);
+    REQUIRE(fresh.factor(some));
+    CHECK(relative_residual(some, kept.solve(b), b) < 1e-10);
+    CHECK((kept.solve(b) - fresh.solve(b)).norm() < 1e-10 * fresh.solve(b).norm());
+    // A contact outside the kept pattern: CHOLMOD orders that matrix itself, as a fresh solver does.
+    const Eigen::SparseMatrix<double> extra = contact_column(n, 0, n / 6, 1.0, 0.2, 0.4);
+    const Eigen::SparseMatrix<double> beyond = all + Eigen::SparseMatrix<double>(extra * extra.transpose());
+    REQUIRE(kept.factor(beyond));
+    REQUIRE(fresh.factor(beyond));
+    CHECK(kept.solve(b) == fresh.solve(b));
+    kept.keep_ordering_for(beyond);
+    CHECK(kept.orderings() == 2);
+  }
+}

@@ -14,8 +14,10 @@
 // over all listed pairs, open or closed: the pairs that would close on the way are in the model.
 // m is minimised exactly by a semismooth Newton iteration on its active set {c : δ_c + g_cᵀu > 0}
 // with an exact line search along each Newton direction (m is convex along it). Between two of
-// its iterations the set changes by a few contacts; the LDLᵀ factor of μD + k Σ_active g gᵀ is then
-// updated by rank-1 terms (CholmodSolver::update) instead of factored again. The model drops the
+// its iterations the set changes by a few contacts; the factor of μD + k Σ_active g gᵀ is then
+// updated by rank-1 terms (CholmodSolver::update) instead of factored again; a fresh factor is
+// supernodal where that pays (Factorisation::updatable: large packings), and its fill-reducing
+// ordering is the one made for all listed pairs, kept while the neighbour list stays. The model drops the
 // prestress part of the Hessian (the Gauss–Newton approximation of this least-squares energy), so
 // it is convex for every μ > 0 and its minimiser is unique. Levenberg–Marquardt control of μ: a
 // step is taken when it lowers U, and μ shrinks when U falls as the model predicted, grows when it
