@@ -4,7 +4,7 @@
 // (g = Jᵀn). Whether such a continuation can beat FIRE at marginality depends on how much cheaper
 // updating the factor for that term is than factoring again. Not a test.
 //
-//   bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T]
+//   bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S]
 //
 // On the non-rattler Hessian H of PACKING's load-bearing contacts (both terms; with
 // --stiffness-only without the prestress term: the positive semidefinite Gauss–Newton matrix of the
@@ -18,13 +18,20 @@
 // the same local structure for the sizes that no replay set reaches. Printed
 // with the relative difference between the solve after one downdate and a fresh factor of the
 // downdated matrix, and the residual of a solve before the events and after all K round trips.
+// --active-set S instead runs S Levenberg–Marquardt steps of the active-set minimiser
+// (active_set_minimise) from PACKING as it is — a trial's start, not relaxed — and prints their CPU
+// seconds in user and kernel mode with the factorisations and updates done: the factor's cost as a
+// minimisation pays it, fresh factor memory and all (io/process_memory.hpp).
+#include "budjam/active_set.hpp"
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
 #include "budjam/hessian.hpp"
 #include "io/packing_file.hpp"
+#include "io/process_memory.hpp"
 
+#include <sys/resource.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +40,7 @@
 #include <exception>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace budjam;
@@ -78,12 +86,37 @@ Packing tiled(const Packing& p, int T) {
   return t;
 }
 
+// CPU seconds of this process so far, in user and in kernel mode.
+std::pair<double, double> user_and_system_seconds() {
+  rusage r{};
+  getrusage(RUSAGE_SELF, &r);
+  return {static_cast<double>(r.ru_utime.tv_sec) + 1e-6 * static_cast<double>(r.ru_utime.tv_usec),
+          static_cast<double>(r.ru_stime.tv_sec) + 1e-6 * static_cast<double>(r.ru_stime.tv_usec)};
+}
+
+int active_set_steps(Packing p, long steps) {
+  ForceField field;
+  ActiveSetParams params;
+  params.max_steps = steps;
+  const auto [user0, system0] = user_and_system_seconds();
+  const ActiveSetResult r = active_set_minimise(p, field, params);
+  const auto [user, system] = user_and_system_seconds();
+  std::printf(
+      "N %zu: %ld active-set steps (%s), %ld inner iterations, %ld factorisations, %ld rank-1 updates, E/N %.6e\n",
+      p.size(), r.steps, to_string(r.stop), r.inner, r.factorisations, r.updates,
+      r.energy / static_cast<double>(p.size()));
+  std::printf("CPU %.2f s: user %.2f s, system %.2f s\n", user - user0 + system - system0, user - user0,
+              system - system0);
+  return 0;
+}
+
 int run(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_factor_update PACKING [--events K]\n");
+    std::fprintf(stderr,
+                 "usage: bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S]\n");
     return 2;
   }
-  long events = 100;
+  long events = 100, steps = 0;
   int tile = 1;
   HessianTerms terms;
   for (int k = 2; k < argc; ++k) {
@@ -93,6 +126,9 @@ int run(int argc, char** argv) {
     } else if (a == "--tile" && k + 1 < argc) {
       tile = std::atoi(argv[++k]);
       if (tile < 1) throw std::runtime_error("--tile needs a positive integer");
+    } else if (a == "--active-set" && k + 1 < argc) {
+      steps = std::atol(argv[++k]);
+      if (steps < 1) throw std::runtime_error("--active-set needs a positive integer");
     } else if (a == "--stiffness-only") {
       terms.prestress = false;
     } else {
@@ -102,6 +138,7 @@ int run(int argc, char** argv) {
   }
   Packing p = io::read_packing(argv[1]).packing;
   if (tile > 1) p = tiled(p, tile);
+  if (steps > 0) return active_set_steps(std::move(p), steps);
   ForceField field;
   Eigen::VectorXd F;
   field.evaluate(p, F);
@@ -193,6 +230,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {

@@ -14,6 +14,7 @@
 #include "budjam/fire.hpp"
 #include "budjam/growth.hpp"
 #include "budjam/growth_driver.hpp"
+#include "io/process_memory.hpp"
 #include "io/scene_file.hpp"
 
 #include <chrono>
@@ -101,6 +102,7 @@ void step_cost(double L) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   std::string dir = "data/scenes";
   bool runs = true, steps = true;
   for (int i = 1; i < argc; ++i) {

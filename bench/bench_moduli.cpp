@@ -15,6 +15,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/moduli.hpp"
 #include "compressed_packing.hpp"
+#include "io/process_memory.hpp"
 #include "random_packing.hpp"
 
 #include <algorithm>
@@ -34,6 +35,7 @@ using Clock = std::chrono::steady_clock;
 static double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   const std::size_t n_max = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 10000;
   const double P = argc > 2 ? std::atof(argv[2]) : 1e-3;
   const int repeats = argc > 3 ? std::atoi(argv[3]) : 3;

@@ -25,6 +25,7 @@
 #include "budjam/fire.hpp"
 #include "budjam/growth_driver.hpp"
 #include "io/packing_file.hpp"
+#include "io/process_memory.hpp"
 #include "io/scene_file.hpp"
 
 #include <algorithm>
@@ -181,6 +182,7 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   if (argc < 4) {
     usage();
     return 2;

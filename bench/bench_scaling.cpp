@@ -35,6 +35,7 @@
 // CPU time is this process's (CLOCK_PROCESS_CPUTIME_ID): the machine is shared, so wall time
 // over-states the cost.
 #include "budjam/growth_driver.hpp"
+#include "io/process_memory.hpp"
 #include "io/scene_file.hpp"
 
 #include <sys/resource.h>
@@ -101,6 +102,7 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   std::string scene_file = "data/scenes/paper-L15.toml", csv_path, targets = "[1e-3, 1e-2]";
   std::vector<std::string> overrides;
   long max_attempts = 0, max_rejections = 0, report_every = 0, seeds = 0;

@@ -17,6 +17,7 @@
 
 #include "budjam/spectrum.hpp"
 #include "io/packing_file.hpp"
+#include "io/process_memory.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -96,6 +97,7 @@ std::vector<std::size_t> parse_sizes(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   fs::path cache = "bench-cache";
   std::size_t accuracy_n = 1000;
   std::vector<std::size_t> sizes = {1000, 2000, 5000, 10000};

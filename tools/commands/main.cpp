@@ -5,6 +5,7 @@
 
 #include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/process_memory.hpp"
 #include "io/text.hpp"
 
 #include <algorithm>
@@ -42,6 +43,7 @@ std::string help_hint(const CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
   using namespace budjam::cli;
   CLI::App app{"budjam: growing packings of budding cells (yeast) in 2D, to jamming and beyond", "budjam"};
   app.set_version_flag("--version", std::string("budjam ") + BUDJAM_VERSION);
