@@ -4,7 +4,7 @@
 // (g = Jᵀn). Whether such a continuation can beat FIRE at marginality depends on how much cheaper
 // updating the factor for that term is than factoring again. Not a test.
 //
-//   bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S]
+//   bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S [--max-updates M]]
 //
 // On the non-rattler Hessian H of PACKING's load-bearing contacts (both terms; with
 // --stiffness-only without the prestress term: the positive semidefinite Gauss–Newton matrix of the
@@ -21,7 +21,9 @@
 // --active-set S instead runs S Levenberg–Marquardt steps of the active-set minimiser
 // (active_set_minimise) from PACKING as it is — a trial's start, not relaxed — and prints their CPU
 // seconds in user and kernel mode with the factorisations and updates done: the factor's cost as a
-// minimisation pays it, fresh factor memory and all (io/process_memory.hpp).
+// minimisation pays it, fresh factor memory and all (io/process_memory.hpp). --max-updates M sets
+// the changes of the active set up to which its factor is updated (ActiveSetParams::max_updates;
+// default the size rule active_set_max_updates).
 #include "budjam/active_set.hpp"
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/contact_network.hpp"
@@ -94,10 +96,11 @@ std::pair<double, double> user_and_system_seconds() {
           static_cast<double>(r.ru_stime.tv_sec) + 1e-6 * static_cast<double>(r.ru_stime.tv_usec)};
 }
 
-int active_set_steps(Packing p, long steps) {
+int active_set_steps(Packing p, long steps, long max_updates) {
   ForceField field;
   ActiveSetParams params;
   params.max_steps = steps;
+  params.max_updates = max_updates;
   const auto [user0, system0] = user_and_system_seconds();
   const ActiveSetResult r = active_set_minimise(p, field, params);
   const auto [user, system] = user_and_system_seconds();
@@ -113,10 +116,11 @@ int active_set_steps(Packing p, long steps) {
 int run(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
-                 "usage: bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S]\n");
+                 "usage: bench_factor_update PACKING [--events K] [--stiffness-only] [--tile T] [--active-set S "
+                 "[--max-updates M]]\n");
     return 2;
   }
-  long events = 100, steps = 0;
+  long events = 100, steps = 0, max_updates = -1;
   int tile = 1;
   HessianTerms terms;
   for (int k = 2; k < argc; ++k) {
@@ -129,6 +133,11 @@ int run(int argc, char** argv) {
     } else if (a == "--active-set" && k + 1 < argc) {
       steps = std::atol(argv[++k]);
       if (steps < 1) throw std::runtime_error("--active-set needs a positive integer");
+    } else if (a == "--max-updates" && k + 1 < argc) {
+      char* end = nullptr;
+      max_updates = std::strtol(argv[++k], &end, 10);
+      if (end == argv[k] || *end != '\0' || max_updates < 0)
+        throw std::runtime_error("--max-updates needs a non-negative integer");
     } else if (a == "--stiffness-only") {
       terms.prestress = false;
     } else {
@@ -138,7 +147,7 @@ int run(int argc, char** argv) {
   }
   Packing p = io::read_packing(argv[1]).packing;
   if (tile > 1) p = tiled(p, tile);
-  if (steps > 0) return active_set_steps(std::move(p), steps);
+  if (steps > 0) return active_set_steps(std::move(p), steps, max_updates);
   ForceField field;
   Eigen::VectorXd F;
   field.evaluate(p, F);

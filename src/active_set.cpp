@@ -25,6 +25,10 @@ const char* to_string(ActiveSetStop stop) {
   return "?";
 }
 
+long active_set_max_updates(long n) {
+  return std::max(64L, static_cast<long>(std::sqrt(static_cast<double>(n)) / 3.0));
+}
+
 namespace {
 
 // One listed pair linearised at the current q: δ = σ − r and g = ∂δ/∂q on the dofs
@@ -80,7 +84,7 @@ class ContactModel {
   }
 
   // Minimises m from u = 0; returns the minimiser. `result` counts the work.
-  Eigen::VectorXd minimise(long max_inner, ActiveSetResult& result) {
+  Eigen::VectorXd minimise(long max_inner, std::size_t max_updates, ActiveSetResult& result) {
     const Eigen::Index n = D_.size();
     Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
     residual_.resize(pairs_.size());
@@ -94,7 +98,7 @@ class ContactModel {
       if (it > 0 && changed.empty()) break;
       ++result.inner;
       // A few changes: rank-1 updates of the factor; many: a fresh factorisation is cheaper.
-      if (it == 0 || changed.size() > kMaxUpdates) {
+      if (it == 0 || changed.size() > max_updates) {
         for (std::size_t c : changed) active_[c] ^= 1;
         factor();
         ++result.factorisations;
@@ -125,8 +129,6 @@ class ContactModel {
   }
 
  private:
-  static constexpr std::size_t kMaxUpdates = 64;
-
   // μD + k Σ g gᵀ over the pairs that `in` selects.
   template <class Selected>
   SparseMatrix assemble(Selected in) const {
@@ -238,6 +240,8 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     lever = std::max({lever, db.mother_offset, db.bud_offset});
   }
   const double max_move = 0.25 * field.neighbours().skin();
+  const auto max_updates =
+      static_cast<std::size_t>(prm.max_updates < 0 ? active_set_max_updates(D.size()) : prm.max_updates);
   CholmodSolver solver(Factorisation::updatable);
   double mu = prm.damping * kSpring;
   int refused = 0;
@@ -257,7 +261,7 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     if (res.steps >= prm.max_steps) break;
     ++res.steps;
     ContactModel model(linearise(p, field), mu * D, solver);
-    Eigen::VectorXd u = model.minimise(prm.max_inner, res);
+    Eigen::VectorXd u = model.minimise(prm.max_inner, max_updates, res);
     double moved = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const auto k = 3 * static_cast<Eigen::Index>(i);

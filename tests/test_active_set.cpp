@@ -106,6 +106,33 @@ TEST_CASE("the steps change the factor by rank-1 updates between factorisations"
   CHECK(r.inner > r.factorisations);
 }
 
+TEST_CASE("updating the factor and making it afresh at every change reach the same minimum", "[active_set]") {
+  Packing updated = resized(1.002), fresh = resized(1.002);
+  ForceField f1, f2;
+  ActiveSetParams by_updates = params_for(updated), afresh = params_for(fresh);
+  by_updates.max_updates = 1000000;  // every change an update
+  afresh.max_updates = 0;            // every change a factorisation
+  const ActiveSetResult u = active_set_minimise(updated, f1, by_updates);
+  const ActiveSetResult a = active_set_minimise(fresh, f2, afresh);
+  for (const ActiveSetResult& r : {u, a}) {  // each stops where the Gauss–Newton model leaves off
+    CHECK(r.stop != ActiveSetStop::step_cap);
+    CHECK(r.max_force < 1e-6 * largest_contact_force(updated));
+  }
+  CHECK(a.updates == 0);
+  CHECK(u.updates > 0);
+  CHECK(u.factorisations < a.factorisations);
+  CHECK(u.energy == Approx(a.energy).epsilon(1e-9));
+}
+
+TEST_CASE("the factor is updated for up to max(64, sqrt(n)/3) changes: the break-even grows as sqrt(n)",
+          "[active_set]") {
+  CHECK(active_set_max_updates(3 * 60) == 64);
+  CHECK(active_set_max_updates(3 * 7663) == 64);  // an L = 100 colony: as below
+  CHECK(active_set_max_updates(36864) == 64);
+  CHECK(active_set_max_updates(3 * 68967) == 151);
+  CHECK(active_set_max_updates(9000000) == 1000);
+}
+
 TEST_CASE("FIRE hands a minimisation to active-set steps after active_set_after evaluations", "[active_set]") {
   Packing alone = resized(1.002), handed = resized(1.002);
   FireParams fire;

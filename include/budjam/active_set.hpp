@@ -38,7 +38,16 @@ struct ActiveSetParams {
   long max_steps = 100;       // Levenberg–Marquardt steps (one linearisation each)
   long max_inner = 60;        // semismooth Newton iterations per step
   int max_refused = 4;        // consecutive steps that did not lower U before giving up
+  // Changes of the active set up to which its factor is updated by rank-1 terms; more are a fresh
+  // factorisation. < 0: active_set_max_updates of the number of dofs; 0: a fresh factor at every change.
+  long max_updates = -1;
 };
+
+// The break-even number of changes between updating a factor of n dofs and making it afresh:
+// max(64, √n / 3). A refactorisation of a 2D contact network costs ∝ n^1.5 (nested dissection);
+// the optimum count was measured flat over 64–128 changes at n = 2.3·10⁴ and 128–512 at 2.1·10⁵
+// (docs/speed.md), so it grows as √n. 64 up to n = 36 864 (12 288 cells).
+long active_set_max_updates(long n);
 
 enum class ActiveSetStop {
   converged,     // largest force below force_tol
