@@ -77,10 +77,11 @@ double along(const PairModel& m, const Eigen::VectorXd& u) {
 class ContactModel {
  public:
   // `solver` is kept from one linearisation to the next: every active set lies within the listed
-  // pairs, so the ordering made for all of them serves until the neighbour list changes.
-  ContactModel(std::vector<PairModel> pairs, Eigen::VectorXd damping, CholmodSolver& solver)
+  // pairs, so the ordering made for all of them serves until the neighbour list changes
+  // (`new_list`: the pairs are not those of the last model).
+  ContactModel(std::vector<PairModel> pairs, Eigen::VectorXd damping, CholmodSolver& solver, bool new_list)
       : pairs_(std::move(pairs)), D_(std::move(damping)), solver_(solver) {
-    solver_.keep_ordering_for(assemble([](std::size_t) { return true; }));
+    if (new_list) solver_.keep_ordering_for(assemble([](std::size_t) { return true; }));
   }
 
   // Minimises m from u = 0; returns the minimiser. `result` counts the work.
@@ -114,7 +115,7 @@ class ContactModel {
       const Eigen::VectorXd d = solver_.solve(rhs) - u;
       const double alpha = line_minimum(u, d);
       u += alpha * d;
-      for (std::size_t c = 0; c < pairs_.size(); ++c) residual_[c] += alpha * along(pairs_[c], d);
+      for (std::size_t c = 0; c < pairs_.size(); ++c) residual_[c] += alpha * rate_[c];
     }
     return u;
   }
@@ -181,8 +182,9 @@ class ContactModel {
   double line_minimum(const Eigen::VectorXd& u, const Eigen::VectorXd& d) {
     double intercept = d.dot(D_.asDiagonal() * u), slope = d.dot(D_.asDiagonal() * d);  // φ' = intercept + α slope
     crossings_.clear();
+    rate_.resize(pairs_.size());
     for (std::size_t c = 0; c < pairs_.size(); ++c) {
-      const double r = residual_[c], s = along(pairs_[c], d);
+      const double r = residual_[c], s = rate_[c] = along(pairs_[c], d);
       const bool in = r > 0.0 || (r == 0.0 && s > 0.0);  // in the set just after α = 0
       if (in) {
         intercept += kSpring * r * s;
@@ -215,6 +217,7 @@ class ContactModel {
   Eigen::VectorXd D_;
   CholmodSolver& solver_;
   std::vector<double> residual_;  // δ_c + g_cᵀu
+  std::vector<double> rate_;      // g_cᵀd along the last Newton direction d
   std::vector<Crossing> crossings_;
   std::vector<char> active_;
 };
@@ -243,6 +246,7 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
   const auto max_updates =
       static_cast<std::size_t>(prm.max_updates < 0 ? active_set_max_updates(D.size()) : prm.max_updates);
   CholmodSolver solver(Factorisation::updatable);
+  long listed = -1;  // the neighbour list's build that the kept ordering was made for
   double mu = prm.damping * kSpring;
   int refused = 0;
   while (true) {
@@ -260,7 +264,9 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     }
     if (res.steps >= prm.max_steps) break;
     ++res.steps;
-    ContactModel model(linearise(p, field), mu * D, solver);
+    const bool new_list = field.neighbours().rebuilds() != listed;
+    listed = field.neighbours().rebuilds();
+    ContactModel model(linearise(p, field), mu * D, solver, new_list);
     Eigen::VectorXd u = model.minimise(prm.max_inner, max_updates, res);
     double moved = 0.0;
     for (std::size_t i = 0; i < n; ++i) {

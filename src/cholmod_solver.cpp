@@ -14,34 +14,6 @@ namespace budjam {
 
 namespace {
 
-// Upper-triangle pattern of a compressed matrix (column pointers and sorted row indices).
-struct Pattern {
-  std::vector<int> outer, inner;
-  static Pattern of(const Eigen::SparseMatrix<double>& C) {
-    return {{C.outerIndexPtr(), C.outerIndexPtr() + C.outerSize() + 1},
-            {C.innerIndexPtr(), C.innerIndexPtr() + C.nonZeros()}};
-  }
-  bool equals(const Eigen::SparseMatrix<double>& C) const {
-    return static_cast<Eigen::Index>(outer.size()) == C.outerSize() + 1 &&
-           std::equal(outer.begin(), outer.end(), C.outerIndexPtr()) &&
-           static_cast<Eigen::Index>(inner.size()) == C.nonZeros() &&
-           std::equal(inner.begin(), inner.end(), C.innerIndexPtr());
-  }
-  // Whether every entry of C (sorted rows per column) is in this pattern.
-  bool contains(const Eigen::SparseMatrix<double>& C) const {
-    if (static_cast<Eigen::Index>(outer.size()) != C.outerSize() + 1) return false;
-    for (Eigen::Index j = 0; j < C.outerSize(); ++j) {
-      auto mine = inner.begin() + outer[static_cast<std::size_t>(j)];
-      const auto end = inner.begin() + outer[static_cast<std::size_t>(j) + 1];
-      for (int k = C.outerIndexPtr()[j]; k < C.outerIndexPtr()[j + 1]; ++k) {
-        mine = std::lower_bound(mine, end, C.innerIndexPtr()[k]);
-        if (mine == end || *mine != C.innerIndexPtr()[k]) return false;
-      }
-    }
-    return true;
-  }
-};
-
 // CHOLMOD's view of a compressed Eigen matrix with sorted columns (no copy; `A` must outlive it).
 // stype 1: symmetric, upper triangle stored; 0: every entry.
 cholmod_sparse cholmod_view(Eigen::SparseMatrix<double>& A, int stype) {
@@ -64,6 +36,36 @@ cholmod_sparse cholmod_view(Eigen::SparseMatrix<double>& A, int stype) {
 }  // namespace
 
 struct CholmodSolver::Impl {
+  // Upper-triangle pattern of a compressed matrix (column pointers and sorted row indices). A member
+  // type: a field of a file-local type is a -Wsubobject-linkage warning where a unity build includes
+  // this file.
+  struct Pattern {
+    std::vector<int> outer, inner;
+    static Pattern of(const Eigen::SparseMatrix<double>& C) {
+      return {{C.outerIndexPtr(), C.outerIndexPtr() + C.outerSize() + 1},
+              {C.innerIndexPtr(), C.innerIndexPtr() + C.nonZeros()}};
+    }
+    bool equals(const Eigen::SparseMatrix<double>& C) const {
+      return static_cast<Eigen::Index>(outer.size()) == C.outerSize() + 1 &&
+             std::equal(outer.begin(), outer.end(), C.outerIndexPtr()) &&
+             static_cast<Eigen::Index>(inner.size()) == C.nonZeros() &&
+             std::equal(inner.begin(), inner.end(), C.innerIndexPtr());
+    }
+    // Whether every entry of C (sorted rows per column) is in this pattern.
+    bool contains(const Eigen::SparseMatrix<double>& C) const {
+      if (static_cast<Eigen::Index>(outer.size()) != C.outerSize() + 1) return false;
+      for (Eigen::Index j = 0; j < C.outerSize(); ++j) {
+        auto mine = inner.begin() + outer[static_cast<std::size_t>(j)];
+        const auto end = inner.begin() + outer[static_cast<std::size_t>(j) + 1];
+        for (int k = C.outerIndexPtr()[j]; k < C.outerIndexPtr()[j + 1]; ++k) {
+          mine = std::lower_bound(mine, end, C.innerIndexPtr()[k]);
+          if (mine == end || *mine != C.innerIndexPtr()[k]) return false;
+        }
+      }
+      return true;
+    }
+  };
+
   // A supernodal factor and its solves call the BLAS: on one thread, so that the factor's bits do
   // not depend on the thread count (blas_threads.hpp).
   SerialBlas serial_blas;
@@ -74,6 +76,9 @@ struct CholmodSolver::Impl {
   // keep_ordering_for: a fill-reducing permutation and the pattern it was computed for.
   Pattern ordered;
   std::vector<int> ordering;
+  // The factor's row of each matrix row (the inverse of L->Perm), for updates; made at the first
+  // update after a factorisation.
+  std::vector<int> position;
   // Solve workspace, reused between calls (cholmod_solve2).
   cholmod_dense* X = nullptr;
   cholmod_dense* Y = nullptr;
@@ -169,8 +174,8 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
   ok_ = false;
   failed_column_ = -1;
   negative_pivots_ = 0;
-  rcond_ = 0;
   n_ = C.rows();
+  m.position.clear();
 
   cholmod_sparse S = cholmod_view(C, 1);  // symmetric, upper triangle
 
@@ -179,7 +184,7 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
     m.drop_factor();
     m.L = m.analyse(S, C);
     if (!m.L) throw CholmodError("CHOLMOD analyse failed: " + m.status_text());
-    m.analysed = Pattern::of(C);
+    m.analysed = Impl::Pattern::of(C);
     ++analyses_;
   }
   const int good = cholmod_factorize(&S, m.L, &m.common);
@@ -198,7 +203,6 @@ bool CholmodSolver::factor_matrix(const Eigen::SparseMatrix<double>& Cin) {
 void CholmodSolver::read_factor() {
   Impl& m = *impl_;
   supernodal_ = m.L->is_super != 0;
-  rcond_ = cholmod_rcond(m.L, &m.common);
   negative_pivots_ = 0;
   if (kind_ == Factorisation::ldlt && (m.L->is_super || m.L->is_ll))
     throw CholmodError("CHOLMOD returned an LLᵀ factor where LDLᵀ was asked");
@@ -210,6 +214,8 @@ void CholmodSolver::read_factor() {
   }
 }
 
+double CholmodSolver::rcond() const { return ok_ ? cholmod_rcond(impl_->L, &impl_->common) : 0.0; }
+
 void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
   if (!ok_) throw CholmodError("CholmodSolver::update: no successful factorisation");
   if (kind_ == Factorisation::llt)
@@ -218,9 +224,12 @@ void CholmodSolver::update(const Eigen::SparseMatrix<double>& C, bool add) {
     throw CholmodError("CholmodSolver::update: C must have rows() rows and 1 to 8 columns");
   Impl& m = *impl_;
   // The factor is of P A Pᵀ (P = L->Perm): row i of C goes to the position k with Perm[k] = i.
-  const int* perm = static_cast<const int*>(m.L->Perm);
-  std::vector<int> position(static_cast<size_t>(n_));
-  for (Eigen::Index k = 0; k < n_; ++k) position[static_cast<size_t>(perm[k])] = static_cast<int>(k);
+  if (m.position.empty()) {
+    const int* perm = static_cast<const int*>(m.L->Perm);
+    m.position.resize(static_cast<size_t>(n_));
+    for (Eigen::Index k = 0; k < n_; ++k) m.position[static_cast<size_t>(perm[k])] = static_cast<int>(k);
+  }
+  const std::vector<int>& position = m.position;
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(static_cast<size_t>(C.nonZeros()));
   for (Eigen::Index j = 0; j < C.outerSize(); ++j)
@@ -251,7 +260,7 @@ void CholmodSolver::keep_ordering_for(const Eigen::SparseMatrix<double>& A) {
   const int* perm = static_cast<const int*>(F->Perm);
   m.ordering.assign(perm, perm + C.rows());
   cholmod_free_factor(&F, &m.common);
-  m.ordered = Pattern::of(C);
+  m.ordered = Impl::Pattern::of(C);
   ++orderings_;
 }
 

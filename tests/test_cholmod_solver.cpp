@@ -135,6 +135,30 @@ TEST_CASE("an LDLT factor updated by contact terms solves as the factor of the c
   CHECK(s.factor_nonzeros() > 0);
 }
 
+TEST_CASE("the condition estimate follows rank-1 updates: that of the changed matrix factored in the same order",
+          "[fast]") {
+  const int cells = 40, n = 3 * cells;
+  const Eigen::MatrixXd A = banded_spd(n, 7);
+  const Eigen::SparseMatrix<double> C = contact_column(n, 5, 29, 3.0, 1.1, 0.5);
+  const Eigen::MatrixXd Cd = Eigen::MatrixXd(C);
+  const Eigen::SparseMatrix<double> before = A.sparseView(),
+                                    after = Eigen::MatrixXd(A + Cd * Cd.transpose()).sparseView();
+  // One ordering for both, so that the LDLᵀ factors, and with them min|D| / max|D|, are unique.
+  CholmodSolver updated(Factorisation::ldlt), fresh(Factorisation::ldlt);
+  updated.keep_ordering_for(after);
+  fresh.keep_ordering_for(after);
+  REQUIRE(updated.factor(before));
+  const double rcond_before = updated.rcond();
+  updated.update(C, true);
+  REQUIRE(fresh.factor(after));
+  CHECK(updated.rcond() == Approx(fresh.rcond()).epsilon(1e-10));
+  CHECK(updated.rcond() != Approx(rcond_before).epsilon(1e-6));
+  // Each pivot of D is a Schur complement's diagonal, within [λ_min, λ_max]: rcond ≥ 1 / κ₂.
+  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Eigen::MatrixXd(after)).eigenvalues();
+  CHECK(updated.rcond() >= lambda.minCoeff() / lambda.maxCoeff());
+  CHECK(updated.rcond() <= 1.0);
+}
+
 TEST_CASE("a downdate that makes the matrix indefinite shows in the inertia (Sylvester)", "[fast]") {
   // A = B + t ccᵀ with B having one negative eigenvalue along c: A is positive definite, and the
   // downdate by t ccᵀ leaves B, whose inertia the updated factor must report.

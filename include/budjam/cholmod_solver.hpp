@@ -86,8 +86,9 @@ class CholmodSolver {
   long failed_column() const { return failed_column_; }  // −1 after success
   // A simplicial LDLᵀ factor: number of negative D entries (inertia); an LLᵀ factor: 0.
   long negative_pivots() const { return negative_pivots_; }
-  // CHOLMOD's cheap reciprocal condition estimate (min/max diagonal of L, squared for LDLᵀ's D).
-  double rcond() const { return rcond_; }
+  // CHOLMOD's cheap reciprocal condition estimate (min/max diagonal of L, squared for LDLᵀ's D),
+  // of the current factor; computed when asked, so that updates do not pay for it.
+  double rcond() const;
   long factor_nonzeros() const { return factor_nonzeros_; }
   bool supernodal() const { return supernodal_; }
   long analyses() const { return analyses_; }    // symbolic analyses done (ordering reuse is visible)
@@ -96,14 +97,13 @@ class CholmodSolver {
  private:
   struct Impl;
   bool factor_matrix(const Eigen::SparseMatrix<double>& C);
-  void read_factor();  // inertia and condition estimate of the current factor
+  void read_factor();  // inertia of the current factor
   std::unique_ptr<Impl> impl_;
   Factorisation kind_;
   bool ok_ = false;
   Eigen::Index n_ = 0;
   long failed_column_ = -1;
   long negative_pivots_ = 0;
-  double rcond_ = 0;
   long factor_nonzeros_ = 0;
   bool supernodal_ = false;
   long analyses_ = 0;
