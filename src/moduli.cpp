@@ -446,9 +446,11 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       CholmodSolver f(llt ? Factorisation::llt : Factorisation::ldlt);
       // LLᵀ stops at the first non-positive pivot; LDLᵀ accepts any nonzero one, so it must also
       // show no negative pivot and no rounding-level one (an exactly singular system).
-      if (f.factor(Hf) && (llt || (f.negative_pivots() == 0 && f.rcond() > kSingularRcond))) {
+      const bool factored = f.factor(Hf);
+      const double rcond = factored ? f.rcond() : 0.0;
+      if (factored && (llt || (f.negative_pivots() == 0 && rcond > kSingularRcond))) {
         k.method = llt ? SolveMethod::cholesky : SolveMethod::ldlt;
-        k.rcond = f.rcond();
+        k.rcond = rcond;
         return refined_solve(
             Hf, Xf, [&](const Eigen::MatrixXd& b) { return f.solve(b); }, steps, threshold, k.refinement_steps);
       }
@@ -460,9 +462,11 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       require_dense_fits(static_cast<std::size_t>(Hf.rows()), 2, "moduli: the dense solver",
                          "a sparse one (--solver ldlt)");
       const Eigen::LDLT<Eigen::MatrixXd> ldl{Eigen::MatrixXd(Hf)};
-      if (ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0 && ldl.rcond() > kSingularRcond) {
+      const bool factored = ldl.info() == Eigen::Success && ldl.vectorD().minCoeff() > 0;
+      const double rcond = factored ? ldl.rcond() : 0.0;
+      if (factored && rcond > kSingularRcond) {
         k.method = SolveMethod::dense;
-        k.rcond = ldl.rcond();
+        k.rcond = rcond;
         return refined_solve(
             Hf, Xf, [&](const Eigen::MatrixXd& b) { return Eigen::MatrixXd(ldl.solve(b)); }, steps, threshold,
             k.refinement_steps);
