@@ -12,10 +12,12 @@
 //   bench_replay run SCENE DIR|FILE... [--set section.key=value]...
 //     relaxes each saved start with the recorded parameters (to convergence: a trial deferred at its
 //     budget is relaxed on) with SCENE's force field, and prints per trial the recorded and the
-//     replayed FIRE iterations, force evaluations, Newton factorisations, CPU seconds and E/N, then
-//     the totals. With jamming.continuation = true a trial with a .branch file first follows that
-//     branch to its sizes (as the growth driver does) and FIRE goes on from where it ended; the
-//     continuation's steps, events and how the branch ended are printed too; with
+//     replayed FIRE iterations, force evaluations, Newton factorisations, CPU seconds and E/N, and
+//     the side of SCENE's jamming window the replayed E/N lies on (marked * where the recorded E/N
+//     lies on another: a changed verdict), then the totals with the number of such trials. With
+//     jamming.continuation = true a trial with a .branch file first follows that branch to its
+//     sizes (as the growth driver does) and FIRE goes on from where it ended; the continuation's
+//     steps, events and how the branch ended are printed too; with
 //     jamming.crossing_step > 0 the branch crosses its stability losses by FIRE rearrangements, and
 //     their number and force evaluations are printed with it.
 //
@@ -24,6 +26,7 @@
 #include "budjam/continuation.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/growth_driver.hpp"
+#include "budjam/jamming.hpp"
 #include "io/packing_file.hpp"
 #include "io/process_memory.hpp"
 #include "io/scene_file.hpp"
@@ -124,9 +127,10 @@ std::vector<fs::path> replay_files(const std::vector<std::string>& args) {
 }
 
 int replay(const Scene& scene, const std::vector<fs::path>& files) {
-  std::printf("%-28s %8s %6s %10s %10s %10s %10s %7s %9s %11s %11s\n", "trial", "verdict", "N", "rec_iter", "rec_eval",
-              "iter", "eval", "factor", "cpu_s", "rec_E/N", "E/N");
-  long rec_evals = 0, evals = 0, factorisations = 0;
+  std::printf("%-28s %8s %6s %10s %10s %10s %10s %7s %9s %11s %11s %7s\n", "trial", "verdict", "N", "rec_iter",
+              "rec_eval", "iter", "eval", "factor", "cpu_s", "rec_E/N", "E/N", "side");
+  long rec_evals = 0, evals = 0, factorisations = 0, sides_changed = 0;
+  const JammingWindow window = jamming_window(scene);
   double cpu = 0;
   for (const fs::path& file : files) {
     io::PackingFile pf = io::read_packing(file);
@@ -163,19 +167,28 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
                   fr.active_set_factorisations, fr.active_set_updates);
     const long factored = fr.newton_iterations + fr.active_set_factorisations + cr.factorisations;
     const double n = static_cast<double>(pf.packing.size());
-    std::printf("%-28s %8s %6zu %10lld %10lld %10ld %10ld %7ld %9.3f %11.4e %11.4e\n", file.filename().c_str(),
+    // The side of the scene's window that each E/N lies on: a change is a changed verdict, the
+    // trial's run would have gone on along another path.
+    const double rec_E = pf.meta.number("replay.E_per_cell");
+    const WindowSide side = window.side(fr.energy / n);
+    const bool changed = side != window.side(rec_E);
+    sides_changed += changed;
+    std::printf("%-28s %8s %6zu %10lld %10lld %10ld %10ld %7ld %9.3f %11.4e %11.4e %6s%s\n", file.filename().c_str(),
                 pf.meta.get("replay.verdict").value_or("?").c_str(), pf.packing.size(),
                 static_cast<long long>(pf.meta.integer("replay.iterations")),
                 static_cast<long long>(pf.meta.integer("replay.evaluations")), fr.iterations,
-                fr.evaluations + cr.evaluations, factored, c, pf.meta.number("replay.E_per_cell"), fr.energy / n);
+                fr.evaluations + cr.evaluations, factored, c, rec_E, fr.energy / n, to_string(side),
+                changed ? "*" : " ");
     std::fflush(stdout);
     rec_evals += pf.meta.integer("replay.evaluations");
     evals += fr.evaluations + cr.evaluations;
     factorisations += factored;
     cpu += c;
   }
-  std::printf("total: %zu trials, recorded evaluations %ld, replayed evaluations %ld, factorisations %ld, CPU %.3f s\n",
-              files.size(), rec_evals, evals, factorisations, cpu);
+  std::printf(
+      "total: %zu trials, recorded evaluations %ld, replayed evaluations %ld, factorisations %ld, CPU %.3f s, "
+      "window side changed in %ld\n",
+      files.size(), rec_evals, evals, factorisations, cpu, sides_changed);
   return 0;
 }
 

@@ -18,6 +18,15 @@ const char* to_string(TrialStart start) {
   return "?";
 }
 
+const char* to_string(WindowSide side) {
+  switch (side) {
+    case WindowSide::below: return "below";
+    case WindowSide::inside: return "inside";
+    case WindowSide::above: return "above";
+  }
+  return "?";
+}
+
 WindowSide JammingWindow::side(double E_per_cell) const {
   if (E_per_cell < bottom_) return WindowSide::below;
   if (E_per_cell <= top()) return WindowSide::inside;

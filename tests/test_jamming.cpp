@@ -71,6 +71,10 @@ TEST_CASE("jamming window: below under eps_U, inside from eps_U to 2 eps_U inclu
     CHECK(w.candidate(eps));
     CHECK(w.candidate(2 * eps));
     CHECK_FALSE(w.candidate(above(2 * eps)));
+    // Named as bench_replay prints them.
+    CHECK(std::string(to_string(w.side(0.0))) == "below");
+    CHECK(std::string(to_string(w.side(eps))) == "inside");
+    CHECK(std::string(to_string(w.side(3 * eps))) == "above");
   }
 }
 

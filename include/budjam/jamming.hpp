@@ -31,6 +31,7 @@ enum class WindowSide {
   inside,  // ε_U ≤ E/N ≤ 2ε_U: a jamming point, if it is a minimum
   above,   // E/N > 2ε_U (or not a number): past the jamming point
 };
+const char* to_string(WindowSide side);
 
 class JammingWindow {
  public:
