@@ -163,8 +163,8 @@ int replay(const Scene& scene, const std::vector<fs::path>& files) {
           cr.evaluations, cr.rearrangements, cr.rearrangement_evaluations,
           cr.energy / static_cast<double>(pf.packing.size()));
     if (fr.active_set_steps > 0)
-      std::printf("  active set: %ld steps, %ld factorisations, %ld rank-1 updates\n", fr.active_set_steps,
-                  fr.active_set_factorisations, fr.active_set_updates);
+      std::printf("  active set: %ld steps, %ld factorisations, %ld rank-1 updates, %ld tries undone\n",
+                  fr.active_set_steps, fr.active_set_factorisations, fr.active_set_updates, fr.active_set_tries_undone);
     const long factored = fr.newton_iterations + fr.active_set_factorisations + cr.factorisations;
     const double n = static_cast<double>(pf.packing.size());
     // The side of the scene's window that each E/N lies on: a change is a changed verdict, the

@@ -21,6 +21,7 @@ const char* to_string(ActiveSetStop stop) {
     case ActiveSetStop::energy_floor: return "energy_floor";
     case ActiveSetStop::stalled: return "stalled";
     case ActiveSetStop::step_cap: return "step_cap";
+    case ActiveSetStop::long_step: return "long_step";
   }
   return "?";
 }
@@ -67,6 +68,14 @@ std::vector<PairModel> linearise(const Packing& p, const ForceField& field) {
   return pairs;
 }
 
+// An upper bound on how far a step u moves any lobe: |Δx| + lever |Δθ|.
+double largest_lobe_move(const Eigen::VectorXd& u, double lever) {
+  double moved = 0.0;
+  for (Eigen::Index k = 0; k < u.size(); k += 3)
+    moved = std::max(moved, std::hypot(u[k], u[k + 1]) + lever * std::abs(u[k + 2]));
+  return moved;
+}
+
 double along(const PairModel& m, const Eigen::VectorXd& u) {
   double s = 0.0;
   for (int k = 0; k < 6; ++k) s += m.g[k] * u[m.dof[k]];
@@ -84,8 +93,10 @@ class ContactModel {
     if (new_list) solver_.keep_ordering_for(assemble([](std::size_t) { return true; }));
   }
 
-  // Minimises m from u = 0; returns the minimiser. `result` counts the work.
-  Eigen::VectorXd minimise(long max_inner, std::size_t max_updates, ActiveSetResult& result) {
+  // Minimises m from u = 0; returns the minimiser, or the first iterate that moves a lobe further
+  // than give_up_move (> 0) when the caller gives such steps up. `result` counts the work.
+  Eigen::VectorXd minimise(long max_inner, std::size_t max_updates, double give_up_move, double lever,
+                           ActiveSetResult& result) {
     const Eigen::Index n = D_.size();
     Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
     residual_.resize(pairs_.size());
@@ -116,6 +127,7 @@ class ContactModel {
       const double alpha = line_minimum(u, d);
       u += alpha * d;
       for (std::size_t c = 0; c < pairs_.size(); ++c) residual_[c] += alpha * rate_[c];
+      if (give_up_move > 0.0 && largest_lobe_move(u, lever) > give_up_move) break;
     }
     return u;
   }
@@ -267,11 +279,11 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     const bool new_list = field.neighbours().rebuilds() != listed;
     listed = field.neighbours().rebuilds();
     ContactModel model(linearise(p, field), mu * D, solver, new_list);
-    Eigen::VectorXd u = model.minimise(prm.max_inner, max_updates, res);
-    double moved = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto k = 3 * static_cast<Eigen::Index>(i);
-      moved = std::max(moved, std::hypot(u[k], u[k + 1]) + lever * std::abs(u[k + 2]));
+    Eigen::VectorXd u = model.minimise(prm.max_inner, max_updates, prm.give_up_move, lever, res);
+    const double moved = largest_lobe_move(u, lever);
+    if (prm.give_up_move > 0.0 && moved > prm.give_up_move) {
+      res.stop = ActiveSetStop::long_step;
+      break;
     }
     // m is convex, so the shortened step still lowers it: m(s u) ≤ (1 − s) m(0) + s m(u).
     if (moved > max_move) u *= max_move / moved;

@@ -128,6 +128,14 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
   constexpr long kNever = std::numeric_limits<long>::max();
   long next_active_set = prm.active_set_after > 0 ? prm.active_set_after : kNever;
   long active_set_tries = 0;
+  // active_set_after = 0 is FIRE alone: no try either.
+  long next_try =
+      prm.active_set_after > 0 && prm.active_set_try_after > 0 && prm.active_set_try_after < prm.active_set_after
+          ? prm.active_set_try_after
+          : kNever;
+  // Evaluations of undone tries: the schedule counts the others, so that FIRE's path after an undone
+  // try is the path it takes without one.
+  long undone = 0;
   // FIRE resumes from rest at the packing a second-order method left (the field is current for it).
   auto restart_fire = [&]() {
     U = field.evaluate(p, F);
@@ -138,23 +146,45 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     alpha = prm.alpha_start;
     n_positive = 0;
   };
+  auto active_set = [&](const ActiveSetParams& as) {
+    const ActiveSetResult ar = active_set_minimise(p, field, as);
+    res.active_set_steps += ar.steps;
+    res.active_set_factorisations += ar.factorisations;
+    res.active_set_updates += ar.updates;
+    res.evaluations += ar.evaluations;
+    return ar;
+  };
   for (long it = 1; !stopped(U, fmax); ++it) {
-    if (res.evaluations >= next_active_set) {
-      ActiveSetParams as;
-      as.force_tol = tol;
-      as.energy_floor = floor_total;
-      const ActiveSetResult ar = active_set_minimise(p, field, as);
-      res.active_set_steps += ar.steps;
-      res.active_set_factorisations += ar.factorisations;
-      res.active_set_updates += ar.updates;
-      res.evaluations += ar.evaluations;
+    if (res.evaluations - undone >= next_try) {
+      next_try = kNever;
+      const Eigen::VectorXd q0 = p.q, F0 = F;
+      const ForceField field0 = field;
+      const ActiveSetResult ar = active_set({.force_tol = tol,
+                                             .energy_floor = floor_total,
+                                             .give_up_move = prm.active_set_try_move * field.neighbours().skin()});
+      // Kept where the steps reached the minimum or the rounding floor of their model (stalled, as
+      // at a prestressed minimum: FIRE finishes from there); undone after a long step or the cap.
+      if (ar.stop != ActiveSetStop::long_step && ar.stop != ActiveSetStop::step_cap) {
+        restart_fire();
+        if (stopped(U, fmax)) break;
+      } else {
+        p.q = q0;  // into p's own buffer, which q points to
+        F = F0;
+        field = field0;
+        undone += ar.evaluations;
+        ++res.active_set_tries_undone;
+      }
+    }
+    if (res.evaluations - undone >= next_active_set) {
+      active_set({.force_tol = tol, .energy_floor = floor_total});
       restart_fire();
       // Each new try waits twice as long as the last: where the steps stall (a large rearrangement
       // whose prestress the model leaves out), they cost at most a few tries per minimisation.
       // Saturating: a huge active_set_after means never again.
       const int doublings = static_cast<int>(std::min(++active_set_tries, 20L));
       const long wait = prm.active_set_after > (kNever >> doublings) ? kNever : prm.active_set_after << doublings;
-      next_active_set = wait > kNever - res.evaluations ? kNever : res.evaluations + wait;
+      const long counted = res.evaluations - undone;
+      next_active_set = wait > kNever - counted ? kNever : counted + wait;
       if (stopped(U, fmax)) break;
     }
     if (fmax < newton_below) {

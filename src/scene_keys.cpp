@@ -278,6 +278,11 @@ std::vector<SceneKey> make_keys() {
       "contact model with every listed pair take over (again after twice as many more, and so on); 0 = FIRE alone, "
       "the paper's minimiser",
       kZeroOrPositive, BUDJAM_FIELD(fire.active_set_after)));
+  e.push_back(integer("minimiser", "active_set_try_after",
+                      "one early try of the active-set steps after this many force evaluations (below "
+                      "active_set_after), kept where it ends at a minimum without a step longer than 1/32 of the "
+                      "skin, undone otherwise (the minimisation then goes on as without it); 0 = no try",
+                      kZeroOrPositive, BUDJAM_FIELD(fire.active_set_try_after)));
   e.push_back(real("minimiser", "skin", "Verlet skin of the neighbour list, in mother diameters", kPositive,
                    BUDJAM_FIELD(skin)));
   e.push_back(integer("minimiser", "threads",

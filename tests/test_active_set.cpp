@@ -150,7 +150,7 @@ TEST_CASE("FIRE hands a minimisation to active-set steps after active_set_after 
   CHECK(b.energy == Approx(a.energy).epsilon(1e-9));
 }
 
-TEST_CASE("by default a minimisation FIRE finishes within active_set_after evaluations is FIRE's, bit for bit",
+TEST_CASE("by default a minimisation FIRE finishes within active_set_try_after evaluations is FIRE's, bit for bit",
           "[active_set]") {
   Packing by_default = resized(1.002), alone = resized(1.002);
   FireParams defaults, fire_alone;
@@ -159,10 +159,63 @@ TEST_CASE("by default a minimisation FIRE finishes within active_set_after evalu
   const FireResult a = minimise(by_default, f1, defaults);
   const FireResult b = minimise(alone, f2, fire_alone);
   REQUIRE(a.converged);
-  REQUIRE(b.evaluations < defaults.active_set_after);
+  REQUIRE(b.evaluations < defaults.active_set_try_after);
   CHECK(a.active_set_steps == 0);
   CHECK(a.evaluations == b.evaluations);
   CHECK(by_default.q == alone.q);
+}
+
+TEST_CASE("a step longer than give_up_move ends the active-set steps before it is taken", "[active_set]") {
+  Packing p = resized(1.002);
+  const Packing start = p;
+  ForceField field;
+  ActiveSetParams params = params_for(p);
+  params.give_up_move = 1e-12;  // far below the overlaps the resizing made
+  const ActiveSetResult r = active_set_minimise(p, field, params);
+  CHECK(r.stop == ActiveSetStop::long_step);
+  CHECK(r.steps == 1);
+  CHECK(p.q == start.q);
+}
+
+// FIRE alone (the Newton finish off; active_set_after = 0 makes no try either) and FIRE with one
+// active-set try after 50 evaluations, the try given up at a step longer than `try_move`, on the
+// same resized packing.
+struct TryAndAlone {
+  Packing tried = resized(1.002), alone = resized(1.002);
+  FireResult with_try, without;
+  explicit TryAndAlone(double try_move) {
+    FireParams fire;
+    fire.newton_force = 0;
+    fire.active_set_after = 0;
+    fire.active_set_try_after = 50;
+    fire.active_set_try_move = try_move;
+    ForceField f1, f2;
+    without = minimise(alone, f1, fire);
+    CHECK(without.active_set_steps == 0);
+    fire.active_set_after = 1000000;
+    with_try = minimise(tried, f2, fire);
+    REQUIRE(without.converged);
+    REQUIRE(without.evaluations > 50);
+  }
+};
+
+TEST_CASE("an undone speculative try leaves FIRE's path bit for bit, its cost counted", "[active_set]") {
+  const TryAndAlone run(1e-12);  // every step is a "rearrangement": the try is undone
+  CHECK(run.with_try.active_set_tries_undone == 1);
+  CHECK(run.with_try.active_set_steps == 1);
+  CHECK(run.with_try.iterations == run.without.iterations);
+  CHECK(run.with_try.evaluations > run.without.evaluations);
+  CHECK(run.tried.q == run.alone.q);
+}
+
+TEST_CASE("a speculative try that converges ends the minimisation at FIRE's minimum", "[active_set]") {
+  const TryAndAlone run(1.0);  // no step is too long
+  REQUIRE(run.with_try.converged);
+  CHECK(run.with_try.active_set_tries_undone == 0);
+  CHECK(run.with_try.active_set_steps > 0);
+  CHECK(run.with_try.iterations < run.without.iterations);
+  CHECK(run.with_try.energy == Approx(run.without.energy).epsilon(1e-9));
+  CHECK(run.with_try.max_force < std::max(kDefaultForceTol, force_resolution(run.tried)));
 }
 
 TEST_CASE("active-set minimisation is deterministic", "[active_set]") {

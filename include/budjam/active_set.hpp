@@ -41,6 +41,10 @@ struct ActiveSetParams {
   // Changes of the active set up to which its factor is updated by rank-1 terms; more are a fresh
   // factorisation. < 0: active_set_max_updates of the number of dofs; 0: a fresh factor at every change.
   long max_updates = -1;
+  // > 0: give up (ActiveSetStop::long_step) at the first step whose model minimiser would move a
+  // lobe further than this, before taking it. Such a step is a rearrangement, whose prestress the
+  // model leaves out; FIRE's speculative try (fire.hpp) hands those back.
+  double give_up_move = 0.0;
 };
 
 // The break-even number of changes between updating a factor of n dofs and making it afresh:
@@ -53,7 +57,8 @@ enum class ActiveSetStop {
   converged,     // largest force below force_tol
   energy_floor,  // U below the floor
   stalled,       // max_refused steps in a row did not lower U (the rounding floor, or a saddle)
-  step_cap       // max_steps steps
+  step_cap,      // max_steps steps
+  long_step      // a step would have moved a lobe further than give_up_move
 };
 const char* to_string(ActiveSetStop stop);
 

@@ -42,6 +42,16 @@ struct FireParams {
   // FIRE finishes sooner bit for bit FIRE's (at L = 15 every jamming point of 300 seeds) and cuts the
   // creeps that set a large run's cost (docs/minimiser.md, "Active-set steps").
   long active_set_after = 100000;
+  // One speculative active-set try after this many force evaluations (< active_set_after; 0 = no
+  // try), for the relaxations that creep into a jammed minimum next to their start: decompressions
+  // a hair above the jamming window, whose steps move lobes by 10⁻⁶–10⁻³ and converge in tens of
+  // linearisations where FIRE spends 10⁵ evaluations. The try is given up at the first step that
+  // would move a lobe by more than active_set_try_move × the neighbour list's skin (a
+  // rearrangement, which FIRE crosses better than the steps' model), and when it does not end at a
+  // minimum the minimisation goes on exactly as if it had not been made: only its cost remains
+  // (docs/minimiser.md, "Active-set steps").
+  long active_set_try_after = 10000;
+  double active_set_try_move = 1.0 / 32.0;
 };
 
 // Why a minimisation stopped.
@@ -61,6 +71,7 @@ struct FireResult {
   long active_set_steps = 0;           // active-set linearisations (active_set.hpp)
   long active_set_factorisations = 0;  // their LDLᵀ factorisations
   long active_set_updates = 0;         // their rank-1 factor changes
+  long active_set_tries_undone = 0;    // speculative tries undone (their steps are counted above)
   long evaluations = 0;                // force evaluations made by this call
   double energy = 0.0;                 // U at the end
   double max_force = 0.0;              // largest |F| component at the end (θ component as F_θ / r_g)

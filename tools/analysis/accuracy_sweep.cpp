@@ -31,15 +31,23 @@ const std::map<std::string, std::vector<std::string>> kFamilyQuantities{
     {"growth", {"phi_J", "u_J", "Z_J", "phi_2", "P", "B", "G", "omega_star"}},
     {"moduli", {"B", "G"}},
     {"spectrum", {"omega_star", "band"}}};
-const std::map<std::string, std::string> kKnobLabel{
-    {"ftol", "minimiser.force_tol"},       {"epsU", "jamming.epsilon_U"},
-    {"tol", "jamming.target_tolerance"},   {"dt", "growth.dt"},
-    {"solver", "moduli linear solver"},    {"arpack_tol", "ARPACK tol"},
-    {"arpack_ncv", "ARPACK ncv"},          {"search", "jamming.search"},
-    {"newton", "minimiser.newton_force"},  {"adaptive", "growth.adaptive_dt"},
-    {"jump", "jamming.jump_factor"},       {"across", "jamming.start_across_divisions"},
-    {"budget", "jamming.trial_budget"},    {"continuation", "jamming.continuation"},
-    {"crossing", "jamming.crossing_step"}, {"activeset", "minimiser.active_set_after"}};
+const std::map<std::string, std::string> kKnobLabel{{"ftol", "minimiser.force_tol"},
+                                                    {"epsU", "jamming.epsilon_U"},
+                                                    {"tol", "jamming.target_tolerance"},
+                                                    {"dt", "growth.dt"},
+                                                    {"solver", "moduli linear solver"},
+                                                    {"arpack_tol", "ARPACK tol"},
+                                                    {"arpack_ncv", "ARPACK ncv"},
+                                                    {"search", "jamming.search"},
+                                                    {"newton", "minimiser.newton_force"},
+                                                    {"adaptive", "growth.adaptive_dt"},
+                                                    {"jump", "jamming.jump_factor"},
+                                                    {"across", "jamming.start_across_divisions"},
+                                                    {"budget", "jamming.trial_budget"},
+                                                    {"continuation", "jamming.continuation"},
+                                                    {"crossing", "jamming.crossing_step"},
+                                                    {"activeset", "minimiser.active_set_after"},
+                                                    {"activetry", "minimiser.active_set_try_after"}};
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -53,11 +61,13 @@ double family_error_floor(const std::string& family, double floor) {
 // minimum than FIRE (docs/minimiser.md, "Active-set steps"), a change of the protocol that per-seed
 // errors do not measure and the ensembles do. Their fronts are measured and reported, but do not
 // decide the verdict.
+const std::string kJudgedByEnsembles =
+    ": a change of the protocol, judged by the jamming ensembles (docs/minimiser.md, \"Active-set steps\"), not by "
+    "per-seed errors";
 const std::map<std::string, std::string> kPinnedByModel{
     {"epsU", "the model fixes epsilon_U = 1e-16 (the jamming criterion the paper's numbers came from)"},
-    {"activeset",
-     "where active-set steps take over they reach other minima than FIRE: a change of the protocol, judged by "
-     "the jamming ensembles (docs/minimiser.md, \"Active-set steps\"), not by per-seed errors"}};
+    {"activeset", "where active-set steps take over they reach other minima than FIRE" + kJudgedByEnsembles},
+    {"activetry", "a kept try of the active-set steps ends at another minimum than FIRE's" + kJudgedByEnsembles}};
 
 // Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp).
 const std::set<std::string> kEnsembleQuantities{"phi_2"};
