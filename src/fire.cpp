@@ -178,7 +178,7 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     if (res.evaluations - undone >= next_active_set) {
       active_set({.force_tol = tol, .energy_floor = floor_total});
       restart_fire();
-      // Each new try waits twice as long as the last: where the steps stall (a large rearrangement
+      // Each new hand-over waits twice as long as the last: where the steps stall (a large rearrangement
       // whose prestress the model leaves out), they cost at most a few tries per minimisation.
       // Saturating: a huge active_set_after means never again.
       const int doublings = static_cast<int>(std::min(++active_set_tries, 20L));

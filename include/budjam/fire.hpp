@@ -44,7 +44,7 @@ struct FireParams {
   long active_set_after = 100000;
   // One speculative active-set try after this many force evaluations (< active_set_after; 0 = no
   // try), for the relaxations that creep into a jammed minimum next to their start: decompressions
-  // a hair above the jamming window, whose steps move lobes by 10⁻⁶–10⁻³ and converge in tens of
+  // a hair above the jamming window, whose steps move lobes by 10⁻⁶–3·10⁻³ and converge in tens of
   // linearisations where FIRE spends 10⁵ evaluations. The try is given up at the first step that
   // would move a lobe by more than active_set_try_move × the neighbour list's skin (a
   // rearrangement, which FIRE crosses better than the steps' model), and when it does not end at a
