@@ -90,6 +90,12 @@ void validate(const Scene& s) {
     fail("minimiser.dt_min", "must not exceed minimiser.dt_start = " + value_text(f.dt_start), f.dt_min);
   if (!(f.dt_start <= f.dt_max))
     fail("minimiser.dt_start", "must not exceed minimiser.dt_max = " + value_text(f.dt_max), f.dt_start);
+  // The try is made before the regular hand-over or not at all: a try at or after it would be a key
+  // without effect. With active_set_after = 0 (FIRE alone) no try is made whatever the key says.
+  if (f.active_set_after > 0 && f.active_set_try_after >= f.active_set_after)
+    fail("minimiser.active_set_try_after",
+         "must be below minimiser.active_set_after = " + std::to_string(f.active_set_after) + " (0 = no try)",
+         std::int64_t(f.active_set_try_after));
   // Below the floor a packing counts as certainly unjammed, so the floor must lie below ε_U.
   if (!(f.energy_floor < s.epsilon_U))
     fail("minimiser.energy_floor", "must be below jamming.epsilon_U = " + value_text(s.epsilon_U), f.energy_floor);

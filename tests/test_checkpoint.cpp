@@ -209,6 +209,7 @@ TEST_CASE("a run with active-set steps resumed from a checkpoint counts the same
           "[checkpoint]") {
   Scene scene = small_scene();
   scene.fire.active_set_after = 500;
+  scene.fire.active_set_try_after = 0;
   const Resumed run = resumed_from_checkpoint(scene, [](const RunResult& r) { return r.active_set_steps > 0; });
   CHECK(run.rewritten);
   const RunResult &r = run.resumed, &uninterrupted = run.uninterrupted;

@@ -178,7 +178,10 @@ TEST_CASE(
   const Relaxed r = jammed(100, 1e-3, 0.3, 1.0, 3);
   const ElasticResponse e = elastic_response(r.p, r.contacts, r.net);
   const StrainSweep iso = strain_sweep(r.p, StrainKind::isotropic, doubling_strains(1e-8, 6), tight_fire());
-  REQUIRE(iso.used == 13);
+  // Strains of 1e-8 … 3.2e-7 each way: one of the largest may open or close a contact that is nearly
+  // zero in this packing (which one depends on the rounding of the BLAS kernel the CPU selects); the
+  // fit takes the samples with the unstrained contact network, and ten or more carry both slopes.
+  REQUIRE(iso.used >= 10);
   INFO("P " << e.P << " P_energy " << e.P_energy << " -dU/dA " << -iso.energy_slope);
   INFO("B " << e.B() << " B_energy " << e.B_energy() << " A d2U/dA2 " << iso.energy_modulus());
   CHECK(rel(-iso.energy_slope, e.P_energy) < 1e-6);

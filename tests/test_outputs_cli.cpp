@@ -160,7 +160,7 @@ TEST_CASE("summary.json's cost counters agree with trials.csv: trials, marginal 
 TEST_CASE("with minimiser.active_set_after, summary.json counts the active-set steps and their factor work", "[cli]") {
   const fs::path run = work_dir() / "active_set";
   REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --out " +
-                     shell_quoted(run) + " --set minimiser.active_set_after=300")
+                     shell_quoted(run) + " --set minimiser.active_set_after=300 --set minimiser.active_set_try_after=0")
               .code == 0);
   const budjam::io::Json summary = budjam::io::read_json(run / "summary.json");
   const auto count = [&](const char* key) { return summary.at(key).get<long long>(); };

@@ -308,6 +308,10 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[minimiser]\nforce_tol = 0\n", "minimiser.force_tol: must be positive"},
       {"[minimiser]\nenergy_floor = 1e-16\n", "minimiser.energy_floor: must be below jamming.epsilon_U = 1e-16"},
       {"[minimiser]\nmax_iterations = 0\n", "minimiser.max_iterations: must be positive"},
+      {"[minimiser]\nactive_set_after = 5000\n",
+       "minimiser.active_set_try_after: must be below minimiser.active_set_after = 5000 (0 = no try) (got 10000)"},
+      {"[minimiser]\nactive_set_try_after = 100000\n",
+       "minimiser.active_set_try_after: must be below minimiser.active_set_after = 100000 (0 = no try) (got 100000)"},
       {"[observe]\nbud_events = 1\n", "observe.bud_events: expected true or false (got 1)"},
       {"[observe]\ncheckpoint_every = -5\n", "observe.checkpoint_every: must be zero or positive (got -5)"},
       {"[observe]\nmoduli = 1\n", "observe.moduli: expected a table [observe.moduli] (got 1)"},
@@ -323,6 +327,21 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
     CHECK_THAT(message, StartsWith("test.toml:"));
     CHECK(message.find('\n') == std::string::npos);
   }
+}
+
+TEST_CASE("an active-set try is refused only where it could never be made", "[scene]") {
+  Scene s;
+  s.fire.active_set_try_after = s.fire.active_set_after - 1;
+  CHECK_NOTHROW(validate(s));
+  // No try, or FIRE alone (active_set_after = 0 makes no try whatever the try key says).
+  s.fire.active_set_try_after = 0;
+  s.fire.active_set_after = 500;
+  CHECK_NOTHROW(validate(s));
+  s.fire.active_set_try_after = 10000;
+  s.fire.active_set_after = 0;
+  CHECK_NOTHROW(validate(s));
+  s.fire.active_set_after = 10000;
+  CHECK_THROWS_WITH(validate(s), StartsWith("minimiser.active_set_try_after: must be below"));
 }
 
 TEST_CASE("validate names the key for scenes built in code, without a file", "[scene]") {
