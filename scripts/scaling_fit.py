@@ -67,6 +67,7 @@ def load(path, lo, hi, last):
     run["wall"] = float(rows[-1]["wall_s"])
     run["N_final"] = int(rows[-1]["N"])
     first = next((i for i, r in enumerate(tries) if r["accepted"] == "0"), len(tries))
+    run["per_search"] = marginal_per_search(tries)
 
     def window(idx):
         ev = sum(int(tries[i]["evals"]) for i in idx)
@@ -83,8 +84,28 @@ def load(path, lo, hi, last):
     return run
 
 
+def marginal_per_search(tries):
+    """Marginal relaxations (attempts of more than 1e5 force evaluations, as summary.json counts them) in
+    each search onto phi_J. A search starts at a rejected trial of the unjammed phase and ends at the
+    next accepted attempt, the jammed state or a state below the window that growth goes on from, so a
+    bracket settled there starts the next search; a search the run did not end is counted too."""
+    counts, current = [], None
+    for r in tries:
+        marginal = int(int(r["evals"]) > 100000)
+        if current is None:
+            if r["accepted"] == "0" and r["phase"] == "unjammed":
+                current = marginal
+            continue
+        current += marginal
+        if r["accepted"] == "1":
+            counts.append(current)
+            current = None
+    return counts + ([current] if current is not None else [])
+
+
 def show_fit(label, xs, ys):
-    if len(xs) < 2:
+    # Runs of one box side span a few per cent in N: no exponent can be read from them.
+    if len(xs) < 2 or max(xs) < 2 * min(xs):
         return
     k, se, c = fit(xs, ys)
     print(f"  {label:<44s} ~ N^{k:.2f} ± {se:.2f}   (prefactor {c:.3g}, {len(xs)} runs, N = {min(xs):.0f}..{max(xs):.0f})")
@@ -124,7 +145,7 @@ def main(argv):
                 f"{k} {st[k]['accepted']}+{st[k]['rejected']} steps, {st[k]['evals']} evals, {st[k]['cpu']:.2f} s "
                 f"({100 * st[k]['cpu'] / r['cpu']:.0f} %)" for k in ("approach", "bisect", "above")))
         print("  by box side: runs, median CPU s (range), median search trials and marginal relaxations "
-              "(trials above 1e5 evaluations) per run")
+              "(trials above 1e5 evaluations) per run, and marginal relaxations per search onto phi_J")
         for side in sorted({r["L"] for r in whole}):
             at = [r for r in whole if r["L"] == side]
             cpu = [r["cpu"] for r in at]
@@ -132,8 +153,12 @@ def main(argv):
             counts = (f"{statistics.median(r['search_trials'] for r in counted):g} trials, "
                       f"{statistics.median(r['marginal'] for r in counted):g} marginal "
                       f"({', '.join(str(r['marginal']) for r in counted)})" if counted else "no cost line")
+            searches = [c for r in at for c in r["per_search"]]
+            # A median of fewer than five searches is no statistic (the same rule as every ensemble).
+            per_search = (f"per search median {statistics.median(searches):g}, mean {statistics.fmean(searches):.2f} "
+                          f"({len(searches)} searches)" if len(searches) >= 5 else f"{len(searches)} searches")
             print(f"    L = {side:<5g} {len(at):3d} runs  CPU {statistics.median(cpu):9.2f} s "
-                  f"({min(cpu):.2f}-{max(cpu):.2f})  {counts}")
+                  f"({min(cpu):.2f}-{max(cpu):.2f})  {counts}; {per_search}")
         n = [r["N_J"] for r in whole]
         show_fit("whole run: CPU s per accepted step", n, [r["cpu"] / r["accepted"] for r in whole])
         show_fit("whole run: evaluations per accepted step", n, [r["evals"] / r["accepted"] for r in whole])
@@ -165,8 +190,9 @@ def main(argv):
     nm = [float(r["N_J"] or r["N_final"]) for r in runs]
     extra = [float(r["rss"] - r["rss0"]) for r in runs]
     show_fit("peak RSS - RSS at start", nm, extra)
-    a, b = linear(nm, extra)
-    print(f"  peak RSS - RSS at start, linear: {a:.0f} KiB + {1024 * b:.0f} bytes x N")
+    if len(set(nm)) > 1:  # a line needs two sizes
+        a, b = linear(nm, extra)
+        print(f"  peak RSS - RSS at start, linear: {a:.0f} KiB + {1024 * b:.0f} bytes x N")
     return 0
 
 
