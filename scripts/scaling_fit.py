@@ -103,9 +103,13 @@ def marginal_per_search(tries):
     return counts + ([current] if current is not None else [])
 
 
+def spans_sizes(xs):
+    """Runs of one box side span a few per cent in N: no exponent or slope can be read from them."""
+    return len(xs) > 1 and max(xs) >= 2 * min(xs)
+
+
 def show_fit(label, xs, ys):
-    # Runs of one box side span a few per cent in N: no exponent can be read from them.
-    if len(xs) < 2 or max(xs) < 2 * min(xs):
+    if not spans_sizes(xs):
         return
     k, se, c = fit(xs, ys)
     print(f"  {label:<44s} ~ N^{k:.2f} ± {se:.2f}   (prefactor {c:.3g}, {len(xs)} runs, N = {min(xs):.0f}..{max(xs):.0f})")
@@ -190,7 +194,7 @@ def main(argv):
     nm = [float(r["N_J"] or r["N_final"]) for r in runs]
     extra = [float(r["rss"] - r["rss0"]) for r in runs]
     show_fit("peak RSS - RSS at start", nm, extra)
-    if len(set(nm)) > 1:  # a line needs two sizes
+    if spans_sizes(nm):
         a, b = linear(nm, extra)
         print(f"  peak RSS - RSS at start, linear: {a:.0f} KiB + {1024 * b:.0f} bytes x N")
     return 0

@@ -33,3 +33,9 @@ def test_trials_above_jamming_belong_to_no_search_and_an_unended_search_counts()
     assert scaling_fit.marginal_per_search(tries) == [0]
     assert scaling_fit.marginal_per_search([attempt(0, "unjammed", 150_000)]) == [1]
     assert scaling_fit.marginal_per_search([attempt(1, "unjammed", 150_000)]) == []
+
+
+def test_no_exponent_is_read_from_runs_of_one_box_side():
+    assert not scaling_fit.spans_sizes([1207, 1242, 1231])
+    assert not scaling_fit.spans_sizes([1207])
+    assert scaling_fit.spans_sizes([179, 1231])
