@@ -14,6 +14,7 @@
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -228,6 +229,44 @@ TEST_CASE(
   std::string head;
   std::getline(csv, head);
   CHECK(head.find(",res_phi_2,") != std::string::npos);
+}
+
+TEST_CASE("every growth variant of Makefile.analysis names a knob the sweep knows; another is refused by name",
+          "[fast]") {
+  const fs::path dir = work_dir() / "acc_knobs";
+  const fs::path ref = dir / "reference";
+  REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --seed 1 --out " +
+                     shell_quoted(ref / "seed1") + " --set box.L=6")
+              .code == 0);
+  // Each variant is a line "<name>|<overrides>" after ACC_VARIANTS, the reference the last.
+  std::ifstream makefile(source_file("Makefile.analysis"));
+  std::string line, dirs;
+  bool in_variants = false;
+  int variants = 0;
+  while (std::getline(makefile, line)) {
+    if (line.rfind("ACC_VARIANTS", 0) == 0)
+      in_variants = true;
+    else if (in_variants && line.find('|') != std::string::npos) {
+      const std::string name = line.substr(line.find_first_not_of(' '), line.find('|') - line.find_first_not_of(' '));
+      if (name == "reference") break;
+      fs::create_directories(dir / name);
+      fs::copy(ref / "seed1", dir / name / "seed1", fs::copy_options::recursive);
+      dirs += ' ';
+      dirs += shell_quoted(dir / name);
+      ++variants;
+    }
+  }
+  REQUIRE(variants > 20);
+  CHECK(run_budjam("accuracy --reference " + shell_quoted(ref) + dirs + " --out " + shell_quoted(dir / "out")).code ==
+        0);
+  fs::create_directories(dir / "skin_0.3");
+  fs::copy(ref / "seed1", dir / "skin_0.3" / "seed1", fs::copy_options::recursive);
+  const auto refused = run_budjam("accuracy --reference " + shell_quoted(ref) + " " + shell_quoted(dir / "default") +
+                                  " " + shell_quoted(dir / "skin_0.3") + " --out " + shell_quoted(dir / "out2"));
+  CHECK(refused.code != 0);
+  CHECK(refused.err.find("skin_0.3") != std::string::npos);
+  CHECK(refused.err.find("floor") != std::string::npos);
+  CHECK(std::count(refused.err.begin(), refused.err.end(), '\n') == 1);
 }
 
 TEST_CASE("the growth cost rates are the least-squares CPU per force evaluation and per factorisation", "[fast]") {

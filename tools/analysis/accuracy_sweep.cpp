@@ -31,23 +31,30 @@ const std::map<std::string, std::vector<std::string>> kFamilyQuantities{
     {"growth", {"phi_J", "u_J", "Z_J", "phi_2", "P", "B", "G", "omega_star"}},
     {"moduli", {"B", "G"}},
     {"spectrum", {"omega_star", "band"}}};
-const std::map<std::string, std::string> kKnobLabel{{"ftol", "minimiser.force_tol"},
-                                                    {"epsU", "jamming.epsilon_U"},
-                                                    {"tol", "jamming.target_tolerance"},
-                                                    {"dt", "growth.dt"},
-                                                    {"solver", "moduli linear solver"},
-                                                    {"arpack_tol", "ARPACK tol"},
-                                                    {"arpack_ncv", "ARPACK ncv"},
-                                                    {"search", "jamming.search"},
-                                                    {"newton", "minimiser.newton_force"},
-                                                    {"adaptive", "growth.adaptive_dt"},
-                                                    {"jump", "jamming.jump_factor"},
-                                                    {"across", "jamming.start_across_divisions"},
-                                                    {"budget", "jamming.trial_budget"},
-                                                    {"continuation", "jamming.continuation"},
-                                                    {"crossing", "jamming.crossing_step"},
-                                                    {"activeset", "minimiser.active_set_after"},
-                                                    {"activetry", "minimiser.active_set_try_after"}};
+// Growth knobs by the <knob> of their variant directories (<knob>_<value>), then post-processing ones.
+const std::map<std::string, std::string> kGrowthKnobLabel{{"ftol", "minimiser.force_tol"},
+                                                          {"floor", "minimiser.energy_floor"},
+                                                          {"epsU", "jamming.epsilon_U"},
+                                                          {"tol", "jamming.target_tolerance"},
+                                                          {"dt", "growth.dt"},
+                                                          {"search", "jamming.search"},
+                                                          {"newton", "minimiser.newton_force"},
+                                                          {"adaptive", "growth.adaptive_dt"},
+                                                          {"jump", "jamming.jump_factor"},
+                                                          {"across", "jamming.start_across_divisions"},
+                                                          {"budget", "jamming.trial_budget"},
+                                                          {"continuation", "jamming.continuation"},
+                                                          {"crossing", "jamming.crossing_step"},
+                                                          {"activeset", "minimiser.active_set_after"},
+                                                          {"activetry", "minimiser.active_set_try_after"}};
+const std::map<std::string, std::string> kPostKnobLabel{
+    {"solver", "moduli linear solver"}, {"arpack_tol", "ARPACK tol"}, {"arpack_ncv", "ARPACK ncv"}};
+
+std::string knob_label(const std::string& knob) {
+  for (const auto* labels : {&kGrowthKnobLabel, &kPostKnobLabel})
+    if (const auto it = labels->find(knob); it != labels->end()) return it->second;
+  return knob;
+}
 // Errors below which a family's settings tie, whatever --error-floor says: direct solvers, the dense
 // reference included, differ by 1e-10–3e-9 in B and G on jammed packings (the Hessian's condition
 // number near jamming times the rounding), so differences there measure the reference, not the setting.
@@ -200,10 +207,12 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
     row.is_reference = is_ref;
     row.is_default = name == "default";
     row.knob = is_ref ? "reference" : row.is_default ? "default" : name.substr(0, name.find('_'));
-    if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kKnobLabel.count(row.knob)))
-      throw InputError(dir.string() +
-                       ": a variant directory is named <knob>_<value> with knob ftol, epsU, tol, dt, search, jump, "
-                       "across, budget, newton, continuation, crossing or adaptive, or default");
+    if (!is_ref && !row.is_default && (name.find('_') == std::string::npos || !kGrowthKnobLabel.count(row.knob))) {
+      std::string knobs;
+      for (const auto& [knob, label] : kGrowthKnobLabel) knobs += (knobs.empty() ? "" : ", ") + knob;
+      throw InputError(dir.string() + ": a variant directory is named <knob>_<value> with knob one of " + knobs +
+                       ", or default");
+    }
     std::map<std::string, std::vector<double>> per;
     std::vector<double> cpu, wall, evals, factorisations;
     for (const auto& [s, d] : seeds_of(dir)) {
@@ -384,10 +393,7 @@ Json joint_fronts(const std::vector<SweepRow>& rows, const std::vector<Group>& g
       used.push_back(name);
     }
     const auto front = pareto_front(ce, tol);
-    Json j{{"family", family},
-           {"knob", knob},
-           {"knob_label", kKnobLabel.count(knob) ? kKnobLabel.at(knob) : knob},
-           {"cost_tie", tol.cost_ratio - 1}};
+    Json j{{"family", family}, {"knob", knob}, {"knob_label", knob_label(knob)}, {"cost_tie", tol.cost_ratio - 1}};
     Json jsets = Json::array(), jset = Json::array(), jfront = Json::array(), jby = Json::array();
     for (const Group* g : sets) jsets.push_back(g->set);
     for (std::size_t k = 0; k < used.size(); ++k)
@@ -472,7 +478,7 @@ Json knob_front(std::vector<SweepRow>& rows, const Group& g, const ParetoToleran
   j["family"] = g.family;
   j["set"] = g.set;
   j["knob"] = g.knob;
-  j["knob_label"] = kKnobLabel.count(g.knob) ? kKnobLabel.at(g.knob) : g.knob;
+  j["knob_label"] = knob_label(g.knob);
   j["cost_tie"] = tol.cost_ratio - 1;
   j["error_floor"] = tol.error_floor;
   j["default"] = rows[g.members[0]].variant;
