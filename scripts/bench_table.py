@@ -11,6 +11,9 @@ supersedes the older ones.
     python3 scripts/bench_table.py --check-readme README.md   # exit 1 if the README's table differs
     python3 scripts/bench_table.py --accuracy growth          # the latest run of one sweep
     python3 scripts/bench_table.py --check-accuracy docs/analysis.md   # exit 1 if a sweep's table differs
+    python3 scripts/bench_table.py --check-topics docs/*.md README.md  # exit 1 if a page cites a topic not in the record
+
+A page cites a topic as (topic `name`), as (topics `a`, `b`) or in a table column headed "topic".
 
 Exit 2 on a malformed record (missing column, bad date, empty field), naming the line.
 """
@@ -18,6 +21,7 @@ import argparse
 import csv
 import datetime
 import pathlib
+import re
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -122,6 +126,28 @@ def differing_block(text, begin, end, expected):
     return None
 
 
+PROSE_CITATION = re.compile(r"\btopics?\s+((?:`[^`]+`(?:,\s*|\s+and\s+|\s+or\s+)?)+)")
+
+
+def cited_topics(text):
+    """(line, topic) for every topic `text` cites in prose or in a table column headed `topic`."""
+    cited = []
+    for m in PROSE_CITATION.finditer(text):
+        line = text.count("\n", 0, m.start()) + 1
+        cited += [(line, name) for name in re.findall(r"`([^`]+)`", m.group(1))]
+    column = None  # the topic column of the table being read
+    for line, row in enumerate(text.splitlines(), start=1):
+        if not row.startswith("|"):
+            column = None
+            continue
+        cells = [c.strip() for c in row.strip().strip("|").split("|")]
+        if column is None:
+            column = cells.index("topic") if "topic" in cells else -1
+        elif column >= 0 and column < len(cells) and not set(cells[column]) <= set("-: "):
+            cited += [(line, name) for name in re.findall(r"`([^`]+)`", cells[column])]
+    return cited
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     group = parser.add_mutually_exclusive_group()
@@ -130,6 +156,7 @@ def main():
     group.add_argument("--check-readme", metavar="README", type=pathlib.Path)
     group.add_argument("--accuracy", metavar="SWEEP")
     group.add_argument("--check-accuracy", metavar="DOC", type=pathlib.Path)
+    group.add_argument("--check-topics", metavar="DOC", type=pathlib.Path, nargs="+")
     parser.add_argument("--record", type=pathlib.Path)
     args = parser.parse_args()
     if args.accuracy or args.check_accuracy:
@@ -147,6 +174,13 @@ def main():
                 return 1
         return 0
     record = read_record(args.record or RECORD)
+    if args.check_topics:
+        topics = {e["topic"] for e in record}
+        missing = [(doc, line, name) for doc in args.check_topics
+                   for line, name in cited_topics(doc.read_text(encoding="utf-8")) if name not in topics]
+        for doc, line, name in missing:
+            print(f"bench_table: {doc}:{line}: cites topic {name!r}, which the record does not hold", file=sys.stderr)
+        return 1 if missing else 0
     if args.history:
         sys.stdout.write(markdown(sorted(record, key=lambda e: e["date"])))
     elif args.readme:

@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 
 # What the demo needs: the compilers, the libraries, the Python module's build and runtime.
 # OpenBLAS becomes the system's libblas.so.3: CHOLMOD's supernodal factors and ARPACK run on its
-# kernels (held on one thread, docs/speed.md "Threads"), 1.7x less CPU than the reference BLAS's.
+# kernels (held on one thread, docs/speed.md "BLAS and OpenMP"), 1.7x less CPU than the reference BLAS's.
 demo_packages=(cmake g++ make libeigen3-dev libsuitesparse-dev libarpack2-dev libboost-graph-dev
                libopenblas0-openmp libtomlplusplus-dev libcli11-dev nlohmann-json3-dev librsvg2-bin
                pybind11-dev python3-dev python3-numpy python3-pandas help2man bash-completion)

@@ -24,7 +24,7 @@ struct FireParams {
   double force_tol = kDefaultForceTol;
   double energy_floor = 1e-20;
   // A safety net, not a tolerance: near jamming a single relaxation of a large packing can take
-  // millions of iterations (an L = 100 search trial, N = 7 627: 5.27·10⁶; docs/speed.md).
+  // millions of iterations (an L = 100 search trial, N = 7 627: 5.27·10⁶; docs/minimiser.md).
   long max_iterations = 10000000;
   // Second-order finish (newton.hpp): once the largest force falls below newton_force, Newton
   // steps with the analytic Hessian take over; FIRE resumes if they give up (and Newton is tried

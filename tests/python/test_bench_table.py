@@ -70,3 +70,22 @@ def test_malformed_accuracy_rows_are_refused_naming_the_line(tmp_path):
     record.write_text(ACCURACY_HEADER + "2026-01-02\th\tgrowth\tr\tdefault\tcost s\t\tcmd\n")
     r = bench_table("--record", record, "--accuracy", "growth")
     assert r.returncode == 2 and f"{record}:2:" in r.stderr and "non-empty" in r.stderr
+
+
+def test_every_topic_the_pages_cite_is_in_the_record():
+    pages = sorted((SOURCE_DIR / "docs").glob("*.md")) + [SOURCE_DIR / "README.md"]
+    r = bench_table("--check-topics", *pages)
+    assert r.returncode == 0, r.stderr
+
+
+def test_a_cited_topic_missing_from_the_record_is_named_with_its_line(tmp_path):
+    record = tmp_path / "m.tsv"
+    record.write_text(HEADER + "2026-01-02\th\tknown\tw\tf\tc\n")
+    page = tmp_path / "page.md"
+    page.write_text("Runs are fast (topic `known`).\n\n| run | topic |\n|---|---|\n| one | `known` |\n")
+    assert bench_table("--record", record, "--check-topics", page).returncode == 0
+    for text, line, name in [("Slow (topics `known`, `gone`).\n", 1, "gone"),
+                             ("x\n\n| run | topic |\n|---|---|\n| one | `known`, `lost` |\n", 5, "lost")]:
+        page.write_text(text)
+        r = bench_table("--record", record, "--check-topics", page)
+        assert r.returncode == 1 and f"{page}:{line}: cites topic '{name}'" in r.stderr
