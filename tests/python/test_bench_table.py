@@ -89,3 +89,12 @@ def test_a_cited_topic_missing_from_the_record_is_named_with_its_line(tmp_path):
         page.write_text(text)
         r = bench_table("--record", record, "--check-topics", page)
         assert r.returncode == 1 and f"{page}:{line}: cites topic '{name}'" in r.stderr
+
+
+def test_the_readme_headline_keeps_whole_clauses_and_never_cuts_inside_brackets():
+    sys.path.insert(0, str(SCRIPT.parent))
+    from bench_table import leading_clauses
+    figure = "median 4 s (2; 3); 1–9 s [a; b]; 5 runs"
+    assert leading_clauses(figure, 1) == "median 4 s (2; 3)"
+    assert leading_clauses(figure, 2) == "median 4 s (2; 3); 1–9 s [a; b]"
+    assert leading_clauses(figure, 3) == figure and leading_clauses("no clause", 1) == "no clause"
