@@ -107,10 +107,11 @@ def readme_table(record):
     missing = [t for t, _, _ in README_TOPICS if t not in latest]
     if missing:
         fail(f"no measurement of {', '.join(missing)} in {RECORD}")
-    lines = ["| run | measured | date, host | topic |", "|---|---|---|---|"]
+    lines = ["| run | measured | command | date, host | topic |", "|---|---|---|---|---|"]
     for topic, name, clauses in README_TOPICS:
         e = latest[topic]
-        lines.append(f"| {name} | {leading_clauses(e['figure'], clauses)} | {e['date']}, {e['host']} | `{topic}` |")
+        figure = leading_clauses(e["figure"], clauses)
+        lines.append(f"| {name} | {figure} | `{e['command']}` | {e['date']}, {e['host']} | `{topic}` |")
     return "\n".join(lines) + "\n"
 
 
