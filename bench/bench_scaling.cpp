@@ -251,6 +251,8 @@ int main(int argc, char** argv) {
       "evals initial %ld search %ld above %ld\n",
       r.search_trials, r.marginal_relaxations, r.newton_factorisations, r.newton_factor_reuses,
       r.force_evaluations_initial, r.force_evaluations_search, r.force_evaluations_above_jamming);
+  std::printf("  active set steps %ld  factorisations %ld  updates %ld\n", r.active_set_steps,
+              r.active_set_factorisations, r.active_set_updates);
   std::printf("  branches %ld  reached %ld  stability lost %ld  branch steps %ld  branch events %ld\n", r.branches,
               r.branches_reached, r.branch_stability_losses, r.branch_steps, r.branch_events);
   approach.print("approach");

@@ -49,8 +49,7 @@ def load(path, lo, hi, last):
     run["status"] = re.search(r"^status (\w+)", txt, re.M).group(1)
     m = re.search(r"peak RSS (\d+) KiB \(at start (\d+) KiB\)", txt)
     run["rss"], run["rss0"] = int(m.group(1)), int(m.group(2))
-    m = re.search(r"search trials\s+(\d+)\s+marginal relaxations\s+(\d+)", txt)
-    run["search_trials"], run["marginal"] = (int(m.group(1)), int(m.group(2))) if m else (None, None)
+    run.update(cost_counters(txt))
     m = re.search(r"N_J (\d+)", txt)
     run["N_J"] = int(m.group(1)) if m else None
     run["stages"] = {m.group(1): {"accepted": int(m.group(2)), "rejected": int(m.group(3)), "evals": int(m.group(4)),
@@ -82,6 +81,17 @@ def load(path, lo, hi, last):
         {"evals": int(tries[first]["evals"]), "cpu": step_cpu[first], "N": int(tries[first]["N"]),
          "phi_accepted": float(tries[first]["phi"])} if first < len(tries) else None)
     return run
+
+
+def cost_counters(txt):
+    """The counters of bench_scaling's cost lines; None where an older output lacks the line."""
+    m = re.search(r"search trials\s+(\d+)\s+marginal relaxations\s+(\d+)\s+Newton factorisations\s+(\d+)", txt)
+    counters = dict(zip(("search_trials", "marginal", "newton_factorisations"),
+                        map(int, m.groups()) if m else (None,) * 3))
+    m = re.search(r"active set steps\s+(\d+)\s+factorisations\s+(\d+)\s+updates\s+(\d+)", txt)
+    counters.update(zip(("active_set_steps", "active_set_factorisations", "active_set_updates"),
+                        map(int, m.groups()) if m else (None,) * 3))
+    return counters
 
 
 def marginal_per_search(tries):
@@ -149,7 +159,8 @@ def main(argv):
                 f"{k} {st[k]['accepted']}+{st[k]['rejected']} steps, {st[k]['evals']} evals, {st[k]['cpu']:.2f} s "
                 f"({100 * st[k]['cpu'] / r['cpu']:.0f} %)" for k in ("approach", "bisect", "above")))
         print("  by box side: runs, median CPU s (range), median search trials and marginal relaxations "
-              "(trials above 1e5 evaluations) per run, and marginal relaxations per search onto phi_J")
+              "(trials above 1e5 evaluations) per run, factorisations per run, and marginal relaxations per "
+              "search onto phi_J")
         for side in sorted({r["L"] for r in whole}):
             at = [r for r in whole if r["L"] == side]
             cpu = [r["cpu"] for r in at]
@@ -157,6 +168,12 @@ def main(argv):
             counts = (f"{statistics.median(r['search_trials'] for r in counted):g} trials, "
                       f"{statistics.median(r['marginal'] for r in counted):g} marginal "
                       f"({', '.join(str(r['marginal']) for r in counted)})" if counted else "no cost line")
+            factored = [r for r in at if r["active_set_steps"] is not None]
+            if factored:
+                counts += (f", factorisations: Newton {statistics.median(r['newton_factorisations'] for r in factored):g}"
+                           f", active set {statistics.median(r['active_set_factorisations'] for r in factored):g}"
+                           f" ({statistics.median(r['active_set_steps'] for r in factored):g} linearisations, "
+                           f"{statistics.median(r['active_set_updates'] for r in factored):g} rank-1 updates)")
             searches = [c for r in at for c in r["per_search"]]
             # A median of fewer than five searches is no statistic (the same rule as every ensemble).
             per_search = (f"per search median {statistics.median(searches):g}, mean {statistics.fmean(searches):.2f} "

@@ -39,3 +39,14 @@ def test_no_exponent_is_read_from_runs_of_one_box_side():
     assert not scaling_fit.spans_sizes([1207, 1242, 1231])
     assert not scaling_fit.spans_sizes([1207])
     assert scaling_fit.spans_sizes([179, 1231])
+
+
+def test_the_cost_lines_counters_are_read_and_an_older_output_without_them_is_none():
+    txt = ("  cost     search trials    12  marginal relaxations   3  Newton factorisations     40  factor reuses     "
+           "90  evals initial 5 search 7 above 9\n  active set steps 85  factorisations 162  updates 27365\n")
+    assert scaling_fit.cost_counters(txt) == {
+        "search_trials": 12, "marginal": 3, "newton_factorisations": 40,
+        "active_set_steps": 85, "active_set_factorisations": 162, "active_set_updates": 27365}
+    older = scaling_fit.cost_counters(txt.splitlines()[0])
+    assert older["marginal"] == 3 and older["active_set_steps"] is None and older["active_set_updates"] is None
+    assert set(scaling_fit.cost_counters("no cost line").values()) == {None}
