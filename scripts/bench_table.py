@@ -15,7 +15,8 @@ supersedes the older ones.
 
 A page cites a topic as (topic `name`), as (topics `a`, `b`) or in a table column headed "topic".
 
-Exit 2 on a malformed record (missing column, bad date, empty field), naming the line.
+Exit 2 on a malformed record (missing column, bad date, empty field), naming the line, or on a page
+that cannot be read.
 """
 import argparse
 import csv
@@ -53,6 +54,13 @@ ACCURACY_END = "<!-- end of accuracy sweep -->"
 def fail(message):
     print(f"bench_table: {message}", file=sys.stderr)
     sys.exit(2)
+
+
+def read_page(path):
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        fail(f"{path}: cannot read ({e.strerror if isinstance(e, OSError) else 'not UTF-8'})")
 
 
 def read_record(path, columns=COLUMNS):
@@ -182,7 +190,7 @@ def main():
         if args.accuracy:
             sys.stdout.write(accuracy_table(record, args.accuracy))
             return 0
-        text = args.check_accuracy.read_text(encoding="utf-8")
+        text = read_page(args.check_accuracy)
         sweeps = list(dict.fromkeys(e["sweep"] for e in record))
         for sweep in sweeps:
             begin = ACCURACY_BEGIN.format(sweep, sweep)
@@ -195,7 +203,7 @@ def main():
     if args.check_topics:
         topics = {e["topic"] for e in record}
         missing = [(doc, line, name) for doc in args.check_topics
-                   for line, name in cited_topics(doc.read_text(encoding="utf-8")) if name not in topics]
+                   for line, name in cited_topics(read_page(doc)) if name not in topics]
         for doc, line, name in missing:
             print(f"bench_table: {doc}:{line}: cites topic {name!r}, which the record does not hold", file=sys.stderr)
         return 1 if missing else 0
@@ -204,7 +212,7 @@ def main():
     elif args.readme:
         sys.stdout.write(readme_table(record))
     elif args.check_readme:
-        text = args.check_readme.read_text(encoding="utf-8")
+        text = read_page(args.check_readme)
         problem = differing_block(text, README_BEGIN, README_END, readme_table(record))
         if problem:
             print(f"bench_table: {args.check_readme}: {problem}", file=sys.stderr)

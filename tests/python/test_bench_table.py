@@ -98,3 +98,9 @@ def test_the_readme_headline_keeps_whole_clauses_and_never_cuts_inside_brackets(
     assert leading_clauses(figure, 1) == "median 4 s (2; 3)"
     assert leading_clauses(figure, 2) == "median 4 s (2; 3); 1–9 s [a; b]"
     assert leading_clauses(figure, 3) == figure and leading_clauses("no clause", 1) == "no clause"
+
+
+def test_a_page_that_cannot_be_read_is_one_line_naming_it(tmp_path):
+    for option in ("--check-topics", "--check-readme", "--check-accuracy"):
+        r = bench_table(option, tmp_path / "missing.md")
+        assert r.returncode == 2 and r.stderr.count("\n") == 1 and "missing.md: cannot read" in r.stderr, r.stderr
