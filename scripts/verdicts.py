@@ -7,7 +7,8 @@ own that the paper does not quote; with the same protocol the spread per sample 
 s_p = s_b √(n_b / n_p) for the paper's n_p samples (n_p = n_b when budjam ran the paper's grid). The
 combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C).
 
-    inconclusive   n_b < 5: no error bar and no verdict (the n is stated);
+    inconclusive   n_b < 5: no error bar and no verdict (the n is stated); likewise with no finite
+                   estimate or no error bar (the reason is stated);
     confirmed      z ≤ 2: x lies within 2σ of C, consistent with the claim at about 95 %;
     not confirmed  z > 2.
 
@@ -70,14 +71,31 @@ def _fmt(v):
 
 
 def inconclusive_n(n):
-    return Verdict("inconclusive", f"n = {n} < {MIN_SAMPLES}")
+    return Verdict("inconclusive", f"n = {n:g} < {MIN_SAMPLES}")
+
+
+def _finite(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def unusable(estimate, se, n):
+    """Why (estimate, se, n) can carry no verdict, or None when it can: fewer than 5 samples (or no
+    count), no finite estimate, or no error bar (missing, not finite or negative)."""
+    if not _finite(n) or n < MIN_SAMPLES:
+        return inconclusive_n(n if _finite(n) else 0)
+    if not _finite(estimate):
+        return Verdict("inconclusive", f"no finite estimate (n = {n:g})")
+    if not _finite(se) or se < 0:
+        return Verdict("inconclusive", f"no error bar (n = {n:g})")
+    return None
 
 
 def compare(estimate, se, n, claim, n_paper=None):
     """The verdict on one claim from budjam's estimate ± se over n samples; n_paper = the paper's
     number of samples (None: the same as budjam's)."""
-    if estimate is None or n is None or n < MIN_SAMPLES or se is None or not math.isfinite(se):
-        return inconclusive_n(n or 0)
+    why_not = unusable(estimate, se, n)
+    if why_not is not None:
+        return why_not
     s_p = se * math.sqrt(n / (n_paper or n))
     sigma = math.hypot(se, s_p)
     d = claim.distance(estimate)
@@ -94,8 +112,9 @@ def trend(points, increasing):
     if len(points) < 2:
         return Verdict("inconclusive", f"{len(points)} group(s)")
     for est, se, n in points:
-        if est is None or n is None or n < MIN_SAMPLES or se is None or not math.isfinite(se):
-            return inconclusive_n(n or 0)
+        why_not = unusable(est, se, n)
+        if why_not is not None:
+            return why_not
     sign = 1.0 if increasing else -1.0
 
     def z(a, b):

@@ -70,3 +70,37 @@ def test_report_refuses_jamming_tables_that_are_not_there(tmp_path):
     assert r.returncode != 0
     assert r.stderr.count("\n") == 1 and "--jamming" in r.stderr
     assert not out.exists()
+
+
+def test_no_verdict_without_a_finite_estimate_or_error_bar_and_the_reason_is_true():
+    c = v.quoted(0.23, 0.01)
+    for est, se, n in ((math.nan, 0.01, 20), (math.inf, 0.01, 20), (None, 0.01, 20),
+                       (0.23, math.nan, 20), (0.23, None, 20), (0.23, -0.01, 20), (0.23, 0.01, math.nan),
+                       (0.23, 0.01, None)):
+        r = v.compare(est, se, n, c)
+        assert r.word == "inconclusive", (est, se, n, r)
+        assert "nan" not in r.why and "z =" not in r.why
+    # n = 20 is not "< 5": the reason names what is missing
+    assert "error bar" in v.compare(0.23, None, 20, c).why and "< 5" not in v.compare(0.23, None, 20, c).why
+    assert "estimate" in v.compare(math.nan, 0.01, 20, c).why
+    for n in (0, 1, 4):
+        assert v.compare(0.23, 0.01, n, c).why == f"n = {n} < 5"
+    pts = [(0.04, 0.002, 20), (math.nan, 0.002, 20), (0.01, 0.001, 20)]
+    assert v.trend(pts, increasing=False).word == "inconclusive"
+    assert v.trend([(0.04, None, 20), (0.01, 0.001, 20)], increasing=False).word == "inconclusive"
+
+
+def test_zero_spread_is_never_a_division_into_a_verdict_of_chance():
+    # σ = 0 (every sample equal, n ≥ 5): inside the set z = 0, outside it z = ∞ — no 0/0, no NaN
+    assert str(v.compare(0.0, 0.0, 8, v.quoted(0.0, 0.0))) == "confirmed (z = 0, σ = 0)"
+    r = v.compare(1e-9, 0.0, 8, v.quoted(0.0, 0.0))
+    assert r.word == "not confirmed" and "z = inf" in r.why
+    assert v.compare(-0.5, 0.0, 8, v.at_least(0.0)).word == "not confirmed"
+    assert v.compare(-0.5, 0.0, 8, v.at_most(0.0)).word == "confirmed"
+    # a negative estimate against an interval: the distance to its near end
+    assert v.compare(-0.1, 0.1, 20, v.interval(0.2, 1.0)).word == "not confirmed"
+    assert v.compare(-0.1, 0.2, 20, v.interval(0.2, 1.0)).word == "confirmed"
+    flat = [(1.0, 0.0, 8), (1.0, 0.0, 8)]
+    assert v.trend(flat, increasing=True).word == "inconclusive"
+    assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=True).word == "confirmed"
+    assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=False).word == "not confirmed"
