@@ -40,14 +40,24 @@ def fmt(v, digits=3):
     return f"{v:.{digits - 1}e}"
 
 
+def error_bar(se, n):
+    """Whether an error (SE, bootstrap SE, interval) may be printed: a finite SE ≥ 0 from at least
+    verdicts.MIN_SAMPLES samples — never from fewer, whatever the input holds."""
+    return verdicts.unusable(0.0, se, n) is None
+
+
+def n_text(n):
+    return f"{n:g}" if isinstance(n, (int, float)) and not isinstance(n, bool) and math.isfinite(n) else "?"
+
+
 def pm(stat, key="mean"):
-    """'x ± se (n)' from a {mean|median, se, n} object."""
+    """'x ± se (n)' from a {mean|median, se, n} object (no ± from fewer than 5 samples)."""
     if not stat or stat.get(key) is None:
         return "not measured"
     s = fmt(stat[key])
-    if stat.get("se") is not None:
+    if error_bar(stat.get("se"), stat.get("n")):
         s += " ± " + fmt(stat["se"], 2)
-    return s + f" (n={stat.get('n', '?')})"
+    return s + f" (n={n_text(stat.get('n'))})"
 
 
 def growth_bulk(stat):
@@ -76,6 +86,8 @@ def cell_pm(c):
 def limit_text(x):
     if x.get("limit") is None:
         return "— (" + x.get("why", "not fitted") + ")"
+    if not error_bar(x.get("limit_se"), x.get("sizes")):
+        return f"— (a fit over {n_text(x.get('sizes'))} sizes: it needs {verdicts.MIN_SAMPLES})"
     res = ", ".join(f"{r:+.1f}" for r in x.get("residuals_in_se", []))
     return (f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ²/dof = {fmt(x['chi2'], 2)}/{x['dof']}; "
             f"residuals/SE {res})")
@@ -101,10 +113,12 @@ def jamming_size_rows(J, source):
         g = r.get("growth_only_cells_per_area", {})
         cells = [cell_pm(r[k]) for k, _ in JAMMING_SIZE_COLUMNS]
         rows.append(f"| {r['L']:g} | {r['runs']} | {fmt(r['N_J']['mean'])} | {cell_pm(r['cells_per_area'])} | "
-                    f"{fmt(g.get('value'))} ± {fmt(g.get('se'), 2)} | {fmt(r.get('cells_per_area_minus_growth_only_in_se'), 2)} | "
+                    f"{fmt(g.get('value'))}{' ± ' + fmt(g['se'], 2) if error_bar(g.get('se'), g.get('n')) else ''} | "
+                    f"{fmt(r.get('cells_per_area_minus_growth_only_in_se'), 2)} | "
                     f"{cell_pm(r['n_J'])} | " + " | ".join(cells) + " |")
     nl = J.get("n_J_limit")
-    rows.append("| N → ∞ | | | | | | " + (f"{fmt(nl['value'])} ± {fmt(nl['se'], 2)}" if nl else "—") + " | " +
+    rows.append("| N → ∞ | | | | | | " + (f"{fmt(nl['value'])} ± {fmt(nl['se'], 2)}" if nl and error_bar(
+        nl.get("se"), J["extrapolation"].get("rattler_fraction", {}).get("sizes")) else "—") + " | " +
                 " | ".join(limit_text(J["extrapolation"][k]) for k, _ in JAMMING_SIZE_COLUMNS) + " |")
     return rows
 
@@ -132,9 +146,12 @@ def ci(stat):
     if not stat or stat.get("median") is None:
         return "not measured"
     lo, hi = stat.get("ci95") or (None, None)
-    if lo is None:
-        return f"{fmt(stat['median'])} (n={stat['n']}, no interval below 5)"
-    return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={stat['n']})"
+    n = stat.get("n")
+    if not error_bar(0.0, n):
+        return f"{fmt(stat['median'])} (n={n_text(n)}, no interval below {verdicts.MIN_SAMPLES})"
+    if lo is None or hi is None:
+        return f"{fmt(stat['median'])} (n={n_text(n)}, no interval)"
+    return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)})"
 
 
 def judged(stat, claim, key="mean", n_paper=None):
@@ -265,9 +282,9 @@ def main():
         if not stat or stat.get(key) is None:
             return f"not measured ({stat.get('admitted', 0)} of {stat.get('runs', '?')} runs admitted)" if stat else \
                 "not measured"
-        se = stat.get("se")
-        return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if se is not None else "") +
-                f" (n={stat['n']}; {stat['admitted']} of {stat['runs']} runs admitted)")
+        se, n = stat.get("se"), stat.get("n")
+        return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "") +
+                f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted)")
 
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     fed = [l for l in order if l != "none"]
@@ -290,20 +307,21 @@ def main():
           judged(jam["u_J"], verdicts.quoted(0.23, 0.01), n_paper=PAPER_SEEDS), "—")
     uw = C["u_J_lambert_w"]
     claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(uw, 4) + " (computed, exact)", "same",
-          "confirmed (rounds to 0.20)" if round(uw, 2) == 0.20 else "not confirmed (does not round to 0.20)", "—")
+          "— (computed exactly, no error bar: " + ("rounds" if round(uw, 2) == 0.20 else "does not round") + " to 0.20)",
+          "—")
     claim("Nonrattler density at jamming n_J", "≃ 0.775", f"{pm(jam['n_J'])} ({jam_src})", "same",
           judged(jam["n_J"], verdicts.quoted(0.775, 0.001), n_paper=PAPER_SEEDS), "—")
     claim("Cells at jamming N_J", "—", f"{pm(jam['N_J'])} ({jam_src}); N_J/L² against the growth process alone: "
           "see \"Finite size at jamming\"", "same", "—", "—")
     claim("Jamming packing fraction φ_J", "—", f"{pm(jam['phi_J'])} ({jam_src})", "same", "—", "—")
     phi_J = jam["phi_J"]
-    pmax = {"mean": 2 / math.pi * (1 - phi_J["mean"]), "se": (2 / math.pi * phi_J["se"]) if phi_J.get("se") else None,
-            "n": phi_J["n"]}
+    pmax = {"mean": None if phi_J.get("mean") is None else 2 / math.pi * (1 - phi_J["mean"]),
+            "se": None if phi_J.get("se") is None else 2 / math.pi * phi_J["se"], "n": phi_J.get("n")}
     claim("Confluence pressure P_max = (2/π)(1 − φ_J) (Eq. D25, φ_J = 0.84)", "≈ 0.1",
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {pm(pmax)} with the measured φ_J", "same",
           judged(pmax, verdicts.quoted(0.1, 0.1), n_paper=PAPER_SEEDS), "—")
     claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
-          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0)), "—")
+          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0), n_paper=PAPER_SEEDS), "—")
     ident = M["dZ_identity"]
     unrep = ident.get("per_P0_unrepopulated_by_run", [])
     vs = [judged(x, verdicts.quoted(0.0, 0.0)) for x in unrep]
@@ -355,7 +373,11 @@ def main():
           f"P_2: {v2}; λ̄_c: {vl} (over the feedback groups, paper's selection)", all_of([v2, vl]), fig("fig3"))
     if "P_dagger" in M:
         claim("P_2 ∝ exp(−P†/P0) (Eq. D19)", "P† = typical bud pressure",
-              f"P† = {fmt(M['P_dagger'])} ± {fmt(M['P_dagger_se'], 2)} (fit over {M['P_dagger_points']} P0 ≤ 1e-2)",
+              f"P† = {fmt(M['P_dagger'])}" + (f" ± {fmt(M['P_dagger_se'], 2)}" if error_bar(
+                  M.get("P_dagger_se"), M.get("P_dagger_points")) else "") +
+              f" (fit over {n_text(M.get('P_dagger_points'))} P0 ≤ 1e-2" +
+              ("" if error_bar(0.0, M.get("P_dagger_points")) else f"; no error bar from fewer than "
+               f"{verdicts.MIN_SAMPLES}") + ")",
               "same", "—", fig("fig3"))
     for lab in order:
         x = groups[lab]
@@ -451,7 +473,7 @@ def main():
         od, o6 = Dp["through_origin_dZ"], Dp["through_origin_Z_minus_6"]
         n = Dp["packings"]
         p = Dp["fraction_Z_minus_6_negative"]
-        frac = {"mean": p, "se": math.sqrt(p * (1 - p) / n) if n else None, "n": n}
+        frac = {"mean": p, "se": math.sqrt(p * (1 - p) / n) if p is not None and error_bar(0.0, n) else None, "n": n}
         theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
                   f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
                   f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {pm(frac)}")

@@ -1,0 +1,135 @@
+"""scripts/report.py on hand-built inputs: the stored analysis.json of the quick reference with its
+sample counts, errors and values changed. No error bar, interval or verdict from fewer than 5 samples,
+no traceback, and every z with the combined error of the verdict rule."""
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+SRC = os.environ.get("BUDJAM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+REF = os.path.join(SRC, "data", "reference")
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def report(tmp_path, A, J=None):
+    """Writes A (and J as the jamming tables) and runs report.py; returns (process, report text)."""
+    tables = tmp_path / "tables"
+    tables.mkdir()
+    (tables / "analysis.json").write_text(json.dumps(A))
+    shutil.copy(os.path.join(REF, "quick", "tables", "survival_main_L.json"), tables)
+    args = [sys.executable, os.path.join(SRC, "scripts", "report.py"), "--tables", str(tables),
+            "--figures", str(tmp_path / "figures"), "--preset", "quick", "--out", str(tmp_path / "R.md")]
+    if J is not None:
+        jam = tmp_path / "jamming"
+        jam.mkdir()
+        (jam / "analysis.json").write_text(json.dumps(J))
+        args += ["--jamming", str(jam)]
+    r = subprocess.run(args, capture_output=True, text=True)
+    out = (tmp_path / "R.md").read_text() if (tmp_path / "R.md").exists() else ""
+    return r, out
+
+
+def stats(o):
+    """Every {n, se|ci95} statistic in a JSON tree."""
+    if isinstance(o, dict):
+        if "n" in o and ("se" in o or "ci95" in o):
+            yield o
+        for v in o.values():
+            yield from stats(v)
+    elif isinstance(o, list):
+        for v in o:
+            yield from stats(v)
+
+
+def quick():
+    return load(os.path.join(REF, "quick", "reanalysed", "analysis.json")), \
+        load(os.path.join(REF, "jamming", "tables", "analysis.json"))
+
+
+def errors_below_five(out):
+    bad = [m.group(0) for m in re.finditer(r"± \S+ \(n=(\d+)", out) if int(m.group(1)) < 5]
+    bad += [m.group(0) for m in re.finditer(r"CI [^(|]*\(n=(\d+)", out) if int(m.group(1)) < 5]
+    return bad
+
+
+def verdict_cells(out):
+    return [line.split(" | ")[4] for line in out.splitlines() if line.startswith("| ") and line.count(" | ") >= 5]
+
+
+@pytest.mark.parametrize("n", [0, 1, 4])
+def test_no_error_bar_interval_or_verdict_from_fewer_than_five(tmp_path, n):
+    A, J = quick()
+    for s in list(stats(A)) + list(stats(J)):
+        s["n"] = n  # the se and ci95 stay: the report must not print them
+        if n == 0:
+            for k in ("mean", "median", "se", "value"):
+                if k in s:
+                    s[k] = None
+    A["main"]["dos"]["paper"]["packings"] = n  # the fraction of packings with Z − 6 < 0
+    if n == 0:
+        A["main"]["dos"]["paper"]["fraction_Z_minus_6_negative"] = None
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert errors_below_five(out) == []
+    for cell in verdict_cells(out):
+        assert not re.match(r"(not )?confirmed \(z", cell), cell
+
+
+def test_nan_values_and_zero_spread_give_no_nan_verdict(tmp_path):
+    A, J = quick()
+    for s in list(stats(A)) + list(stats(J)):
+        for k in ("mean", "median", "se"):
+            if k in s:
+                s[k] = math.nan
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert "z = nan" not in out and "σ = nan" not in out
+
+
+def test_missing_feedback_groups_and_no_jamming_ensemble(tmp_path):
+    A, _ = quick()
+    A["groups"] = [g for g in A["groups"] if g["P0_label"] in ("0.001", "1e-05")]
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert "| Claim of the paper |" in out
+
+
+def test_jamming_quantities_take_the_papers_twenty_seeds(tmp_path):
+    A, J = quick()
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0, r.stderr
+    dz = J["groups"][[g["L"] for g in J["groups"]].index(15)]["dZ_J"]
+    row = next(line for line in out.splitlines() if line.startswith("| Modified Maxwell count"))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    assert math.isclose(sigma, dz["se"] * math.sqrt(1 + dz["n"] / 20), rel_tol=0.05), row
+
+
+def test_the_tally_counts_every_verdict_in_the_table(tmp_path):
+    A, J = quick()
+    r, out = report(tmp_path, A, J)
+    tally = re.search(r"\*\*Verdicts: (\d+) confirmed, (\d+) not confirmed, (\d+) inconclusive\*\*", out)
+    cells = verdict_cells(out)
+    words = [re.match(r"(not confirmed|confirmed|inconclusive)\b", c) for c in cells]
+    words = [w.group(1) for w in words if w]
+    assert (words.count("confirmed"), words.count("not confirmed"), words.count("inconclusive")) == \
+        tuple(int(x) for x in tally.groups())
+
+
+def test_no_fit_error_from_fewer_than_five_points(tmp_path):
+    A, J = quick()
+    A["main"].update(P_dagger=2.8e-5, P_dagger_se=1.4e-5, P_dagger_points=4)
+    A["main"]["dos"]["paper"]["packings"] = 3
+    r, out = report(tmp_path, A, J)
+    row = next(line for line in out.splitlines() if line.startswith("| P_2 ∝ exp"))
+    assert "±" not in row
+    row = next(line for line in out.splitlines() if line.startswith("| ω* collapses"))
+    assert "±" not in row.split(" | ")[3] and row.split(" | ")[4].startswith("inconclusive")
