@@ -479,3 +479,52 @@ TEST_CASE(
   CHECK(g["G_2_over_Pmax_paper"]["se"].is_null());
   CHECK(g["G_2_over_P_2_paper"]["n"] == 4);
 }
+
+TEST_CASE("analyse writes no SE, bootstrap SE or interval from fewer than five samples: B_grow test per group, "
+          "ΔZ identity per P0, the P† fit",
+          "[analyse]") {
+  // Three feedback groups of two runs with two targets each: 4 targets per group (no error bar),
+  // 12 pooled (an error bar), and a P† fit over 3 values of P0 (no error bar).
+  const fs::path dir = work_dir() / "few_tables", out = work_dir() / "few_tables_out";
+  fs::create_directories(dir);
+  {
+    std::ofstream r(dir / "runs.csv");
+    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
+         "dphi_2_pred_diameter_sq,G_2\n";
+    std::ofstream t(dir / "targets.csv");
+    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,dZ_pred,lambda_c,B_grow,B\n";
+    const char* P0s[] = {"0.01", "0.001", "0.0001"};
+    int k = 0;
+    for (int p = 0; p < 3; ++p)
+      for (int s = 1; s <= 2; ++s, ++k) {
+        const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
+        r << run << ",15," << P0s[p] << "," << s << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
+          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.01,0.011,1.0\n";
+        for (int d = 0; d < 2; ++d)
+          t << run << ",15," << P0s[p] << "," << s << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841) << ",2,"
+            << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"
+            << 1.0 + 0.1 * (k + d) << ",2.0\n";
+      }
+  }
+  REQUIRE(run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15").code == 0);
+  const auto j = budjam::io::read_json(out / "analysis.json");
+  REQUIRE(j["groups"].size() == 3);
+  for (const auto& g : j["groups"]) {
+    const auto& b = g["B_grow_over_lambda_B_log10"];
+    CHECK(b["n"] == 4);
+    CHECK(b["median"].is_number());
+    CHECK(b["se"].is_null());
+    CHECK(b["ci95"][0].is_null());
+    CHECK(b["ci95"][1].is_null());
+  }
+  const auto& pooled = j["main"]["B_grow_over_lambda_B_log10"];
+  CHECK(pooled["n"] == 12);
+  CHECK(pooled["se"].is_number());
+  for (const auto& x : j["main"]["dZ_identity"]["per_P0_feedback"]) {
+    CHECK(x["n"] == 4);
+    CHECK(x["se"].is_null());
+  }
+  CHECK(j["main"]["P_dagger_points"] == 3);
+  CHECK(j["main"]["P_dagger"].is_number());
+  CHECK(j["main"]["P_dagger_se"].is_null());
+}

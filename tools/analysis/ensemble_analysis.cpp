@@ -586,10 +586,12 @@ Json growth_bulk_json(const std::vector<const RunRow*>& rs, const BootstrapOptio
   j["median"] = nullptr;
   if (const auto c = growth_bulk_check(b_grow, lambda, b_ext, bo)) {
     const auto& b = c->log10_median;
+    const bool error_bar = b.n >= kMinSamplesForError;
     j["n"] = b.n;
     j["median"] = io::number_or_null(b.estimate);
-    j["se"] = io::number_or_null(b.se);
-    j["ci95"] = Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)});
+    j["se"] = error_bar ? io::number_or_null(b.se) : Json(nullptr);
+    j["ci95"] = error_bar ? Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)})
+                          : Json::array({nullptr, nullptr});
     j["nonpositive_B_grow"] = c->nonpositive;
   }
   return j;
@@ -708,7 +710,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
     }
     if (!rem.empty())
       t.remaining.push_back({num(key.L), P0s, num(grid[k]), num(mean(rem)),
-                             cell(rem.size() >= 2 ? standard_error(rem) : kNaN), std::to_string(rem.size())});
+                             cell(rem.size() >= kMinSamplesForError ? standard_error(rem) : kNaN),
+                             std::to_string(rem.size())});
     if (!dv.empty())
       t.divisions.push_back({num(key.L), P0s, num(grid[k]), num(median(dv)), num(quantile(dv, 0.25)),
                              num(quantile(dv, 0.75)), std::to_string(dv.size())});
@@ -809,7 +812,7 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
     Json p = Json{{"P0", x.P0},
                   {"n", x.residual.n},
                   {"mean", io::number_or_null(x.residual.mean)},
-                  {"se", io::number_or_null(x.residual.se)},
+                  {"se", x.residual.n >= kMinSamplesForError ? io::number_or_null(x.residual.se) : Json(nullptr)},
                   {"rms", x.rms}};
     per.push_back(p);
   }
@@ -904,7 +907,7 @@ void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*
   if (x.size() >= 2) {
     const auto f = linear_fit(x, y);
     h["P_dagger"] = -f.slope;
-    h["P_dagger_se"] = f.slope_se;
+    h["P_dagger_se"] = x.size() >= kMinSamplesForError ? io::number_or_null(f.slope_se) : Json(nullptr);
     h["P_dagger_points"] = x.size();
   }
   auto range = [&](const std::vector<double>& ac, const char* a_key, const char* p_key) {
