@@ -62,6 +62,17 @@ def num(s):
     return float(s)
 
 
+
+def err(*errors):
+    """Error bars for errorbar(): a missing error (None, NaN: fewer than 5 samples, see `budjam analyse`)
+    draws no bar (NaN, not a zero-length bar that reads as an exact value); None when no bar is left
+    (matplotlib refuses an all-NaN error). Several lists: an asymmetric error [below, above]."""
+    lists = [[e if isinstance(e, (int, float)) and math.isfinite(e) else math.nan for e in es] for es in errors]
+    if not any(math.isfinite(e) for es in lists for e in es):
+        return None
+    return lists[0] if len(lists) == 1 else lists
+
+
 def p0_value(label):
     """P0 label → x position on a log axis: 'none' sits one decade above the weakest feedback (at 1)."""
     return 1.0 if label == "none" else float(label)
@@ -188,7 +199,7 @@ def fig2(T):
         rows = [r for r in rows if 2 * int(r["runs"]) >= most]  # where at least half the runs still contribute
         x = [num(r["dphi"]) for r in rows]
         y = [num(r["mean"]) for r in rows]
-        e = [num(r["se"]) if r["se"] else 0.0 for r in rows]
+        e = [num(r["se"]) if r["se"] else math.nan for r in rows]
         c = p0_colour(lab, labels)
         ax.plot(x, y, "-", color=c, label=p0_text(lab))
         ax.fill_between(x, [a - b for a, b in zip(y, e)], [a + b for a, b in zip(y, e)], color=c, alpha=0.2, lw=0)
@@ -205,7 +216,7 @@ def fig2(T):
                             ("dphi_2_pred_diameter_sq", "^", r"Eq. (14), $a$ as diameter$^2$")):
         x = [p0_value(g["P0_label"]) for g in gs if g[key]["mean"] is not None]
         y = [g[key]["mean"] for g in gs if g[key]["mean"] is not None]
-        e = [g[key]["se"] or 0.0 for g in gs if g[key]["mean"] is not None]
+        e = err([g[key]["se"] for g in gs if g[key]["mean"] is not None])
         ax.errorbar(x, y, yerr=e, fmt=style if style != "ko" else "o", color="black" if style == "ko" else None,
                     mfc="none" if style != "ko" else "black", capsize=3, label=lab, ls="none")
     p0_axis(ax, [g["P0_label"] for g in gs])
@@ -284,14 +295,14 @@ def fig3(T):
     ax = axes[1]
     g2 = [g for g in gs if g["P_2_over_Pmax"]["mean"] is not None]
     ax.errorbar([p0_value(g["P0_label"]) for g in g2], [g["P_2_over_Pmax"]["mean"] for g in g2],
-                yerr=[g["P_2_over_Pmax"]["se"] or 0 for g in g2], fmt="ko", capsize=3)
+                yerr=err([g["P_2_over_Pmax"]["se"] for g in g2]), fmt="ko", capsize=3)
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_yscale("log")
     ax.set_ylabel(r"$P_2/P_{\max}$")
     ins = ax.inset_axes([0.58, 0.12, 0.38, 0.35])
     lb = [g for g in gs if g["lambda_bar"]["mean"] is not None]
     ins.errorbar([p0_value(g["P0_label"]) for g in lb], [g["lambda_bar"]["mean"] for g in lb],
-                 yerr=[g["lambda_bar"]["se"] or 0 for g in lb], fmt="s", ms=3, color=BLUE, capsize=2)
+                 yerr=err([g["lambda_bar"]["se"] for g in lb]), fmt="s", ms=3, color=BLUE, capsize=2)
     ins.set_xscale("log")
     ins.set_yscale("log")
     ins.set_xlabel(r"$P_0$" + K, fontsize=7)
@@ -305,7 +316,7 @@ def fig3(T):
             ax.plot(p0_value(r["P0"]), num(r["G_2"]), "o", color="0.7", ms=3, zorder=1)
     gm = [g for g in gs if g["G_2"]["median"] is not None]
     ax.errorbar([p0_value(g["P0_label"]) for g in gm], [g["G_2"]["median"] for g in gm],
-                yerr=[g["G_2"]["se"] for g in gm], fmt="ko", capsize=3, zorder=2, label="median ± bootstrap SE")
+                yerr=err([g["G_2"]["se"] for g in gm]), fmt="ko", capsize=3, zorder=2, label="median ± bootstrap SE")
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_ylabel(r"$G_2=G(\phi_2)$" + K)
     # symlog: a run near a shear instability of its box (G_2 ≪ 0) stays visible without flattening the rest
@@ -365,7 +376,7 @@ def figB1(T):
         for key, fmt, lab in (("dphi_2", "o-", f"L = {L:g}"), ("dphi_2_paper", "o:", None)):
             gs = [g for g in T.groups(L) if g[key]["mean"] is not None]
             ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g[key]["mean"] for g in gs],
-                        yerr=[g[key]["se"] or 0 for g in gs], fmt=fmt, color=col[L], capsize=3, label=lab,
+                        yerr=err([g[key]["se"] for g in gs]), fmt=fmt, color=col[L], capsize=3, label=lab,
                         mfc=col[L] if key == "dphi_2" else "none")
         gs = [g for g in T.groups(L) if g["dphi_2_pred_area"]["mean"] is not None]
         ax.plot([p0_value(g["P0_label"]) for g in gs], [g["dphi_2_pred_area"]["mean"] for g in gs], "--",
@@ -384,7 +395,7 @@ def figB1(T):
     for L in Ls:
         gs = [g for g in T.groups(L) if g["G_2"]["median"] is not None]
         ax.errorbar([p0_value(g["P0_label"]) for g in gs], [g["G_2"]["median"] for g in gs],
-                    yerr=[g["G_2"]["se"] for g in gs], fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
+                    yerr=err([g["G_2"]["se"] for g in gs]), fmt="o-", color=col[L], capsize=3, label=f"L = {L:g}")
     p0_axis(ax, [g["P0_label"] for g in T.groups()])
     ax.set_ylabel(r"median $G_2$" + K)
     ax.legend(fontsize=7, frameon=False)
@@ -424,11 +435,12 @@ def figD1(T):
                               ("N_div_2_over_N_J", False, "at most one left")):
         gm = [g for g in gs if g.get(key, {}).get("median") is not None]
         med = [g[key]["median"] for g in gm]
-        lo = [m - g[key]["ci95"][0] for m, g in zip(med, gm)]
-        hi = [g[key]["ci95"][1] - m for m, g in zip(med, gm)]
-        ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=[lo, hi], fmt="o" if filled else "s", capsize=3,
+        ci = [g[key].get("ci95") or [None, None] for g in gm]
+        lo = [m - c[0] if c[0] is not None else None for m, c in zip(med, ci)]
+        hi = [c[1] - m if c[1] is not None else None for m, c in zip(med, ci)]
+        ax.errorbar([p0_value(g["P0_label"]) for g in gm], med, yerr=err(lo, hi), fmt="o" if filled else "s", capsize=3,
                     mfc="k" if filled else "none", color="k" if filled else "0.5", label=r"$\phi_2$: " + text)
-        top += [g[key]["ci95"][1] for g in gm]
+        top += [c[1] if c[1] is not None else m for m, c in zip(med, ci)]
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.legend(fontsize=7, frameon=False)
     ax.set_yscale("symlog", linthresh=1e-3)
@@ -452,8 +464,8 @@ def figD2(T):
         ax.plot([num(r["P_2"]) for r in rr], [num(r["G_2"]) for r in rr], "o", ms=3, color=c, alpha=0.5)
         g = [g for g in gs if g["P0_label"] == lab]
         if g and g[0]["G_2"]["median"] is not None and g[0]["P_2_median"]["median"] is not None:
-            ax.errorbar(g[0]["P_2_median"]["median"], g[0]["G_2"]["median"], xerr=g[0]["P_2_median"]["se"],
-                        yerr=g[0]["G_2"]["se"], fmt="o", ms=8, color=c, mec="k", capsize=3, label=p0_text(lab))
+            ax.errorbar(g[0]["P_2_median"]["median"], g[0]["G_2"]["median"], xerr=err([g[0]["P_2_median"]["se"]]),
+                        yerr=err([g[0]["G_2"]["se"]]), fmt="o", ms=8, color=c, mec="k", capsize=3, label=p0_text(lab))
     ax.set_xscale("log")
     ax.set_xlabel(r"$P_2$" + K)
     ax.set_ylabel(r"$G_2$" + K)
@@ -462,7 +474,7 @@ def figD2(T):
     ax = axes[1]
     gm = [g for g in gs if g["G_2_over_P_2"]["median"] is not None]
     ax.errorbar([p0_value(g["P0_label"]) for g in gm], [g["G_2_over_P_2"]["median"] for g in gm],
-                yerr=[g["G_2_over_P_2"]["se"] for g in gm], fmt="ko", capsize=3)
+                yerr=err([g["G_2_over_P_2"]["se"] for g in gm]), fmt="ko", capsize=3)
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_yscale("log")
     ax.set_ylabel(r"median $G_2/P_2$")
@@ -485,7 +497,7 @@ def figE1(T):
     ax = fig.add_subplot(grid[0, :])
     x = [p0_value(g["P0_label"]) for g in gs]
     y = [g["h_gamma"]["median"] for g in gs]
-    ax.errorbar(x, y, yerr=[g["h_gamma"]["se"] for g in gs], fmt="ko-", capsize=3)
+    ax.errorbar(x, y, yerr=err([g["h_gamma"]["se"] for g in gs]), fmt="ko-", capsize=3)
     p0_axis(ax, [g["P0_label"] for g in gs])
     ax.set_yscale("symlog", linthresh=1e-5)
     ax.set_ylim(0, 3 * max(y))

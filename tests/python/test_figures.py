@@ -70,3 +70,44 @@ def test_categorical_colours_are_okabe_ito_or_grey(figF1, figures):
         r, g, b = matplotlib.colors.to_rgb(line.get_color())
         assert matplotlib.colors.to_hex((r, g, b)) in palette or r == g == b, line.get_label()
     assert any(matplotlib.colors.to_hex(line.get_color()) in palette for line in lines)
+
+
+def small_n_tables(tmp_path):
+    """The quick reference's tables with every statistic from 3 samples: no SE, no interval."""
+    import shutil
+    tables = tmp_path / "few"
+    shutil.copytree(SOURCE_DIR / "data" / "reference" / "quick" / "tables", tables)
+    A = json.loads((tables / "analysis.json").read_text())
+
+    def strip(o):
+        if isinstance(o, dict):
+            if "n" in o and ("se" in o or "ci95" in o):
+                o.update(n=3, se=None)
+                if "ci95" in o:
+                    o["ci95"] = [None, None]
+            for v in o.values():
+                strip(v)
+        elif isinstance(o, list):
+            for v in o:
+                strip(v)
+    strip(A)
+    (tables / "analysis.json").write_text(json.dumps(A))
+    return tables
+
+
+@pytest.mark.parametrize("name", ["fig2", "fig3", "figB1", "figD1", "figD2", "figE1"])
+def test_groups_without_error_bars_draw_no_bars_and_no_traceback(figures, tmp_path, monkeypatch, name):
+    drawn = {}
+    monkeypatch.setattr(figures, "save", lambda fig, out, n: drawn.setdefault(n, fig))
+    T = figures.Tables(str(small_n_tables(tmp_path)))
+    T.out = str(tmp_path / "figures")
+    figures.FIGURES[name](T)
+    assert name in drawn
+
+
+def test_a_missing_error_is_no_bar_not_a_zero_bar(figures):
+    assert figures.err([None, None]) is None
+    e = figures.err([0.1, None, float("nan")])
+    assert e[0] == 0.1 and e[1] != e[1] and e[2] != e[2]
+    lo, hi = figures.err([None, 0.2], [None, 0.3])
+    assert lo[0] != lo[0] and hi[1] == 0.3
