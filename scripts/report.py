@@ -154,10 +154,24 @@ def ci(stat):
     return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)})"
 
 
-def judged(stat, claim, key="mean", n_paper=None):
-    """The verdict of the one rule (scripts/verdicts.py) on a {mean|median, se, n} statistic."""
+PAPER_SEEDS = 20  # the paper's seeds per point (docs/model.md, "Reference parameters")
+
+
+def paper_n(n, seeds):
+    """The paper's number of samples for a statistic of n samples from budjam's `seeds` seeds per point:
+    the paper ran the same protocol on PAPER_SEEDS seeds, so n · PAPER_SEEDS / seeds (n when seeds = 20)."""
+    ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0 for x in (n, seeds))
+    return n * PAPER_SEEDS / seeds if ok else None
+
+
+def judged(stat, claim, key="mean", n_paper=None, seeds=None):
+    """The verdict of the one rule (scripts/verdicts.py) on a {mean|median, se, n} statistic; the paper's
+    sample is n_paper, or for a statistic of the grid that budjam grew with `seeds` seeds per point,
+    paper_n(n, seeds)."""
     if not stat or stat.get(key) is None:
         return verdicts.Verdict("inconclusive", "not measured")
+    if n_paper is None and seeds is not None:
+        n_paper = paper_n(stat.get("n"), seeds)
     return verdicts.compare(stat[key], stat.get("se"), stat.get("n"), claim, n_paper)
 
 
@@ -289,8 +303,13 @@ def main():
     order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
     fed = [l for l in order if l != "none"]
 
+    # Seeds per point of this preset's grid: the paper's sample of a grid statistic is paper_n(n, seeds).
+    def seeds_in(g_):
+        return g_.get("runs") if g_ else None
+
+    grid_seeds = sorted({seeds_in(groups[l]) for l in order if seeds_in(groups[l])})
+    main_seeds = (M.get("runs") / len(order)) if order and M.get("runs") else None
     # ---- jamming: the jamming ensembles at the paper's L = 15 (independent seeds), else this preset ----
-    PAPER_SEEDS = 20  # the paper's samples per point (docs/model.md, "Reference parameters")
     jam_L = 15
     jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
     jam_groups = {g_["L"]: g_ for g_ in (AJ or {}).get("groups", [])}
@@ -324,7 +343,7 @@ def main():
           f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0), n_paper=PAPER_SEEDS), "—")
     ident = M["dZ_identity"]
     unrep = ident.get("per_P0_unrepopulated_by_run", [])
-    vs = [judged(x, verdicts.quoted(0.0, 0.0)) for x in unrep]
+    vs = [judged(x, verdicts.quoted(0.0, 0.0), seeds=seeds_in(groups.get(label(x.get("P0"))))) for x in unrep]
     claim("ΔZ = ΔZ₀(P) + 2(u_J − u) over (P0, Δφ) (Eq. 6)", "holds within finite-size scatter",
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
           f", RMS {fmt(ident['all_targets'].get('rms'))}",
@@ -341,7 +360,7 @@ def main():
               "every run",
               avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure); "
                     f"prediction − simulation {sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_diameter_sq"),
-              judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0)), fig("fig2"))
+              judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0), seeds=seeds_in(x)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order),
@@ -353,11 +372,12 @@ def main():
     bg_name, bg_text, bg = growth_bulk(M["B_grow_over_lambda_B_log10"])
     if have_moduli and bg is not None:
         per = {l: groups[l].get("B_grow_over_lambda_B_log10", {}) for l in order}
-        vs = [judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median")] + \
-             [judged(per[l], verdicts.quoted(0.0, 0.0), key="median") for l in order]
+        vs = [judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median", seeds=main_seeds)] + \
+             [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", seeds=seeds_in(groups[l])) for l in order]
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
               f"{bg_name} = {bg_text} over the targets with λ_c B > 0; per P0: " +
-              ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order), "same", all_of(vs), fig("fig3"))
+              ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order), "same",
+              all_of(vs), fig("fig3"))
     else:
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)", "not measured (moduli stage off or unavailable)",
               "same", verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
@@ -385,7 +405,7 @@ def main():
         claim(f"G_2/P_max, {p0_name(lab)} (median ± bootstrap SE)", "≈ 0.2 – 1",
               pm(x["G_2_over_Pmax"], "median") + ", every run" if have_moduli else "not measured (moduli stage off)",
               sel(s_, "median") + " (G_2 > 0, Tukey fences on G_2)" if have_moduli else "not measured",
-              judged(s_, verdicts.interval(0.2, 1.0), key="median") if have_moduli else
+              judged(s_, verdicts.interval(0.2, 1.0), key="median", seeds=seeds_in(x)) if have_moduli else
               verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
           f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={M.get('plateau_P0')}, ℓ_c² = {fmt(M.get('lc2_J'))})",
@@ -412,7 +432,8 @@ def main():
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}, L = 20", paper,
                   ci(x["N_div_2_over_N_J"]) + "; up to φ_2 (≤ 1 tagged bud left)",
                   avail(ci(x["N_div_2_over_N_J_paper"]) + "; every division after φ_J up to no tagged bud left",
-                        "N_div_2_none_left"), judged(x["N_div_2_over_N_J_paper"], cl, key="median"), fig("figD1"))
+                        "N_div_2_none_left"), judged(x["N_div_2_over_N_J_paper"], cl, key="median", seeds=seeds_in(x)),
+                  fig("figD1"))
         else:
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",
                   verdicts.Verdict("inconclusive", "no L = 20 runs"), fig("figD1"))
@@ -421,7 +442,7 @@ def main():
     for lab in order:
         x = groups[lab]
         if lab in paper_h:
-            verdict = judged(x["h_gamma"], verdicts.quoted(*paper_h[lab]), key="median")
+            verdict = judged(x["h_gamma"], verdicts.quoted(*paper_h[lab]), key="median", seeds=seeds_in(x))
             paper = fmt(paper_h[lab][0])
         else:
             verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
@@ -448,7 +469,7 @@ def main():
               f"{pm(w)} (u at Δφ = 3e-3); g < 1: " +
               avail(f"median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
                     "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled") + peak_text,
-              judged(w, verdicts.quoted(paper_w[lab], 0.01)) if lab in paper_w else "—", fig("figE1"))
+              judged(w, verdicts.quoted(paper_w[lab], 0.01), seeds=seeds_in(x)) if lab in paper_w else "—", fig("figE1"))
     if "P_star_range_paper" in M:
         lo, hi = M["P_star_range_paper"]
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
@@ -465,7 +486,8 @@ def main():
         diff = D.get("N_zero_minus_N_u")
         claim("N_zero ≃ N_u (Eq. F4)", "tracks",
               f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
-              f"N_zero − N_u = {pm(diff)}", "same", judged(diff, verdicts.quoted(0.0, 0.0)), fig("figF1"))
+              f"N_zero − N_u = {pm(diff)}", "same", judged(diff, verdicts.quoted(0.0, 0.0), seeds=main_seeds),
+              fig("figF1"))
     else:
         claim("N_zero ≃ N_u (Eq. F4)", "tracks", "not measured (dos stage off or unavailable)", "same",
               verdicts.Verdict("inconclusive", "not measured"), fig("figF1"))
@@ -477,7 +499,7 @@ def main():
         theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
                   f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
                   f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {pm(frac)}")
-        verdict = judged(frac, verdicts.at_least(0.5))
+        verdict = judged(frac, verdicts.at_least(0.5), seeds=main_seeds)
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", verdicts.Verdict("inconclusive", "not measured")
     claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5): more than half of the packings have Z − 6 < 0",
@@ -497,10 +519,22 @@ def main():
 
     bins = M.get("shear_unstable_by_PN2") or []
     shear = shear_note(bins) if have_moduli and bins else []
-    scope = ("The quick preset uses L = 8 and few seeds: it checks trends and orders of magnitude, not the paper's "
-             "L = 15 values to their last digit (run `make -f Makefile.analysis -j2 paper` for that)."
-             if a.preset == "quick" else
-             f"Preset {a.preset}: the paper's grid for the sizes and targets listed in docs/analysis.md.")
+    sizes_run = ", ".join(f"{l:g}" for l in sorted(groups_at))
+    seeds_text = ("?" if not grid_seeds else f"{grid_seeds[0]:g}" if len(grid_seeds) == 1 else
+                  f"{grid_seeds[0]:g}–{grid_seeds[-1]:g}")
+    if a.preset == "paper":
+        scope = (f"Preset paper: the paper's grid, L = {sizes_run} with {seeds_text} seeds per point, for the targets "
+                 "listed in docs/analysis.md.")
+    else:
+        scope = (f"Preset {a.preset} ran L = {sizes_run} with {seeds_text} seeds per point and its own Δφ targets, "
+                 f"not the paper's grid (L = 8, 15, 20 with {PAPER_SEEDS} seeds per point, Δφ up to 0.12): its "
+                 f"verdicts compare these values (main L = {L:g}) with the paper's {PAPER_SEEDS}-seed numbers (L = 15; "
+                 f"L = 20 for the divisions), with s_p from the paper's {PAPER_SEEDS} seeds, so they check trends and "
+                 "orders of magnitude, not the paper's values to their last digit (run `make -f Makefile.analysis -j2 "
+                 "paper` for that).")
+    jam_n = (jam.get("u_J") or {}).get("n") if isinstance(jam, dict) else None
+    grid_np = (f"n_p = n_b (this preset ran the paper's {PAPER_SEEDS} seeds per point)" if grid_seeds == [PAPER_SEEDS]
+               else f"n_p = n_b · {PAPER_SEEDS}/S for this preset's S = {seeds_text} seeds per point")
     inp = A["inputs"]
     if "tables" in inp:
         source = (f"written by `make -f Makefile.analysis PRESET={a.preset} stored-report` on "
@@ -532,8 +566,10 @@ def main():
         f"**Verdicts: {tally}** (docs/analysis.md, \"Verdicts\"). One rule for every row: a claim is the set of values "
         "it allows (a number quoted to its last digit, a range, a bound); z is the distance of budjam's estimate from "
         "that set in units of σ = √(s_b² + s_p²), budjam's standard error and the paper's own sampling error, estimated "
-        "from budjam's spread and the paper's number of samples (20 seeds per point; where budjam ran the paper's grid, "
-        "the same as budjam's). Confirmed when z ≤ 2, not confirmed when z > 2, inconclusive with fewer than 5 samples "
+        "from budjam's spread as s_p = s_b √(n_b/n_p) for the paper's n_p samples: the paper ran "
+        f"{PAPER_SEEDS} seeds per point, so n_p = {PAPER_SEEDS} for the jamming rows (one sample per seed; "
+        f"budjam's n_b = {n_text(jam_n)}) and, for every other row, {grid_np}. Confirmed when z ≤ 2, not confirmed "
+        "when z > 2, inconclusive with fewer than 5 samples "
         "(no error bar is printed from fewer either). A trend is confirmed when its first-to-last change has z > 2 and "
         "no step goes against it with z > 2, not confirmed when one does, and inconclusive otherwise.",
         "",

@@ -4,7 +4,8 @@ A claim of the paper is a set C of values: a number quoted to its last digit ("�
 that rounds to it, [0.225, 0.235]), a range ("0.2 – 1"), or a bound ("≲ 3e-3", "> 1/2"). budjam's
 estimate x has its standard error s_b from n_b samples. The paper's number has a sampling error of its
 own that the paper does not quote; with the same protocol the spread per sample is the same, so it is
-s_p = s_b √(n_b / n_p) for the paper's n_p samples (n_p = n_b when budjam ran the paper's grid). The
+s_p = s_b √(n_b / n_p) for the paper's n_p samples (its 20 seeds per point: n_p = n_b · 20/S for a grid
+budjam grew with S seeds per point, n_p = n_b when S = 20). The
 combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C).
 
     inconclusive   n_b < 5: no error bar and no verdict (the n is stated); likewise with no finite

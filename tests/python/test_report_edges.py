@@ -113,15 +113,26 @@ def test_jamming_quantities_take_the_papers_twenty_seeds(tmp_path):
     assert math.isclose(sigma, dz["se"] * math.sqrt(1 + dz["n"] / 20), rel_tol=0.05), row
 
 
+def tally_and_cells(out):
+    """(the tally the report prints, the count of the verdict words in its table)."""
+    tally = re.search(r"\*\*Verdicts: (\d+) confirmed, (\d+) not confirmed, (\d+) inconclusive\*\*", out)
+    words = [re.match(r"(not confirmed|confirmed|inconclusive)\b", c) for c in verdict_cells(out)]
+    words = [w.group(1) for w in words if w]
+    return tuple(int(x) for x in tally.groups()), \
+        (words.count("confirmed"), words.count("not confirmed"), words.count("inconclusive"))
+
+
+def fresh(tmp_path, name):
+    d = tmp_path / name
+    d.mkdir()
+    return d
+
+
 def test_the_tally_counts_every_verdict_in_the_table(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
-    tally = re.search(r"\*\*Verdicts: (\d+) confirmed, (\d+) not confirmed, (\d+) inconclusive\*\*", out)
-    cells = verdict_cells(out)
-    words = [re.match(r"(not confirmed|confirmed|inconclusive)\b", c) for c in cells]
-    words = [w.group(1) for w in words if w]
-    assert (words.count("confirmed"), words.count("not confirmed"), words.count("inconclusive")) == \
-        tuple(int(x) for x in tally.groups())
+    printed, counted = tally_and_cells(out)
+    assert printed == counted
 
 
 def test_no_fit_error_from_fewer_than_five_points(tmp_path):
@@ -133,3 +144,34 @@ def test_no_fit_error_from_fewer_than_five_points(tmp_path):
     assert "±" not in row
     row = next(line for line in out.splitlines() if line.startswith("| ω* collapses"))
     assert "±" not in row.split(" | ")[3] and row.split(" | ")[4].startswith("inconclusive")
+
+
+def row_of(out, start):
+    return next(line for line in out.splitlines() if line.startswith("| " + start))
+
+
+def main_L_groups(A):
+    return [g for g in A["groups"] if g["L"] == A["main_L"]]
+
+
+def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
+    A, J = quick()
+    r, out = report(tmp_path, A, J)
+    seeds = {g["runs"] for g in main_L_groups(A)}
+    assert len(seeds) == 1 and seeds != {20}
+    s = seeds.pop()
+    assert f"L = 8 with {s} seeds per point" in out and "not the paper's grid" in out
+    assert f"n_p = n_b · 20/S for this preset's S = {s} seeds per point" in out
+    # a grid row: σ = s_b √(1 + n_b/n_p) with n_p = n_b · 20/S
+    x = next(g for g in main_L_groups(A) if g["P0_label"] == "0.1")["h_gamma"]
+    row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    assert math.isclose(sigma, x["se"] * math.sqrt(1 + s / 20), rel_tol=0.05), row
+    # with 20 seeds per point the paper's sample is budjam's
+    for g in A["groups"]:
+        g["runs"] = 20
+    A["main"]["runs"] = 20 * len(main_L_groups(A))
+    r, out = report(fresh(tmp_path, "twenty"), A, J)
+    row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    assert math.isclose(sigma, x["se"] * math.sqrt(2), rel_tol=0.05), row
