@@ -180,14 +180,18 @@ def trend_of(stats, increasing, key="mean"):
                            for s in stats], increasing)
 
 
-def all_of(vs):
-    """One verdict for a claim tested in several groups: not confirmed if any is, confirmed if all are."""
+def all_of(vs, noun="groups", pooled=None):
+    """One verdict for a claim tested in several groups (`noun`): not confirmed if any test is, confirmed if
+    all are. `pooled`: the verdict on the value pooled over the groups, tested beside them; it is named
+    apart and not counted as a group."""
     words = [v.word for v in vs]
-    if "not confirmed" in words:
-        return verdicts.Verdict("not confirmed", f"{words.count('not confirmed')} of {len(vs)} groups")
-    if all(w == "confirmed" for w in words):
-        return verdicts.Verdict("confirmed", f"all {len(vs)} groups")
-    return verdicts.Verdict("inconclusive", f"{words.count('inconclusive')} of {len(vs)} groups without a verdict")
+    every = words + ([pooled.word] if pooled is not None else [])
+    head = f"pooled value {pooled.word}; " if pooled is not None else ""
+    if "not confirmed" in every:
+        return verdicts.Verdict("not confirmed", head + f"{words.count('not confirmed')} of {len(vs)} {noun} not confirmed")
+    if all(w == "confirmed" for w in every):
+        return verdicts.Verdict("confirmed", head + f"all {len(vs)} {noun} confirmed")
+    return verdicts.Verdict("inconclusive", head + f"{words.count('inconclusive')} of {len(vs)} {noun} without a verdict")
 
 
 def shear_note(bins):
@@ -350,7 +354,7 @@ def main():
           "mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
           "repopulation), feedback runs, per P0: " +
           "; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)),
-          all_of(vs) if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
+          all_of(vs, "P0 groups") if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
     # ---- depletion ----
     for lab in order:
         x = groups[lab]
@@ -372,12 +376,12 @@ def main():
     bg_name, bg_text, bg = growth_bulk(M["B_grow_over_lambda_B_log10"])
     if have_moduli and bg is not None:
         per = {l: groups[l].get("B_grow_over_lambda_B_log10", {}) for l in order}
-        vs = [judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median", seeds=main_seeds)] + \
-             [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", seeds=seeds_in(groups[l])) for l in order]
+        pooled = judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median", seeds=main_seeds)
+        vs = [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", seeds=seeds_in(groups[l])) for l in order]
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
               f"{bg_name} = {bg_text} over the targets with λ_c B > 0; per P0: " +
               ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order), "same",
-              all_of(vs), fig("fig3"))
+              all_of(vs, "P0 groups", pooled=pooled), fig("fig3"))
     else:
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)", "not measured (moduli stage off or unavailable)",
               "same", verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
@@ -390,7 +394,7 @@ def main():
     v2 = trend_of([groups[l]["P_2_over_Pmax_paper"] for l in fed], increasing=False)
     vl = trend_of([groups[l]["lambda_bar_paper"] for l in fed], increasing=False)
     claim("P_2 and λ̄_c fall together with feedback (trend over P0)", "mirrored", "—",
-          f"P_2: {v2}; λ̄_c: {vl} (over the feedback groups, paper's selection)", all_of([v2, vl]), fig("fig3"))
+          f"P_2: {v2}; λ̄_c: {vl} (over the feedback groups, paper's selection)", all_of([v2, vl], "trends"), fig("fig3"))
     if "P_dagger" in M:
         claim("P_2 ∝ exp(−P†/P0) (Eq. D19)", "P† = typical bud pressure",
               f"P† = {fmt(M['P_dagger'])}" + (f" ± {fmt(M['P_dagger_se'], 2)}" if error_bar(

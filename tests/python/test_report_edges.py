@@ -154,6 +154,24 @@ def main_L_groups(A):
     return [g for g in A["groups"] if g["L"] == A["main_L"]]
 
 
+def test_the_pooled_value_is_not_counted_as_a_group(tmp_path):
+    A, J = quick()
+    groups = main_L_groups(A)
+    A["main"]["B_grow_over_lambda_B_log10"].update(median=1.0, se=0.01, n=100)  # pooled: far from 0
+    for k, g in enumerate(groups):  # the first two groups far from 0, the others at 0
+        g["B_grow_over_lambda_B_log10"].update(median=1.0 if k < 2 else 0.0, se=0.01, n=40)
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0, r.stderr
+    cell = row_of(out, "B_grow = λ_c B_ext").split(" | ")[4]
+    assert cell.startswith("not confirmed"), cell
+    assert f"2 of {len(groups)} P0 groups not confirmed" in cell and "pooled value not confirmed" in cell, cell
+    for g in groups:
+        g["B_grow_over_lambda_B_log10"].update(median=0.0)
+    r, out = report(fresh(tmp_path, "again"), A, J)
+    cell = row_of(out, "B_grow = λ_c B_ext").split(" | ")[4]
+    assert f"0 of {len(groups)} P0 groups not confirmed" in cell and "pooled value not confirmed" in cell, cell
+
+
 def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
