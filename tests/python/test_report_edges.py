@@ -172,6 +172,20 @@ def test_the_pooled_value_is_not_counted_as_a_group(tmp_path):
     assert f"0 of {len(groups)} P0 groups not confirmed" in cell and "pooled value not confirmed" in cell, cell
 
 
+def test_the_phi2_trend_tests_every_group_it_lists(tmp_path):
+    A, J = quick()
+    groups = main_L_groups(A)
+    # a clean decrease over the feedback groups, but no feedback (listed first) far below all of them
+    for k, g in enumerate(g for g in groups if g["P0_label"] != "none"):
+        g["dphi_2_paper"].update(mean=0.05 - 0.005 * k, se=1e-4, n=20)
+    none = next(g for g in groups if g["P0_label"] == "none")
+    none["dphi_2_paper"].update(mean=0.001, se=1e-4, n=20)
+    r, out = report(tmp_path, A, J)
+    row = row_of(out, "Stronger feedback moves φ_2")
+    assert "no feedback" in row.split(" | ")[3]
+    assert row.split(" | ")[4].startswith("not confirmed"), row
+
+
 def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
