@@ -443,16 +443,24 @@ def main():
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",
                   verdicts.Verdict("inconclusive", "no L = 20 runs"), fig("figD1"))
     # ---- growth rates ----
-    paper_h = {"none": (0.0, 0.0), "0.1": (1.4e-4, 0.01e-4)}
+    paper_h = {"0.1": (1.4e-4, 0.01e-4)}
     for lab in order:
         x = groups[lab]
-        if lab in paper_h:
+        ours = pm(x["h_gamma"], "median")
+        if lab == "none":
+            # Without feedback every cell grows at the full rate: h_γ = 0 by construction, not a measurement.
+            h = (x.get("h_gamma") or {}).get("median")
+            paper = "0"
+            ours = (f"{fmt(h)} (n={n_text(x['h_gamma'].get('n'))})" if h is not None else "not measured")
+            verdict = ("— (0 by construction without feedback: exact, no error bar, not a test)" if h == 0 else
+                       "— (0 by construction without feedback: not a test; a measured value other than 0 is an "
+                       "error of the analysis)" if h is not None else "— (not measured)")
+        elif lab in paper_h:
             verdict = judged(x["h_gamma"], verdicts.quoted(*paper_h[lab]), key="median", seeds=seeds_in(x))
             paper = fmt(paper_h[lab][0])
         else:
             verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
-        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)} (median ± bootstrap SE)", paper, pm(x["h_gamma"], "median"), "same",
-              verdict, fig("figE1"))
+        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)} (median ± bootstrap SE)", paper, ours, "same", verdict, fig("figE1"))
     strong = [l for l in fed if float(l) <= 1e-2]
     claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "same",
           trend_of([groups[l]["h_gamma"] for l in strong], increasing=True, key="median"), fig("figE1"))

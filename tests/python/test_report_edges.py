@@ -186,6 +186,18 @@ def test_the_phi2_trend_tests_every_group_it_lists(tmp_path):
     assert row.split(" | ")[4].startswith("not confirmed"), row
 
 
+def test_h_gamma_without_feedback_is_exact_and_not_counted(tmp_path):
+    A, J = quick()
+    none = next(g for g in main_L_groups(A) if g["P0_label"] == "none")
+    none["h_gamma"].update(median=0.0, se=0.0, n=20)
+    r, out = report(tmp_path, A, J)
+    row = row_of(out, "h_γ at Δφ = 3e-3, no feedback")
+    cell = row.split(" | ")[4]
+    assert not re.match(r"(not )?confirmed|inconclusive", cell), cell
+    assert "construction" in cell and "± 0" not in row
+    assert tally_and_cells(out)[0] == tally_and_cells(out)[1]
+
+
 def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
