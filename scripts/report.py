@@ -508,11 +508,17 @@ def main():
         od, o6 = Dp["through_origin_dZ"], Dp["through_origin_Z_minus_6"]
         n = Dp["packings"]
         p = Dp["fraction_Z_minus_6_negative"]
-        frac = {"mean": p, "se": math.sqrt(p * (1 - p) / n) if p is not None and error_bar(0.0, n) else None, "n": n}
+        half = verdicts.at_least(0.5)
+        if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and error_bar(0.0, n):
+            lo, hi = verdicts.wilson(p, n)
+            frac_text = f"{fmt(p)} [95% Wilson CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)}; score test at 1/2)"
+        else:
+            frac_text = f"{fmt(p)} (n={n_text(n)})"
         theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
                   f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
-                  f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {pm(frac)}")
-        verdict = judged(frac, verdicts.at_least(0.5), seeds=main_seeds)
+                  f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {frac_text}")
+        verdict = (verdicts.proportion(p, n, half, n_paper=paper_n(n, main_seeds)) if p is not None else
+                   verdicts.Verdict("inconclusive", "not measured"))
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", verdicts.Verdict("inconclusive", "not measured")
     claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5): more than half of the packings have Z − 6 < 0",

@@ -13,6 +13,10 @@ combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside
     confirmed      z ≤ 2: x lies within 2σ of C, consistent with the claim at about 95 %;
     not confirmed  z > 2.
 
+A proportion p̂ = k/n (a fraction of packings) is judged by the score test: its SE is that of the claim's
+boundary p0 nearest to p̂, √(p0(1 − p0)/n), not the Wald √(p̂(1 − p̂)/n), which is 0 at p̂ = 0 or 1 and would make
+z 0 or ∞ whatever n; its interval is Wilson's (the score test inverted), never of zero width.
+
 A trend over the feedback groups ("decreases with feedback") is budjam's own data tested for
 direction, each group with its SE: not confirmed when a step between neighbouring groups goes against
 the claimed direction by more than 2σ of that step, confirmed when the change from the first group to
@@ -106,6 +110,33 @@ def compare(estimate, se, n, claim, n_paper=None):
         z = d / sigma
     word = "confirmed" if z <= Z_MAX else "not confirmed"
     return Verdict(word, f"z = {_fmt(z)}, σ = {_fmt(sigma)}")
+
+
+def _clamp01(x):
+    return min(max(x, 0.0), 1.0)
+
+
+def proportion(p, n, claim, n_paper=None):
+    """The verdict on a claim about a proportion p = k/n by the score test: the SE is that of p0, the
+    claim's boundary nearest to p, √(p0(1 − p0)/n) — not 0 at p = 0 or 1 unless the claim's own
+    boundary is 0 or 1; n_paper as in compare()."""
+    why_not = unusable(p, 0.0, n)
+    if why_not is not None:
+        return why_not
+    if not 0.0 <= p <= 1.0:
+        return Verdict("inconclusive", f"not a proportion: {_fmt(p)} (n = {n:g})")
+    ends = [e for e in (claim.lo, claim.hi) if math.isfinite(e)]
+    p0 = _clamp01(min(ends, key=lambda e: abs(e - p)) if ends else p)  # the boundary nearest to p
+    se0 = math.sqrt(p0 * (1.0 - p0) / n)
+    return compare(p, se0, n, claim, n_paper)
+
+
+def wilson(p, n, z=1.96):
+    """Wilson's score interval (95 % by default) of a proportion p = k/n, n ≥ 1: never of zero width."""
+    d = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / d
+    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / d
+    return _clamp01(centre - half), _clamp01(centre + half)
 
 
 def trend(points, increasing):

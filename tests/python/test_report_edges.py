@@ -198,6 +198,20 @@ def test_h_gamma_without_feedback_is_exact_and_not_counted(tmp_path):
     assert tally_and_cells(out)[0] == tally_and_cells(out)[1]
 
 
+def test_a_fraction_of_zero_or_one_is_judged_by_a_finite_error(tmp_path):
+    A, J = quick()
+    paper = A["main"]["dos"]["paper"]
+    for p, word in ((0.0, "not confirmed"), (1.0, "confirmed"), (0.45, None)):
+        paper.update(packings=40, fraction_Z_minus_6_negative=p)
+        r, out = report(fresh(tmp_path, f"p{p}"), A, J)
+        row = row_of(out, "ω* collapses")
+        cell = row.split(" | ")[4]
+        assert "inf" not in cell and "σ = 0)" not in cell and "± 0 " not in row, row
+        if word:
+            assert re.match(word + r" \(z", cell), cell
+        assert "Wilson" in row
+
+
 def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)

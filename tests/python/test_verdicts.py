@@ -104,3 +104,36 @@ def test_zero_spread_is_never_a_division_into_a_verdict_of_chance():
     assert v.trend(flat, increasing=True).word == "inconclusive"
     assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=True).word == "confirmed"
     assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=False).word == "not confirmed"
+
+
+def test_a_proportion_at_zero_or_one_keeps_a_finite_error():
+    # the score test: the SE is the one of the claim's boundary p0 = 1/2, √(p0(1 − p0)/n), not the
+    # Wald SE √(p̂(1 − p̂)/n), which is 0 at p̂ = 0 or 1
+    half = v.at_least(0.5)
+    n = 40
+    s = math.sqrt(0.25 / n)
+    r = v.proportion(0.0, n, half)
+    assert r.word == "not confirmed" and "inf" not in r.why
+    assert math.isclose(float(r.why.split("z = ")[1].split(",")[0]), 0.5 / (math.sqrt(2) * s), rel_tol=0.02)
+    r = v.proportion(1.0, n, half)
+    assert r.word == "confirmed" and "σ = 0)" not in r.why
+    # a few below one half out of 40 is within noise of it; far below is not
+    assert v.proportion(0.45, n, half).word == "confirmed"
+    assert v.proportion(0.2, n, half).word == "not confirmed"
+    r = v.proportion(0.45, n, half)
+    assert math.isclose(float(r.why.split("z = ")[1].split(",")[0]), 0.05 / (math.sqrt(2) * s), rel_tol=0.02)
+    # against a bound of 1/2 from above, p̂ = 1 is a finite distance in finite units
+    r = v.proportion(1.0, n, v.at_most(0.5))
+    assert r.word == "not confirmed" and "inf" not in r.why
+    # the paper's sample enters as for every other row; fewer than 5: no verdict
+    assert v.proportion(0.45, n, half, n_paper=20).why != v.proportion(0.45, n, half).why
+    assert v.proportion(0.0, 4, half).word == "inconclusive"
+    assert v.proportion(math.nan, n, half).word == "inconclusive"
+
+
+def test_the_wilson_interval_never_has_zero_width():
+    for p in (0.0, 1.0, 0.3):
+        lo, hi = v.wilson(p, 20)
+        assert 0.0 <= lo <= p <= hi <= 1.0 and hi - lo > 0.05
+    lo, hi = v.wilson(0.0, 20)
+    assert lo == 0.0 and math.isclose(hi, 0.161, abs_tol=1e-3)  # 1.96²/(20 + 1.96²)
