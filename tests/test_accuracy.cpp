@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 #include <vector>
@@ -183,18 +184,18 @@ void copy_with_phi2_shift(const fs::path& from, const fs::path& to, const std::v
 
 TEST_CASE(
     "phi_2 is judged over the seeds: one switched branch is within its resolution (a tie), a shift of every seed is "
-    "resolved",
+    "resolved; from fewer than 5 seeds it has no resolution and is not judged",
     "[fast]") {
   const fs::path dir = work_dir() / "acc_phi2";
   const fs::path ref = dir / "reference";
-  for (int seed = 1; seed <= 3; ++seed)
+  for (int seed = 1; seed <= 5; ++seed)
     REQUIRE(run_budjam("grow " + shell_quoted(source_file("data/scenes/demo.toml")) + " --quiet --seed " +
                        std::to_string(seed) + " --out " + shell_quoted(ref / ("seed" + std::to_string(seed))) +
                        " --set box.L=6 --set 'jamming.targets=[1e-3]' --set jamming.continue_to_phi2=true")
                 .code == 0);
-  copy_with_phi2_shift(ref, dir / "default", {0, 0, 0});
-  copy_with_phi2_shift(ref, dir / "ftol_1e-11", {0, 0, 0.01});          // one seed on another branch
-  copy_with_phi2_shift(ref, dir / "ftol_1e-10", {0.01, 0.011, 0.009});  // every seed moved alike
+  copy_with_phi2_shift(ref, dir / "default", {0, 0, 0, 0, 0});
+  copy_with_phi2_shift(ref, dir / "ftol_1e-11", {0, 0, 0, 0, 0.01});                // one seed on another branch
+  copy_with_phi2_shift(ref, dir / "ftol_1e-10", {0.01, 0.011, 0.009, 0.01, 0.01});  // every seed moved alike
   REQUIRE(run_budjam("accuracy --reference " + shell_quoted(ref) + " " + shell_quoted(dir / "default") + " " +
                      shell_quoted(dir / "ftol_1e-11") + " " + shell_quoted(dir / "ftol_1e-10") + " --out " +
                      shell_quoted(dir / "out"))
@@ -207,10 +208,10 @@ TEST_CASE(
   REQUIRE(all);
   REQUIRE(def);
   // |mean| of the signed differences, and 2 standard errors of that mean
-  CHECK((*one)["err_phi_2"].get<double>() == Approx(0.01 / 3).epsilon(1e-9));
-  CHECK((*one)["res_phi_2"].get<double>() == Approx(2 * 0.01 / 3).epsilon(1e-9));
+  CHECK((*one)["err_phi_2"].get<double>() == Approx(0.01 / 5).epsilon(1e-9));
+  CHECK((*one)["res_phi_2"].get<double>() == Approx(2 * 0.002).epsilon(1e-9));  // SD 0.01/√5, SE 0.002
   CHECK((*all)["err_phi_2"].get<double>() == Approx(0.01).epsilon(1e-9));
-  CHECK((*all)["res_phi_2"].get<double>() == Approx(2 * 0.001 / std::sqrt(3.0)).epsilon(1e-9));
+  CHECK((*all)["res_phi_2"].get<double>() == Approx(2 * std::sqrt(5e-7 / 5)).epsilon(1e-9));
   CHECK((*def)["err_phi_2"].get<double>() == 0.0);
   // Same runs, same cost: the switched branch ties with the default; the resolved shift is worse.
   const auto front_of = [&](const std::string& knob) {
@@ -229,6 +230,34 @@ TEST_CASE(
   std::string head;
   std::getline(csv, head);
   CHECK(head.find(",res_phi_2,") != std::string::npos);
+
+  // The same variants on three seeds: no resolution from fewer than 5, and φ_2 is not judged — the
+  // shift of every seed no longer puts ftol_1e-10 off the φ_2 front, and the table says why.
+  const fs::path three = dir / "three";
+  for (const char* v : {"reference", "default", "ftol_1e-11", "ftol_1e-10"}) {
+    fs::create_directories(three / v);
+    for (int seed = 1; seed <= 3; ++seed)
+      fs::copy(dir / v / ("seed" + std::to_string(seed)), three / v / ("seed" + std::to_string(seed)),
+               fs::copy_options::recursive);
+  }
+  REQUIRE(run_budjam("accuracy --reference " + shell_quoted(three / "reference") + " " +
+                     shell_quoted(three / "default") + " " + shell_quoted(three / "ftol_1e-11") + " " +
+                     shell_quoted(three / "ftol_1e-10") + " --out " + shell_quoted(three / "out"))
+              .code == 0);
+  const io::Json acc3 = io::read_json(three / "out" / "accuracy.json");
+  const io::Json* all3 = row(acc3, "growth", "ftol_1e-10");
+  REQUIRE(all3);
+  CHECK((*all3)["err_phi_2"].get<double>() == Approx(0.01).epsilon(1e-9));
+  CHECK((!all3->contains("res_phi_2") || (*all3)["res_phi_2"].is_null()));
+  std::set<std::string> names3;
+  for (const auto& g : acc3["groups"])
+    if (g["knob"] == "ftol")
+      for (const auto& n : g["front_by_quantity"]["phi_2"]) names3.insert(n.get<std::string>());
+  CHECK(names3 == std::set<std::string>{"default", "ftol_1e-11", "ftol_1e-10"});
+  std::ifstream md(three / "out" / "accuracy.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  CHECK(text.find("3 seeds < 5: not judged") != std::string::npos);
+  CHECK(text.find(" ± ") == std::string::npos);
 }
 
 TEST_CASE("every growth variant of Makefile.analysis names a knob the sweep knows; another is refused by name",

@@ -9,7 +9,8 @@
 // An error may carry a statistical resolution r (an ensemble quantity measured on a few seeds: the
 // error is a difference of means, r its uncertainty): it is then known only to lie in
 // [max(0, e − r), e + r], and a is worse than b only when a's lower end exceeds error_ratio × b's
-// upper end. With r = 0 this is the rule above.
+// upper end. With r = 0 this is the rule above. A resolution is never taken from fewer than 5 seeds
+// (`budjam accuracy`): such an ensemble error is passed as NaN, not as an exact one.
 // Errors that are NaN (not measured, or a quantity the knob cannot change) take no part.
 // With tolerances, dominance is not transitive; the front is the set of settings that no other
 // setting dominates. A default is "on the front" of its knob when no other setting of that knob

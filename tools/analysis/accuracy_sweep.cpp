@@ -76,8 +76,11 @@ const std::map<std::string, std::string> kPinnedByModel{
     {"activeset", "where active-set steps take over they reach other minima than FIRE" + kJudgedByEnsembles},
     {"activetry", "a kept try of the active-set steps ends at another minimum than FIRE's" + kJudgedByEnsembles}};
 
-// Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp).
+// Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp), and the
+// fewest seeds that give one a resolution: an SE of 2–4 values is itself uncertain by 35–70 %, so below
+// this an ensemble quantity has no resolution and takes no part in any front (it is not judged).
 const std::set<std::string> kEnsembleQuantities{"phi_2"};
+constexpr std::size_t kMinEnsembleSeeds = 5;
 
 double error_of(const SweepRow& r, const std::string& q) {
   const auto it = r.err.find(q);
@@ -244,7 +247,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
       std::vector<double> d;
       for (double x : v)
         if (std::isfinite(x)) d.push_back(x);
-      row.resolution[q] = d.size() > 1 ? 2 * standard_error(d) : kNaN;
+      row.resolution[q] = d.size() >= kMinEnsembleSeeds ? 2 * standard_error(d) : kNaN;
     }
     rows.push_back(row);
   };
@@ -337,11 +340,14 @@ std::vector<Group> groups_of(const std::vector<SweepRow>& rows) {
   return groups;
 }
 
+// An ensemble quantity without a resolution (fewer than kMinEnsembleSeeds seeds) is not judged: its
+// error is NaN here, which takes no part in a comparison (budjam/pareto.hpp).
 CostErrors cost_errors(const SweepRow& r, const std::vector<std::string>& quantities) {
   CostErrors c{r.cost, {}, {}};
   for (const auto& q : quantities) {
-    c.errors.push_back(error_of(r, q));
-    c.resolution.push_back(resolution_of(r, q));
+    const double res = resolution_of(r, q);
+    c.errors.push_back(kEnsembleQuantities.count(q) && std::isnan(res) ? kNaN : error_of(r, q));
+    c.resolution.push_back(res);
   }
   return c;
 }
@@ -618,7 +624,10 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
     for (const auto& q : kQuantities) {
       const double e = error_of(r, q);
       md << " | " << (r.err.count(q) ? (std::isnan(e) ? "n/a" : fmt(e)) : "");
-      if (const double res = resolution_of(r, q); !std::isnan(res)) md << " ± " << fmt(res);
+      if (const double res = resolution_of(r, q); !std::isnan(res))
+        md << " ± " << fmt(res);
+      else if (kEnsembleQuantities.count(q) && r.err.count(q) && !std::isnan(e))
+        md << " (" << r.n << " seeds < " << kMinEnsembleSeeds << ": not judged)";
     }
     md << " | "
        << (r.is_reference       ? "reference"
@@ -653,7 +662,8 @@ void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std
                        "(phi_J, u_J, Z_J) or of the relative error (P, B, G, omega_star averaged over the "
                        "targets; band = the largest relative error of the n_band eigenvalues omega* averages); "
                        "phi_2 (a trajectory property): |mean over seeds of variant - reference|, res_phi_2 = 2 "
-                       "standard errors of that mean, within which it ties; "
+                       "standard errors of that mean, within which it ties (from 5 seeds or more; with fewer, no "
+                       "res_phi_2 and phi_2 is not judged); "
                        "seconds: CPU seconds per run (growth) or per computation (best of interleaved repeats); "
                        "cost (what the front compares): the seconds, except for growth: force evaluations per run "
                        "times the sweep's mean CPU seconds per evaluation (deterministic); "

@@ -11,7 +11,8 @@
 // G, ω* from the .moduli.json / .dos.json beside the target packings). φ_2 is a property of the whole
 // trajectory (which tagged bud completes last), which a perturbation at any step may switch to
 // another branch, tighter settings included: it is judged as an ensemble quantity, by the mean over
-// seeds of the signed difference and that mean's resolution of 2 standard errors (budjam/pareto.hpp).
+// seeds of the signed difference and that mean's resolution of 2 standard errors (budjam/pareto.hpp),
+// from 5 seeds or more; with fewer it has no resolution and is not judged (no part in any front).
 //
 // Post-processing knobs (packing sets NAME=DIR): the moduli's linear solver and ARPACK's tol and ncv,
 // measured on every packings/*.pack below DIR (analysis/accuracy_post.hpp).
@@ -57,7 +58,7 @@ struct SweepRow {
   std::map<std::string, double> err;      // by quantity; absent = n/a
   std::map<std::string, double> max_err;  // post-processing: the worst packing
   // Ensemble quantities (φ_2): err is |mean over seeds of the signed difference|, and this its
-  // resolution, 2 standard errors of that mean (absent with one seed).
+  // resolution, 2 standard errors of that mean (absent with fewer than 5 seeds: not judged).
   std::map<std::string, double> resolution;
   double max_residual = kNaN;
   bool well_posed = true;
