@@ -89,16 +89,20 @@ TEST_CASE("a writer that throws leaves the previous file intact and no temporary
   CHECK_FALSE(fs::exists(dir.path / "new.pack"));
 }
 
-TEST_CASE("an output that cannot be written raises IoError and keeps the old file", "[atomic]") {
+TEST_CASE("an output that cannot be written raises IoError (a path that names none InputError) and keeps the old file",
+          "[atomic]") {
   TempDir dir("atomic-fail");
   const fs::path file = dir.path / "out.json";
   write_atomically(file, "old\n");
   // A directory in the way of the final name: rename fails after the temporary file was written.
   fs::create_directories(dir.path / "blocked" / "inner");
-  CHECK_THROWS_AS(write_atomically(dir.path / "blocked", "new\n"), IoError);
+  CHECK_THROWS_AS(write_atomically(Directory::open(dir.path, false), "blocked", "new\n"), IoError);
   CHECK(names_in(dir.path) == std::vector<std::string>{"blocked", "out.json"});
-  // A parent that is a regular file.
-  CHECK_THROWS_AS(write_atomically(file / "child.txt", "x"), IoError);
+  // By path, both are the user's spelling, refused before anything is made (exit 2): a directory
+  // named as the file, a parent that is a regular file.
+  CHECK_THROWS_AS(write_atomically(dir.path / "blocked", "new\n"), InputError);
+  CHECK_THROWS_AS(write_atomically(file / "child.txt", "x"), InputError);
+  CHECK(names_in(dir.path) == std::vector<std::string>{"blocked", "out.json"});
   CHECK(slurp(file) == "old\n");
 }
 
@@ -269,6 +273,38 @@ TEST_CASE("output names that do not name a file are refused", "[atomic]") {
   CHECK_THROWS_WITH(check_output_name("--out", dir.path), Contains("is a directory"));
   CHECK_NOTHROW(check_output_name("-o", dir.path / "-dash.png"));
   CHECK_NOTHROW(check_output_name("-o", "odd=.png"));
+  // Its temporary `.NAME.tmp-XXXXXX` must fit in a name: 243 bytes at most.
+  CHECK_NOTHROW(check_output_name("--out", dir.path / std::string(kMaxOutputName, 'x')));
+  CHECK_THROWS_WITH(check_output_name("--out", dir.path / std::string(kMaxOutputName + 1, 'x')),
+                    Contains("file name too long"));
+  CHECK_THROWS_WITH(write_atomically(dir.path / "sub/", "x"), Contains("not a file name"));
+  CHECK_FALSE(fs::exists(dir.path / "sub"));
+  // A BASE adds extensions: BASE itself may not name a directory, BASE.json may not be one.
+  fs::create_directory(dir.path / "r.json");
+  CHECK_THROWS_WITH(check_output_base("--out", dir.path / "r", {".json"}), Contains("r.json: is a directory"));
+  CHECK_THROWS_WITH(check_output_base("--out", dir.path / ".", {".json"}), Contains("not a file name"));
+  CHECK_NOTHROW(check_output_base("--out", dir.path / "r", {".csv"}));
+  // A DIR of outputs: what exists of it must be a directory.
+  std::ofstream(dir.path / "file") << "the user's\n";
+  fs::create_symlink(dir.path / "nowhere", dir.path / "dangling");
+  CHECK_THROWS_WITH(check_output_directory("--out", dir.path / "file", {}), Contains("is not a directory"));
+  CHECK_THROWS_WITH(check_output_directory("--out", dir.path / "file" / "x", {}), Contains("is not a directory"));
+  CHECK_THROWS_WITH(check_output_directory("--out", dir.path / "dangling", {}), Contains("symbolic link to nothing"));
+  CHECK_THROWS_WITH(check_output_directory("--out", dir.path, {"r.json"}), Contains("r.json: is a directory"));
+  CHECK_NOTHROW(check_output_directory("--out", dir.path / "new" / "dir", {"a.csv"}));
+  CHECK_THROWS_AS(Directory::open(dir.path / "file" / "x", true), InputError);
+  CHECK_THROWS_AS(Directory::open(dir.path / "dangling", true), InputError);
+}
+
+TEST_CASE("an input that is not a regular file is refused, never waited on", "[atomic]") {
+  TempDir dir("inputs");
+  REQUIRE(::mkfifo((dir.path / "fifo").c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(read_text_file(dir.path / "fifo"), Contains("fifo: cannot read: is not a regular file"));
+  CHECK_THROWS_WITH(read_text_file("/dev/zero"), Contains("is not a regular file"));
+  CHECK_THROWS_WITH(read_text_file(dir.path), Contains("is a directory"));
+  { std::ofstream big(dir.path / "big.pack"); }
+  fs::resize_file(dir.path / "big.pack", kMaxInputBytes + 1);  // sparse
+  CHECK_THROWS_WITH(read_text_file(dir.path / "big.pack"), Contains("larger than 2 GiB"));
 }
 
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {

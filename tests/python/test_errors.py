@@ -3,6 +3,7 @@ never a JSONDecodeError, a pandas ParserError, a UnicodeDecodeError or a Runtime
 input does not have raises budjam.NoResultError; messages are one line with control bytes escaped,
 as the command line prints them."""
 import json
+import os
 
 import pytest
 
@@ -80,3 +81,29 @@ def test_moduli_of_an_unjammed_packing_raises_no_result_error():
 def test_a_packing_with_coincident_cells_is_refused_by_input_error():
     with pytest.raises(budjam.InputError, match="the mother of cell 0 and the mother of cell 1 are r = 0 apart"):
         budjam.Packing(L=8.0, x=[2.0, 2.0], y=[2.0, 2.0], theta=[0.0, 0.0], b=[0.5, 0.5])
+
+
+@pytest.mark.parametrize("name", ["sub/", "", ".", "d", "x" * 250])
+@pytest.mark.parametrize("write", [lambda p, path: p.write(path),
+                                   lambda p, path: budjam.export(p, path, "xyz"),
+                                   lambda p, path: budjam.export(p, path, "gsd")], ids=["write", "xyz", "gsd"])
+def test_an_output_path_that_names_no_file_raises_input_error_and_writes_nothing(tmp_path, write, name):
+    packing = budjam.read_packing(PACKING)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "d").mkdir()
+    path = "" if name == "" else f"{tmp_path}/{name}"
+    with pytest.raises(budjam.InputError):
+        write(packing, path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "sub"]
+    assert not any((tmp_path / "sub").iterdir()) and not any((tmp_path / "d").iterdir())
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_reading_a_fifo_or_a_device_raises_input_error_at_once(tmp_path, kind):
+    path = tmp_path / "p.pack"
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path = "/dev/zero"
+    with pytest.raises(budjam.InputError, match="not a regular file"):
+        budjam.read_packing(path)

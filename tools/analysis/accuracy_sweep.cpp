@@ -649,9 +649,13 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
 
 }  // namespace
 
+void check_accuracy_out(const fs::path& dir) {
+  io::check_output_directory("--out", dir, {"accuracy.csv", "accuracy.md", "accuracy.json"});
+}
+
 void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std::vector<SweepRow>& rows,
                            const SweepVerdict& v) {
-  fs::create_directories(dir);
+  io::Directory::open(dir, true);
   write_csv(dir / "accuracy.csv", rows);
   io::write_atomically(dir / "accuracy.md", markdown(rows, v));
   Json jrows = Json::array();

@@ -88,6 +88,9 @@ std::vector<SweepRow> growth_rows(const SweepOptions& options);
 std::vector<SweepRow> post_rows(const SweepOptions& options);
 // Judges every knob's front and marks the rows on it.
 SweepVerdict judge_fronts(std::vector<SweepRow>& rows, const SweepOptions& options);
+// InputError naming --out unless write_accuracy_tables can write in `dir` (io::check_output_directory);
+// changes nothing: call it before the measurements.
+void check_accuracy_out(const std::filesystem::path& dir);
 // DIR/accuracy.csv (one row per setting), DIR/accuracy.json (rows, groups with their fronts, the
 // verdict) and DIR/accuracy.md (the table as Markdown).
 void write_accuracy_tables(const std::filesystem::path& dir, const SweepOptions& options,

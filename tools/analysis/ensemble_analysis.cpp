@@ -990,6 +990,11 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
   return h;
 }
 
+// The files analyse writes in --out: analysis.json, then the tables.
+const std::vector<std::string_view> kOutputFiles{"analysis.json",    "runs.csv",       "targets.csv",
+                                                 "survival.csv",     "remaining.csv",  "division_curve.csv",
+                                                 "growth_rates.csv", "trajectory.csv", "dos.csv"};
+
 // A table the inputs could not give (Ensemble::unavailable names it) is not written: an empty file
 // would read as "measured, nothing there".
 void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
@@ -1017,6 +1022,8 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
                        cell(q.N_zero), cell(q.N_u), cell(q.N_u_buds)});
   auto write = [&](const char* name, const std::vector<std::string>& header,
                    const std::vector<std::vector<std::string>>& rows) {
+    if (std::find(kOutputFiles.begin(), kOutputFiles.end(), name) == kOutputFiles.end())
+      throw std::logic_error(std::string("analyse: ") + name + " is not in kOutputFiles");
     if (!e.unavailable.count(name)) write_csv(out / name, header, rows);
   };
   write("runs.csv", run_header, run_rows);
@@ -1036,6 +1043,7 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
 
 std::string analyse_ensemble(const EnsembleOptions& o) {
   if (o.out.empty()) throw InputError("--out: an output directory is required");
+  io::check_output_directory("--out", o.out, kOutputFiles);  // before the work, not after it
   if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
   if (!o.tables.empty() && fs::exists(o.out) && fs::equivalent(o.tables, o.out))
     throw InputError("--out: " + o.out + " is the --tables directory; its tables would be overwritten");
@@ -1059,7 +1067,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   }
 
   const fs::path out(o.out);
-  fs::create_directories(out);
+  io::Directory::open(out, true);
   Tables tables;
   Json jgroups = Json::array();
   for (const auto& [key, rs] : groups) jgroups.push_back(group_json(key, rs, e.survival.at(key), o.bootstrap, tables));

@@ -22,6 +22,7 @@ struct Options {
 
 void run(const Options& o) {
   tools::check_sweep_options(o.sweep);
+  tools::check_accuracy_out(o.out);
   std::vector<tools::SweepRow> rows;
   if (!o.sweep.reference.empty()) rows = tools::growth_rows(o.sweep);
   for (tools::SweepRow& r : tools::post_rows(o.sweep)) rows.push_back(std::move(r));

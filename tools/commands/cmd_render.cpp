@@ -56,6 +56,7 @@ void run(const Options& o) {
   const std::string ext = out.extension().string();
   if (ext != ".svg" && ext != ".png" && ext != ".pdf")
     throw InputError("-o: the output must end in .svg, .png or .pdf (got " + o.out + ")");
+  if (o.png) io::check_output_name("--png", fs::path(out).replace_extension(".png"));
   const io::PackingFile f = io::read_packing(o.packing);
   const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
 

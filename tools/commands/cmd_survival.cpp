@@ -24,6 +24,7 @@ struct Options {
 };
 
 void run(const Options& o) {
+  io::check_output_request(o.output, true);
   const std::vector<std::filesystem::path> dirs(o.runs.begin(), o.runs.end());
   const tools::SurvivalReport report = tools::survival_report(dirs, o.epsilon);
   io::emit(o.output, tools::survival_result(report), std::cout);

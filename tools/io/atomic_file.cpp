@@ -14,7 +14,6 @@
 #include <cerrno>
 #include <climits>
 #include <cstring>
-#include <fstream>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -52,14 +51,26 @@ void write_all(int fd, std::string_view data, const fs::path& path) {
   }
 }
 
+// The whole of an input file: a regular file (a FIFO would wait for a writer, a device such as
+// /dev/zero never end) of at most kMaxInputBytes.
 std::string read_all(int fd, const fs::path& path) {
+  const std::string at = path.string() + ": cannot read: ";
+  struct ::stat st {};
+  if (::fstat(fd, &st) != 0) throw InputError(at + reason(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(at + "is a directory");
+  if (!S_ISREG(st.st_mode)) throw InputError(at + "is not a regular file (a FIFO, a device or a socket)");
+  const auto too_large = [&] {
+    return InputError(at + "larger than " + std::to_string(kMaxInputBytes >> 30) + " GiB, the most budjam reads");
+  };
+  if (static_cast<std::uint64_t>(st.st_size) > kMaxInputBytes) throw too_large();
   std::string text;
   char buf[65536];
   while (true) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw InputError(path.string() + ": cannot read: " + reason(errno));
+    if (n < 0) throw InputError(at + reason(errno));
     if (n == 0) return text;
+    if (text.size() + static_cast<std::size_t>(n) > kMaxInputBytes) throw too_large();  // grew while read
     text.append(buf, static_cast<std::size_t>(n));
   }
 }
@@ -97,11 +108,22 @@ Directory Directory::open(const fs::path& path, bool create) {
   if (create && !path.empty()) {
     std::error_code ec;
     fs::create_directories(path, ec);
-    if (ec && !fs::is_directory(path)) throw IoError(path.string() + ": cannot create directory: " + ec.message());
+    std::error_code lec;
+    if (ec && !fs::is_directory(path, lec)) {
+      // A file, a dangling link or too long a name on the way is the user's spelling: exit 2.
+      if (fs::is_symlink(fs::symlink_status(path, lec)))
+        throw InputError(path.string() + ": is a symbolic link to nothing; cannot create the directory");
+      if (ec == std::errc::file_exists || ec == std::errc::not_a_directory || ec == std::errc::filename_too_long ||
+          ec == std::errc::too_many_symbolic_link_levels)
+        throw InputError(path.string() + ": cannot create directory: " + ec.message());
+      throw IoError(path.string() + ": cannot create directory: " + ec.message());
+    }
   }
   const int fd = ::open(path.empty() ? "." : path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) {
     if (errno == ENOTDIR) throw InputError(path.string() + ": is not a directory");
+    if (errno == ENAMETOOLONG || errno == ELOOP)
+      throw InputError(path.string() + ": cannot open directory: " + reason(errno));
     io_fail(path, "cannot open directory", errno);
   }
   Directory d;
@@ -292,9 +314,9 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
     name_ += ".tmp-";
     for (int k = 0; k < 6; ++k) name_ += kChars[rng() % (sizeof kChars - 1)];
     fd_ = ::openat(dir_.fd(), name_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
-    if (fd_ < 0 && errno != EEXIST) io_fail(dir_.path(), "cannot create a temporary file", errno);
+    if (fd_ < 0 && errno != EEXIST) io_fail(dir_ / final_, "cannot create a temporary file beside it", errno);
   }
-  if (fd_ < 0) io_fail(dir_.path(), "cannot create a temporary file", EEXIST);
+  if (fd_ < 0) io_fail(dir_ / final_, "cannot create a temporary file beside it", EEXIST);
   slot_ = list_temporary(dir_.fd(), name_);
   // Recorded once it exists: the list never names a file this process did not create.
   if (dir_.manifest()) {
@@ -339,15 +361,64 @@ void TempFile::commit() {
   dir_.sync();
 }
 
-void check_output_name(std::string_view option, const fs::path& path) {
+namespace {
+
+std::string output_at(std::string_view option, const fs::path& path) {
+  const std::string text = path.empty() ? "\"\"" : escape_control(path.string());
+  return (option.empty() ? "" : std::string(option) + ": ") + text + ": ";
+}
+
+// The name alone: given, and short enough for the temporary `.NAME.tmp-XXXXXX` beside it.
+void check_output_spelling(std::string_view option, const fs::path& path) {
   const std::string text = path.string();
   const std::string name = path.filename().string();
-  const std::string at = std::string(option) + ": " + escape_control(text) + ": ";
   if (text.empty() || text.back() == '/' || name.empty() || name == "." || name == "..")
-    throw InputError(at + "not a file name (it names a directory)");
-  if (name.front() == '=') throw InputError(at + "a file name may not start with '='");
+    throw InputError(output_at(option, path) + "not a file name (it names a directory)");
+  if (name.size() > kMaxOutputName)
+    throw InputError(output_at(option, path) + "file name too long (" + std::to_string(name.size()) +
+                     " bytes; at most " + std::to_string(kMaxOutputName) + ")");
+}
+
+}  // namespace
+
+void check_output_path(std::string_view option, const fs::path& path) {
+  check_output_spelling(option, path);
   std::error_code ec;
-  if (fs::is_directory(path, ec)) throw InputError(at + "is a directory");
+  if (fs::is_directory(path, ec)) throw InputError(output_at(option, path) + "is a directory");
+}
+
+void check_output_name(std::string_view option, const fs::path& path) {
+  check_output_path(option, path);
+  if (path.filename().string().front() == '=')
+    throw InputError(output_at(option, path) + "a file name may not start with '='");
+}
+
+void check_output_base(std::string_view option, const fs::path& base,
+                       std::initializer_list<std::string_view> extensions) {
+  check_output_spelling(option, base);
+  check_output_directory(option, base.parent_path(), {});
+  for (const std::string_view ext : extensions) {
+    fs::path file = base;
+    file += ext;
+    check_output_path(option, file);
+  }
+}
+
+void check_output_directory(std::string_view option, const fs::path& dir, const std::vector<std::string_view>& names) {
+  // The nearest part of the path that exists must be a directory (links followed, as spelled).
+  std::error_code ec;
+  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+    const fs::file_status st = fs::status(p, ec);
+    const std::string which = p == dir ? "" : escape_control(p.string()) + " ";
+    if (fs::exists(st)) {
+      if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which + "is not a directory");
+      break;
+    }
+    if (fs::is_symlink(fs::symlink_status(p, ec)))
+      throw InputError(output_at(option, dir) + which + "is a symbolic link to nothing");
+    if (p == p.parent_path()) break;
+  }
+  for (const std::string_view name : names) check_output_path(option, dir / name);
 }
 
 void write_atomically(const Directory& dir, std::string_view name, std::string_view content) {
@@ -357,6 +428,7 @@ void write_atomically(const Directory& dir, std::string_view name, std::string_v
 }
 
 void write_atomically(const fs::path& path, std::string_view content) {
+  check_output_path("", path);
   write_atomically(Directory::open(path.parent_path(), true), path.filename().string(), content);
 }
 
@@ -369,13 +441,14 @@ void write_atomically(const Directory& dir, std::string_view name, const std::fu
 }
 
 void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
+  check_output_path("", path);
   write_atomically(Directory::open(path.parent_path(), true), path.filename().string(), writer);
 }
 
-std::string read_text_file(const Directory& dir, std::string_view name) {
-  const int fd = dir.open_file(name, O_RDONLY);
+namespace {
+std::string read_and_close(int fd, const fs::path& path) {
   try {
-    std::string text = read_all(fd, dir / name);
+    std::string text = read_all(fd, path);
     ::close(fd);
     return text;
   } catch (...) {
@@ -383,16 +456,17 @@ std::string read_text_file(const Directory& dir, std::string_view name) {
     throw;
   }
 }
+}  // namespace
+
+std::string read_text_file(const Directory& dir, std::string_view name) {
+  return read_and_close(dir.open_file(name, O_RDONLY), dir / name);
+}
 
 std::string read_text_file(const fs::path& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw InputError(path.string() + ": cannot read: is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot read: " + reason(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path.string() + ": cannot read: " + reason(errno));
-  return std::move(text).str();
+  // O_NONBLOCK: opening a FIFO does not wait for a writer (read_all refuses it).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) throw InputError(path.string() + ": cannot read: " + reason(errno));
+  return read_and_close(fd, path);
 }
 
 // ---- CSV -------------------------------------------------------------------------------------

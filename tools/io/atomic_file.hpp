@@ -135,13 +135,31 @@ void remove_open_temporaries() noexcept;
 void write_atomically(const Directory& dir, std::string_view name, std::string_view content);
 void write_atomically(const Directory& dir, std::string_view name, const std::function<void(std::ostream&)>& writer);
 
-// InputError "<option>: <path>: ..." unless `path` names a file budjam may write: a name is
-// given (not empty, no trailing '/', not "." or ".."), it does not start with '=' (which
-// converters' option parsers take as part of an option) and it is not an existing directory.
+// The most bytes budjam reads of one input file; a larger one is refused (InputError) unread.
+inline constexpr std::uint64_t kMaxInputBytes = std::uint64_t{2} << 30;
+// The longest name of an output file: its temporary `.NAME.tmp-XXXXXX` must fit in NAME_MAX (255).
+inline constexpr std::size_t kMaxOutputName = 255 - 12;
+
+// InputError "<option>: <path>: ..." ("<path>: ..." if option is empty) unless `path` names a file
+// budjam may write: a name is given (not empty, no trailing '/', not "." or ".."), at most
+// kMaxOutputName bytes, and it is not an existing directory.
+void check_output_path(std::string_view option, const std::filesystem::path& path);
+// check_output_path, and the name does not start with '=' (which converters' option parsers take
+// as part of an option).
 void check_output_name(std::string_view option, const std::filesystem::path& path);
+// `--out BASE` of a command writing BASE<ext> for each extension: BASE names a file (as above) and
+// each BASE<ext> passes check_output_path. Before any work, so nothing is computed to be lost.
+void check_output_base(std::string_view option, const std::filesystem::path& base,
+                       std::initializer_list<std::string_view> extensions);
+// `--out DIR` of a command writing the files `names` in DIR: the part of DIR that exists is a
+// directory (a file or a dangling link on the way is refused) and each DIR/name passes
+// check_output_path. Changes nothing.
+void check_output_directory(std::string_view option, const std::filesystem::path& dir,
+                            const std::vector<std::string_view>& names);
 
 // Replaces `path` by `content` atomically. On any failure the temporary file is removed, the
-// previous file at `path` (if any) is untouched, and IoError is thrown.
+// previous file at `path` (if any) is untouched, and IoError is thrown (InputError if `path` does
+// not pass check_output_path).
 void write_atomically(const std::filesystem::path& path, std::string_view content);
 
 // Same, with the content produced by `writer`; if `writer` throws, nothing is written and the

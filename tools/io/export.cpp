@@ -404,6 +404,7 @@ except Exception as e:
 }  // namespace
 
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
+  check_output_path("", path);
   Json all = Json::array();
   for (const auto& f : frames) all.push_back(particle_frame_json(f));
   const Directory dir = Directory::open(path.parent_path(), true);

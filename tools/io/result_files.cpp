@@ -1,6 +1,7 @@
 #include "io/result_files.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/text.hpp"
 
 #include <ostream>
 
@@ -12,6 +13,15 @@ fs::path result_base(const std::string& base) {
   fs::path p(base);
   if (p.extension() == ".json" || p.extension() == ".csv") p.replace_extension();
   return p;
+}
+
+void check_output_request(const OutputRequest& request, bool table) {
+  if (request.base.empty()) return;
+  const fs::path base = result_base(request.base);
+  if (table)
+    check_output_base("--out", base, {".json", ".csv"});
+  else
+    check_output_base("--out", base, {".json"});
 }
 
 std::vector<fs::path> write_result_files(const fs::path& base, const CommandResult& result) {
@@ -38,7 +48,8 @@ void emit(const OutputRequest& request, const CommandResult& result, std::ostrea
   }
   if (request.quiet) return;
   out << result.summary;
-  for (std::size_t k = 0; k < written.size(); ++k) out << (k == 0 ? " -> " : ", ") << written[k].string();
+  for (std::size_t k = 0; k < written.size(); ++k)
+    out << (k == 0 ? " -> " : ", ") << escape_control(written[k].string());  // one line, whatever the names
   out << '\n';
 }
 

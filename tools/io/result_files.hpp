@@ -31,6 +31,11 @@ struct OutputRequest {
 // and survival.json, not survival.csv.csv.
 std::filesystem::path result_base(const std::string& base);
 
+// InputError naming --out unless BASE (without a trailing .json or .csv) names files budjam may
+// write: BASE.json, and BASE.csv if the result has a `table` (check_output_base). Call it before the
+// work, so that a bad name costs nothing; without --out it checks nothing.
+void check_output_request(const OutputRequest& request, bool table);
+
 // Writes BASE.csv (if the result has a table), then BASE.json, so that a BASE.json present means
 // the pair is complete. Returns the paths written, JSON first.
 std::vector<std::filesystem::path> write_result_files(const std::filesystem::path& base, const CommandResult& result);

@@ -1,0 +1,130 @@
+"""Output and input paths a hostile user gives every command: names that do not name a file, a
+directory where a file is expected, names too long for a temporary beside them, inputs that are not
+regular files. Each is one line `budjam: error: ...` naming the path, exit 2, nothing written and
+every file that was there byte-identical (docs/files.md, "Crash safety")."""
+import os
+import stat
+import subprocess
+
+import pytest
+
+from conftest import SOURCE_DIR
+
+PACKING = SOURCE_DIR / "tests" / "data" / "negative_G_target_L8.pack"
+
+
+def snapshot(root):
+    """Every entry under root (links not followed): kind and content."""
+    out = {}
+    for dirpath, dirnames, filenames in os.walk(root):
+        for name in dirnames + filenames:
+            path = os.path.join(dirpath, name)
+            st = os.lstat(path)
+            if stat.S_ISLNK(st.st_mode):
+                out[path] = ("link", os.readlink(path))
+            elif stat.S_ISREG(st.st_mode):
+                with open(path, "rb") as f:
+                    out[path] = ("file", f.read())
+            else:
+                out[path] = ("dir" if stat.S_ISDIR(st.st_mode) else "other", None)
+    return out
+
+
+def assert_refused(r, *words):
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("budjam: error: "), r.stderr
+    assert "internal" not in lines[0]
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+# (command, arguments before --out, extensions written, option)
+BASE_COMMANDS = [
+    ("rigidity", [PACKING], [".json", ".csv"], "--out"),
+    ("dos", [PACKING], [".json", ".csv"], "--out"),
+    ("moduli", [PACKING], [".json"], "--out"),
+]
+
+
+@pytest.mark.parametrize("command,args,extensions,option", BASE_COMMANDS)
+@pytest.mark.parametrize("base", ["d/", ".", "..", "sub/.", "x" * 250])
+def test_a_base_that_names_no_file_or_too_long_a_name_is_refused(run_budjam, tmp_path, command, args, extensions,
+                                                                 option, base):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "sub").mkdir()
+    before = snapshot(tmp_path)
+    r = run_budjam(command, *args, option, f"{tmp_path}/{base}", check=False)
+    assert_refused(r, option)
+    assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("command,args,extensions,option", BASE_COMMANDS)
+def test_a_directory_where_a_result_file_goes_is_refused_before_anything_is_written(run_budjam, tmp_path, command,
+                                                                                    args, extensions, option):
+    for ext in extensions:
+        for other in extensions:
+            (tmp_path / ("r" + other)).unlink(missing_ok=True)
+            if other != ext:
+                (tmp_path / ("r" + other)).write_text("the user's\n")
+        (tmp_path / ("r" + ext)).mkdir()
+        before = snapshot(tmp_path)
+        r = run_budjam(command, *args, option, tmp_path / "r", check=False)
+        assert_refused(r, f"r{ext}", "is a directory")
+        assert snapshot(tmp_path) == before
+        (tmp_path / ("r" + ext)).rmdir()
+
+
+def test_survival_refuses_a_base_that_names_a_directory(run_budjam, run_dir, tmp_path):
+    before = snapshot(tmp_path)
+    r = run_budjam("survival", run_dir, "-o", str(tmp_path) + "/", check=False)
+    assert_refused(r)
+    assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+@pytest.mark.parametrize("command", ["rigidity", "dos", "moduli", "render", "export", "validate"])
+def test_an_input_that_is_not_a_regular_file_is_refused_at_once(budjam_exe, tmp_path, command, kind):
+    if kind == "fifo":
+        path = tmp_path / "p.pack"
+        os.mkfifo(path)
+    else:
+        path = "/dev/zero"
+    extra = {"render": ["-o", tmp_path / "p.svg"], "export": ["--format", "xyz", "--out", tmp_path / "p"]}
+    before = snapshot(tmp_path)
+    # a reader would wait for a writer (FIFO) or fill the memory (/dev/zero)
+    r = subprocess.run([budjam_exe, command, str(path), *map(str, extra.get(command, []))], capture_output=True,
+                       text=True, timeout=60)
+    assert_refused(r, str(path), "not a regular file")
+    assert snapshot(tmp_path) == before
+
+
+def test_an_input_file_beyond_the_size_limit_is_refused_without_reading_it(run_budjam, tmp_path):
+    huge = tmp_path / "huge.pack"
+    with open(huge, "wb") as f:
+        f.truncate(64 << 30)  # sparse: no disk used
+    r = run_budjam("rigidity", huge, check=False)
+    assert_refused(r, str(huge), "larger than")
+
+
+@pytest.mark.parametrize("command", ["analyse", "accuracy"])
+def test_an_output_directory_that_is_a_file_or_a_dangling_link_is_refused(run_budjam, run_dir, tmp_path, command):
+    (tmp_path / "file").write_text("the user's\n")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    args = {"analyse": [run_dir], "accuracy": ["--packings", f"x={run_dir}"]}[command]
+    before = snapshot(tmp_path)
+    for out in ["file", "dangling", "file/sub"]:
+        r = run_budjam(command, *args, "--out", tmp_path / out, check=False)
+        assert_refused(r, out)
+        assert snapshot(tmp_path) == before
+
+
+def test_analyse_refuses_a_directory_where_a_table_goes_before_writing_any(run_budjam, run_dir, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "targets.csv").mkdir()
+    (out / "runs.csv").write_text("an earlier analysis\n")
+    before = snapshot(tmp_path)
+    r = run_budjam("analyse", run_dir, "--out", out, "--resamples", "10", check=False)
+    assert_refused(r, "targets.csv", "is a directory")
+    assert snapshot(tmp_path) == before
