@@ -307,6 +307,45 @@ TEST_CASE("an input that is not a regular file is refused, never waited on", "[a
   CHECK_THROWS_WITH(read_text_file(dir.path / "big.pack"), Contains("larger than 2 GiB"));
 }
 
+namespace {
+extern "C" void remove_temporaries_and_exit(int) {
+  remove_open_temporaries();
+  ::_exit(0);
+}
+}  // namespace
+
+TEST_CASE("a signal at any moment of making temporaries leaves none behind", "[atomic]") {
+  // The handler a command installs (remove_open_temporaries, then end) against a writer that makes
+  // temporaries without pause: a signal that lands while one is being created must find it listed.
+  TempDir dir("signal-temporaries");
+  for (int trial = 0; trial < 100; ++trial) {
+    int ready[2];
+    REQUIRE(::pipe(ready) == 0);
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+      ::close(ready[0]);
+      std::signal(SIGTERM, remove_temporaries_and_exit);
+      const Directory d = Directory::open(dir.path, false);
+      for (long i = 0;; ++i) {
+        TempFile t(d, "result.json");
+        t.write("{}\n");
+        if (i == 10) (void)!::write(ready[1], "x", 1);
+      }
+    }
+    ::close(ready[1]);
+    char c;
+    REQUIRE(::read(ready[0], &c, 1) == 1);
+    ::close(ready[0]);
+    ::usleep(static_cast<useconds_t>(100 + 37 * trial));
+    ::kill(child, SIGTERM);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    INFO("trial " << trial);
+    REQUIRE(names_in(dir.path).empty());
+  }
+}
+
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {
   TempDir dir("csv-kill");
   const fs::path file = dir.path / "steps.csv";

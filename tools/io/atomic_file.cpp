@@ -5,6 +5,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -296,6 +297,25 @@ void unlist_temporary(int slot) {
   if (slot >= 0) g_open_temporaries[static_cast<std::size_t>(slot)].dir_fd.store(-1);
 }
 
+// Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), so that
+// a temporary is created and listed for remove_open_temporaries() as one step: a signal that
+// arrives while open(2) creates the file would otherwise find it not yet listed.
+class SignalsHeld {
+ public:
+  SignalsHeld() {
+    sigset_t held;
+    sigemptyset(&held);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, sig);
+    ::pthread_sigmask(SIG_BLOCK, &held, &old_);
+  }
+  ~SignalsHeld() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+  SignalsHeld(const SignalsHeld&) = delete;
+  SignalsHeld& operator=(const SignalsHeld&) = delete;
+
+ private:
+  sigset_t old_{};
+};
+
 }  // namespace
 
 void remove_open_temporaries() noexcept {
@@ -308,6 +328,7 @@ void remove_open_temporaries() noexcept {
 TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(dir)), final_(final_name) {
   static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
   static thread_local std::mt19937_64 rng{std::random_device{}()};
+  std::optional<SignalsHeld> held(std::in_place);  // until the file is listed
   for (int attempt = 0; attempt < 100 && fd_ < 0; ++attempt) {
     name_.assign(1, '.');  // not = "." nor "." + string: GCC 12 -O3 misreads those as overlapping (-Wrestrict)
     name_ += final_;
@@ -318,6 +339,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
   }
   if (fd_ < 0) io_fail(dir_ / final_, "cannot create a temporary file beside it", EEXIST);
   slot_ = list_temporary(dir_.fd(), name_);
+  held.reset();
   // Recorded once it exists: the list never names a file this process did not create.
   if (dir_.manifest()) {
     try {
