@@ -48,7 +48,7 @@ std::optional<std::pair<std::size_t, std::size_t>> brute_force_violation(const P
   place_lobes(p, l);
   auto overlapping = brute_force_pairs(l, p.box, 0);
   std::sort(overlapping.begin(), overlapping.end());
-  for (const auto [a, b] : overlapping) {
+  for (const auto& [a, b] : overlapping) {
     double dx = l.x[b] - l.x[a], dy = l.y[b] - l.y[a];
     p.box.minimum_image(dx, dy);
     if (std::hypot(dx, dy) <= kMinContactRatio * (l.R[a] + l.R[b])) return std::pair{cell_of(a), cell_of(b)};
