@@ -312,6 +312,25 @@ extern "C" void remove_temporaries_and_exit(int) {
   remove_open_temporaries();
   ::_exit(0);
 }
+
+// Forks a child running `work` (which never returns) and returns its pid once the child has said,
+// by writing to the descriptor it is given, that it is under way.
+template <class Work>
+pid_t start_child(Work work) {
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    ::close(ready[0]);
+    work(ready[1]);
+  }
+  ::close(ready[1]);
+  char c;
+  REQUIRE(::read(ready[0], &c, 1) == 1);
+  ::close(ready[0]);
+  return child;
+}
 }  // namespace
 
 TEST_CASE("a signal at any moment of making temporaries leaves none behind", "[atomic]") {
@@ -319,24 +338,15 @@ TEST_CASE("a signal at any moment of making temporaries leaves none behind", "[a
   // temporaries without pause: a signal that lands while one is being created must find it listed.
   TempDir dir("signal-temporaries");
   for (int trial = 0; trial < 100; ++trial) {
-    int ready[2];
-    REQUIRE(::pipe(ready) == 0);
-    const pid_t child = ::fork();
-    REQUIRE(child >= 0);
-    if (child == 0) {
-      ::close(ready[0]);
+    const pid_t child = start_child([&](int ready) {
       std::signal(SIGTERM, remove_temporaries_and_exit);
       const Directory d = Directory::open(dir.path, false);
       for (long i = 0;; ++i) {
         TempFile t(d, "result.json");
         t.write("{}\n");
-        if (i == 10) (void)!::write(ready[1], "x", 1);
+        if (i == 10) (void)!::write(ready, "x", 1);
       }
-    }
-    ::close(ready[1]);
-    char c;
-    REQUIRE(::read(ready[0], &c, 1) == 1);
-    ::close(ready[0]);
+    });
     ::usleep(static_cast<useconds_t>(100 + 37 * trial));
     ::kill(child, SIGTERM);
     int status = 0;
@@ -349,26 +359,17 @@ TEST_CASE("a signal at any moment of making temporaries leaves none behind", "[a
 TEST_CASE("a process killed while logging leaves only whole lines in the .partial file", "[csv]") {
   TempDir dir("csv-kill");
   const fs::path file = dir.path / "steps.csv";
-  int ready[2];
-  REQUIRE(::pipe(ready) == 0);
-  const pid_t child = ::fork();
-  REQUIRE(child >= 0);
-  if (child == 0) {
-    ::close(ready[0]);
+  const pid_t child = start_child([&](int ready) {
     CsvLog log(Directory::open(dir.path, false), "steps.csv", {"step", "phi", "phase"});
     for (long i = 0;; ++i) {
       log.row({i, 0.5 + 1e-9 * static_cast<double>(i), "growing"});
-      if (i == 1000) (void)!::write(ready[1], "x", 1);
+      if (i == 1000) (void)!::write(ready, "x", 1);
     }
-  }
-  ::close(ready[1]);
-  char c;
-  REQUIRE(::read(ready[0], &c, 1) == 1);
+  });
   ::usleep(20000);
   ::kill(child, SIGKILL);
   int status = 0;
   ::waitpid(child, &status, 0);
-  ::close(ready[0]);
   REQUIRE(WIFSIGNALED(status));
 
   CHECK_FALSE(fs::exists(file));
