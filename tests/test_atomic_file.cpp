@@ -2,6 +2,7 @@
 // resumable logs, and the JSON helpers.
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
+#include "io/result_files.hpp"
 #include "io/text.hpp"
 
 #include "budjam/errors.hpp"
@@ -353,6 +354,34 @@ TEST_CASE("a signal at any moment of making temporaries leaves none behind", "[a
     ::waitpid(child, &status, 0);
     INFO("trial " << trial);
     REQUIRE(names_in(dir.path).empty());
+  }
+}
+
+TEST_CASE("a result's JSON and CSV are replaced as one: a signal never leaves a new CSV beside an old JSON",
+          "[atomic]") {
+  // A command's --out BASE pair rewritten without pause, each pair carrying its own number in both
+  // files, and SIGTERM sent at moments spread over the writes and their fsyncs.
+  TempDir dir("signal-pairs");
+  for (int trial = 0; trial < 60; ++trial) {
+    const pid_t child = start_child([&](int ready) {
+      std::signal(SIGTERM, remove_temporaries_and_exit);
+      const Directory d = Directory::open(dir.path, false);
+      for (long i = 0;; ++i) {
+        io::CommandResult r;
+        r.json = Json{{"pair", i}};
+        r.csv = [i](std::ostream& out) { out << "pair\n" << i << "\n"; };
+        io::write_result_files(d, "result", r);
+        if (i == 3) (void)!::write(ready, "x", 1);
+      }
+    });
+    ::usleep(static_cast<useconds_t>(50 + 211 * trial));
+    ::kill(child, SIGTERM);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    INFO("trial " << trial);
+    REQUIRE(names_in(dir.path) == std::vector<std::string>{"result.csv", "result.json"});
+    const long in_json = io::read_json(dir.path / "result.json").at("pair").get<long>();
+    CHECK(slurp(dir.path / "result.csv") == "pair\n" + std::to_string(in_json) + "\n");
   }
 }
 

@@ -462,6 +462,16 @@ void write_atomically(const Directory& dir, std::string_view name, const std::fu
   write_atomically(dir, name, out.view());
 }
 
+void write_atomically(const Directory& dir, const std::vector<std::pair<std::string, std::string>>& files) {
+  std::vector<std::unique_ptr<TempFile>> temporaries;
+  for (const auto& [name, content] : files) {
+    temporaries.push_back(std::make_unique<TempFile>(dir, name));
+    temporaries.back()->write(content);
+  }
+  const SignalsHeld held;
+  for (auto& t : temporaries) t->commit();
+}
+
 void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
   check_output_path("", path);
   write_atomically(Directory::open(path.parent_path(), true), path.filename().string(), writer);

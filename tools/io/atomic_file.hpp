@@ -22,6 +22,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace budjam::io {
@@ -134,6 +135,11 @@ void remove_open_temporaries() noexcept;
 // removed, the previous file (if any) is untouched, and IoError is thrown.
 void write_atomically(const Directory& dir, std::string_view name, std::string_view content);
 void write_atomically(const Directory& dir, std::string_view name, const std::function<void(std::ostream&)>& writer);
+
+// Replaces the files of `dir` named in `files` (name, content) as one: every content is written
+// to its temporary before the first rename, and the renames follow in the given order with SIGINT,
+// SIGTERM and SIGHUP held back, so that such a stop never leaves some replaced and not the others.
+void write_atomically(const Directory& dir, const std::vector<std::pair<std::string, std::string>>& files);
 
 // The most bytes budjam reads of one input file; a larger one is refused (InputError) unread.
 inline constexpr std::uint64_t kMaxInputBytes = std::uint64_t{2} << 30;

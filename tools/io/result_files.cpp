@@ -3,7 +3,10 @@
 #include "io/atomic_file.hpp"
 #include "io/text.hpp"
 
+#include "budjam/errors.hpp"
+
 #include <ostream>
+#include <sstream>
 
 namespace budjam::io {
 
@@ -31,11 +34,16 @@ std::vector<fs::path> write_result_files(const fs::path& base, const CommandResu
 std::vector<fs::path> write_result_files(const Directory& dir, const std::string& base_name,
                                          const CommandResult& result) {
   std::vector<fs::path> written{dir / (base_name + ".json")};
+  std::vector<std::pair<std::string, std::string>> files;
   if (result.csv) {
     written.push_back(dir / (base_name + ".csv"));
-    write_atomically(dir, base_name + ".csv", result.csv);
+    std::ostringstream table;
+    result.csv(table);
+    if (!table) throw IoError(written.back().string() + ": formatting the content failed");
+    files.emplace_back(base_name + ".csv", table.str());
   }
-  write_json(dir, base_name + ".json", result.json);
+  files.emplace_back(base_name + ".json", json_text(result.json));
+  write_atomically(dir, files);
   return written;
 }
 

@@ -36,8 +36,9 @@ std::filesystem::path result_base(const std::string& base);
 // work, so that a bad name costs nothing; without --out it checks nothing.
 void check_output_request(const OutputRequest& request, bool table);
 
-// Writes BASE.csv (if the result has a table), then BASE.json, so that a BASE.json present means
-// the pair is complete. Returns the paths written, JSON first.
+// Writes BASE.csv (if the result has a table) and BASE.json as one (write_atomically of both: both
+// contents are complete before the first rename, and a SIGINT, SIGTERM or SIGHUP never falls
+// between the renames), BASE.json last. Returns the paths written, JSON first.
 std::vector<std::filesystem::path> write_result_files(const std::filesystem::path& base, const CommandResult& result);
 // The same in `dir`: files `<base_name>.json` and `<base_name>.csv`.
 std::vector<std::filesystem::path> write_result_files(const Directory& dir, const std::string& base_name,
