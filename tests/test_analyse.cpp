@@ -480,9 +480,10 @@ TEST_CASE(
   CHECK(g["G_2_over_P_2_paper"]["n"] == 4);
 }
 
-TEST_CASE("analyse writes no SE, bootstrap SE or interval from fewer than five samples: B_grow test per group, "
-          "ΔZ identity per P0, the P† fit",
-          "[analyse]") {
+TEST_CASE(
+    "analyse writes no SE, bootstrap SE or interval from fewer than five samples: B_grow test per group, "
+    "ΔZ identity per P0, the P† fit",
+    "[analyse]") {
   // Three feedback groups of two runs with two targets each: 4 targets per group (no error bar),
   // 12 pooled (an error bar), and a P† fit over 3 values of P0 (no error bar).
   const fs::path dir = work_dir() / "few_tables", out = work_dir() / "few_tables_out";

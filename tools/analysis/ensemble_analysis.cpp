@@ -590,8 +590,8 @@ Json growth_bulk_json(const std::vector<const RunRow*>& rs, const BootstrapOptio
     j["n"] = b.n;
     j["median"] = io::number_or_null(b.estimate);
     j["se"] = error_bar ? io::number_or_null(b.se) : Json(nullptr);
-    j["ci95"] = error_bar ? Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)})
-                          : Json::array({nullptr, nullptr});
+    j["ci95"] =
+        error_bar ? Json::array({io::number_or_null(b.lo), io::number_or_null(b.hi)}) : Json::array({nullptr, nullptr});
     j["nonpositive_B_grow"] = c->nonpositive;
   }
   return j;
