@@ -426,6 +426,11 @@ TEST_CASE("analyse takes run directories or --tables, not both and not neither: 
       2);
 }
 
+// The columns of a hand-built runs.csv (the stored tables' layout).
+constexpr const char* kRunsHeader =
+    "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
+    "dphi_2_pred_diameter_sq,G_2\n";
+
 TEST_CASE(
     "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
     "fences on G_2 alone",
@@ -441,8 +446,7 @@ TEST_CASE(
   const std::vector<double> div_far{3, 4, 5, 6, 10, 12};
   {
     std::ofstream r(dir / "runs.csv");
-    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
-         "dphi_2_pred_diameter_sq,G_2\n";
+    r << kRunsHeader;
     std::ofstream t(dir / "targets.csv");
     t << "run,L,P0,seed,dphi,phi,N_div,below_phi2\n";
     for (int k = 0; k < 6; ++k) {
@@ -490,8 +494,7 @@ TEST_CASE(
   fs::create_directories(dir);
   {
     std::ofstream r(dir / "runs.csv");
-    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
-         "dphi_2_pred_diameter_sq,G_2\n";
+    r << kRunsHeader;
     std::ofstream t(dir / "targets.csv");
     t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,dZ_pred,lambda_c,B_grow,B\n";
     const char* P0s[] = {"0.01", "0.001", "0.0001"};
