@@ -297,9 +297,10 @@ void unlist_temporary(int slot) {
   if (slot >= 0) g_open_temporaries[static_cast<std::size_t>(slot)].dir_fd.store(-1);
 }
 
-// Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), so that
-// a temporary is created and listed for remove_open_temporaries() as one step: a signal that
-// arrives while open(2) creates the file would otherwise find it not yet listed.
+// Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), making
+// one step of what a stop must not split: a temporary's creation and its listing for
+// remove_open_temporaries() (a signal during open(2) would find it not yet listed), and the
+// renames of files written as one.
 class SignalsHeld {
  public:
   SignalsHeld() {
