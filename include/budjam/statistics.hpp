@@ -15,6 +15,10 @@ namespace budjam {
 
 // What a statistic is without the data it needs (and a missing value in a table of them).
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// No error bar, bootstrap or otherwise, and no verdict from fewer samples than this: an SE from 2–4
+// values is itself uncertain by 35–70 %, and a bootstrap of so few values has only a handful of
+// distinct resamples.
+inline constexpr std::size_t kMinSamplesForError = 5;
 
 // Arithmetic mean; NaN for no data.
 double mean(std::span<const double> x);

@@ -76,11 +76,9 @@ const std::map<std::string, std::string> kPinnedByModel{
     {"activeset", "where active-set steps take over they reach other minima than FIRE" + kJudgedByEnsembles},
     {"activetry", "a kept try of the active-set steps ends at another minimum than FIRE's" + kJudgedByEnsembles}};
 
-// Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp), and the
-// fewest seeds that give one a resolution: an SE of 2–4 values is itself uncertain by 35–70 %, so below
-// this an ensemble quantity has no resolution and takes no part in any front (it is not judged).
+// Quantities of the whole trajectory, judged over the ensemble of seeds (accuracy_sweep.hpp); from
+// fewer than kMinSamplesForError seeds one has no resolution and takes no part in any front.
 const std::set<std::string> kEnsembleQuantities{"phi_2"};
-constexpr std::size_t kMinEnsembleSeeds = 5;
 
 double error_of(const SweepRow& r, const std::string& q) {
   const auto it = r.err.find(q);
@@ -247,7 +245,7 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
       std::vector<double> d;
       for (double x : v)
         if (std::isfinite(x)) d.push_back(x);
-      row.resolution[q] = d.size() >= kMinEnsembleSeeds ? 2 * standard_error(d) : kNaN;
+      row.resolution[q] = d.size() >= kMinSamplesForError ? 2 * standard_error(d) : kNaN;
     }
     rows.push_back(row);
   };
@@ -340,7 +338,7 @@ std::vector<Group> groups_of(const std::vector<SweepRow>& rows) {
   return groups;
 }
 
-// An ensemble quantity without a resolution (fewer than kMinEnsembleSeeds seeds) is not judged: its
+// An ensemble quantity without a resolution (fewer than kMinSamplesForError seeds) is not judged: its
 // error is NaN here, which takes no part in a comparison (budjam/pareto.hpp).
 CostErrors cost_errors(const SweepRow& r, const std::vector<std::string>& quantities) {
   CostErrors c{r.cost, {}, {}};
@@ -627,7 +625,7 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
       if (const double res = resolution_of(r, q); !std::isnan(res))
         md << " ± " << fmt(res);
       else if (kEnsembleQuantities.count(q) && r.err.count(q) && !std::isnan(e))
-        md << " (" << r.n << " seeds < " << kMinEnsembleSeeds << ": not judged)";
+        md << " (" << r.n << " seeds < " << kMinSamplesForError << ": not judged)";
     }
     md << " | "
        << (r.is_reference       ? "reference"

@@ -320,10 +320,6 @@ std::vector<double> finite(std::vector<double> v) {
   return v;
 }
 
-// No error bar, bootstrap or otherwise, from fewer samples than this: an SE from 2–4 values is itself
-// uncertain by 35–70 %, and a bootstrap of so few values has only a handful of distinct resamples.
-constexpr std::size_t kMinSamplesForError = 5;
-
 Json mean_se_json(const std::vector<double>& v0) {
   const auto v = finite(v0);
   Json j;
