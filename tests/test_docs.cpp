@@ -1,9 +1,10 @@
 // The documentation names only what exists: every scene key written as `section.name` in a code
 // span or a shell block of README.md and docs/*.md is a row of the knob table, every
-// `budjam <subcommand>` there is a subcommand of the executable, and the tables of jamming searches
-// and observers are their registries'.
+// `budjam <subcommand>` there is a subcommand of the executable, the tables of jamming searches
+// and observers are their registries', and the checkpoint format named is the one written.
 #include "budjam/jamming.hpp"
 #include "budjam/scene_keys.hpp"
+#include "io/checkpoint.hpp"
 #include "scratch.hpp"
 
 #include <catch2/catch.hpp>
@@ -161,4 +162,15 @@ TEST_CASE("docs/growth.md's table of observers is the registry's, and each is sw
       CHECK(budjam::find_scene_key(keys) != nullptr);
   }
   CHECK(rows >= 7);
+}
+
+TEST_CASE("every checkpoint format the documentation names is the one the writer writes", "[docs]") {
+  const std::regex named("budjam-checkpoint ([0-9]+)");
+  std::size_t names = 0;
+  for (const Doc& d : documents())
+    for (std::sregex_iterator m(d.code.begin(), d.code.end(), named), end; m != end; ++m, ++names) {
+      INFO(d.name << ": " << m->str());
+      CHECK(std::stoi((*m)[1].str()) == budjam::io::kCheckpointVersion);
+    }
+  CHECK(names >= 1);  // docs/growth.md, "Checkpoints and resume"
 }

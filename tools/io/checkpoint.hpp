@@ -4,7 +4,8 @@
 //
 // A checkpoint is trusted only if all of these hold (else InputError "<file>:<line>: <problem>",
 // exit 2, nothing changed):
-//  - format `budjam-checkpoint 8`; its last line `checksum <FNV-1a 64 of everything before>`;
+//  - its first line `budjam-checkpoint <kCheckpointVersion>`, its last line
+//    `checksum <FNV-1a 64 of everything before>`;
 //  - the hash of the effective scene it was written with equals that of the scene resuming it
 //    (an edited scene.toml — growth.P0, a target, an observer — is refused);
 //  - every number is finite and in range, every counter consistent with the others and with
