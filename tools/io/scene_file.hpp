@@ -18,7 +18,7 @@ namespace budjam::io {
 //   "<source>: empty scene file (...)"                     (nothing but white space)
 //   "<source>:<line>:<col>: not valid UTF-8 (...)"         (checked before the TOML parser)
 //   "<source>:<line>:<col>: <TOML syntax problem>"
-//   "<source>:<line>:<col>: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps)"
+//   "<source>:<line>:<col>: growth.P00: unknown key (known in [growth]: P0, dt, dt_min, max_steps, ...)"
 //   "<source>:<line>:<col>: growth.dt: expected a number (got \"fast\")"
 //   "<source>: growth.P0: must be positive, or \"none\" for no feedback (got -0.001)"   (validate)
 Scene parse_scene(std::string_view toml_text, const std::string& source = "<scene>",
