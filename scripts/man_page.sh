@@ -15,7 +15,7 @@ trap 'rm -f "$include"' EXIT
     echo ".fi"
   done
   echo "[FILES]"
-  echo "Scene, packing, run-directory and export formats, the output convention (--out DIR for grow, analyse and accuracy; --out BASE writing BASE.json and BASE.csv, --json and --quiet for moduli, rigidity, dos and survival), exit codes: docs/files.md in the source tree; every column with its units: docs/columns.md."
+  echo "Scene, packing, run-directory and export formats, the output convention (--out DIR for grow, analyse and accuracy; --out BASE writing BASE.json (and BASE.csv for rigidity, dos and survival), --json and --quiet for moduli, rigidity, dos and survival), exit codes: docs/files.md in the source tree; every column with its units: docs/columns.md."
 } > "$include"
 help2man --locale=C.UTF-8 --no-info --no-discard-stderr --name "growing budding-cell packings, jamming and rigidity" \
   --section 1 --include "$include" --output "$out.tmp" "$exe"

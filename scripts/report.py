@@ -237,7 +237,7 @@ def main():
     ap.add_argument("--moduli", default="1")
     ap.add_argument("--dos", default="1")
     ap.add_argument("--survival", help="`budjam survival` JSON of the main L (default: TABLES/survival_main_L.json)")
-    ap.add_argument("--jamming", help="tables of the jamming ensembles (`make -f Makefile.analysis PRESET=jamming`); "
+    ap.add_argument("--jamming", help="tables of the jamming ensembles (`make -f Makefile.analysis PRESET=jamming analysis`); "
                                       "without them the jamming rows use the preset's own runs")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
