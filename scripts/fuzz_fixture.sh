@@ -3,8 +3,9 @@
 # checkpoint format: the run directory fuzz/fixtures/resume/ (a run of the harnesses' scene,
 # checkpoint_scene() in fuzz/harnesses.hpp, killed after a checkpoint of its jammed phase) and the
 # seeds fuzz/corpus/{checkpoint,resume}/{unjammed,jammed}.txt (its first checkpoint before jamming,
-# and the one the fixture holds); and the checkpoint reproducers fuzz/reproducers/checkpoint/*.txt,
-# each with its defect made again in the new jammed seed.
+# and the one the fixture holds), fuzz/corpus/checkpoint/bracket.txt (a checkpoint between two
+# trials of the bracket search, with its open bracket); and the checkpoint reproducers
+# fuzz/reproducers/checkpoint/*.txt, each with its defect made again in the new jammed seed.
 #   bash scripts/fuzz_fixture.sh [BUDJAM]   (default build/budjam)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -47,6 +48,25 @@ for corpus in checkpoint resume; do
   cp "$work/unjammed.txt" "fuzz/corpus/$corpus/unjammed.txt"
   cp fuzz/fixtures/resume/checkpoint.txt "fuzz/corpus/$corpus/jammed.txt"
 done
+# The bracket seed: the same run stopped by SIGTERM soon after each start and resumed, until a
+# signal lands between two trials of its search onto phi_J with both ends of the bracket kept.
+"$budjam" grow "$work/scene.toml" --out "$work/b" --quiet 2>/dev/null &
+pid=$!
+for ((k = 0; k < 5000; ++k)); do
+  read -r -t 0.00$((RANDOM % 10 + 1)) <> <(:) || true
+  kill -TERM $pid 2>/dev/null || true
+  { wait $pid; } 2>/dev/null || true
+  grep -q '^trial below ' "$work/b/checkpoint.txt" 2>/dev/null && break
+  [[ -f $work/b/summary.json ]] && { echo "fuzz_fixture: no signal landed inside the search" >&2; exit 1; }
+  if [[ -f $work/b/checkpoint.txt ]]; then
+    "$budjam" grow --resume "$work/b" --quiet 2>/dev/null &
+  else
+    "$budjam" grow "$work/scene.toml" --out "$work/b" --overwrite --quiet 2>/dev/null &
+  fi
+  pid=$!
+done
+grep -q '^trial below ' "$work/b/checkpoint.txt" || { echo "fuzz_fixture: no checkpoint inside the search" >&2; exit 1; }
+cp "$work/b/checkpoint.txt" fuzz/corpus/checkpoint/bracket.txt
 echo "fuzz_fixture: $(grep -c . fuzz/fixtures/resume/steps.csv.partial) rows of steps.csv;" \
      "checkpoint at $(sed -n 's/^state \([a-z]*\) [^ ]* [^ ]* [^ ]* \([0-9]*\) .*/\1, step \2/p' fuzz/fixtures/resume/checkpoint.txt)" >&2
 # The checkpoint reproducers, each its defect made again in the new jammed seed.

@@ -629,19 +629,21 @@ struct GrowthDriver::Impl {
     }
     switch (verdict) {
       case TrialVerdict::rejected:
-      case TrialVerdict::deferred: reject(std::move(*trial)); return result.status;
+      case TrialVerdict::deferred: reject(std::move(*trial)); break;
       case TrialVerdict::below_window:
         ++result.rejected;
         search->keep_below(std::move(*trial));
-        return result.status;
+        break;
       case TrialVerdict::stop:
         field.invalidate();
         result.status = RunStatus::finished;
         finish_events();
         return result.status;
-      case TrialVerdict::accepted: break;
+      case TrialVerdict::accepted: take(std::move(*trial)); return result.status;
     }
-    take(std::move(*trial));
+    // The next attempt starts from the same accepted state, with the search's state (its open
+    // bracket) and Δt: a complete state too, so a long search can be checkpointed between trials.
+    if (result.status == RunStatus::running && checkpoint_hook) checkpoint_hook();
     return result.status;
   }
 

@@ -148,8 +148,8 @@ class Secant final : public JammingSearcher {
 
 // The bracket search: from the fixed accepted state, φ_J lies between the largest Δt whose trial
 // relaxed below the jamming window and the smallest whose trial overshot it. Opened by the first
-// overshoot, closed by the next accepted state: never open at a checkpoint. Lands targets above
-// jamming.
+// overshoot, closed by the next accepted state; a checkpoint between its trials keeps it open.
+// Lands targets above jamming.
 class BracketSearch final : public JammingSearcher {
  public:
   explicit BracketSearch(const Scene& scene)
@@ -228,18 +228,16 @@ class BracketSearch final : public JammingSearcher {
     if (phase_changed) open_.reset();
   }
 
+  JammingSearchState state() const override {
+    JammingSearchState s;
+    s.bracket = open_;
+    return s;
+  }
+  void restore(JammingSearchState s) override { open_ = std::move(s.bracket); }
+
  private:
-  struct End {
-    Trial trial;            // relaxed
-    JammingOvershoot line;  // its (φ, s = √(E/N), slope)
-  };
-  struct Bracket {
-    std::optional<Trial> below;  // the highest trial below the window, relaxed only to E/N < ε_U
-    std::vector<End> above;      // the two relaxed overshoots of smallest Δt and the deferred trials
-                                 // beneath them, smallest Δt first
-    int slow_trials = 0;         // consecutive trials that did not halve the bracket
-    double width = 0;            // Δt width of the bracket at the last trial
-  };
+  using End = BracketEnd;
+  using Bracket = OpenBracket;
 
   double dt_lo() const { return open_->below ? open_->below->dt : 0.0; }
   double phi_lo(double phi) const { return open_->below ? open_->below->packing.packing_fraction() : phi; }

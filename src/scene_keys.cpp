@@ -296,9 +296,10 @@ std::vector<SceneKey> make_keys() {
   e.push_back(flag("observe", "trials",
                    "log every relaxed growth attempt, accepted or not: the search onto phi_J (trials.csv)",
                    BUDJAM_FIELD(trials)));
-  e.push_back(integer("observe", "checkpoint_every",
-                      "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT still write one)", kZeroOrPositive,
-                      BUDJAM_FIELD(checkpoint_every)));
+  e.push_back(
+      integer("observe", "checkpoint_every",
+              "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT and marginal relaxations still write one)",
+              kZeroOrPositive, BUDJAM_FIELD(checkpoint_every)));
   e.push_back(
       integer("observe", "trajectory_every",
               "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",

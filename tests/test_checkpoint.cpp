@@ -84,6 +84,44 @@ const Snapshot& snapshot() {
   return snap;
 }
 
+// The first checkpoint taken inside the bracket search onto φ_J with both of its ends (a trial below
+// the window and one above it) and a trial that divided cells, in a run of the small scene in a
+// larger box (seed 7 is one whose search keeps such a trial: few of L = 6 do), and the
+// uninterrupted run's end.
+struct BracketSnapshot {
+  Scene scene = small_scene();
+  std::string text;
+  long attempts = 0;
+  RunResult final;
+  Packing final_packing;
+};
+const BracketSnapshot& bracket_snapshot() {
+  static const BracketSnapshot snap = [] {
+    BracketSnapshot s;
+    s.scene.L = 8.0;
+    s.scene.seed = 7;
+    const auto divided = [](const OpenBracket& b) {
+      return (b.below && !b.below->divisions.empty()) ||
+             std::ranges::any_of(b.above, [](const BracketEnd& e) { return !e.trial.divisions.empty(); });
+    };
+    GrowthDriver d(s.scene);
+    d.set_checkpoint_hook([&] {
+      if (!s.text.empty()) return;
+      const GrowthState state = d.state();
+      const auto& b = state.search.bracket;
+      if (b && b->below && !b->above.empty() && divided(*b)) {
+        s.text = format_checkpoint(s.scene, state, {});
+        s.attempts = state.attempts;
+      }
+    });
+    d.run();
+    s.final = d.result();
+    s.final_packing = d.packing();
+    return s;
+  }();
+  return snap;
+}
+
 // `text` with its checksum line recomputed: what a deliberate (not accidental) edit looks like.
 std::string resealed(const std::string& text) {
   const std::size_t at = text.rfind("checksum ");
@@ -125,6 +163,81 @@ TEST_CASE("a run resumed from a checkpoint text ends identical to the uninterrup
   CHECK(d.result().targets.back().phi == snap.final.targets.back().phi);
   CHECK(d.packing().q == snap.final_packing.q);
   CHECK(c.steps == snap.final_count);
+}
+
+TEST_CASE("a run resumed from a checkpoint taken between the trials of the bracket search ends identical",
+          "[checkpoint]") {
+  const BracketSnapshot& snap = bracket_snapshot();
+  REQUIRE_FALSE(snap.text.empty());
+  const Scene& scene = snap.scene;
+  GrowthDriver d(scene);
+  d.restore(parse_checkpoint(snap.text, "cp", scene, scene.seed, {}));
+  // The open bracket, its trials' packings, random streams and divisions read back exactly.
+  CHECK(format_checkpoint(scene, d.state(), {}) == snap.text);
+  CHECK(d.view().attempts == snap.attempts);
+  CHECK(d.phase() == Phase::unjammed);
+  d.run();
+  const RunResult &r = d.result(), &u = snap.final;
+  const auto counts = [](const RunResult& x) {
+    return std::vector<long>{x.accepted, x.rejected, x.search_trials, x.force_evaluations, x.divisions};
+  };
+  CHECK(counts(r) == counts(u));
+  REQUIRE(r.jamming);
+  CHECK(r.jamming->phi == u.jamming->phi);
+  CHECK(r.jamming->E_per_cell == u.jamming->E_per_cell);
+  CHECK(d.packing().q == snap.final_packing.q);
+  CHECK(d.packing().b == snap.final_packing.b);
+}
+
+TEST_CASE("an open bracket whose trials disagree with the accepted state or the window is refused at its line",
+          "[checkpoint]") {
+  const std::vector<std::string> lines = split_lines(bracket_snapshot().text);
+  const auto line_of = [&](const std::string& prefix) {
+    const auto at =
+        std::find_if(lines.begin(), lines.end(), [&](const std::string& l) { return l.rfind(prefix, 0) == 0; });
+    REQUIRE(at != lines.end());
+    return static_cast<std::size_t>(at - lines.begin());
+  };
+  const auto refused = [&](std::size_t k, const std::string& edited, const std::string& why) {
+    std::vector<std::string> v = lines;
+    v[k] = edited;
+    INFO(edited);
+    CHECK_THROWS_WITH(
+        parse_checkpoint(resealed(join_lines(v)), "cp", bracket_snapshot().scene, bracket_snapshot().scene.seed, {}),
+        Contains("cp:" + std::to_string(k + 1) + ":") && Contains(why));
+  };
+  const auto words = [&](std::size_t k) {
+    std::vector<std::string> w;
+    std::istringstream ws(lines[k]);
+    for (std::string x; ws >> x;) w.push_back(x);
+    return w;
+  };
+  const auto joined = [](const std::vector<std::string>& w) {
+    std::string l;
+    for (const auto& x : w) l += (l.empty() ? "" : " ") + x;
+    return l;
+  };
+  const std::size_t below = line_of("trial below "), above = line_of("trial above ");
+  std::vector<std::string> w = words(below);
+  w[3] = "1";  // E/N of the lower end far above the window
+  refused(below, joined(w), "the lower end of the bracket is not below the window");
+  w = words(above);
+  w[3] = "0";  // E/N of an upper end below the window
+  refused(above, joined(w), "an upper end of the bracket is below the window");
+  w = words(above);
+  w[9] = "0.5";  // its line's φ is not the trial's
+  refused(above, joined(w), "overshoot phi");
+  w = words(above);
+  w[2] = words(below)[2];  // its Δt not above the lower end's
+  refused(above, joined(w), "increasing dt");
+  w = words(above);
+  w[6] = std::to_string(std::stoul(w[6]) + 1);  // a cell more than its divisions make
+  refused(above, joined(w), "divisions make");
+  // Under another search, or when jammed, no bracket is open.
+  Scene secant = bracket_snapshot().scene;
+  secant.search = JammingSearch::secant;
+  CHECK_THROWS_WITH(parse_checkpoint(bracket_snapshot().text, "cp", secant, secant.seed, {}),
+                    Contains("scene.toml has changed"));
 }
 
 TEST_CASE("a run under the paper's phi_2 (no tagged bud left) resumes from a checkpoint past phi_2 unchanged",
@@ -319,62 +432,66 @@ TEST_CASE("any accidental change of a checkpoint is refused by its checksum, nam
 TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-checked field by field", "[checkpoint]") {
   // Every field of every line is replaced by values that break a range, a type or a relation;
   // each edit must be refused with InputError naming file and line, or give a state the driver
-  // can continue from — never another exception, never a crash or a hang.
-  const Snapshot& snap = snapshot();
-  const std::vector<std::string> lines = split_lines(snap.text);
-  const std::vector<std::string> values{"",
-                                        "x",
-                                        "-1",
-                                        "0",
-                                        "1e308",
-                                        "nan",
-                                        "inf",
-                                        "9223372036854775807",
-                                        "-9223372036854775808",
-                                        "99999999999999999999",
-                                        "0.5",
-                                        "\x1b[2J"};
-  long refused = 0, accepted = 0;
-  for (std::size_t k = 1; k + 1 < lines.size(); ++k) {  // not the magic, not the checksum
-    std::vector<std::string> fields;
-    std::istringstream ws(lines[k]);
-    for (std::string w; ws >> w;) fields.push_back(w);
-    if (lines[k].rfind("rng ", 0) == 0) fields.resize(3);  // 313 numbers of one kind: a few suffice
-    for (std::size_t f = 0; f < fields.size(); ++f)
-      for (const std::string& val : values) {
-        std::vector<std::string> w;
-        std::istringstream again(lines[k]);
-        for (std::string x; again >> x;) w.push_back(x);
-        w[f] = val;
-        std::string line;
-        for (std::size_t i = 0; i < w.size(); ++i) line += (i ? " " : "") + w[i];
-        std::vector<std::string> v = lines;
-        v[k] = line;
-        const std::string text = resealed(join_lines(v));
-        Scene scene = small_scene();
-        Counter c;
-        std::vector<Observer*> obs{&c};
-        INFO("line " << k + 1 << " field " << f + 1 << " = '" << io::escape_control(val) << "'");
-        try {
-          GrowthState s = parse_checkpoint(text, "cp", scene, 3, obs);
-          // One growth attempt from the accepted state, with a short FIRE budget (an edited
-          // coordinate can leave overlaps that take long to relax; ending unconverged is fine).
-          Scene quick = scene;
-          quick.fire.max_iterations = 200;
-          GrowthDriver d(quick);
-          d.add_observer(c);
-          d.restore(std::move(s));
-          d.advance();
-          ++accepted;
-        } catch (const InputError& e) {
-          const std::string m = e.what();
-          CHECK(m.rfind("cp:", 0) == 0);
-          CHECK(m.find('\x1b') == std::string::npos);
-          ++refused;
+  // can continue from — never another exception, never a crash or a hang. Two checkpoints: one
+  // past the first target (with an observer's section), one inside the bracket search (its trials).
+  for (const bool bracket : {false, true}) {
+    const std::vector<std::string> lines = split_lines(bracket ? bracket_snapshot().text : snapshot().text);
+    const std::vector<std::string> values{"",
+                                          "x",
+                                          "-1",
+                                          "0",
+                                          "1e308",
+                                          "nan",
+                                          "inf",
+                                          "9223372036854775807",
+                                          "-9223372036854775808",
+                                          "99999999999999999999",
+                                          "0.5",
+                                          "\x1b[2J"};
+    long refused = 0, accepted = 0;
+    for (std::size_t k = 1; k + 1 < lines.size(); ++k) {  // not the magic, not the checksum
+      std::vector<std::string> fields;
+      std::istringstream ws(lines[k]);
+      for (std::string w; ws >> w;) fields.push_back(w);
+      if (lines[k].rfind("rng ", 0) == 0) fields.resize(3);  // 313 numbers of one kind: a few suffice
+      for (std::size_t f = 0; f < fields.size(); ++f)
+        for (const std::string& val : values) {
+          std::vector<std::string> w;
+          std::istringstream again(lines[k]);
+          for (std::string x; again >> x;) w.push_back(x);
+          w[f] = val;
+          std::string line;
+          for (std::size_t i = 0; i < w.size(); ++i) line += (i ? " " : "") + w[i];
+          std::vector<std::string> v = lines;
+          v[k] = line;
+          const std::string text = resealed(join_lines(v));
+          const Scene scene = bracket ? bracket_snapshot().scene : small_scene();
+          Counter c;
+          std::vector<Observer*> obs;
+          if (!bracket) obs.push_back(&c);
+          INFO((bracket ? "bracket checkpoint, " : "")
+               << "line " << k + 1 << " field " << f + 1 << " = '" << io::escape_control(val) << "'");
+          try {
+            GrowthState s = parse_checkpoint(text, "cp", scene, scene.seed, obs);
+            // One growth attempt from the accepted state, with a short FIRE budget (an edited
+            // coordinate can leave overlaps that take long to relax; ending unconverged is fine).
+            Scene quick = scene;
+            quick.fire.max_iterations = 200;
+            GrowthDriver d(quick);
+            for (Observer* o : obs) d.add_observer(*o);
+            d.restore(std::move(s));
+            d.advance();
+            ++accepted;
+          } catch (const InputError& e) {
+            const std::string m = e.what();
+            CHECK(m.rfind("cp:", 0) == 0);
+            CHECK(m.find('\x1b') == std::string::npos);
+            ++refused;
+          }
         }
-      }
+    }
+    INFO(refused << " refused, " << accepted << " accepted");
+    CHECK(refused > 1000);
+    CHECK(accepted > 0);  // e.g. a coordinate changed within its range: a valid state of another run
   }
-  INFO(refused << " refused, " << accepted << " accepted");
-  CHECK(refused > 1000);
-  CHECK(accepted > 0);  // e.g. a coordinate changed within its range: a valid state of another run
 }

@@ -376,6 +376,42 @@ TEST_CASE("SIGTERM and SIGINT write a checkpoint; the resumed run is byte-identi
   }
 }
 
+TEST_CASE("a signal inside the search onto phi_J checkpoints its open bracket; the resumed run is byte-identical",
+          "[grow_cli][.slow]") {
+  // No periodic checkpoints: the one resumed from is the signal's, taken between two trials.
+  const fs::path scene = small_scene("bracket", "[observe]\ncheckpoint_every = 0\ntrials = true\n", "[1e-3]");
+  const fs::path ref = work_dir() / "bracket_ref";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
+  bool inside = false;
+  for (int attempt = 0; attempt < 6 && !inside; ++attempt) {
+    const fs::path dir = work_dir() / ("bracket_" + std::to_string(attempt));
+    fs::remove_all(dir);
+    const pid_t pid = start_grow(scene, dir);
+    // The first overshoot of the jamming window opens the bracket (trials.csv: verdict rejected).
+    const auto t0 = std::chrono::steady_clock::now();
+    while (slurp(dir / "trials.csv.partial").find(",rejected,") == std::string::npos &&
+           !fs::exists(dir / "summary.json") && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    REQUIRE(WIFEXITED(status));
+    if (WEXITSTATUS(status) == 0) continue;  // finished before the signal
+    CHECK(WEXITSTATUS(status) == 143);
+    const std::string err = slurp(dir.string() + ".stderr");
+    INFO(err);
+    CHECK(err.find("checkpoint written; resume with") != std::string::npos);
+    inside = slurp(dir / "checkpoint.txt").find("\nbracket 1 ") != std::string::npos;
+    const Result r = grow("--resume " + q(dir) + " --quiet");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    for (const char* f : {"summary.json", "steps.csv", "divisions.csv", "bud_events.csv", "trials.csv",
+                          "packings/jammed.pack", "packings/target_0.pack"})
+      CHECK(slurp(dir / f) == slurp(ref / f));
+  }
+  CHECK(inside);  // the case this test is for arose
+}
+
 TEST_CASE("a signal as soon as the run directory exists still ends in a checkpoint", "[grow_cli][.slow]") {
   const fs::path scene = small_scene("early", "[observe]\ncheckpoint_every = 0\n");
   for (int k = 0; k < 8; ++k) {

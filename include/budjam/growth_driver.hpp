@@ -249,12 +249,11 @@ class Observer {
   // Checkpoints (tools/io/checkpoint.hpp): whatever the observer needs to continue after --resume
   // (e.g. the byte length of the files it appends to, so that rows written after the checkpoint
   // can be cut off; make them durable first, CsvLog::sync). save_state is called after all events
-  // of a checkpointed step; load_state gets exactly what it wrote (any text) and throws
-  // InputError if it does not fit. A `stateful` observer must find its section in a checkpoint
-  // (else the resume is refused); a stateless one (a progress display) may come and go.
-  // load_state only reads and checks: it changes nothing outside the observer, because the
-  // resume may still be refused; on_resumed() follows once the whole resume was accepted, and
-  // may then change what the observer keeps outside (cut its logs back).
+  // of a checkpointed attempt (growth_driver set_checkpoint_hook); load_state gets exactly what it wrote (any text) and
+  // throws InputError if it does not fit. A `stateful` observer must find its section in a checkpoint (else the resume
+  // is refused); a stateless one (a progress display) may come and go. load_state only reads and checks: it changes
+  // nothing outside the observer, because the resume may still be refused; on_resumed() follows once the whole resume
+  // was accepted, and may then change what the observer keeps outside (cut its logs back).
   virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
   virtual void load_state(std::istream&) {}
@@ -291,8 +290,8 @@ struct GrowthState {
   int episodes = 0;  // jamming episodes begun
   RunResult result;  // status `running`
   BudTracker buds;
-  Packing packing;  // the last accepted state
-  JammingSearchState search;
+  Packing packing;            // the last accepted state
+  JammingSearchState search;  // with the trials of an open bracket, between the trials of a search
 };
 
 // Extra knobs that are not part of a scene (tests use them).
@@ -316,9 +315,11 @@ class GrowthDriver {
   // Runs until the status is no longer `running`; emits Finished or Failed once.
   RunStatus run();
 
-  // Called after all events of every accepted step that does not end the run: the moments at
-  // which state() (with the observers' save_state) is a complete checkpoint. The caller decides
-  // which of them to keep (every k steps, every s seconds, on a signal).
+  // Called after every growth attempt that does not end the run, after its events: after an
+  // accepted step, and after a rejected trial (an overshoot, a trial below the window or a deferred
+  // one), from whose search state the next attempt goes on. These are the moments at which state()
+  // (with the observers' save_state) is a complete checkpoint. The caller decides which of them to
+  // keep (every k steps, after a costly trial, on a signal).
   void set_checkpoint_hook(std::function<void()> hook);
   // The state a checkpoint holds (after the first advance()).
   GrowthState state() const;

@@ -98,12 +98,31 @@ struct JammingOvershoot {
 // estimate; a second overshoot replaces it by a secant.
 JammingOvershoot overshoot_line(double phi, double E_per_cell, std::size_t N, double P, double L);
 
-// What the secant search carries from one accepted state to the next (a checkpoint stores it; the
-// other searches keep nothing across accepted states).
+// An upper end of the bracket search: a relaxed (or deferred) trial above the window and its line.
+struct BracketEnd {
+  Trial trial;
+  JammingOvershoot line;  // its (φ, s = √(E/N), slope)
+};
+
+// The bracket around φ_J in Δt from one fixed accepted state, while it is open: from the first
+// overshoot to the next accepted state.
+struct OpenBracket {
+  std::optional<Trial> below;     // the highest trial below the window, relaxed only to E/N < ε_U
+  std::vector<BracketEnd> above;  // the two relaxed overshoots of smallest Δt and the deferred trials
+                                  // beneath them, smallest Δt first
+  int slow_trials = 0;            // consecutive trials that did not halve the bracket
+  double width = 0;               // Δt width of the bracket at the last trial
+};
+
+// What a search carries between growth attempts, which a checkpoint stores: the secant search's
+// overshoots from one accepted state to the next, and the bracket search's open bracket (its kept
+// trials), so that a run interrupted inside a search resumes it where it was. Bisection keeps
+// nothing (the driver's Δt is halved).
 struct JammingSearchState {
-  std::vector<JammingOvershoot> overshoots;  // sorted by φ
-  int slow_trials = 0;                       // consecutive trials that did not halve the bracket around φ_J
-  double bracket_width = 0;                  // φ from the accepted state to the lowest overshoot at the last trial
+  std::vector<JammingOvershoot> overshoots;  // secant: sorted by φ
+  int slow_trials = 0;                       // secant: consecutive trials that did not halve the bracket around φ_J
+  double bracket_width = 0;            // secant: φ from the accepted state to the lowest overshoot at the last trial
+  std::optional<OpenBracket> bracket;  // bracket search, while open
 };
 
 // φ after growing the accepted state by a (scaled) Δt, divisions and their draws included: known

@@ -116,30 +116,51 @@ void run(const Options& o) {
     driver.restore(std::move(state));
   }
 
-  // Checkpoints every observe.checkpoint_every accepted steps, and at the first accepted state
-  // after SIGTERM or SIGINT, which then ends the run (resumable). A state that holds less than the
-  // run depends on (a kept Newton factor) is not saved: the run then resumes, exactly, from its last
-  // checkpoint.
-  std::optional<long> last_checkpoint;
-  if (resuming) last_checkpoint = driver.view().step;
+  // Checkpoints every observe.checkpoint_every accepted steps, after every growth attempt that was a
+  // marginal relaxation (more than kMarginalEvaluations force evaluations: the trials worth not
+  // repeating, hours each at 10⁵ cells, inside a search that may have no accepted state for hours),
+  // and at the first growth attempt after SIGTERM or SIGINT, which then ends the run (resumable). A
+  // state that holds less than the run depends on (a kept Newton factor) is not saved: the run then
+  // resumes, exactly, from its last checkpoint.
+  struct Moment {
+    long step, attempts;
+  };
+  const auto moment = [&] { return Moment{driver.view().step, driver.view().attempts}; };
+  const auto text = [](const Moment& m) {
+    return "growth attempt " + std::to_string(m.attempts) + " (step " + std::to_string(m.step) + ")";
+  };
+  std::optional<Moment> last_checkpoint;
+  if (resuming) last_checkpoint = moment();
+  // Force evaluations of the growth attempts, without the initial relaxation's.
+  const auto attempt_evaluations = [&] {
+    return driver.result().force_evaluations - driver.result().force_evaluations_initial;
+  };
+  long step_seen = driver.view().step, evaluations_seen = attempt_evaluations();
   driver.set_checkpoint_hook([&] {
-    const long step = driver.view().step;
+    const Moment now = moment();
+    // Not from the initial state, which no step produced (a checkpoint holds the step that made its
+    // accepted state): a search from it, if any, is saved from its first accepted step on.
+    if (now.step == 0) return;
+    const bool accepted = now.step != step_seen;
+    const bool marginal = attempt_evaluations() - evaluations_seen > kMarginalEvaluations;
+    step_seen = now.step;
+    evaluations_seen = attempt_evaluations();
     const int signal = cli::StopSignals::received();
-    if ((scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) || (signal && driver.state_is_complete())) {
+    const bool periodic = accepted && scene.checkpoint_every > 0 && now.step % scene.checkpoint_every == 0;
+    if (periodic || ((signal || marginal) && driver.state_is_complete())) {
       io::write_checkpoint(root, run_files::checkpoint, scene, driver.state(), observers);
-      last_checkpoint = step;
+      last_checkpoint = now;
     }
     if (!signal) return;
     const std::string stopped =
-        "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") + " at step " + std::to_string(step);
-    if (last_checkpoint == step)
+        "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") + " at " + text(now);
+    if (last_checkpoint && last_checkpoint->attempts == now.attempts)
       throw cli::Interrupted(signal,
                              stopped + ", checkpoint written; resume with: budjam grow --resume " + dir.string());
     const std::string why = " (a Newton factor kept in memory is not saved, so that state would not resume exactly)";
     if (last_checkpoint)
-      throw cli::Interrupted(signal, stopped + "; the checkpoint of step " + std::to_string(*last_checkpoint) +
-                                         " is kept" + why + "; resume from it with: budjam grow --resume " +
-                                         dir.string());
+      throw cli::Interrupted(signal, stopped + "; the checkpoint of " + text(*last_checkpoint) + " is kept" + why +
+                                         "; resume from it with: budjam grow --resume " + dir.string());
     throw cli::Interrupted(signal, stopped + "; no checkpoint yet" + why + "; start the run again with --overwrite");
   });
 

@@ -156,6 +156,27 @@ NetworkSummary read_network(const CheckpointText& in, const std::vector<std::str
   return n;
 }
 
+// One line per cell: x y θ b γ0 id parent.
+void write_cells(std::ostream& os, const Packing& p) {
+  for (std::size_t i = 0; i < p.size(); ++i)
+    os << num(p.x(i)) << ' ' << num(p.y(i)) << ' ' << num(p.theta(i)) << ' ' << num(p.b[i]) << ' ' << num(p.gamma0[i])
+       << ' ' << p.id[i] << ' ' << p.parent[i] << '\n';
+}
+
+// A trial kept by an open bracket: its header (an upper end with its overshoot line), its random
+// stream, its divisions and its cells. The box is the accepted packing's.
+void write_trial(std::ostream& os, std::string_view end, const Trial& t, const JammingOvershoot* line) {
+  const Packing& p = t.packing;
+  os << "trial " << end << ' ' << num(t.dt) << ' ' << num(t.E) << ' ' << to_string(t.start) << ' '
+     << (t.deferred ? 1 : 0) << ' ' << p.size() << ' ' << p.next_id << ' ' << t.divisions.size();
+  if (line) os << ' ' << num(line->phi) << ' ' << num(line->s) << ' ' << num(line->slope);
+  os << '\n' << "rng " << t.rng << '\n';
+  for (const Division& d : t.divisions)
+    os << "division " << d.mother_index << ' ' << d.daughter_index << ' ' << d.mother_id << ' ' << d.daughter_id << ' '
+       << num(d.x) << ' ' << num(d.y) << ' ' << num(d.theta) << ' ' << num(d.b) << '\n';
+  write_cells(os, p);
+}
+
 }  // namespace
 
 std::uint64_t fnv1a64(std::string_view bytes) {
@@ -216,9 +237,15 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   s.buds.save(os);
   const Packing& p = s.packing;
   os << "packing " << p.size() << ' ' << num(p.box.L) << ' ' << num(p.box.shear) << ' ' << p.next_id << '\n';
-  for (std::size_t i = 0; i < p.size(); ++i)
-    os << num(p.x(i)) << ' ' << num(p.y(i)) << ' ' << num(p.theta(i)) << ' ' << num(p.b[i]) << ' ' << num(p.gamma0[i])
-       << ' ' << p.id[i] << ' ' << p.parent[i] << '\n';
+  write_cells(os, p);
+  os << "bracket " << (s.search.bracket ? 1 : 0);
+  if (const auto& b = s.search.bracket) {
+    os << ' ' << b->slow_trials << ' ' << num(b->width) << ' ' << (b->below ? 1 : 0) << ' ' << b->above.size() << '\n';
+    if (b->below) write_trial(os, "below", *b->below, nullptr);
+    for (const BracketEnd& e : b->above) write_trial(os, "above", e.trial, &e.line);
+  } else {
+    os << '\n';
+  }
   for (Observer* o : observers) {
     std::ostringstream body;
     o->save_state(body);
@@ -267,6 +294,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {7, "the run counted the relaxed branches it followed (jamming.continuation)"},
     {8, "the run counted the stability losses its branches crossed (jamming.crossing_step)"},
     {9, "the run counted its active-set steps (minimiser.active_set_after)"},
+    {10, "a search onto phi_J was kept between its trials (the open bracket)"},
 };
 
 void read_version(CheckpointText& in) {
@@ -303,14 +331,18 @@ void read_seed(Parse& p, const Words& w) {
   p.s.seed = p.seed;
 }
 
-void read_rng(Parse& p, const Words& w) {
+Rng random_stream(const CheckpointText& in, const Words& w) {
   std::string words;
   for (const auto& x : w) words.append(x).push_back(' ');
   std::istringstream rs(words);
-  rs >> p.s.rng;
+  Rng rng;
+  rs >> rng;
   std::string rest;
-  if (!rs || (rs >> rest)) p.in.fail("rng: not the state of a mt19937_64 random stream");
+  if (!rs || (rs >> rest)) in.fail("rng: not the state of a mt19937_64 random stream");
+  return rng;
 }
+
+void read_rng(Parse& p, const Words& w) { p.s.rng = random_stream(p.in, w); }
 
 void read_state(Parse& p, const Words& w) {
   CheckpointText& in = p.in;
@@ -518,19 +550,9 @@ void read_buds(Parse& p, const Words& w) {
   }
 }
 
-void read_packing(Parse& p, const Words& w) {
-  CheckpointText& in = p.in;
-  const Scene& scene = p.scene;
-  const std::size_t cells_cap = p.cells_cap();
-  const std::size_t n = in.count_of(w[0], "cells", cells_cap);
-  if (n == 0) in.fail("packing: no cells");
-  Packing& pk = p.s.packing;
-  pk.box.L = in.positive(w[1], "L");
-  if (pk.box.L != scene.L) in.fail("L: does not match the scene's box.L");
-  pk.box.shear = in.real(w[2], "shear");
-  if (pk.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
-  const std::int64_t next_id =
-      in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
+// `n` cells (ids below next_id, unique) into `pk`, whose box is set, each obeying the physical rules.
+std::unordered_set<std::int64_t> read_cells(CheckpointText& in, const Scene& scene, std::size_t n, std::int64_t next_id,
+                                            Packing& pk) {
   std::unordered_set<std::int64_t> ids;
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = in.next("", 7);
@@ -546,8 +568,128 @@ void read_packing(Parse& p, const Words& w) {
   }
   pk.next_id = next_id;
   if (const auto problem = box_problem(pk, scene.skin)) in.fail(*problem);
+  return ids;
+}
+
+void read_packing(Parse& p, const Words& w) {
+  CheckpointText& in = p.in;
+  const Scene& scene = p.scene;
+  const std::size_t cells_cap = p.cells_cap();
+  const std::size_t n = in.count_of(w[0], "cells", cells_cap);
+  if (n == 0) in.fail("packing: no cells");
+  Packing& pk = p.s.packing;
+  pk.box.L = in.positive(w[1], "L");
+  if (pk.box.L != scene.L) in.fail("L: does not match the scene's box.L");
+  pk.box.shear = in.real(w[2], "shear");
+  if (pk.box.shear != 0) in.fail("shear: a growing packing is never sheared (expected 0)");
+  const std::int64_t next_id =
+      in.integer(w[3], "next id", static_cast<std::int64_t>(n), static_cast<std::int64_t>(cells_cap));
+  const std::unordered_set<std::int64_t> ids = read_cells(in, scene, n, next_id, pk);
   for (const auto& t : p.where.buds)
     if (!ids.count(t.id)) in.fail_at(t.line, "bud id " + std::to_string(t.id) + ": no cell of the packing has it");
+}
+
+// The cells of an open bracket's trial, grown from the accepted packing: the same cells first
+// (a dividing mother keeps its index and id), then one daughter per division, in order.
+Trial read_trial(Parse& p, const Words& w, bool upper, JammingOvershoot* line) {
+  CheckpointText& in = p.in;
+  const Packing& accepted = p.s.packing;
+  const std::size_t header = in.line();
+  Trial t;
+  t.dt = in.positive(w[1], "trial dt");
+  t.E = in.real(w[2], "trial E/N");
+  if (!(t.E >= 0)) in.fail("trial E/N: must be >= 0");
+  if (w[3] == to_string(TrialStart::accepted_state))
+    t.start = TrialStart::accepted_state;
+  else if (w[3] == to_string(TrialStart::lowest_overshoot))
+    t.start = TrialStart::lowest_overshoot;
+  else
+    in.fail("trial start: expected accepted_state or lowest_overshoot, found '" + std::string(w[3]) + "'");
+  t.deferred = in.flag(w[4], "deferred");
+  const std::size_t cap = max_cells(p.scene);
+  const std::size_t n = in.count_of(w[5], "trial cells", cap);
+  const std::size_t born = in.count_of(w[7], "trial divisions", cap);
+  if (n != accepted.size() + born)
+    in.fail("trial cells: " + std::to_string(n) + ", but the accepted packing's " + std::to_string(accepted.size()) +
+            " and " + std::to_string(born) + " divisions make " + std::to_string(accepted.size() + born));
+  const std::int64_t next_id = in.integer(w[6], "trial next id", accepted.next_id + static_cast<std::int64_t>(born),
+                                          accepted.next_id + static_cast<std::int64_t>(born));
+  const JammingWindow window = jamming_window(p.scene);
+  if (upper) {
+    line->phi = in.positive(w[8], "overshoot phi");
+    line->s = in.real(w[9], "overshoot sqrt(E/N)");
+    line->slope = in.real(w[10], "overshoot slope");
+    if (!(line->slope >= 0)) in.fail("overshoot slope: must be >= 0");
+    if (window.side(t.E) == WindowSide::below) in.fail("trial E/N: an upper end of the bracket is below the window");
+    if (line->s != std::sqrt(t.E)) in.fail("overshoot sqrt(E/N): not the square root of the trial's E/N");
+  } else {
+    if (t.deferred) in.fail("deferred: the lower end of the bracket is relaxed");
+    if (window.side(t.E) != WindowSide::below)
+      in.fail("trial E/N: the lower end of the bracket is not below the window");
+  }
+  t.rng = random_stream(in, in.next("rng", -1));
+  for (std::size_t k = 0; k < born; ++k) {
+    const auto d_w = in.next("division", 8);
+    Division d;
+    d.daughter_index = in.count_of(d_w[1], "daughter index", n);
+    if (d.daughter_index != accepted.size() + k)
+      in.fail("daughter index: expected " + std::to_string(accepted.size() + k) + " (daughters are appended in order)");
+    d.mother_index = in.count_of(d_w[0], "mother index", d.daughter_index - 1);
+    d.mother_id = in.integer(d_w[2], "mother id", 0, next_id - 1);
+    d.daughter_id = in.integer(d_w[3], "daughter id", 0, next_id - 1);
+    d.x = in.real(d_w[4], "x"), d.y = in.real(d_w[5], "y"), d.theta = in.real(d_w[6], "theta");
+    d.b = in.real(d_w[7], "b");
+    t.divisions.push_back(d);
+  }
+  t.packing.box = accepted.box;
+  read_cells(in, p.scene, n, next_id, t.packing);
+  const Packing& q = t.packing;
+  for (std::size_t i = 0; i < accepted.size(); ++i)
+    if (q.id[i] != accepted.id[i])
+      in.fail_at(header + 2 + born + i, "id: not that of the accepted packing's cell " + std::to_string(i));
+  for (std::size_t k = 0; k < born; ++k) {
+    const Division& d = t.divisions[k];
+    if (q.id[d.mother_index] != d.mother_id || q.id[d.daughter_index] != d.daughter_id ||
+        q.parent[d.daughter_index] != d.mother_id)
+      in.fail_at(header + 2 + k, "division: the trial's cells do not record it (ids and parent)");
+  }
+  if (upper && line->phi != q.packing_fraction())
+    in.fail_at(header, "overshoot phi: not the packing fraction of the trial");
+  return t;
+}
+
+// An open bracket (the bracket search between two trials): its lower end, then its upper ends by
+// increasing Δt, all from the accepted state, the accepted state unjammed.
+void read_bracket(Parse& p, const Words& w) {
+  CheckpointText& in = p.in;
+  const bool open = record_flag(in, w, "bracket");
+  check_record_size(in, w, "bracket", open, 5);
+  if (!open) return;
+  if (p.scene.search != JammingSearch::bracket) in.fail("bracket: the scene's jamming.search is not bracket");
+  if (p.s.phase != Phase::unjammed) in.fail("bracket: open while jammed (a bracket searches for phi_J)");
+  OpenBracket b;
+  b.slow_trials = static_cast<int>(in.integer(w[1], "slow trials", 0, 2));
+  b.width = in.real(w[2], "bracket width");
+  if (!(b.width >= 0)) in.fail("bracket width: must be >= 0");
+  const bool below = in.flag(w[3], "lower end");
+  const std::size_t ends = in.count_of(w[4], "upper ends", static_cast<std::size_t>(p.s.attempts));
+  if (!below && ends == 0) in.fail("bracket: neither a lower nor an upper end");
+  if (below) {
+    const auto t_w = in.next("trial", 8);
+    if (t_w[0] != "below") in.fail("trial: expected the lower end ('trial below ...')");
+    b.below = read_trial(p, t_w, false, nullptr);
+  }
+  for (std::size_t k = 0; k < ends; ++k) {
+    const auto t_w = in.next("trial", 11);
+    if (t_w[0] != "above") in.fail("trial: expected an upper end ('trial above ...')");
+    const std::size_t header = in.line();
+    BracketEnd e;
+    e.trial = read_trial(p, t_w, true, &e.line);
+    const double lower = k ? b.above.back().trial.dt : (b.below ? b.below->dt : 0.0);
+    if (!(e.trial.dt > lower)) in.fail_at(header, "trial dt: the bracket's ends are not in increasing dt");
+    b.above.push_back(std::move(e));
+  }
+  p.s.search.bracket = std::move(b);
 }
 
 // The lines between the header and the observer sections, in the order format_checkpoint writes
@@ -574,6 +716,7 @@ constexpr LineKind kLineKinds[] = {
     {"unjammings", 1, read_unjammings},
     {"buds", 2, read_buds},
     {"packing", 4, read_packing},
+    {"bracket", -1, read_bracket},
 };
 
 // The observer sections up to the line `end`, each observer named once.

@@ -25,7 +25,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 10;
+inline constexpr int kCheckpointVersion = 11;
 
 // Where parse_checkpoint found the records that other files can confirm (1-based lines), so that
 // a disagreement names the checkpoint's line.
