@@ -240,6 +240,27 @@ TEST_CASE("an open bracket whose trials disagree with the accepted state or the 
                     Contains("scene.toml has changed"));
 }
 
+TEST_CASE("checkpoints fall on every k-th accepted step, after a marginal relaxation and on a signal", "[checkpoint]") {
+  // Steps 0 (the initial state), 1, 1 (a rejected trial), 2, ...; the force evaluations so far.
+  CheckpointSchedule every2(2, 0, 0);
+  CHECK_FALSE(every2.due(0, kMarginalEvaluations + 1, true, true));   // the initial state: never
+  CHECK(every2.due(1, kMarginalEvaluations + 1, false, true));        // the initial state's attempts count here
+  CHECK(every2.due(2, kMarginalEvaluations + 2, false, false));       // periodic: complete by construction
+  CHECK_FALSE(every2.due(2, kMarginalEvaluations + 3, false, true));  // a rejected trial at step 2: not again
+  // A marginal relaxation, accepted or not, when the state is complete.
+  CHECK(every2.due(2, 2 * kMarginalEvaluations + 4, false, true));
+  CHECK_FALSE(every2.due(3, 3 * kMarginalEvaluations + 5, false, false));
+  CHECK(every2.due(3, 4 * kMarginalEvaluations + 6, false, true));
+  CHECK_FALSE(every2.due(3, 5 * kMarginalEvaluations + 6, false, true));  // exactly kMarginalEvaluations: not
+  // A signal, when the state is complete.
+  CHECK(every2.due(3, 5 * kMarginalEvaluations + 7, true, true));
+  CHECK_FALSE(every2.due(5, 5 * kMarginalEvaluations + 8, true, false));
+  // observe.checkpoint_every = 0: no periodic ones.
+  CheckpointSchedule never(0, 10, 0);
+  CHECK_FALSE(never.due(20, 1, false, true));
+  CHECK(never.due(20, 2, true, true));
+}
+
 TEST_CASE("a run under the paper's phi_2 (no tagged bud left) resumes from a checkpoint past phi_2 unchanged",
           "[checkpoint]") {
   Scene scene = small_scene();

@@ -116,12 +116,9 @@ void run(const Options& o) {
     driver.restore(std::move(state));
   }
 
-  // Checkpoints every observe.checkpoint_every accepted steps, after every growth attempt that was a
-  // marginal relaxation (more than kMarginalEvaluations force evaluations: the trials worth not
-  // repeating, hours each at 10⁵ cells, inside a search that may have no accepted state for hours),
-  // and at the first growth attempt after SIGTERM or SIGINT, which then ends the run (resumable). A
-  // state that holds less than the run depends on (a kept Newton factor) is not saved: the run then
-  // resumes, exactly, from its last checkpoint.
+  // Checkpoints as io::CheckpointSchedule says; a signal then ends the run (resumable). A state that
+  // holds less than the run depends on (a kept Newton factor) is not saved: the run then resumes,
+  // exactly, from its last checkpoint.
   struct Moment {
     long step, attempts;
   };
@@ -135,23 +132,15 @@ void run(const Options& o) {
   const auto attempt_evaluations = [&] {
     return driver.result().force_evaluations - driver.result().force_evaluations_initial;
   };
-  long step_seen = driver.view().step, evaluations_seen = attempt_evaluations();
+  io::CheckpointSchedule schedule(scene.checkpoint_every, moment().step, attempt_evaluations());
   driver.set_checkpoint_hook([&] {
     const Moment now = moment();
-    // Not from the initial state, which no step produced (a checkpoint holds the step that made its
-    // accepted state): a search from it, if any, is saved from its first accepted step on.
-    if (now.step == 0) return;
-    const bool accepted = now.step != step_seen;
-    const bool marginal = attempt_evaluations() - evaluations_seen > kMarginalEvaluations;
-    step_seen = now.step;
-    evaluations_seen = attempt_evaluations();
     const int signal = cli::StopSignals::received();
-    const bool periodic = accepted && scene.checkpoint_every > 0 && now.step % scene.checkpoint_every == 0;
-    if (periodic || ((signal || marginal) && driver.state_is_complete())) {
+    if (schedule.due(now.step, attempt_evaluations(), signal != 0, driver.state_is_complete())) {
       io::write_checkpoint(root, run_files::checkpoint, scene, driver.state(), observers);
       last_checkpoint = now;
     }
-    if (!signal) return;
+    if (!signal || now.step == 0) return;  // a signal is honoured from the first accepted step on
     const std::string stopped =
         "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") + " at " + text(now);
     if (last_checkpoint && last_checkpoint->attempts == now.attempts)

@@ -188,6 +188,16 @@ std::uint64_t fnv1a64(std::string_view bytes) {
   return h;
 }
 
+bool CheckpointSchedule::due(long step, long evaluations, bool signal, bool complete) {
+  if (step == 0) return false;
+  const bool accepted = step != step_;
+  const bool marginal = evaluations - evaluations_ > kMarginalEvaluations;
+  step_ = step;
+  evaluations_ = evaluations;
+  const bool periodic = accepted && every_ > 0 && step % every_ == 0;
+  return periodic || ((signal || marginal) && complete);
+}
+
 std::uint64_t scene_hash(const Scene& scene) {
   Scene physics = scene;
   physics.threads = Scene{}.threads;

@@ -27,6 +27,25 @@ namespace budjam::io {
 
 inline constexpr int kCheckpointVersion = 11;
 
+// When `budjam grow` saves its state, asked after every growth attempt the driver's checkpoint hook
+// follows (docs/growth.md, "Checkpoints and resume"): at every `every`-th accepted step; after an
+// attempt that cost more than kMarginalEvaluations force evaluations (a marginal relaxation, hours
+// at 10⁵ cells and not worth repeating, inside a search that may have no accepted state for hours);
+// and on a signal. The last two only when the state is complete (GrowthDriver::state_is_complete:
+// the periodic steps always are). Never at the initial state (step 0), which no step produced.
+class CheckpointSchedule {
+ public:
+  // `every`: observe.checkpoint_every (0 = no periodic checkpoints); `step`, `evaluations`: as
+  // for due(), where the run starts (or resumes).
+  CheckpointSchedule(long every, long step, long evaluations) : every_(every), step_(step), evaluations_(evaluations) {}
+  // After a growth attempt: the accepted steps and the force evaluations of all growth attempts
+  // so far (not the initial relaxation's), whether a signal came, whether the state is complete.
+  bool due(long step, long evaluations, bool signal, bool complete);
+
+ private:
+  long every_, step_, evaluations_;
+};
+
 // Where parse_checkpoint found the records that other files can confirm (1-based lines), so that
 // a disagreement names the checkpoint's line.
 struct CheckpointLines {
