@@ -10,10 +10,19 @@ dir=$(sed -n "$((SLURM_ARRAY_TASK_ID + 1))p" "$runs")
 targets=()
 for t in $per_run; do targets+=("$dir/$t"); done
 
+# `budjam grow` stops at the end of the growth attempt it is in, with a checkpoint; one trial of a
+# marginal search of a large packing can outlast the grace, so the task waits at most half of it
+# and requeues anyway: the run then resumes from its last checkpoint (the periodic one, or the one
+# after its last marginal relaxation), and only the trial in progress is grown again.
 requeue() {
   echo "run_task: time limit near: stopping $dir and requeueing" >&2
   kill -TERM "$child" 2>/dev/null || true
-  wait "$child" || true
+  local waited=0
+  while kill -0 "$child" 2>/dev/null && ((waited < ${SLURM_GRACE:-120} / 2)); do
+    sleep 1
+    waited=$((waited + 1))
+  done
+  kill -0 "$child" 2>/dev/null && echo "run_task: $dir did not stop within ${waited} s; requeued from its last checkpoint" >&2
   scontrol requeue "${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}"
   exit 0
 }

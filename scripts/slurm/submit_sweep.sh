@@ -9,7 +9,9 @@
 # variables travel in MAKEFLAGS) is exported to the jobs. Knobs (environment):
 #   SLURM_SBATCH_OPTIONS  extra sbatch options for every job, e.g. "--partition=long --time=2:00:00"
 #   SLURM_MAX_PARALLEL    at most this many array tasks at once (default: no limit)
-#   SLURM_GRACE           seconds before the time limit at which a task is requeued (default 120)
+#   SLURM_GRACE           seconds before the time limit at which a task is stopped and requeued
+#                         (default 120; a run still in a growth attempt after half of it is requeued
+#                         from its last checkpoint)
 #   SLURM_WAIT=1          wait: a progress line every SLURM_POLL seconds (default 30), then exit
 #                         with the sweep's status; on failure, the last SLURM_LOG_LINES (default 15)
 #                         lines of each failed job's log. Without it the script returns once the
