@@ -249,10 +249,11 @@ class Observer {
   // Checkpoints (tools/io/checkpoint.hpp): whatever the observer needs to continue after --resume
   // (e.g. the byte length of the files it appends to, so that rows written after the checkpoint
   // can be cut off; make them durable first, CsvLog::sync). save_state is called after all events
-  // of a checkpointed attempt (growth_driver set_checkpoint_hook); load_state gets exactly what it wrote (any text) and
-  // throws InputError if it does not fit. A `stateful` observer must find its section in a checkpoint (else the resume
-  // is refused); a stateless one (a progress display) may come and go. load_state only reads and checks: it changes
-  // nothing outside the observer, because the resume may still be refused; on_resumed() follows once the whole resume
+  // of a checkpointed growth attempt (GrowthDriver::set_checkpoint_hook); load_state gets exactly
+  // what it wrote (any text) and throws InputError if it does not fit. A `stateful` observer must
+  // find its section in a checkpoint (else the resume is refused); a stateless one (a progress
+  // display) may come and go. load_state only reads and checks: it changes nothing outside the
+  // observer, because the resume may still be refused; on_resumed() follows once the whole resume
   // was accepted, and may then change what the observer keeps outside (cut its logs back).
   virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
