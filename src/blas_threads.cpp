@@ -3,7 +3,9 @@
 
 #include <dlfcn.h>
 
+#include <filesystem>
 #include <mutex>
+#include <sstream>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -46,6 +48,30 @@ SerialBlasHolders& serial_blas_holders() {
 }  // namespace
 
 std::string threaded_blas() { return openblas().present() ? "OpenBLAS" : ""; }
+
+std::string blas_library() {
+  Dl_info where{};
+  const void* gemm = dlsym(RTLD_DEFAULT, "dgemm_");
+  if (!gemm || !dladdr(gemm, &where) || !where.dli_fname) return "unknown";
+  // The alternatives' symlink (libblas.so.3) says nothing; the file it leads to names the BLAS.
+  std::error_code ec;
+  const std::filesystem::path canonical = std::filesystem::canonical(where.dli_fname, ec);
+  const std::string file = ec ? std::string(where.dli_fname) : canonical.string();
+  // OpenBLAS, itself or behind Debian's libblas.so.3 that forwards to it (a dependency, which dlsym
+  // on the library's handle also searches), says which version and kernel run.
+  using Text = char* (*)();
+  Text config = nullptr, core = nullptr;
+  if (void* library = dlopen(where.dli_fname, RTLD_LAZY | RTLD_NOLOAD)) {
+    config = reinterpret_cast<Text>(dlsym(library, "openblas_get_config"));
+    core = reinterpret_cast<Text>(dlsym(library, "openblas_get_corename"));
+    dlclose(library);  // only the reference taken above: the library stays loaded
+  }
+  if (!config || !core) return file;
+  std::istringstream words(config());  // "OpenBLAS 0.3.21 NO_LAPACKE DYNAMIC_ARCH ...": name, version, options
+  std::string name, version;
+  words >> name >> version;
+  return name + " " + version + ", " + core() + " kernel (" + file + ")";
+}
 
 int blas_threads() { return openblas().present() ? openblas().get() : 1; }
 

@@ -21,6 +21,12 @@ namespace budjam {
 
 // The BLAS loaded in this process, if its thread count can be held ("OpenBLAS"), else empty.
 std::string threaded_blas();
+// Which BLAS this process computes with, for a run's record: a factor's last bits depend on it and,
+// for an OpenBLAS built for several CPUs, on the kernel it chose for this one at load time (or that
+// OPENBLAS_CORETYPE named). The file that provides dgemm_, links resolved, with OpenBLAS's version
+// and kernel when it is OpenBLAS: "OpenBLAS 0.3.21, Haswell kernel (/usr/lib/.../libblas.so.3)";
+// "unknown" if no loaded library provides dgemm_.
+std::string blas_library();
 // The BLAS's thread count (1 for a BLAS without threads), and setting it (ignored there). For
 // tests and benchmarks; budjam's own BLAS calls are under a SerialBlas.
 int blas_threads();

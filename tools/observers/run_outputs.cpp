@@ -1,5 +1,6 @@
 #include "observers/run_outputs.hpp"
 
+#include "budjam/blas_threads.hpp"
 #include "io/packing_file.hpp"
 #include "io/text.hpp"
 #include "observers/observers.hpp"
@@ -183,6 +184,7 @@ Json summary_json(const GrowthDriver& driver) {
   j["message"] = r.message;
   j["scene"] = sc.name;
   j["seed"] = driver.seed();
+  j["blas"] = blas_library();  // the bits of every factorisation depend on it (docs/speed.md)
   j["L"] = sc.L;
   j["P0"] = sc.P0 ? Json(*sc.P0) : Json(nullptr);
   const auto& J = r.jamming;
