@@ -18,10 +18,10 @@ pid=$!
 # The run goes on in short bursts between SIGSTOP and SIGCONT, and its checkpoint is read while it
 # is stopped: so a checkpoint and the logs beside it belong to one moment, as a kill leaves them, and
 # the moment a checkpoint of each phase is written is not missed.
-phase() {  # the phase on the checkpoint's `state` line (its fifth), or nothing
+phase() {  # the phase on the checkpoint's `state` line (its sixth), or nothing
   local lines=()
-  [[ -f $work/run/checkpoint.txt ]] && mapfile -n 5 -t lines < "$work/run/checkpoint.txt"
-  local state=${lines[4]:-}
+  [[ -f $work/run/checkpoint.txt ]] && mapfile -n 6 -t lines < "$work/run/checkpoint.txt"
+  local state=${lines[5]:-}
   [[ $state == state\ * ]] && { state=${state#state }; echo "${state%% *}"; }
 }
 wait_for() {  # wait_for PHASE: returns with the run stopped at a checkpoint of PHASE

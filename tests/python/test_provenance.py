@@ -6,8 +6,11 @@ import os
 import pathlib
 import platform
 import re
-import sys
+import shutil
+import signal
 import subprocess
+import sys
+import time
 
 import pytest
 
@@ -61,3 +64,40 @@ def test_a_run_on_the_reference_blas_records_that_library(budjam_exe, tmp_path):
         pytest.skip("Debian's reference BLAS (libblas3) is not installed")
     blas = recorded_blas(budjam_exe, tmp_path / "run", LD_LIBRARY_PATH=str(reference[0].parent))
     assert blas == os.path.realpath(reference[0])
+
+
+def stopped_after_a_checkpoint(budjam_exe, out, env):
+    """A demo run under `env` stopped by SIGTERM (a checkpoint of its last complete state, exit 143)."""
+    for delay in (0.2, 0.1, 0.05, 0.02, 0.0):
+        shutil.rmtree(out, ignore_errors=True)
+        proc = subprocess.Popen([budjam_exe, "grow", DEMO, "--out", out, "--quiet"], env={**os.environ, **env},
+                                stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 60
+        while not (out / "steps.csv.partial").exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.001)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGTERM)
+        if proc.wait() == 128 + signal.SIGTERM and (out / "checkpoint.txt").exists():
+            return
+    pytest.fail("the demo run finished before every signal")
+
+
+@pytest.mark.skipif(platform.machine() != "x86_64", reason="OpenBLAS kernel names of x86-64")
+def test_a_resume_under_another_blas_kernel_says_so_and_one_under_the_same_does_not(budjam_exe, tmp_path):
+    if not recorded_blas(budjam_exe, tmp_path / "default").startswith("OpenBLAS "):
+        pytest.skip("the BLAS is not OpenBLAS")
+    run = tmp_path / "run"
+    stopped_after_a_checkpoint(budjam_exe, run, {"OPENBLAS_CORETYPE": "Prescott"})
+    for kernel in ("Prescott", "Nehalem"):
+        copy = tmp_path / kernel
+        shutil.copytree(run, copy)
+        r = subprocess.run([budjam_exe, "grow", "--resume", copy, "--quiet"], env={**os.environ,
+                           "OPENBLAS_CORETYPE": kernel}, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        notices = [line for line in r.stderr.splitlines() if "another BLAS" in line]
+        if kernel == "Prescott":
+            assert notices == []
+        else:
+            assert len(notices) == 1
+            assert "Prescott kernel" in notices[0] and "now OpenBLAS" in notices[0] and "Nehalem kernel" in notices[0]
+        assert f", {kernel} kernel (" in json.loads((copy / "summary.json").read_text())["blas"]

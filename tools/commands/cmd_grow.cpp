@@ -114,6 +114,13 @@ void run(const Options& o) {
     run_dir->remove_recorded_temporaries();
     for (Observer* obs : observers) obs->on_resumed();
     driver.restore(std::move(state));
+    if (const std::string blas = io::checkpoint_blas(); lines.blas != blas)
+      std::cerr << "budjam: grow: "
+                << io::one_line("resuming under another BLAS than the checkpoint was computed with (" + lines.blas +
+                                "; now " + blas +
+                                "): the run goes on, but its last bits can differ from an "
+                                "uninterrupted run's")
+                << std::endl;
   }
 
   // Checkpoints as io::CheckpointSchedule says; a signal then ends the run (resumable). A state that

@@ -1,5 +1,6 @@
 #include "io/checkpoint.hpp"
 
+#include "budjam/blas_threads.hpp"
 #include "budjam/growth.hpp"
 #include "budjam/packing_rules.hpp"
 #include "io/atomic_file.hpp"
@@ -198,6 +199,13 @@ bool CheckpointSchedule::due(long step, long evaluations, bool signal, bool comp
   return periodic || ((signal || marginal) && complete);
 }
 
+std::string checkpoint_blas() {
+  std::istringstream words(blas_library());
+  std::string line, word;
+  while (words >> word) line.append(line.empty() ? "" : " ").append(escape_control(word));
+  return line.empty() ? "unknown" : line;
+}
+
 std::uint64_t scene_hash(const Scene& scene) {
   Scene physics = scene;
   physics.threads = Scene{}.threads;
@@ -210,6 +218,7 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   os << kCheckpointMagic << ' ' << kCheckpointVersion << '\n';
   os << "scene " << hex64(scene_hash(scene)) << '\n';
   os << "seed " << s.seed << '\n';
+  os << "blas " << checkpoint_blas() << '\n';
   os << "rng " << s.rng << '\n';
   os << "state " << to_string(s.phase) << ' ' << num(s.dt) << ' ' << num(s.last_dt) << ' ' << num(s.last_log_scale)
      << ' ' << s.step << ' ' << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' '
@@ -305,6 +314,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {8, "the run counted the stability losses its branches crossed (jamming.crossing_step)"},
     {9, "the run counted its active-set steps (minimiser.active_set_after)"},
     {10, "a search onto phi_J was kept between its trials (the open bracket)"},
+    {11, "the checkpoint recorded the BLAS its run computed with"},
 };
 
 void read_version(CheckpointText& in) {
@@ -339,6 +349,10 @@ void read_seed(Parse& p, const Words& w) {
   if (w[0] != std::to_string(p.seed) || !parse_int64(w[0]))
     p.in.fail("seed " + std::string(w[0]) + " does not match the run's seed " + std::to_string(p.seed));
   p.s.seed = p.seed;
+}
+
+void read_blas(Parse& p, const Words& w) {
+  for (const auto& word : w) p.where.blas.append(p.where.blas.empty() ? "" : " ").append(word);
 }
 
 Rng random_stream(const CheckpointText& in, const Words& w) {
@@ -714,6 +728,7 @@ struct LineKind {
 constexpr LineKind kLineKinds[] = {
     {"scene", 1, read_scene},
     {"seed", 1, read_seed},
+    {"blas", -1, read_blas},
     {"rng", -1, read_rng},
     {"state", 9, read_state},
     {"counters", 6, read_counters},

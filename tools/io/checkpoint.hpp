@@ -25,7 +25,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 11;
+inline constexpr int kCheckpointVersion = 12;
 
 // When `budjam grow` saves its state, asked after every growth attempt the driver's checkpoint hook
 // follows (docs/growth.md, "Checkpoints and resume"): at every `every`-th accepted step; after an
@@ -47,8 +47,10 @@ class CheckpointSchedule {
 };
 
 // Where parse_checkpoint found the records that other files can confirm (1-based lines), so that
-// a disagreement names the checkpoint's line.
+// a disagreement names the checkpoint's line; and the BLAS the checkpoint was computed with
+// (checkpoint_blas), which a resume compares with its own.
 struct CheckpointLines {
+  std::string blas;
   std::size_t state = 0, counters = 0, jamming = 0, depletion = 0;
   std::vector<std::size_t> targets;  // one per target record
   struct Tag {
@@ -58,6 +60,11 @@ struct CheckpointLines {
   };
   std::vector<Tag> buds;
 };
+
+// The BLAS of this process (blas_library) as a checkpoint records it: one line, its words separated by
+// one space. A run resumed under another BLAS continues correctly, but not in the bits an
+// uninterrupted run would have had.
+std::string checkpoint_blas();
 
 // FNV-1a, 64 bit: the content checksum of a checkpoint and the hash of its scene.
 std::uint64_t fnv1a64(std::string_view bytes);
