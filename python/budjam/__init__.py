@@ -29,11 +29,12 @@ import os
 import pathlib
 
 from . import _budjam
-from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, read_packing,
+from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, blas, read_packing,
                       survival)
 
-__all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "__version__", "contacts",
-           "export", "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity", "spectrum", "survival"]
+__all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "__version__", "blas",
+           "contacts", "export", "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity",
+           "spectrum", "survival"]
 
 
 def _accepts_paths(function):

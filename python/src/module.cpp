@@ -6,6 +6,7 @@
 #include "analysis/moduli_report.hpp"
 #include "analysis/rigidity_report.hpp"
 #include "analysis/survival_report.hpp"
+#include "budjam/blas_threads.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/growth_driver.hpp"
@@ -344,6 +345,9 @@ class Growth {
 PYBIND11_MODULE(_budjam, m) {
   m.doc() = "budjam: growing budding-cell packings, jamming and rigidity (compiled core).";
   m.attr("__version__") = BUDJAM_VERSION;
+  m.def("blas", &blas_library,
+        "The BLAS this process computes with, as a run's summary.json records it (`blas`): results agree with "
+        "the command line's to the last bit under the same one.");
   // Messages as the command line prints them: one line, control bytes escaped, bounded in length.
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
   static py::exception<io::IoError> output_error(m, "OutputError", PyExc_OSError);

@@ -41,6 +41,10 @@ def test_version_is_the_command_lines(run_budjam):
     assert run_budjam("--version").stdout.split() == ["budjam", budjam.__version__]
 
 
+def test_blas_is_the_one_a_run_of_the_command_line_records(run_dir):
+    assert budjam.blas() == json.loads((run_dir / "summary.json").read_text())["blas"]
+
+
 @pytest.mark.parametrize("as_path", [str, pathlib.Path])
 def test_every_function_of_a_packing_accepts_its_path(as_path):
     p = budjam.read_packing(PACKING)
