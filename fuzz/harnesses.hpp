@@ -62,6 +62,7 @@ P0 = 1e-3
 targets = [1e-3, 1e-2]
 [observe]
 checkpoint_every = 20
+checkpoint_evaluations = 300
 )",
                                          "fuzz.toml");
   return s;

@@ -2,8 +2,8 @@
 # Regenerates what the checkpoint and resume fuzz harnesses start from, after a change of the
 # checkpoint format: the run directory fuzz/fixtures/resume/ (a run of the harnesses' scene,
 # checkpoint_scene() in fuzz/harnesses.hpp, killed after a checkpoint of its jammed phase) and the
-# seeds fuzz/corpus/{checkpoint,resume}/{unjammed,jammed}.txt (its first checkpoint before jamming,
-# and the one the fixture holds), fuzz/corpus/checkpoint/bracket.txt (a checkpoint between two
+# seeds fuzz/corpus/{checkpoint,resume}/{unjammed,relaxation,jammed}.txt (its first checkpoint before
+# jamming, its first inside a relaxation, and the one the fixture holds), fuzz/corpus/checkpoint/bracket.txt (a checkpoint between two
 # trials of the bracket search, with its open bracket); and the checkpoint reproducers
 # fuzz/reproducers/checkpoint/*.txt, each with its defect made again in the new jammed seed.
 #   bash scripts/fuzz_fixture.sh [BUDJAM]   (default build/budjam)
@@ -24,16 +24,26 @@ phase() {  # the phase on the checkpoint's `state` line (its sixth), or nothing
   local state=${lines[5]:-}
   [[ $state == state\ * ]] && { state=${state#state }; echo "${state%% *}"; }
 }
-wait_for() {  # wait_for PHASE: returns with the run stopped at a checkpoint of PHASE
+wait_for() {  # wait_for PHASE: returns with the run stopped at a checkpoint of PHASE, between two steps
   while true; do
     kill -STOP $pid 2>/dev/null || { echo "fuzz_fixture: the run ended before a checkpoint while $1" >&2; exit 1; }
-    [[ $(phase) == "$1" ]] && return
+    [[ $(phase) == "$1" ]] && grep -q '^relaxation 0$' "$work/run/checkpoint.txt" && return
     kill -CONT $pid
     read -r -t 0.002 <> <(:) || true
   done
 }
 wait_for unjammed
 cp "$work/run/checkpoint.txt" "$work/unjammed.txt"
+kill -CONT $pid
+# A checkpoint inside a relaxation (the scene's checkpoint_evaluations is small), before jamming.
+while true; do
+  kill -STOP $pid 2>/dev/null || { echo "fuzz_fixture: the run ended before a checkpoint inside a relaxation" >&2; exit 1; }
+  grep -q '^relaxation 1 ' "$work/run/checkpoint.txt" && break
+  [[ $(phase) == jammed ]] && { echo "fuzz_fixture: no checkpoint inside a relaxation before jamming" >&2; exit 1; }
+  kill -CONT $pid
+  read -r -t 0.002 <> <(:) || true
+done
+cp "$work/run/checkpoint.txt" "$work/relaxation.txt"
 kill -CONT $pid
 wait_for jammed
 rm -rf fuzz/fixtures/resume.new
@@ -46,17 +56,25 @@ rm -rf fuzz/fixtures/resume
 mv fuzz/fixtures/resume.new fuzz/fixtures/resume
 for corpus in checkpoint resume; do
   cp "$work/unjammed.txt" "fuzz/corpus/$corpus/unjammed.txt"
+  cp "$work/relaxation.txt" "fuzz/corpus/$corpus/relaxation.txt"
   cp fuzz/fixtures/resume/checkpoint.txt "fuzz/corpus/$corpus/jammed.txt"
 done
-# The bracket seed: the same run stopped by SIGTERM soon after each start and resumed, until a
-# signal lands between two trials of its search onto phi_J with both ends of the bracket kept.
+# The bracket seed: the same run stopped by SIGTERM soon after each start (once its logs exist) and
+# resumed, until a signal lands in its search onto phi_J with both ends of the bracket kept (in a
+# trial's relaxation, as a signal in the search mostly does: the state before the trial holds the
+# bracket).
+in_bracket() { grep -q '^trial below ' "$1" 2>/dev/null; }
 "$budjam" grow "$work/scene.toml" --out "$work/b" --quiet 2>/dev/null &
 pid=$!
 for ((k = 0; k < 5000; ++k)); do
-  read -r -t 0.00$((RANDOM % 10 + 1)) <> <(:) || true
+  for ((w = 0; w < 2000; ++w)); do
+    [[ -f $work/b/steps.csv.partial ]] && break
+    read -r -t 0.001 <> <(:) || true
+  done
+  read -r -t "$(printf '0.%03d' $((RANDOM % 40 + 5)))" <> <(:) || true  # 5-44 ms: a resume's start, a few trials
   kill -TERM $pid 2>/dev/null || true
   { wait $pid; } 2>/dev/null || true
-  grep -q '^trial below ' "$work/b/checkpoint.txt" 2>/dev/null && break
+  in_bracket "$work/b/checkpoint.txt" && break
   [[ -f $work/b/summary.json ]] && { echo "fuzz_fixture: no signal landed inside the search" >&2; exit 1; }
   if [[ -f $work/b/checkpoint.txt ]]; then
     "$budjam" grow --resume "$work/b" --quiet 2>/dev/null &
@@ -65,7 +83,7 @@ for ((k = 0; k < 5000; ++k)); do
   fi
   pid=$!
 done
-grep -q '^trial below ' "$work/b/checkpoint.txt" || { echo "fuzz_fixture: no checkpoint inside the search" >&2; exit 1; }
+in_bracket "$work/b/checkpoint.txt" || { echo "fuzz_fixture: no checkpoint inside the search" >&2; exit 1; }
 cp "$work/b/checkpoint.txt" fuzz/corpus/checkpoint/bracket.txt
 echo "fuzz_fixture: $(grep -c . fuzz/fixtures/resume/steps.csv.partial) rows of steps.csv;" \
      "checkpoint at $(sed -n 's/^state \([a-z]*\) [^ ]* [^ ]* [^ ]* \([0-9]*\) .*/\1, step \2/p' fuzz/fixtures/resume/checkpoint.txt)" >&2

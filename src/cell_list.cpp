@@ -67,6 +67,25 @@ bool NeighbourList::update(const Lobes& lobes, const Box& box) {
   return rebuild;
 }
 
+std::optional<std::string> NeighbourList::misfit(const Origin& o, const Lobes& lobes) const {
+  const std::size_t n = lobes.size();
+  if (o.x0.size() != n || o.y0.size() != n || o.x1.size() != n || o.y1.size() != n)
+    return "an origin of " + std::to_string(o.x0.size()) + " lobes for " + std::to_string(n) + " lobes";
+  // update() keeps d₁ + d₂ from the near list's build below the near skin, and from the pair list's
+  // build below the skin (with a margin for the rounding of the two sums).
+  if (!(closing_bound(lobes, o.x1, o.y1) < near_skin_))
+    return "the lobes moved further from the near list's build than its skin allows";
+  if (!(closing_bound(lobes, o.x0, o.y0) <= skin_ * (1 + 1e-12)))
+    return "the lobes moved further from the pair list's build than its skin allows";
+  return std::nullopt;
+}
+
+void NeighbourList::restore(const Origin& o, const Lobes& lobes, const Box& box) {
+  if (const auto problem = misfit(o, lobes)) throw std::invalid_argument("neighbour list: " + *problem);
+  build(Lobes{o.x0, o.y0, lobes.R}, box);
+  build_near(Lobes{o.x1, o.y1, lobes.R}, box);
+}
+
 void NeighbourList::build_near(const Lobes& lobes, const Box& box) {
   near_.clear();
   for (std::uint32_t k = 0; k < pairs_.size(); ++k) {

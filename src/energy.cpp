@@ -88,6 +88,21 @@ ForceField::ForceField(double skin, int threads) : threads_(resolve_threads(thre
 void ForceField::invalidate() { list_.invalidate(); }
 
 void ForceField::refresh(const Packing& p) {
+  place_lobes_of(p);
+  // The displacement test stays a pass of its own: folded into the lobe placement it was slower.
+  const long near_built = list_.near_rebuilds();
+  if (list_.update(lobes_, p.box)) find_pair_images(p.box, lobes_.x, lobes_.y);
+  if (list_.near_rebuilds() != near_built) gather_near_pairs();
+}
+
+void ForceField::restore_neighbours(const Packing& p, const NeighbourList::Origin& o) {
+  place_lobes_of(p);
+  list_.restore(o, lobes_, p.box);
+  find_pair_images(p.box, o.x0, o.y0);  // the images are found where the pair list was built
+  gather_near_pairs();
+}
+
+void ForceField::place_lobes_of(const Packing& p) {
   const std::size_t n = p.size();
   if (b_cached_.size() != n) {
     b_cached_.assign(n, -1.0);  // never a bud size: forces recomputation below
@@ -148,10 +163,6 @@ void ForceField::refresh(const Packing& p) {
   } else {
     for (std::size_t i = 0; i < n; ++i) place(i);
   }
-  // The displacement test stays a pass of its own: folded into the loop above it was slower.
-  const long near_built = list_.near_rebuilds();
-  if (list_.update(lobes_, p.box)) find_pair_images(p.box);
-  if (list_.near_rebuilds() != near_built) gather_near_pairs();
 }
 
 // The force loops run over the near list's pairs, copied out in order with their images so that
@@ -167,13 +178,13 @@ void ForceField::gather_near_pairs() {
   }
 }
 
-void ForceField::find_pair_images(const Box& box) {
+void ForceField::find_pair_images(const Box& box, const std::vector<double>& x, const std::vector<double>& y) {
   const auto& pairs = list_.pairs();
   const double inv_L = 1.0 / box.L;
   images_.resize(pairs.size());
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const auto [a, b] = pairs[k];
-    images_[k] = minimum_image_periods(box, inv_L, lobes_.x[a] - lobes_.x[b], lobes_.y[a] - lobes_.y[b]);
+    images_[k] = minimum_image_periods(box, inv_L, x[a] - x[b], y[a] - y[b]);
   }
 }
 

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace budjam {
 
@@ -49,7 +51,8 @@ double force_resolution(const Packing& p) {
   return 16.0 * std::numeric_limits<double>::epsilon() * kSpring * extent;
 }
 
-FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, NewtonWorkspace* newton_workspace) {
+FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, NewtonWorkspace* newton_workspace,
+                    const FireCheckpoints* checkpoints) {
   FireResult res;
   const std::size_t n = p.size();
   if (n == 0) {
@@ -57,7 +60,12 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     res.converged = true;
     return res;
   }
-  wrap_far_centroids(p);
+  const FireProgress* resume = checkpoints ? checkpoints->resume : nullptr;
+  if (resume && resume->v.size() != static_cast<Eigen::Index>(3 * n))
+    throw std::invalid_argument("minimise: a progress of " + std::to_string(resume->v.size() / 3) + " cells for " +
+                                std::to_string(n) + " cells");
+  // Resumed, the coordinates are the progress's: wrapped at the start, and moved only by FIRE since.
+  if (!resume) wrap_far_centroids(p);
 
   const Eigen::Index m = static_cast<Eigen::Index>(3 * n);
   std::vector<double> rg(n), inv_rg(n);
@@ -65,7 +73,7 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     rg[i] = p.dumbbell(i).gyration;
     inv_rg[i] = 1.0 / rg[i];
   }
-  const double tol = std::max(prm.force_tol, force_resolution(p));
+  const double tol = resume ? resume->tol : std::max(prm.force_tol, force_resolution(p));
   const double floor_total = prm.energy_floor * static_cast<double>(n);
 
   Eigen::VectorXd F(m), v = Eigen::VectorXd::Zero(m);
@@ -114,8 +122,9 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     return true;
   };
 
-  double U = field.evaluate(p, F);
-  ++res.evaluations;
+  if (resume) field.restore_neighbours(p, resume->neighbours);
+  double U = field.evaluate(p, F);  // a resumed minimisation counted this evaluation before its stop
+  if (!resume) ++res.evaluations;
   double fmax = scale_forces();
 
   double dt = prm.dt_start;
@@ -136,6 +145,29 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
   // Evaluations of undone tries: the schedule counts the others, so that FIRE's path after an undone
   // try is the path it takes without one.
   long undone = 0;
+  long first = 1;
+  if (resume) {
+    res = resume->so_far;
+    first = resume->iteration;
+    v = resume->v;
+    dt = resume->dt;
+    alpha = resume->alpha;
+    n_positive = resume->n_positive;
+    newton_below = resume->newton_below;
+    next_try = resume->next_try;
+    next_active_set = resume->next_active_set;
+    active_set_tries = resume->active_set_tries;
+    undone = resume->undone;
+  }
+  const long every = checkpoints ? checkpoints->every : 0;
+  long next_checkpoint = every > 0 ? res.evaluations + every : kNever;
+  auto offer_checkpoint = [&](long it) {
+    if (!checkpoints->save || (newton_workspace && newton_workspace->factored)) return;
+    if (res.evaluations < next_checkpoint && !(checkpoints->requested && checkpoints->requested())) return;
+    next_checkpoint = every > 0 ? res.evaluations + every : kNever;
+    checkpoints->save(p, FireProgress{res, it, v, dt, alpha, n_positive, tol, newton_below, next_try, next_active_set,
+                                      active_set_tries, undone, field.neighbours().origin()});
+  };
   // FIRE resumes from rest at the packing a second-order method left (the field is current for it).
   auto restart_fire = [&]() {
     U = field.evaluate(p, F);
@@ -154,7 +186,8 @@ FireResult minimise(Packing& p, ForceField& field, const FireParams& prm, Newton
     res.evaluations += ar.evaluations;
     return ar;
   };
-  for (long it = 1; !stopped(U, fmax); ++it) {
+  for (long it = first; !stopped(U, fmax); ++it) {
+    if (checkpoints) offer_checkpoint(it);
     if (res.evaluations - undone >= next_try) {
       next_try = kNever;
       const Eigen::VectorXd q0 = p.q, F0 = F;

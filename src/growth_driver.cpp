@@ -167,6 +167,25 @@ JammingOvershoot overshoot_of(const Trial& t, const ForceField& field) {
                         t.packing.box.L);
 }
 
+// The fields a checkpoint holds besides the seed and the search, from the driver to a GrowthState
+// or back (moved out of a non-const source).
+template <class To, class From>
+void transfer(To& to, From& from) {
+  to.rng = from.rng;
+  to.phase = from.phase;
+  to.dt = from.dt;
+  to.last_dt = from.last_dt;
+  to.last_log_scale = from.last_log_scale;
+  to.step = from.step;
+  to.attempts = from.attempts;
+  to.next_target = from.next_target;
+  to.divisions_since_jamming = from.divisions_since_jamming;
+  to.episodes = from.episodes;
+  to.result = std::move(from.result);
+  to.buds = std::move(from.buds);
+  to.packing = std::move(from.packing);
+}
+
 }  // namespace
 
 struct GrowthDriver::Impl {
@@ -218,6 +237,15 @@ struct GrowthDriver::Impl {
   Eigen::VectorXd force;
   bool final_emitted = false;
   std::function<void()> checkpoint_hook;
+  // Checkpoints inside relaxations (set_relaxation_checkpoints): the state before the attempt under
+  // way (when it can be saved), which of its relaxations is running, and a relaxation in progress
+  // restored from a checkpoint, for the next attempt to take up.
+  long relaxation_every = 0;
+  std::function<bool()> relaxation_requested;
+  std::function<void(const GrowthState&)> relaxation_save;
+  std::optional<GrowthState> before_attempt;
+  int relaxation_index = 0;
+  std::optional<RelaxationState> pending_relaxation;
 
   Impl(const Scene& s, const DriverOptions& o) : scene(s), window(jamming_window(s)), field(s.skin, s.threads) {
     validate(scene);
@@ -225,6 +253,14 @@ struct GrowthDriver::Impl {
     seed = o.seed ? *o.seed : scene.seed;
     rng.seed(seed);
     dt = scene.dt;
+  }
+
+  GrowthState public_state() const {
+    GrowthState s;
+    s.seed = seed;
+    transfer(s, *this);
+    s.search = search->state();
+    return s;
   }
 
   // U/N of `p` with a freshly built neighbour list, so that the list (and the order of the
@@ -256,7 +292,32 @@ struct GrowthDriver::Impl {
     FireParams run = params;
     const bool budgeted = budget > 0 && budget < params.max_iterations;
     if (budgeted) run.max_iterations = budget;
-    const FireResult fr = minimise(p, field, run, &newton);
+    const int index = relaxation_index++;
+    FireCheckpoints checkpoints;
+    if (pending_relaxation && pending_relaxation->index == index) {
+      const RelaxationState& r = *pending_relaxation;
+      if (r.attempts != attempts || r.q.size() != p.q.size())
+        throw InputError("checkpoint: its relaxation in progress (growth attempt " + std::to_string(r.attempts) + ", " +
+                         std::to_string(r.q.size() / 3) + " cells) is not the one this run makes (growth attempt " +
+                         std::to_string(attempts) + ", " + std::to_string(p.size()) + " cells)");
+      p.q = r.q;
+      Lobes lobes;
+      place_lobes(p, lobes);
+      if (const auto problem = field.neighbours().misfit(r.progress.neighbours, lobes))
+        throw InputError("checkpoint: its relaxation in progress does not fit its neighbour list: " + *problem);
+      checkpoints.resume = &r.progress;
+    }
+    if (before_attempt) {
+      checkpoints.every = relaxation_every;
+      checkpoints.requested = relaxation_requested;
+      checkpoints.save = [this, index](const Packing& at, const FireProgress& progress) {
+        GrowthState s = *before_attempt;
+        s.relaxation = RelaxationState{attempts, index, at.q, progress};
+        relaxation_save(s);
+      };
+    }
+    const FireResult fr = minimise(p, field, run, &newton, &checkpoints);
+    if (checkpoints.resume) pending_relaxation.reset();
     count(fr, phase == Phase::unjammed ? result.force_evaluations_search : result.force_evaluations_above_jamming);
     if (spent) *spent = budgeted && !fr.converged;
     if (!fr.converged && !budgeted)
@@ -612,7 +673,15 @@ struct GrowthDriver::Impl {
     }
     const long evaluations = result.force_evaluations, iterations = result.fire_iterations;
     const bool searching = phase == Phase::unjammed;
+    relaxation_index = 0;
+    before_attempt.reset();
+    if (relaxation_save && step > 0 && !newton.factored) before_attempt = public_state();
     std::optional<Trial> trial = make_trial();
+    before_attempt.reset();
+    if (pending_relaxation)
+      throw InputError("checkpoint: growth attempt " + std::to_string(pending_relaxation->attempts) +
+                       " made no relaxation " + std::to_string(pending_relaxation->index) +
+                       " to resume (was the checkpoint written by another build?)");
     if (!trial) return result.status;
     if (searching) ++result.search_trials;
     if (result.force_evaluations - evaluations > kMarginalEvaluations) ++result.marginal_relaxations;
@@ -703,41 +772,19 @@ RunStatus GrowthDriver::run() {
 }
 
 void GrowthDriver::set_checkpoint_hook(std::function<void()> hook) { impl_->checkpoint_hook = std::move(hook); }
+void GrowthDriver::set_relaxation_checkpoints(long every, std::function<bool()> requested,
+                                              std::function<void(const GrowthState&)> save) {
+  impl_->relaxation_every = every;
+  impl_->relaxation_requested = std::move(requested);
+  impl_->relaxation_save = std::move(save);
+}
 bool GrowthDriver::state_is_complete() const { return !impl_->newton.factored; }
 
 // ---- checkpoints ---------------------------------------------------------------------------------
 
-namespace {
-
-// The fields a checkpoint holds besides the seed and the search, from the driver to a GrowthState
-// or back (moved out of a non-const source).
-template <class To, class From>
-void transfer(To& to, From& from) {
-  to.rng = from.rng;
-  to.phase = from.phase;
-  to.dt = from.dt;
-  to.last_dt = from.last_dt;
-  to.last_log_scale = from.last_log_scale;
-  to.step = from.step;
-  to.attempts = from.attempts;
-  to.next_target = from.next_target;
-  to.divisions_since_jamming = from.divisions_since_jamming;
-  to.episodes = from.episodes;
-  to.result = std::move(from.result);
-  to.buds = std::move(from.buds);
-  to.packing = std::move(from.packing);
-}
-
-}  // namespace
-
 GrowthState GrowthDriver::state() const {
-  const Impl& d = *impl_;
-  if (!d.started) throw std::logic_error("GrowthDriver::state: the run has not started");
-  GrowthState s;
-  s.seed = d.seed;
-  transfer(s, d);
-  s.search = d.search->state();
-  return s;
+  if (!impl_->started) throw std::logic_error("GrowthDriver::state: the run has not started");
+  return impl_->public_state();
 }
 
 void GrowthDriver::restore(GrowthState s) {
@@ -749,6 +796,7 @@ void GrowthDriver::restore(GrowthState s) {
   transfer(d, s);
   d.result.status = RunStatus::running;
   d.search->restore(std::move(s.search));
+  d.pending_relaxation = std::move(s.relaxation);
   d.started = true;
   d.final_emitted = false;
   d.newton.clear();

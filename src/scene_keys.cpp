@@ -300,6 +300,10 @@ std::vector<SceneKey> make_keys() {
       integer("observe", "checkpoint_every",
               "accepted steps between checkpoints; 0 = none (SIGTERM/SIGINT and marginal relaxations still write one)",
               kZeroOrPositive, BUDJAM_FIELD(checkpoint_every)));
+  e.push_back(integer("observe", "checkpoint_evaluations",
+                      "force evaluations of one relaxation between checkpoints inside it; 0 = none (SIGTERM/SIGINT "
+                      "still write one)",
+                      kZeroOrPositive, BUDJAM_FIELD(checkpoint_evaluations)));
   e.push_back(
       integer("observe", "trajectory_every",
               "accepted steps between frames of trajectory.xyz (also at jamming, targets, phi_2, end); 0 = none",

@@ -122,6 +122,29 @@ const BracketSnapshot& bracket_snapshot() {
   return snap;
 }
 
+// The first checkpoint inside a relaxation (every 200 force evaluations of one), in the run of
+// bracket_snapshot's scene, and the uninterrupted run's end.
+struct RelaxationSnapshot {
+  Scene scene = bracket_snapshot().scene;
+  std::string text;
+  RunResult final;
+  Packing final_packing;
+};
+const RelaxationSnapshot& relaxation_snapshot() {
+  static const RelaxationSnapshot snap = [] {
+    RelaxationSnapshot s;
+    GrowthDriver d(s.scene);
+    d.set_relaxation_checkpoints(200, nullptr, [&](const GrowthState& state) {
+      if (s.text.empty()) s.text = format_checkpoint(s.scene, state, {});
+    });
+    d.run();
+    s.final = d.result();
+    s.final_packing = d.packing();
+    return s;
+  }();
+  return snap;
+}
+
 // `text` with its checksum line recomputed: what a deliberate (not accidental) edit looks like.
 std::string resealed(const std::string& text) {
   const std::size_t at = text.rfind("checksum ");
@@ -187,6 +210,59 @@ TEST_CASE("a run resumed from a checkpoint taken between the trials of the brack
   CHECK(r.jamming->E_per_cell == u.jamming->E_per_cell);
   CHECK(d.packing().q == snap.final_packing.q);
   CHECK(d.packing().b == snap.final_packing.b);
+}
+
+TEST_CASE("a run resumed from a checkpoint inside a relaxation ends identical to the uninterrupted run",
+          "[checkpoint]") {
+  const RelaxationSnapshot& snap = relaxation_snapshot();
+  REQUIRE(snap.text.find("\nrelaxation 1 ") != std::string::npos);
+  const Scene& scene = snap.scene;
+  GrowthDriver d(scene);
+  GrowthState state = parse_checkpoint(snap.text, "cp", scene, scene.seed, {});
+  REQUIRE(state.relaxation);
+  // Read back exactly: written again, the same bytes.
+  CHECK(format_checkpoint(scene, state, {}) == snap.text);
+  d.restore(std::move(state));
+  d.run();
+  const RunResult &r = d.result(), &u = snap.final;
+  const auto counts = [](const RunResult& x) {
+    return std::vector<long>{x.accepted,
+                             x.rejected,
+                             x.search_trials,
+                             x.force_evaluations,
+                             x.fire_iterations,
+                             x.divisions,
+                             x.marginal_relaxations,
+                             x.active_set_steps,
+                             x.newton_factorisations,
+                             x.saddles_relaxed};
+  };
+  CHECK(counts(r) == counts(u));
+  REQUIRE(r.jamming);
+  CHECK(r.jamming->phi == u.jamming->phi);
+  CHECK(r.jamming->E_per_cell == u.jamming->E_per_cell);
+  CHECK(d.packing().q == snap.final_packing.q);
+}
+
+TEST_CASE("a relaxation in progress that the resumed attempt does not make is refused", "[checkpoint]") {
+  const RelaxationSnapshot& snap = relaxation_snapshot();
+  const Scene& scene = snap.scene;
+  const GrowthState state = parse_checkpoint(snap.text, "cp", scene, scene.seed, {});
+  REQUIRE(state.relaxation);
+  const auto refused = [&](GrowthState s, const std::string& why) {
+    GrowthDriver d(scene);
+    d.restore(std::move(s));
+    CHECK_THROWS_WITH(d.advance(), Contains(why));
+  };
+  GrowthState other_index = state;
+  other_index.relaxation->index = 2;  // no attempt makes a third relaxation unless a saddle is relaxed on
+  refused(other_index, "made no relaxation 2");
+  GrowthState moved = state;
+  moved.relaxation->q[0] += 1.0;  // a cell moved beyond what its neighbour list allows
+  refused(moved, "does not fit its neighbour list");
+  GrowthState fewer = state;
+  fewer.relaxation->q.conservativeResize(fewer.relaxation->q.size() - 3);
+  refused(fewer, "is not the one this run makes");
 }
 
 TEST_CASE("an open bracket whose trials disagree with the accepted state or the window is refused at its line",
@@ -453,10 +529,27 @@ TEST_CASE("any accidental change of a checkpoint is refused by its checksum, nam
 TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-checked field by field", "[checkpoint]") {
   // Every field of every line is replaced by values that break a range, a type or a relation;
   // each edit must be refused with InputError naming file and line, or give a state the driver
-  // can continue from — never another exception, never a crash or a hang. Two checkpoints: one
-  // past the first target (with an observer's section), one inside the bracket search (its trials).
-  for (const bool bracket : {false, true}) {
-    const std::vector<std::string> lines = split_lines(bracket ? bracket_snapshot().text : snapshot().text);
+  // can continue from — never another exception, never a crash or a hang. Three checkpoints: one
+  // past the first target (with an observer's section), one inside the bracket search (its trials),
+  // one inside a relaxation.
+  for (const int source : {0, 1, 2}) {
+    const bool bracket = source > 0, relaxation = source == 2;
+    const std::vector<std::string> lines = split_lines(relaxation ? relaxation_snapshot().text
+                                                       : bracket  ? bracket_snapshot().text
+                                                                  : snapshot().text);
+    // Of a relaxation in progress its two header lines and the first row of each of its blocks.
+    std::vector<std::size_t> edited;
+    for (std::size_t k = 1; k + 1 < lines.size(); ++k) edited.push_back(k);  // not the magic, not the checksum
+    if (relaxation) {
+      const auto at =
+          std::ranges::find_if(lines, [](const std::string& l) { return l.rfind("relaxation 1 ", 0) == 0; });
+      REQUIRE(at != lines.end());
+      const std::size_t r = static_cast<std::size_t>(at - lines.begin());
+      std::istringstream words(*at);
+      std::string w;
+      for (int i = 0; i < 5; ++i) words >> w;  // relaxation 1 attempts index cells
+      edited = {r, r + 1, r + 2, r + 2 + std::stoul(w)};
+    }
     const std::vector<std::string> values{"",
                                           "x",
                                           "-1",
@@ -470,7 +563,7 @@ TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-check
                                           "0.5",
                                           "\x1b[2J"};
     long refused = 0, accepted = 0;
-    for (std::size_t k = 1; k + 1 < lines.size(); ++k) {  // not the magic, not the checksum
+    for (const std::size_t k : edited) {
       std::vector<std::string> fields;
       std::istringstream ws(lines[k]);
       for (std::string w; ws >> w;) fields.push_back(w);
@@ -490,7 +583,9 @@ TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-check
           Counter c;
           std::vector<Observer*> obs;
           if (!bracket) obs.push_back(&c);
-          INFO((bracket ? "bracket checkpoint, " : "")
+          INFO((relaxation ? "relaxation checkpoint, "
+                : bracket  ? "bracket checkpoint, "
+                           : "")
                << "line " << k + 1 << " field " << f + 1 << " = '" << io::escape_control(val) << "'");
           try {
             GrowthState s = parse_checkpoint(text, "cp", scene, scene.seed, obs);
@@ -504,15 +599,16 @@ TEST_CASE("a deliberately edited checkpoint (checksum recomputed) is range-check
             d.advance();
             ++accepted;
           } catch (const InputError& e) {
+            // The driver names the checkpoint when the attempt it resumes does not fit the relaxation.
             const std::string m = e.what();
-            CHECK(m.rfind("cp:", 0) == 0);
+            CHECK((m.rfind("cp:", 0) == 0 || (relaxation && m.rfind("checkpoint: ", 0) == 0)));
             CHECK(m.find('\x1b') == std::string::npos);
             ++refused;
           }
         }
     }
     INFO(refused << " refused, " << accepted << " accepted");
-    CHECK(refused > 1000);
+    CHECK(refused > (relaxation ? 200 : 1000));
     CHECK(accepted > 0);  // e.g. a coordinate changed within its range: a valid state of another run
   }
 }

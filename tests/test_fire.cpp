@@ -405,3 +405,85 @@ TEST_CASE("after an uphill step FIRE steps half back and restarts from rest alon
     CHECK(uphill >= 3);  // the path went uphill (else the check above tested nothing)
   }
 }
+
+namespace {
+
+// A checkpoint a minimisation offered: its coordinates and its progress.
+struct Offered {
+  Eigen::VectorXd q;
+  FireProgress progress;
+};
+
+}  // namespace
+
+TEST_CASE("a minimisation resumed from any of its checkpoints ends in the bits of the uninterrupted one", "[fast]") {
+  // The default minimiser (the Newton finish included) with an active-set try after 100 evaluations
+  // that is undone (every step counts as a rearrangement) and a hand-over after 400, so that the
+  // checkpoints fall before and after both, with neighbour-list rebuilds between them.
+  const Packing start = random_packing(100, 1.0, 2);
+  FireParams params;
+  params.active_set_try_after = 100;
+  params.active_set_try_move = 1e-12;
+  params.active_set_after = 400;
+  Packing plain = start;
+  ForceField plain_field;
+  const FireResult uninterrupted = minimise(plain, plain_field, params);
+  REQUIRE(uninterrupted.converged);
+
+  std::vector<Offered> offered;
+  FireCheckpoints every;
+  every.every = 17;
+  every.save = [&](const Packing& p, const FireProgress& f) { offered.push_back({p.q, f}); };
+  Packing checkpointed = start;
+  ForceField field;
+  const FireResult with = minimise(checkpointed, field, params, nullptr, &every);
+  CHECK(checkpointed.q == plain.q);  // offering checkpoints changes nothing
+  CHECK(with.evaluations == uninterrupted.evaluations);
+
+  // The paths this test is for arose.
+  REQUIRE(offered.size() > 10);
+  CHECK(uninterrupted.active_set_tries_undone == 1);
+  CHECK(uninterrupted.active_set_steps > 1);
+  CHECK(offered.front().progress.so_far.active_set_steps == 0);
+  CHECK(offered.back().progress.so_far.active_set_tries_undone == 1);
+  bool rebuilt_between = false;
+  for (std::size_t k = 1; k < offered.size(); ++k)
+    rebuilt_between |= offered[k].progress.neighbours.x0 != offered[k - 1].progress.neighbours.x0;
+  CHECK(rebuilt_between);
+
+  for (const Offered& o : offered) {
+    INFO("resumed at iteration " << o.progress.iteration << ", " << o.progress.so_far.evaluations << " evaluations");
+    Packing p = start;
+    p.q = o.q;
+    ForceField fresh;
+    FireCheckpoints from;
+    from.resume = &o.progress;
+    const FireResult r = minimise(p, fresh, params, nullptr, &from);
+    CHECK(p.q == plain.q);
+    CHECK(r.energy == uninterrupted.energy);
+    CHECK(r.iterations == uninterrupted.iterations);
+    CHECK(r.evaluations == uninterrupted.evaluations);
+    CHECK(r.newton_iterations == uninterrupted.newton_iterations);
+    CHECK(r.active_set_steps == uninterrupted.active_set_steps);
+    CHECK(r.active_set_tries_undone == uninterrupted.active_set_tries_undone);
+  }
+}
+
+TEST_CASE("a minimisation offers no checkpoint while its Newton factor is kept", "[fast]") {
+  Packing p = random_packing(100, 1.0, 2);
+  FireParams params;
+  params.active_set_after = 0;
+  NewtonWorkspace newton;
+  long offered = 0, offered_with_factor = 0;
+  FireCheckpoints every;
+  every.every = 1;
+  every.save = [&](const Packing&, const FireProgress&) {
+    ++offered;
+    offered_with_factor += newton.factored;
+  };
+  ForceField field;
+  const FireResult r = minimise(p, field, params, &newton, &every);
+  REQUIRE(r.newton_iterations > 0);
+  CHECK(offered > 0);
+  CHECK(offered_with_factor == 0);
+}

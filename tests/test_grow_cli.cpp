@@ -335,6 +335,32 @@ int grow_and_signal(const fs::path& scene, const fs::path& dir, double delay, in
   return status;
 }
 
+// Starts `budjam grow SCENE --quiet --set box.L=12 --out DIR` afresh, sends `sig` once `ready()`
+// holds (or the run finished, or after a minute) and returns the exit status.
+int signal_when(const fs::path& scene, const fs::path& dir, int sig, const std::function<bool()>& ready) {
+  fs::remove_all(dir);
+  const pid_t pid = start_grow(scene, dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!ready() && !fs::exists(dir / "summary.json") &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ::kill(pid, sig);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+// `budjam grow --resume DIR` succeeds and ends with the files of the uninterrupted run `ref` of a
+// scene with one target and trials.csv.
+void resumes_to(const fs::path& dir, const fs::path& ref) {
+  const Result r = grow("--resume " + q(dir) + " --quiet");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* f : {"summary.json", "steps.csv", "divisions.csv", "bud_events.csv", "trials.csv",
+                        "packings/jammed.pack", "packings/target_0.pack"})
+    CHECK(slurp(dir / f) == slurp(ref / f));
+}
+
 // grow_and_signal at the first of `delays` whose signal leaves a checkpoint. A signal past jamming,
 // while the Newton finish keeps its factor, writes none (that state would not resume exactly), and
 // how far a run has got after a given delay depends on the machine: so the delays go down until
@@ -385,16 +411,9 @@ TEST_CASE("a signal inside the search onto phi_J checkpoints its open bracket; t
   bool inside = false;
   for (int attempt = 0; attempt < 6 && !inside; ++attempt) {
     const fs::path dir = work_dir() / ("bracket_" + std::to_string(attempt));
-    fs::remove_all(dir);
-    const pid_t pid = start_grow(scene, dir);
     // The first overshoot of the jamming window opens the bracket (trials.csv: verdict rejected).
-    const auto t0 = std::chrono::steady_clock::now();
-    while (slurp(dir / "trials.csv.partial").find(",rejected,") == std::string::npos &&
-           !fs::exists(dir / "summary.json") && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    ::kill(pid, SIGTERM);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
+    const int status = signal_when(
+        scene, dir, SIGTERM, [&] { return slurp(dir / "trials.csv.partial").find(",rejected,") != std::string::npos; });
     REQUIRE(WIFEXITED(status));
     if (WEXITSTATUS(status) == 0) continue;  // finished before the signal
     CHECK(WEXITSTATUS(status) == 143);
@@ -402,14 +421,39 @@ TEST_CASE("a signal inside the search onto phi_J checkpoints its open bracket; t
     INFO(err);
     CHECK(err.find("checkpoint written; resume with") != std::string::npos);
     inside = slurp(dir / "checkpoint.txt").find("\nbracket 1 ") != std::string::npos;
-    const Result r = grow("--resume " + q(dir) + " --quiet");
-    INFO(r.err);
-    REQUIRE(r.code == 0);
-    for (const char* f : {"summary.json", "steps.csv", "divisions.csv", "bud_events.csv", "trials.csv",
-                          "packings/jammed.pack", "packings/target_0.pack"})
-      CHECK(slurp(dir / f) == slurp(ref / f));
+    resumes_to(dir, ref);
   }
   CHECK(inside);  // the case this test is for arose
+}
+
+TEST_CASE("a run killed or signalled inside a relaxation resumes it from its checkpoint, byte-identical",
+          "[grow_cli][.slow]") {
+  // A checkpoint every 300 force evaluations of a relaxation and none between steps: the one
+  // resumed from holds a relaxation in progress.
+  const fs::path scene =
+      small_scene("inside", "[observe]\ncheckpoint_every = 0\ncheckpoint_evaluations = 300\ntrials = true\n", "[1e-3]");
+  const fs::path ref = work_dir() / "inside_ref";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
+  for (const int sig : {SIGKILL, SIGTERM}) {
+    bool inside = false;
+    for (int attempt = 0; attempt < 6 && !inside; ++attempt) {
+      const fs::path dir = work_dir() / ("inside_" + std::to_string(sig) + "_" + std::to_string(attempt));
+      const int status = signal_when(
+          scene, dir, sig, [&] { return slurp(dir / "checkpoint.txt").find("\nrelaxation 1 ") != std::string::npos; });
+      if (WIFEXITED(status) && WEXITSTATUS(status) == 0) continue;  // finished before the signal
+      const std::string checkpoint = slurp(dir / "checkpoint.txt");
+      inside = checkpoint.find("\nrelaxation 1 ") != std::string::npos;
+      const std::string err = slurp(dir.string() + ".stderr");
+      INFO(err);
+      if (sig == SIGTERM) {
+        REQUIRE(WIFEXITED(status));
+        CHECK(WEXITSTATUS(status) == 143);
+        CHECK(err.find("checkpoint written; resume with") != std::string::npos);
+      }
+      resumes_to(dir, ref);
+    }
+    CHECK(inside);  // the case this test is for arose
+  }
 }
 
 TEST_CASE("a signal as soon as the run directory exists still ends in a checkpoint", "[grow_cli][.slow]") {

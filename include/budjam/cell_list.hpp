@@ -6,6 +6,8 @@
 // from the pair list alone, so near force balance, where lobes move by far less than a skin, the
 // force loop visits little more than the contacts.
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 #include "budjam/packing.hpp"
@@ -31,6 +33,20 @@ class NeighbourList {
   // std::domain_error if a lobe position is not finite.
   bool update(const Lobes& lobes, const Box& box);
   void invalidate() { valid_ = false; }
+
+  // The lobe positions the pair list (x0, y0) and the near list (x1, y1) were last built at: with
+  // the radii and the box, all that decides the lists and when update() rebuilds them.
+  struct Origin {
+    std::vector<double> x0, y0, x1, y1;
+  };
+  Origin origin() const { return {x0_, y0_, x1_, y1_}; }
+  // Why `o` cannot be the origin of lists that are current for `lobes` (a list expires before its
+  // lobes move further than this list's skins allow), or nullopt.
+  std::optional<std::string> misfit(const Origin& o, const Lobes& lobes) const;
+  // The lists as they were when origin() returned `o`, current for `lobes` in `box`: the same pairs
+  // in the same order, expiring at the same displacements (a minimisation resumed from a
+  // checkpoint, fire.hpp). Throws std::invalid_argument with misfit()'s reason.
+  void restore(const Origin& o, const Lobes& lobes, const Box& box);
 
   // Pairs (a, b), a < b, of lobes on different cells with r < R_a + R_b + skin at build time,
   // sorted by (a, b): the order depends only on the configuration at the last build.

@@ -56,13 +56,19 @@ class ForceField {
   // (A changed radius or count is also detected by the neighbour list itself.)
   void invalidate();
 
+  // The neighbour list as it was when it had origin `o` (NeighbourList::restore), for the packing
+  // `p` as it is now: evaluations from here repeat those of the field that had it, bit for bit,
+  // rebuilds included (a minimisation resumed from a checkpoint, fire.hpp).
+  void restore_neighbours(const Packing& p, const NeighbourList::Origin& o);
   const Lobes& lobes() const { return lobes_; }
   const NeighbourList& neighbours() const { return list_; }
   long evaluations() const { return evaluations_; }
 
  private:
   void refresh(const Packing& p);
-  void find_pair_images(const Box& box);
+  void place_lobes_of(const Packing& p);
+  // The images of the listed pairs from lobe positions (x, y): those of the pair list's build.
+  void find_pair_images(const Box& box, const std::vector<double>& x, const std::vector<double>& y);
   void gather_near_pairs();
   double pair_loop(const Packing& p, double* F) const;
   double threaded_pair_loop(const Packing& p, double* F);

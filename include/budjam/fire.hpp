@@ -6,6 +6,8 @@
 #include "budjam/newton.hpp"
 #include "budjam/packing.hpp"
 
+#include <functional>
+
 namespace budjam {
 
 struct FireParams {
@@ -77,10 +79,40 @@ struct FireResult {
   double max_force = 0.0;              // largest |F| component at the end (θ component as F_θ / r_g)
 };
 
+// Where a minimisation stands before one of its FIRE iterations: with the packing's coordinates,
+// everything the rest of it depends on (the neighbour list's origin included), so that minimise()
+// resumed from it ends in the bits it would have reached without the stop (a growth run's
+// checkpoint inside a long relaxation: docs/growth.md, "Checkpoints and resume").
+struct FireProgress {
+  FireResult so_far;   // the counters up to here (stop, energy and max_force unused)
+  long iteration = 1;  // the FIRE iteration about to be made
+  Eigen::VectorXd v;   // velocities in the scaled coordinates (x, y, θ̃ = r_g θ)
+  double dt = 0, alpha = 0;
+  long n_positive = 0;      // consecutive steps with F·v > 0
+  double tol = 0;           // the force tolerance, fixed at the start from the start's extent
+  double newton_below = 0;  // the Newton finish is tried when the largest force falls below this
+  long next_try = 0, next_active_set = 0, active_set_tries = 0;  // the active-set schedule
+  long undone = 0;                                               // evaluations of undone tries
+  NeighbourList::Origin neighbours;
+};
+
+// Checkpoints inside a minimisation. Before a FIRE iteration, once `every` more force evaluations
+// have been made since the last checkpoint (or the start; 0 = never) or when `requested()` says so
+// (a signal), `save` receives the packing and the progress; `save` may throw to end the
+// minimisation. Never while the Newton workspace keeps a factor, which the progress does not hold.
+// With `resume`, minimise goes on from that progress, p holding the coordinates saved with it.
+struct FireCheckpoints {
+  long every = 0;
+  std::function<bool()> requested;
+  std::function<void(const Packing&, const FireProgress&)> save;
+  const FireProgress* resume = nullptr;
+};
+
 // Relaxes p in place. A centroid lying more than L/2 outside the box is first moved back by whole
 // periods (a deterministic relabelling of images that leaves U unchanged); no other wrapping.
 // `newton` (optional) carries the Newton factor from one minimisation to the next.
-FireResult minimise(Packing& p, ForceField& field, const FireParams& params = {}, NewtonWorkspace* newton = nullptr);
+FireResult minimise(Packing& p, ForceField& field, const FireParams& params = {}, NewtonWorkspace* newton = nullptr,
+                    const FireCheckpoints* checkpoints = nullptr);
 
 // The smallest force FIRE can resolve in double precision: 16 ε k × (the larger of L and the
 // largest |coordinate|), since lobe positions, hence overlaps, carry rounding errors of a few

@@ -273,6 +273,17 @@ struct StepStart {
   double log_scale = 0;
 };
 
+// A growth attempt's relaxation in progress: where the minimisation stood, saved with the state
+// before the attempt (GrowthState::relaxation). The resumed run makes the attempt again from that
+// state (the same Δt, divisions and random draws) and goes on with this relaxation from here.
+struct RelaxationState {
+  long attempts = 0;  // GrowthState::attempts while it ran (the attempt's own number)
+  int index = 0;      // which relaxation of the attempt: 0 the trial's, then one on a deferred trial near the
+                      // window or on a saddle
+  Eigen::VectorXd q;  // the packing's coordinates
+  FireProgress progress;
+};
+
 // Everything that determines the rest of a run, besides the scene: a checkpoint
 // (tools/io/checkpoint.hpp) stores it, and the quantities derived from it (contacts, network,
 // pressures, rates) are recomputed identically after restore(), so that a resumed run repeats an
@@ -293,6 +304,9 @@ struct GrowthState {
   BudTracker buds;
   Packing packing;            // the last accepted state
   JammingSearchState search;  // with the trials of an open bracket, between the trials of a search
+  // Inside a growth attempt: its relaxation in progress (the rest of the state is from before the
+  // attempt).
+  std::optional<RelaxationState> relaxation;
 };
 
 // Extra knobs that are not part of a scene (tests use them).
@@ -322,6 +336,12 @@ class GrowthDriver {
   // (with the observers' save_state) is a complete checkpoint. The caller decides which of them to
   // keep (every k steps, after a costly trial, on a signal).
   void set_checkpoint_hook(std::function<void()> hook);
+  // Checkpoints inside a growth attempt's relaxations (FireCheckpoints: every `every` force
+  // evaluations of one relaxation, 0 = never, and whenever `requested()`), from the first accepted
+  // step on and while state_is_complete() holds: `save` receives state() as it was before the
+  // attempt, with the relaxation in progress. `save` may throw to end the run.
+  void set_relaxation_checkpoints(long every, std::function<bool()> requested,
+                                  std::function<void(const GrowthState&)> save);
   // The state a checkpoint holds (after the first advance()).
   GrowthState state() const;
   // Whether state() holds everything the rest of the run depends on. Not while a Newton factor is
@@ -330,7 +350,9 @@ class GrowthDriver {
   // every step that is a multiple of observe.checkpoint_every, so periodic checkpoints always are.
   bool state_is_complete() const;
   // Continues from `state` (taken from a driver of the same scene and seed). Throws InputError
-  // if the seed or the box differs; everything else is the checkpoint reader's to check.
+  // if the seed or the box differs; everything else is the checkpoint reader's to check. A
+  // relaxation in progress is taken up by the next attempt (InputError if that attempt does not
+  // make it: another number of cells, or no such relaxation).
   void restore(GrowthState state);
 
   const Scene& scene() const;

@@ -110,7 +110,10 @@ struct Scene {
   Schedule moduli;
   Schedule dos;
   long checkpoint_every = 100;  // accepted steps between checkpoints; 0 = none (a signal still writes one)
-  long trajectory_every = 0;    // accepted steps between trajectory frames (and at events); 0 = none
+  // Force evaluations of one relaxation between the checkpoints inside it (a marginal relaxation of a
+  // large packing runs for hours); 0 = none (a signal still writes one). 10⁵ = kMarginalEvaluations.
+  long checkpoint_evaluations = 100000;
+  long trajectory_every = 0;  // accepted steps between trajectory frames (and at events); 0 = none
   bool progress = true;
 };
 

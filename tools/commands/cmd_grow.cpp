@@ -159,6 +159,19 @@ void run(const Options& o) {
                                          "; resume from it with: budjam grow --resume " + dir.string());
     throw cli::Interrupted(signal, stopped + "; no checkpoint yet" + why + "; start the run again with --overwrite");
   });
+  // Inside a relaxation, every observe.checkpoint_evaluations force evaluations of it and at a
+  // signal, which then ends the run there: a marginal relaxation of a large packing runs for hours.
+  driver.set_relaxation_checkpoints(
+      scene.checkpoint_evaluations, [] { return cli::StopSignals::received() != 0; },
+      [&](const GrowthState& s) {
+        io::write_checkpoint(root, run_files::checkpoint, scene, s, observers);
+        const Moment now{s.step, s.relaxation->attempts};
+        last_checkpoint = Moment{s.step, s.attempts};
+        if (const int signal = cli::StopSignals::received())
+          throw cli::Interrupted(signal, "grow: stopped by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                                             " in a relaxation of " + text(now) +
+                                             ", checkpoint written; resume with: budjam grow --resume " + dir.string());
+      });
 
   tools::SessionTiming timing;
   timing.attempts_at_start = driver.view().attempts;

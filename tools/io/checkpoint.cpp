@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <unordered_set>
 
@@ -178,6 +179,32 @@ void write_trial(std::ostream& os, std::string_view end, const Trial& t, const J
   write_cells(os, p);
 }
 
+// A growth attempt's relaxation in progress: its place and FIRE's state, the counters so far, then
+// per cell its coordinates and velocities, per lobe where the neighbour lists were built.
+void write_relaxation(std::ostream& os, const std::optional<RelaxationState>& relaxation) {
+  os << "relaxation " << (relaxation ? 1 : 0);
+  if (!relaxation) {
+    os << '\n';
+    return;
+  }
+  const RelaxationState& r = *relaxation;
+  const FireProgress& f = r.progress;
+  const std::size_t n = static_cast<std::size_t>(r.q.size() / 3);
+  os << ' ' << r.attempts << ' ' << r.index << ' ' << n << ' ' << f.iteration << ' ' << num(f.dt) << ' ' << num(f.alpha)
+     << ' ' << f.n_positive << ' ' << num(f.tol) << ' ' << num(f.newton_below) << ' ' << f.next_try << ' '
+     << f.next_active_set << ' ' << f.active_set_tries << ' ' << f.undone << '\n';
+  const FireResult& c = f.so_far;
+  os << "relaxed " << c.iterations << ' ' << c.newton_iterations << ' ' << c.newton_chord_steps << ' '
+     << c.active_set_steps << ' ' << c.active_set_factorisations << ' ' << c.active_set_updates << ' '
+     << c.active_set_tries_undone << ' ' << c.evaluations << '\n';
+  for (Eigen::Index k = 0; k < 3 * static_cast<Eigen::Index>(n); k += 3)
+    os << num(r.q[k]) << ' ' << num(r.q[k + 1]) << ' ' << num(r.q[k + 2]) << ' ' << num(f.v[k]) << ' '
+       << num(f.v[k + 1]) << ' ' << num(f.v[k + 2]) << '\n';
+  const NeighbourList::Origin& o = f.neighbours;
+  for (std::size_t a = 0; a < 2 * n; ++a)
+    os << num(o.x0[a]) << ' ' << num(o.y0[a]) << ' ' << num(o.x1[a]) << ' ' << num(o.y1[a]) << '\n';
+}
+
 }  // namespace
 
 std::uint64_t fnv1a64(std::string_view bytes) {
@@ -265,6 +292,7 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
   } else {
     os << '\n';
   }
+  write_relaxation(os, s.relaxation);
   for (Observer* o : observers) {
     std::ostringstream body;
     o->save_state(body);
@@ -315,6 +343,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {9, "the run counted its active-set steps (minimiser.active_set_after)"},
     {10, "a search onto phi_J was kept between its trials (the open bracket)"},
     {11, "the checkpoint recorded the BLAS its run computed with"},
+    {12, "a growth attempt's relaxation could be checkpointed while it ran"},
 };
 
 void read_version(CheckpointText& in) {
@@ -716,6 +745,77 @@ void read_bracket(Parse& p, const Words& w) {
   p.s.search.bracket = std::move(b);
 }
 
+// A relaxation in progress (write_relaxation). Whether its cells are those the attempt grows is
+// known only once the resumed run makes the attempt (GrowthDriver::restore).
+void read_relaxation(Parse& p, const Words& w) {
+  CheckpointText& in = p.in;
+  const bool present = record_flag(in, w, "relaxation");
+  check_record_size(in, w, "relaxation", present, 14);
+  if (!present) return;
+  const GrowthState& s = p.s;
+  RelaxationState r;
+  // A grown trial counts its attempt before its relaxation; a deferred trial resumed or a bracket
+  // settled is an attempt already counted.
+  r.attempts = in.integer(w[1], "relaxation attempt", s.attempts, std::min(s.attempts + 1, p.scene.max_steps));
+  r.index = static_cast<int>(in.integer(w[2], "relaxation index", 0, 2));
+  const std::size_t n = in.count_of(w[3], "relaxation cells", max_cells(p.scene));
+  if (n == 0) in.fail("relaxation cells: none");
+  FireProgress& f = r.progress;
+  f.iteration = in.integer(w[4], "relaxation iteration", 1, kLongMax);
+  f.dt = in.positive(w[5], "relaxation FIRE dt");
+  const double dt_cap = std::max(p.scene.fire.dt_max, p.scene.fire.dt_start);
+  if (!(f.dt <= dt_cap)) in.fail("relaxation FIRE dt: above the scene's minimiser.dt_max");
+  f.alpha = in.real(w[6], "relaxation FIRE alpha");
+  if (!(f.alpha >= 0 && f.alpha <= 1)) in.fail("relaxation FIRE alpha: must be in [0, 1]");
+  f.n_positive = in.integer(w[7], "relaxation steps with positive power", 0, f.iteration);
+  f.tol = in.positive(w[8], "relaxation force tolerance");
+  f.newton_below = in.real(w[9], "relaxation Newton threshold");
+  if (!(f.newton_below >= 0)) in.fail("relaxation Newton threshold: must be >= 0");
+  f.next_try = in.integer(w[10], "relaxation next active-set try", 0, kLongMax);
+  f.next_active_set = in.integer(w[11], "relaxation next active-set steps", 0, kLongMax);
+  f.active_set_tries = in.integer(w[12], "relaxation active-set hand-overs", 0, kLongMax);
+  const std::size_t header = in.line();
+  const auto c_w = in.next("relaxed", 8);
+  FireResult& c = f.so_far;
+  c.iterations = in.integer(c_w[0], "relaxed iterations", f.iteration - 1, f.iteration - 1);
+  c.newton_iterations = in.integer(c_w[1], "relaxed Newton steps", 0, kLongMax);
+  c.newton_chord_steps = in.integer(c_w[2], "relaxed Newton chord steps", 0, kLongMax);
+  c.active_set_steps = in.integer(c_w[3], "relaxed active-set steps", 0, kLongMax);
+  c.active_set_factorisations = in.integer(c_w[4], "relaxed active-set factorisations", 0, c.active_set_steps);
+  c.active_set_updates = in.integer(c_w[5], "relaxed active-set updates", 0, kLongMax);
+  c.active_set_tries_undone = in.integer(c_w[6], "relaxed active-set tries undone", 0, kLongMax);
+  c.evaluations = in.integer(c_w[7], "relaxed force evaluations", c.iterations, kLongMax);
+  f.undone = in.integer(w[13], "relaxation evaluations undone", 0, kLongMax);
+  if (f.undone > c.evaluations) in.fail_at(header, "relaxation evaluations undone: more than its evaluations");
+  const Eigen::Index m = 3 * static_cast<Eigen::Index>(n);
+  r.q.resize(m);
+  f.v.resize(m);
+  // Positions within the packing rules' reach of the box; no FIRE step crosses a box.
+  const double far = kMaxBoxesAway * p.scene.L;
+  const auto position = [&](std::string_view word, const char* what) {
+    const double x = in.real(word, what);
+    if (!(std::abs(x) <= far)) in.fail(std::string(what) + ": more than " + num(kMaxBoxesAway) + " box sides away");
+    return x;
+  };
+  for (Eigen::Index k = 0; k < m; k += 3) {
+    const auto x = in.next("", 6);
+    r.q[k] = position(x[0], "x"), r.q[k + 1] = position(x[1], "y"), r.q[k + 2] = in.real(x[2], "theta");
+    for (int j = 0; j < 3; ++j) {
+      f.v[k + j] = in.real(x[3 + j], "velocity");
+      if (!(std::abs(f.v[k + j]) * dt_cap <= p.scene.L)) in.fail("velocity: a FIRE step would cross the box");
+    }
+  }
+  NeighbourList::Origin& o = f.neighbours;
+  for (std::size_t a = 0; a < 2 * n; ++a) {
+    const auto x = in.next("", 4);
+    o.x0.push_back(position(x[0], "lobe x at the pair list's build"));
+    o.y0.push_back(position(x[1], "lobe y at the pair list's build"));
+    o.x1.push_back(position(x[2], "lobe x at the near list's build"));
+    o.y1.push_back(position(x[3], "lobe y at the near list's build"));
+  }
+  p.s.relaxation = std::move(r);
+}
+
 // The lines between the header and the observer sections, in the order format_checkpoint writes
 // them. A line `key w1 ... wn` is split into words, `key` checked, then `read` checks and stores
 // the words (and reads the rows that follow a count, if any).
@@ -742,6 +842,7 @@ constexpr LineKind kLineKinds[] = {
     {"buds", 2, read_buds},
     {"packing", 4, read_packing},
     {"bracket", -1, read_bracket},
+    {"relaxation", -1, read_relaxation},
 };
 
 // The observer sections up to the line `end`, each observer named once.
