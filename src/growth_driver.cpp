@@ -246,6 +246,10 @@ struct GrowthDriver::Impl {
   std::optional<GrowthState> before_attempt;
   int relaxation_index = 0;
   std::optional<RelaxationState> pending_relaxation;
+  // Where a restored state came from (a checkpoint file), for the messages that refuse it; and
+  // whether the observers are still to hear that the run resumed (announce_resume).
+  std::string restored_from;
+  bool resume_unannounced = false;
 
   Impl(const Scene& s, const DriverOptions& o) : scene(s), window(jamming_window(s)), field(s.skin, s.threads) {
     validate(scene);
@@ -297,22 +301,26 @@ struct GrowthDriver::Impl {
     if (pending_relaxation && pending_relaxation->index == index) {
       const RelaxationState& r = *pending_relaxation;
       if (r.attempts != attempts || r.q.size() != p.q.size())
-        throw InputError("checkpoint: its relaxation in progress (growth attempt " + std::to_string(r.attempts) + ", " +
-                         std::to_string(r.q.size() / 3) + " cells) is not the one this run makes (growth attempt " +
-                         std::to_string(attempts) + ", " + std::to_string(p.size()) + " cells)");
+        throw InputError(restored_from + ": its relaxation in progress (growth attempt " + std::to_string(r.attempts) +
+                         ", " + std::to_string(r.q.size() / 3) +
+                         " cells) is not the one this run makes (growth attempt " + std::to_string(attempts) + ", " +
+                         std::to_string(p.size()) + " cells)");
       p.q = r.q;
       Lobes lobes;
       place_lobes(p, lobes);
       if (const auto problem = field.neighbours().misfit(r.progress.neighbours, lobes))
-        throw InputError("checkpoint: its relaxation in progress does not fit its neighbour list: " + *problem);
+        throw InputError(restored_from + ": its relaxation in progress does not fit its neighbour list: " + *problem);
       checkpoints.resume = &r.progress;
     }
-    if (before_attempt) {
+    // The relaxations of a resumed attempt before the one it resumes are made again without
+    // checkpoints: the checkpoint resumed from is further along (a signal waits for it).
+    if (before_attempt && (!pending_relaxation || checkpoints.resume)) {
       checkpoints.every = relaxation_every;
       checkpoints.requested = relaxation_requested;
       checkpoints.save = [this, index](const Packing& at, const FireProgress& progress) {
         GrowthState s = *before_attempt;
         s.relaxation = RelaxationState{attempts, index, at.q, progress};
+        announce_resume();
         relaxation_save(s);
       };
     }
@@ -370,9 +378,31 @@ struct GrowthDriver::Impl {
     return v;
   }
 
+  // Every event reaches the observers through here.
+  template <class Event>
+  void notify(const Event& event) {
+    announce_resume();
+    for (Observer* o : observers) event(*o);
+  }
+
+  // After a restore the observers' on_resumed() (which cuts their logs back to the checkpoint)
+  // waits for the first event or checkpoint of the resumed run: by then its first attempt has taken
+  // up the relaxation in progress, the last thing in a checkpoint that can disagree with the run,
+  // so a resume refused on it leaves the run directory as it was.
+  void announce_resume() {
+    if (!resume_unannounced) return;
+    resume_unannounced = false;
+    for (Observer* o : observers) o->on_resumed();
+  }
+
+  void save_checkpoint() {
+    if (!checkpoint_hook) return;
+    announce_resume();
+    checkpoint_hook();
+  }
+
   void emit_bud_events(const StateView& v, const std::vector<BudEvent>& events) {
-    for (const BudEvent& e : events)
-      for (Observer* o : observers) o->on_bud_event(BudEventHappened{v, e});
+    for (const BudEvent& e : events) notify([&](Observer& o) { o.on_bud_event(BudEventHappened{v, e}); });
   }
 
   void start() {
@@ -390,7 +420,7 @@ struct GrowthDriver::Impl {
     if (window.jammed(E)) throw InputError("init: the relaxed initial state is already jammed (E/N = " + num(E) + ")");
     derive();
     const StateView v = view();
-    for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
+    notify([&](Observer& o) { o.on_step_accepted(StepAccepted{v}); });
   }
 
   void fail(RunStatus status, std::string message) {
@@ -404,12 +434,12 @@ struct GrowthDriver::Impl {
     final_emitted = true;
     const StateView v = view();
     if (phase == Phase::jammed) emit_bud_events(v, buds.close(BudEventKind::censored_end, step, phi, packing));
-    for (Observer* o : observers) {
+    notify([&](Observer& o) {
       if (result.status == RunStatus::finished)
-        o->on_finished(Finished{v, result});
+        o.on_finished(Finished{v, result});
       else
-        o->on_failed(Failed{v, result});
-    }
+        o.on_failed(Failed{v, result});
+    });
   }
 
   // ---- choosing the growth step --------------------------------------------------------------
@@ -653,11 +683,11 @@ struct GrowthDriver::Impl {
            std::abs(phi - (result.jamming->phi + scene.targets[next_target])) <= scene.target_tolerance) {
       result.targets.push_back(target_record(v, next_target, scene.targets[next_target], result.jamming->phi));
       ++next_target;
-      for (Observer* o : observers) o->on_target_reached(TargetReached{v, result.targets.back()});
+      notify([&](Observer& o) { o.on_target_reached(TargetReached{v, result.targets.back()}); });
     }
     if (result.depletion || buds.active() > scene.phi2_tagged_left) return;
     result.depletion = depletion_record(v, buds.active());
-    for (Observer* o : observers) o->on_depleted(Depleted{v, *result.depletion});
+    notify([&](Observer& o) { o.on_depleted(Depleted{v, *result.depletion}); });
   }
 
   RunStatus advance() {
@@ -679,7 +709,7 @@ struct GrowthDriver::Impl {
     std::optional<Trial> trial = make_trial();
     before_attempt.reset();
     if (pending_relaxation)
-      throw InputError("checkpoint: growth attempt " + std::to_string(pending_relaxation->attempts) +
+      throw InputError(restored_from + ": growth attempt " + std::to_string(pending_relaxation->attempts) +
                        " made no relaxation " + std::to_string(pending_relaxation->index) +
                        " to resume (was the checkpoint written by another build?)");
     if (!trial) return result.status;
@@ -694,7 +724,7 @@ struct GrowthDriver::Impl {
         relaxed.minimiser = trial_params;
         relaxed.branch_start = trial_branch ? &*trial_branch : nullptr;
       }
-      for (Observer* o : observers) o->on_trial(relaxed);
+      notify([&](Observer& o) { o.on_trial(relaxed); });
     }
     switch (verdict) {
       case TrialVerdict::rejected:
@@ -712,7 +742,7 @@ struct GrowthDriver::Impl {
     }
     // The next attempt starts from the same accepted state, with the search's state (its open
     // bracket) and Δt: a complete state too, so a long search can be checkpointed between trials.
-    if (result.status == RunStatus::running && checkpoint_hook) checkpoint_hook();
+    if (result.status == RunStatus::running) save_checkpoint();
     return result.status;
   }
 
@@ -730,15 +760,13 @@ struct GrowthDriver::Impl {
     if (change == Change::jammed) bud_events = record_jamming();
 
     const StateView v = view();
-    for (const Division& d : divisions)
-      for (Observer* o : observers) o->on_divided(Divided{v, d});
+    for (const Division& d : divisions) notify([&](Observer& o) { o.on_divided(Divided{v, d}); });
     // Events in physical order: the buds tagged at a jamming follow the jamming they belong to.
     if (change != Change::jammed) emit_bud_events(v, bud_events);
-    for (Observer* o : observers) o->on_step_accepted(StepAccepted{v});
-    if (change == Change::unjammed)
-      for (Observer* o : observers) o->on_unjammed(Unjammed{v, result.unjammings.back()});
+    notify([&](Observer& o) { o.on_step_accepted(StepAccepted{v}); });
+    if (change == Change::unjammed) notify([&](Observer& o) { o.on_unjammed(Unjammed{v, result.unjammings.back()}); });
     if (change == Change::jammed) {
-      for (Observer* o : observers) o->on_jammed(Jammed{v, *result.jamming});
+      notify([&](Observer& o) { o.on_jammed(Jammed{v, *result.jamming}); });
       emit_bud_events(v, bud_events);
     }
     if (phase == Phase::jammed && change == Change::none) land_targets_and_depletion(v);
@@ -749,7 +777,7 @@ struct GrowthDriver::Impl {
       return finish_events();
     }
     if (scene.checkpoint_every > 0 && step % scene.checkpoint_every == 0) newton.clear();
-    if (checkpoint_hook) checkpoint_hook();
+    save_checkpoint();
   }
 };
 
@@ -787,12 +815,14 @@ GrowthState GrowthDriver::state() const {
   return impl_->public_state();
 }
 
-void GrowthDriver::restore(GrowthState s) {
+void GrowthDriver::restore(GrowthState s, std::string source) {
   Impl& d = *impl_;
   if (s.seed != d.seed)
-    throw InputError("checkpoint: seed " + std::to_string(s.seed) + " does not match the run's seed " +
+    throw InputError(source + ": seed " + std::to_string(s.seed) + " does not match the run's seed " +
                      std::to_string(d.seed));
-  if (s.packing.box.L != d.scene.L) throw InputError("checkpoint: box side does not match the scene");
+  if (s.packing.box.L != d.scene.L) throw InputError(source + ": box side does not match the scene");
+  d.restored_from = std::move(source);
+  d.resume_unannounced = true;
   transfer(d, s);
   d.result.status = RunStatus::running;
   d.search->restore(std::move(s.search));

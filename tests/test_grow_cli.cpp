@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -651,15 +652,16 @@ std::size_t line_starting(const std::vector<std::string>& lines, const std::stri
   return 0;
 }
 
-// Resumes `dir`, which must be refused with exit 2 and one line holding `expect`, leaving
-// every file of the directory as it was.
-void refused_unchanged(const fs::path& dir, const std::string& expect) {
+// Resumes `dir`, which must be refused with exit 2 and one line holding `expect` (and `also`),
+// leaving every file of the directory as it was.
+void refused_unchanged(const fs::path& dir, const std::string& expect, const std::string& also = "") {
   const auto before = snapshot(dir);
   const Result r = grow("--resume " + q(dir) + " --quiet");
   INFO(r.err);
   CHECK(r.code == 2);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   CHECK(r.err.find(expect) != std::string::npos);
+  CHECK(r.err.find(also) != std::string::npos);
   CHECK(snapshot(dir) == before);
 }
 
@@ -787,6 +789,60 @@ TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed 
           v[section + 1] = joined(b);
         },
         log + ".csv.partial: ");
+  }
+}
+
+TEST_CASE("a relaxation in progress that the resumed attempt does not make is refused, the run directory unchanged",
+          "[grow_cli]") {
+  // Only the resumed attempt can tell that a checkpoint's relaxation in progress is not its own;
+  // the logs are cut back, and checkpoints written, only after it has.
+  const fs::path scene =
+      small_scene("pending", "[observe]\ncheckpoint_every = 0\ncheckpoint_evaluations = 300\n", "[1e-3]");
+  const fs::path run = work_dir() / "pending";
+  std::vector<std::string> lines;
+  for (int attempt = 0; attempt < 6 && lines.empty(); ++attempt) {
+    const int status = signal_when(scene, run, SIGTERM, [&] {
+      return slurp(run / "checkpoint.txt").find("\nrelaxation 1 ") != std::string::npos;
+    });
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 143 &&
+        slurp(run / "checkpoint.txt").find("\nrelaxation 1 ") != std::string::npos)
+      lines = lines_of(slurp(run / "checkpoint.txt"));
+  }
+  REQUIRE(!lines.empty());
+  const std::size_t k = line_starting(lines, "relaxation 1 ");
+  const fs::path copy = work_dir() / "pending_copy";
+  auto edited = [&](std::size_t line, std::size_t word, const std::function<std::string(const std::string&)>& to,
+                    const std::string& expect) {
+    fs::remove_all(copy);
+    fs::copy(run, copy, fs::copy_options::recursive);
+    std::vector<std::string> v = lines;
+    std::istringstream is(v[line]);
+    std::vector<std::string> w{std::istream_iterator<std::string>(is), {}};
+    w.at(word) = to(w.at(word));
+    std::string joined;
+    for (const auto& x : w) joined += (joined.empty() ? "" : " ") + x;
+    REQUIRE(joined != v[line]);
+    v[line] = joined;
+    write_with_checksum(copy / "checkpoint.txt", v);
+    refused_unchanged(copy, "checkpoint.txt: ", expect);  // the refusal names the checkpoint
+  };
+  SECTION("another growth attempt's") {
+    // The reader takes the attempts made (a deferred trial resumed) or the next (a trial grown).
+    std::istringstream state(lines[line_starting(lines, "state ")]);
+    std::vector<std::string> w{std::istream_iterator<std::string>(state), {}};
+    const long made = std::stol(w.at(6));
+    edited(
+        k, 2, [&](const std::string& a) { return std::to_string(std::stol(a) == made ? made + 1 : made); },
+        "its relaxation in progress");
+  }
+  SECTION("a relaxation the attempt does not make") {
+    edited(
+        k, 3, [](const std::string& i) { return i == "2" ? "1" : "2"; }, "made no relaxation");
+  }
+  SECTION("cells moved past the reach of its neighbour list") {
+    edited(
+        k + 2, 0, [](const std::string& x) { return std::to_string(std::stod(x) + 1.0); },
+        "does not fit its neighbour list");
   }
 }
 

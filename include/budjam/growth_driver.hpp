@@ -254,7 +254,8 @@ class Observer {
   // find its section in a checkpoint (else the resume is refused); a stateless one (a progress
   // display) may come and go. load_state only reads and checks: it changes nothing outside the
   // observer, because the resume may still be refused; on_resumed() follows once the whole resume
-  // was accepted, and may then change what the observer keeps outside (cut its logs back).
+  // was accepted (before the resumed run's first event or checkpoint, GrowthDriver::restore), and
+  // may then change what the observer keeps outside (cut its logs back).
   virtual bool stateful() const { return false; }
   virtual void save_state(std::ostream&) {}
   virtual void load_state(std::istream&) {}
@@ -349,11 +350,14 @@ class GrowthDriver {
   // the run goes on with chord steps where a resumed one would factor afresh. It is dropped at
   // every step that is a multiple of observe.checkpoint_every, so periodic checkpoints always are.
   bool state_is_complete() const;
-  // Continues from `state` (taken from a driver of the same scene and seed). Throws InputError
-  // if the seed or the box differs; everything else is the checkpoint reader's to check. A
-  // relaxation in progress is taken up by the next attempt (InputError if that attempt does not
-  // make it: another number of cells, or no such relaxation).
-  void restore(GrowthState state);
+  // Continues from `state` (taken from a driver of the same scene and seed; `source` names where it
+  // came from, for the messages). Throws InputError if the seed or the box differs; everything
+  // else is the checkpoint reader's to check. A relaxation in progress is taken up by the next
+  // attempt (InputError if that attempt does not make it: another number of cells, or no such
+  // relaxation). The observers' on_resumed() comes just before the resumed run's first event or
+  // checkpoint, after that attempt took up its relaxation: a resume refused on it changes nothing
+  // an observer keeps.
+  void restore(GrowthState state, std::string source = "checkpoint");
 
   const Scene& scene() const;
   std::uint64_t seed() const;

@@ -109,11 +109,10 @@ void run(const Options& o) {
     // Everything is checked before anything changes: a refused resume leaves the run as it was.
     io::CheckpointLines lines;
     GrowthState state = io::read_checkpoint(root, run_files::checkpoint, scene, scene.seed, observers, &lines);
-    log.check_resumed_state(state, scene, lines, (dir / run_files::checkpoint).string());
+    const std::string checkpoint = (dir / run_files::checkpoint).string();
+    log.check_resumed_state(state, scene, lines, checkpoint);
     for (Observer* obs : observers) obs->check_resumed(state);
-    run_dir->remove_recorded_temporaries();
-    for (Observer* obs : observers) obs->on_resumed();
-    driver.restore(std::move(state));
+    driver.restore(std::move(state), checkpoint);  // the observers' on_resumed() comes with its first event
     if (const std::string blas = io::checkpoint_blas(); lines.blas != blas)
       std::cerr << "budjam: grow: "
                 << io::one_line("resuming under another BLAS than the checkpoint was computed with (" + lines.blas +

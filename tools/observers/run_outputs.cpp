@@ -55,7 +55,7 @@ const std::vector<std::string>& RunLog::division_columns() {
   return c;
 }
 
-RunLog::RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resuming)
+RunLog::RunLog(io::RunDirectory& run_dir, std::uint64_t seed, bool resuming)
     : CsvLogObserver(
           run_dir.root(),
           {{std::string(run_files::steps), step_columns()}, {std::string(run_files::divisions), division_columns()}},
@@ -63,6 +63,11 @@ RunLog::RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resumin
       run_dir_(run_dir),
       seed_(seed) {
   if (!resuming) packings();  // every run directory has packings/, also one that never jams
+}
+
+void RunLog::on_resumed() {
+  run_dir_.remove_recorded_temporaries();
+  CsvLogObserver::on_resumed();
 }
 
 io::OwnedEntries RunLog::files() {

@@ -21,7 +21,7 @@ namespace budjam::tools {
 class RunLog : public CsvLogObserver {
  public:
   // resuming: the logs are reopened by load_state (cut back to the checkpoint) instead of created.
-  RunLog(const io::RunDirectory& run_dir, std::uint64_t seed, bool resuming);
+  RunLog(io::RunDirectory& run_dir, std::uint64_t seed, bool resuming);
   // The entries it writes: steps.csv, divisions.csv, the run packings and their sidecars (which
   // describe the packing and go with it).
   static io::OwnedEntries files();
@@ -32,6 +32,8 @@ class RunLog : public CsvLogObserver {
   void on_unjammed(const Unjammed& e) override;
   void on_target_reached(const TargetReached& e) override;
   void on_depleted(const Depleted& e) override;
+  // Also removes the temporaries a killed writer left in the run directory.
+  void on_resumed() override;
 
   static const std::vector<std::string>& step_columns();
   static const std::vector<std::string>& division_columns();
@@ -48,7 +50,7 @@ class RunLog : public CsvLogObserver {
   void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
   // Opened when used: a resume refused for another reason must not find packings/ created.
   io::Directory packings() const { return run_dir_.subdirectory(io::run_files::packings); }
-  const io::RunDirectory& run_dir_;
+  io::RunDirectory& run_dir_;
   std::uint64_t seed_;
   static constexpr std::size_t kSteps = 0, kDivisions = 1;  // log(k)
 };
