@@ -10,7 +10,7 @@ supersedes the older ones.
     python3 scripts/bench_table.py --history    # every row, oldest first
     python3 scripts/bench_table.py --check-readme README.md   # exit 1 if the README's table differs
     python3 scripts/bench_table.py --accuracy growth          # the latest run of one sweep
-    python3 scripts/bench_table.py --check-accuracy docs/analysis.md   # exit 1 if a sweep's table differs
+    python3 scripts/bench_table.py --check-accuracy docs/accuracy.md   # exit 1 if a sweep's table differs
     python3 scripts/bench_table.py --check-topics docs/*.md README.md  # exit 1 if a page cites a topic not in the record
 
 A page cites a topic as (topic `name`), as (topics `a`, `b`) or in a table column headed "topic".

@@ -51,18 +51,22 @@ def n_text(n):
 
 
 def pm(stat, key="mean"):
-    """'x ± se (n)' from a {mean|median, se, n} object (no ± from fewer than 5 samples)."""
+    """'x ± se (n)' from a {mean|median, se, n} object (no ± from fewer than 5 samples). A statistic over values
+    that come in seeds (the targets of runs; `budjam analyse` counts them in "values" or "targets") has n = seeds,
+    the independent samples, and says how many values they hold."""
     if not stat or stat.get(key) is None:
         return "not measured"
     s = fmt(stat[key])
     if error_bar(stat.get("se"), stat.get("n")):
         s += " ± " + fmt(stat["se"], 2)
-    return s + f" (n={n_text(stat.get('n'))})"
+    held = next((f" seeds, {stat[k]} {k}" for k in ("values", "targets") if stat.get(k) is not None), "")
+    return s + f" (n={n_text(stat.get('n'))}{held})"
 
 
 def growth_bulk(stat):
-    """(statistic, text, value) of the B_grow = λ_c B_ext test: log₁₀ of the median ratio ± bootstrap SE (n,
-    B_grow ≤ 0 counted); an analysis.json of version ≤ 2 has the mean of log₁₀ B_grow/(λ_c B) instead."""
+    """(statistic, text, value) of the B_grow = λ_c B_ext test: log₁₀ of the median ratio ± bootstrap SE over seeds
+    (n seeds and their targets, B_grow ≤ 0 counted); an analysis.json of version ≤ 2 has the mean of
+    log₁₀ B_grow/(λ_c B) instead, one of version 3 targets as n."""
     if stat.get("median") is None and stat.get("mean") is not None:
         return "⟨log₁₀ B_grow/(λ_c B)⟩", pm(stat), stat["mean"]
     s = pm(stat, "median")
@@ -89,8 +93,12 @@ def limit_text(x):
     if not error_bar(x.get("limit_se"), x.get("sizes")):
         return f"— (a fit over {n_text(x.get('sizes'))} sizes: it needs {verdicts.MIN_SAMPLES})"
     res = ", ".join(f"{r:+.1f}" for r in x.get("residuals_in_se", []))
-    return (f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} (χ²/dof = {fmt(x['chi2'], 2)}/{x['dof']}; "
-            f"residuals/SE {res})")
+    fit = f"χ²/dof = {fmt(x.get('chi2'), 2)}/{x.get('dof')}"
+    if verdicts.fit_rejected(x.get("chi2"), x.get("dof")):
+        # q_∞ of a form the data reject is no N → ∞ value, however small its (widened) error
+        return (f"model rejected ({fit}; χ² > {fmt(verdicts.chi2_quantile(x['dof']))}, its 95 % quantile at "
+                f"{x['dof']} dof; residuals/SE {res})")
+    return f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} ({fit}; residuals/SE {res})"
 
 
 def jamming_size_rows(J, source):
@@ -143,18 +151,57 @@ def depletion_size_rows(entries):
 
 
 def ci(stat):
+    """'median ± bootstrap SE [95% CI lo, hi] (n)' (no SE or interval from fewer than 5 samples)."""
     if not stat or stat.get("median") is None:
         return "not measured"
     lo, hi = stat.get("ci95") or (None, None)
     n = stat.get("n")
     if not error_bar(0.0, n):
         return f"{fmt(stat['median'])} (n={n_text(n)}, no interval below {verdicts.MIN_SAMPLES})"
+    se = stat.get("se")
+    s = fmt(stat["median"]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "")
     if lo is None or hi is None:
-        return f"{fmt(stat['median'])} (n={n_text(n)}, no interval)"
-    return f"{fmt(stat['median'])} [95% CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)})"
+        return f"{s} (n={n_text(n)}, no interval)"
+    return f"{s} [95% CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)})"
+
+
+def paper_cells_text(cells, measured, predicted):
+    """The paper's figure of an identity: per (P0, Δφ) cell the means of both sides ± SE, no test. Summarised by how
+    many cells' means lie more than 2 combined SE apart (about 1 in 20 by chance where the identity holds)."""
+    if not cells or not cells.get("cells"):
+        return "not measured"
+    return (f"the paper plots per (P0, Δφ) ⟨{measured}⟩ against ⟨{predicted}⟩ ± SE over seeds, with no test: the two "
+            f"means lie more than 2 combined SE apart in {cells['cells_apart_2se']} of {cells['cells_tested']} cells "
+            f"with ≥ {verdicts.MIN_SAMPLES} runs (about 1 in 20 by chance where the identity holds)")
+
+
+def effective_n(p, se, n):
+    """The packings a fraction p of n packings is worth when they come in seeds: Kish's effective sample size
+    p(1 − p)/se² from the SE by seed (at most n; n where the seeds' SE is 0 and p is 0 or 1, which no spread can
+    make less certain). None without an SE by seed."""
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (p, se, n)):
+        return None
+    if se <= 0:
+        return n if p in (0, 1) else None
+    return min(n, p * (1 - p) / (se * se))
 
 
 PAPER_SEEDS = 20  # the paper's seeds per point (docs/model.md, "Reference parameters")
+PAPER_L_JAMMING = 15    # the box of the paper's u_J and n_J
+PAPER_L_DIVISIONS = 20  # the box of the paper's N_div medians
+PAPER_L_MAIN = 15       # the box of the paper's other numbers (h_γ, the Π(g) weights)
+
+
+def size_mismatch(have, paper_L):
+    """The verdict on a number the paper gives for a box of side paper_L when budjam's value is from other
+    boxes (`have`: one L or several), else None. u_J, n_J, N_div and the weight of g = 1 move with L by more than
+    their errors (docs/analysis.md, "Finite size"), so a value from another box does not test the number, whatever
+    z."""
+    sizes = sorted(have) if isinstance(have, (list, tuple, set)) else [have]
+    if paper_L in sizes:
+        return None
+    return verdicts.Verdict("inconclusive", f"L = {', '.join(f'{l:g}' for l in sizes)}, the paper's number is "
+                                            f"for L = {paper_L:g}")
 
 
 def paper_n(n, seeds):
@@ -298,8 +345,13 @@ def main():
     def sel(stat, key="mean"):
         """'x ± se (n of runs)' of a statistic under the paper's selection."""
         if not stat or stat.get(key) is None:
-            return f"not measured ({stat.get('admitted', 0)} of {stat.get('runs', '?')} runs admitted)" if stat else \
-                "not measured"
+            if not stat:
+                return "not measured"
+            admitted, runs = stat.get("admitted", 0), stat.get("runs", "?")
+            if not admitted:
+                return f"not measured ({admitted} of {runs} runs admitted)"
+            # admitted runs without a value: for G_2, each had G_2 ≤ 0 or none (the paper keeps G_2 > 0 only)
+            return f"not measured: {admitted} of {runs} runs admitted, none with a value kept (G_2 > 0 for G_2)"
         se, n = stat.get("se"), stat.get("n")
         return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "") +
                 f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted)")
@@ -314,7 +366,7 @@ def main():
     grid_seeds = sorted({seeds_in(groups[l]) for l in order if seeds_in(groups[l])})
     main_seeds = (M.get("runs") / len(order)) if order and M.get("runs") else None
     # ---- jamming: the jamming ensembles at the paper's L = 15 (independent seeds), else this preset ----
-    jam_L = 15
+    jam_L = PAPER_L_JAMMING
     jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
     jam_groups = {g_["L"]: g_ for g_ in (AJ or {}).get("groups", [])}
     if jam is not None:
@@ -327,12 +379,14 @@ def main():
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
           f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",
           "same: the paper's u_J counts the buds free at jamming over N_nr",
+          size_mismatch(jam_L, PAPER_L_JAMMING) or
           judged(jam["u_J"], verdicts.quoted(0.23, 0.01), n_paper=PAPER_SEEDS), "—")
     uw = C["u_J_lambert_w"]
     claim("Mean-field u_J = −W₀(−2e⁻²)/2 (Eq. A10)", "≈ 0.20", fmt(uw, 4) + " (computed, exact)", "same",
           "— (computed exactly, no error bar: " + ("rounds" if round(uw, 2) == 0.20 else "does not round") + " to 0.20)",
           "—")
     claim("Nonrattler density at jamming n_J", "≃ 0.775", f"{pm(jam['n_J'])} ({jam_src})", "same",
+          size_mismatch(jam_L, PAPER_L_JAMMING) or
           judged(jam["n_J"], verdicts.quoted(0.775, 0.001), n_paper=PAPER_SEEDS), "—")
     claim("Cells at jamming N_J", "—", f"{pm(jam['N_J'])} ({jam_src}); N_J/L² against the growth process alone: "
           "see \"Finite size at jamming\"", "same", "—", "—")
@@ -350,10 +404,11 @@ def main():
     vs = [judged(x, verdicts.quoted(0.0, 0.0), seeds=seeds_in(groups.get(label(x.get("P0"))))) for x in unrep]
     claim("ΔZ = ΔZ₀(P) + 2(u_J − u) over (P0, Δφ) (Eq. 6)", "holds within finite-size scatter",
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
-          f", RMS {fmt(ident['all_targets'].get('rms'))}",
-          "mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
-          "repopulation), feedback runs, per P0: " +
+          f", RMS {fmt(ident['all_targets'].get('rms'))}; the verdict's test: mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
+          "repopulation), feedback runs, per P0 (± is the SE over runs and that of the no-feedback branch ΔZ₀(P), which "
+          "every run shares, in quadrature): " +
           "; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)),
+          paper_cells_text(ident.get("paper_cells"), "ΔZ", "ΔZ₀(P) + 2(u_J − u)"),
           all_of(vs, "P0 groups") if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
     # ---- depletion ----
     for lab in order:
@@ -380,8 +435,9 @@ def main():
         pooled = judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median", seeds=main_seeds)
         vs = [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", seeds=seeds_in(groups[l])) for l in order]
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
-              f"{bg_name} = {bg_text} over the targets with λ_c B > 0; per P0: " +
-              ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order), "same",
+              f"{bg_name} = {bg_text} over the targets with λ_c B > 0, error by seed (the verdict's test); per P0: " +
+              ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order),
+              paper_cells_text(M["B_grow_over_lambda_B_log10"].get("paper_cells"), "B_grow", "λ_c B_ext"),
               all_of(vs, "P0 groups", pooled=pooled), fig("fig3"))
     else:
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)", "not measured (moduli stage off or unavailable)",
@@ -426,7 +482,7 @@ def main():
     # ---- divisions: the paper's medians are from L = 20 ----
     paper_div = {"none": (0.081, 0.001), "0.1": (0.071, 0.001), "0.01": (0.053, 0.001), "0.001": (0.013, 0.001),
                  "0.0001": None, "1e-05": None}
-    g20 = groups_at.get(20)
+    g20 = groups_at.get(PAPER_L_DIVISIONS)
     for lab in order:
         pv = paper_div.get(lab)
         bound = pv is None
@@ -441,7 +497,8 @@ def main():
                   fig("figD1"))
         else:
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",
-                  verdicts.Verdict("inconclusive", "no L = 20 runs"), fig("figD1"))
+                  size_mismatch(list(groups_at), PAPER_L_DIVISIONS) or
+                  verdicts.Verdict("inconclusive", f"no L = 20 runs at {p0_name(lab)}"), fig("figD1"))
     # ---- growth rates ----
     paper_h = {"0.1": (1.4e-4, 0.01e-4)}
     for lab in order:
@@ -456,14 +513,17 @@ def main():
                        "— (0 by construction without feedback: not a test; a measured value other than 0 is an "
                        "error of the analysis)" if h is not None else "— (not measured)")
         elif lab in paper_h:
-            verdict = judged(x["h_gamma"], verdicts.quoted(*paper_h[lab]), key="median", seeds=seeds_in(x))
+            verdict = (size_mismatch(L, PAPER_L_MAIN) or
+                       judged(x.get("h_gamma_paper"), verdicts.quoted(*paper_h[lab]), seeds=seeds_in(x)))
             paper = fmt(paper_h[lab][0])
         else:
             verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
-        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)} (median ± bootstrap SE)", paper, ours, "same", verdict, fig("figE1"))
+        theirs = avail(f"{pm(x.get('h_gamma_paper'))} (mean ± SE over runs)", "h_gamma") if lab != "none" else "same"
+        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)}", paper, ours + " (median ± bootstrap SE)", theirs, verdict,
+              fig("figE1"))
     strong = [l for l in fed if float(l) <= 1e-2]
-    claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "same",
-          trend_of([groups[l]["h_gamma"] for l in strong], increasing=True, key="median"), fig("figE1"))
+    claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "the trend of the means ± SE over runs",
+          trend_of([groups[l].get("h_gamma_paper") for l in strong], increasing=True), fig("figE1"))
     paper_w = {"0.1": 0.21, "0.01": 0.21, "0.0001": 0.16}
     paper_peak = {"0.1": 0.97, "0.01": 0.90, "0.001": 0.17}
     for lab in fed:
@@ -479,10 +539,12 @@ def main():
               f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
               f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}",
               avail(f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)", "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
-              f"{pm(w)} (u at Δφ = 3e-3); g < 1: " +
+              f"{pm(w)} (u at Δφ = 3e-3, contact-free buds over N_nr: the tables hold no g per cell, and the paper's "
+              "weight, cells of every kind whose bud grows at g = 1 exactly, needs it); g < 1: " +
               avail(f"median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
                     "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled") + peak_text,
-              judged(w, verdicts.quoted(paper_w[lab], 0.01), seeds=seeds_in(x)) if lab in paper_w else "—", fig("figE1"))
+              (size_mismatch(L, PAPER_L_MAIN) or judged(w, verdicts.quoted(paper_w[lab], 0.01), seeds=seeds_in(x)))
+              if lab in paper_w else "—", fig("figE1"))
     if "P_star_range_paper" in M:
         lo, hi = M["P_star_range_paper"]
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
@@ -497,10 +559,15 @@ def main():
     Dp = D.get("paper") or {}
     if have_dos and D:
         diff = D.get("N_zero_minus_N_u")
+        nz = Dp.get("N_zero_vs_N_u") or {}
+        slope = (f"; slope of N_zero on N_u through 0: {fmt(nz['slope_through_origin'])} ± {fmt(nz['slope_se'], 2)}"
+                 if nz.get("slope_through_origin") is not None else "")
         claim("N_zero ≃ N_u (Eq. F4)", "tracks",
               f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
-              f"N_zero − N_u = {pm(diff)}", "same", judged(diff, verdicts.quoted(0.0, 0.0), seeds=main_seeds),
-              fig("figF1"))
+              f"N_zero − N_u = {pm(diff)} (the verdict's test)",
+              f"N_zero = N_u exactly in {n_text(nz.get('N_zero_equals_N_u'))} of {n_text(nz.get('packings'))} "
+              f"Δφ-target packings{slope} (the paper's panel, no test)" if nz else "not measured",
+              judged(diff, verdicts.quoted(0.0, 0.0), seeds=main_seeds), fig("figF1"))
     else:
         claim("N_zero ≃ N_u (Eq. F4)", "tracks", "not measured (dos stage off or unavailable)", "same",
               verdicts.Verdict("inconclusive", "not measured"), fig("figF1"))
@@ -509,16 +576,18 @@ def main():
         n = Dp["packings"]
         p = Dp["fraction_Z_minus_6_negative"]
         half = verdicts.at_least(0.5)
-        if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and error_bar(0.0, n):
-            lo, hi = verdicts.wilson(p, n)
-            frac_text = f"{fmt(p)} [95% Wilson CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)}; score test at 1/2)"
+        n_eff = effective_n(p, Dp.get("fraction_Z_minus_6_negative_se"), n)
+        if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and error_bar(0.0, n_eff):
+            lo, hi = verdicts.wilson(p, n_eff)
+            frac_text = (f"{fmt(p)} [95% Wilson CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)} packings of "
+                         f"{n_text(Dp.get('seeds'))} seeds, effective n = {n_eff:.0f}; score test at 1/2)")
         else:
             frac_text = f"{fmt(p)} (n={n_text(n)})"
         theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
                   f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
                   f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {frac_text}")
-        verdict = (verdicts.proportion(p, n, half, n_paper=paper_n(n, main_seeds)) if p is not None else
-                   verdicts.Verdict("inconclusive", "not measured"))
+        verdict = (verdicts.proportion(p, n_eff, half, n_paper=paper_n(n_eff, main_seeds)) if n_eff is not None else
+                   verdicts.Verdict("inconclusive", "no error by seed (an analysis.json before version 4)"))
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", verdicts.Verdict("inconclusive", "not measured")
     claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5): more than half of the packings have Z − 6 < 0",
@@ -529,7 +598,8 @@ def main():
 
     # The size table: identities across L from the preset's own runs.
     size_rows = ["", "## System size", "",
-                 "Identities over the targets of each size of this preset (its seeds repeat across sizes).", "",
+                 "Identities over the targets of each size of this preset (its seeds repeat across sizes, so the sizes "
+                 "are not independent); errors are by seed, the targets of a seed being one sample.", "",
                  "| L | runs | ΔZ identity residual (feedback runs, all P0) | " +
                  growth_bulk(M["B_grow_over_lambda_B_log10"])[0] + " |", "| --- | --- | --- | --- |"]
     for sz in A.get("sizes", []):

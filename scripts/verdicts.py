@@ -9,13 +9,21 @@ budjam grew with S seeds per point, n_p = n_b when S = 20). The
 combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C).
 
     inconclusive   n_b < 5: no error bar and no verdict (the n is stated); likewise with no finite
-                   estimate or no error bar (the reason is stated);
+                   estimate, no error bar, an SE of 0 (no spread among n_b ≥ 5 values is no error bar
+                   either: z would be 0 or ∞ by the tie alone), or a paper's n_p that is not a positive
+                   number (the reason is stated);
     confirmed      z ≤ 2: x lies within 2σ of C, consistent with the claim at about 95 %;
     not confirmed  z > 2.
 
+z is printed to 3 significant digits, more where rounding would carry a z above 2 onto 2, so that the
+printed z is on the same side of 2 as its verdict.
+
 A proportion p̂ = k/n (a fraction of packings) is judged by the score test: its SE is that of the claim's
 boundary p0 nearest to p̂, √(p0(1 − p0)/n), not the Wald √(p̂(1 − p̂)/n), which is 0 at p̂ = 0 or 1 and would make
-z 0 or ∞ whatever n; its interval is Wilson's (the score test inverted), never of zero width.
+z 0 or ∞ whatever n; its interval is Wilson's (the score test inverted), never of zero width. At a boundary
+p0 = 0 or 1 the score SE is 0 too, so there the SE is the half-width of p̂'s Wilson interval over 1.96.
+
+A fit rejected by its χ² (above the 95 % quantile of χ² with its degrees of freedom) gives no value.
 
 A trend over the feedback groups ("decreases with feedback") is budjam's own data tested for
 direction, each group with its SE: not confirmed when a step between neighbouring groups goes against
@@ -68,11 +76,23 @@ class Verdict:
         return f"{self.word} ({self.why})"
 
 
-def _fmt(v):
+def _fmt(v, digits=2):
     if v == 0 or not math.isfinite(v):
         return f"{v:g}"
     a = abs(v)
-    return f"{v:.2g}" if 1e-3 <= a < 1e4 else f"{v:.1e}"
+    return f"{v:.{digits}g}" if 1e-3 <= a < 1e4 else f"{v:.{digits - 1}e}"
+
+
+def _fmt_z(z):
+    """z to 3 significant digits, or as many more as it takes to keep |z| > Z_MAX printed above Z_MAX:
+    rounding 2.004 to "2" would print a not-confirmed verdict with the z of a confirmed one. (A |z| ≤ Z_MAX
+    never rounds above it, Z_MAX being a round number.)"""
+    digits = 3
+    while True:
+        s = _fmt(z, digits)
+        if not (abs(z) > Z_MAX >= abs(float(s))) or digits >= 17:
+            return s
+        digits += 1
 
 
 def inconclusive_n(n):
@@ -101,15 +121,17 @@ def compare(estimate, se, n, claim, n_paper=None):
     why_not = unusable(estimate, se, n)
     if why_not is not None:
         return why_not
-    s_p = se * math.sqrt(n / (n_paper or n))
-    sigma = math.hypot(se, s_p)
-    d = claim.distance(estimate)
-    if sigma == 0:
-        z = 0.0 if d == 0 else math.inf
-    else:
-        z = d / sigma
+    if n_paper is None:
+        n_paper = n
+    elif not _finite(n_paper) or n_paper <= 0:
+        shown = f"{n_paper:g}" if isinstance(n_paper, (int, float)) and not isinstance(n_paper, bool) else repr(n_paper)
+        return Verdict("inconclusive", f"n_p = {shown}: the paper's sample size must be a positive number")
+    if se == 0:
+        return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
+    sigma = math.hypot(se, se * math.sqrt(n / n_paper))
+    z = claim.distance(estimate) / sigma
     word = "confirmed" if z <= Z_MAX else "not confirmed"
-    return Verdict(word, f"z = {_fmt(z)}, σ = {_fmt(sigma)}")
+    return Verdict(word, f"z = {_fmt_z(z)}, σ = {_fmt(sigma)}")
 
 
 def _clamp01(x):
@@ -118,8 +140,9 @@ def _clamp01(x):
 
 def proportion(p, n, claim, n_paper=None):
     """The verdict on a claim about a proportion p = k/n by the score test: the SE is that of p0, the
-    claim's boundary nearest to p, √(p0(1 − p0)/n) — not 0 at p = 0 or 1 unless the claim's own
-    boundary is 0 or 1; n_paper as in compare()."""
+    claim's boundary nearest to p, √(p0(1 − p0)/n) — not 0 at p = 0 or 1. When p0 itself is 0 or 1 the score
+    SE is 0 (no k other than 0 or n is possible there), which would turn any p ≠ p0 into z = ∞: the SE is
+    then the half-width of p's Wilson interval over 1.96, never 0. n_paper as in compare()."""
     why_not = unusable(p, 0.0, n)
     if why_not is not None:
         return why_not
@@ -128,6 +151,9 @@ def proportion(p, n, claim, n_paper=None):
     ends = [e for e in (claim.lo, claim.hi) if math.isfinite(e)]
     p0 = _clamp01(min(ends, key=lambda e: abs(e - p)) if ends else p)  # the boundary nearest to p
     se0 = math.sqrt(p0 * (1.0 - p0) / n)
+    if se0 == 0:
+        lo, hi = wilson(p, n)
+        se0 = (hi - lo) / (2 * 1.96)
     return compare(p, se0, n, claim, n_paper)
 
 
@@ -157,9 +183,48 @@ def trend(points, increasing):
     steps = [z(a, b) for a, b in zip(points, points[1:])]
     worst = min(steps)
     overall = z(points[0], points[-1])
-    why = f"first to last z = {_fmt(overall)}, worst step z = {_fmt(worst)}"
+    why = f"first to last z = {_fmt_z(overall)}, worst step z = {_fmt_z(worst)}"
     if worst < -Z_MAX:
         return Verdict("not confirmed", why)
     if overall > Z_MAX:
         return Verdict("confirmed", why)
     return Verdict("inconclusive", why + ": not resolved")
+
+
+def _lower_gamma_regularised(a, x):
+    """P(a, x) = γ(a, x)/Γ(a) by its power series, which converges for every x ≥ 0 (in about x terms)."""
+    if x <= 0:
+        return 0.0
+    term = total = 1.0 / a
+    k = 0
+    while term > total * 1e-17 and k < 100000:
+        k += 1
+        term *= x / (a + k)
+        total += term
+    return min(1.0, total * math.exp(a * math.log(x) - x - math.lgamma(a)))
+
+
+def chi2_quantile(dof, level=0.95):
+    """The `level` quantile of the χ² distribution with dof > 0 degrees of freedom, by bisection on its
+    CDF P(dof/2, x/2): exact to rounding, and without scipy, which Debian's python3 lacks by default."""
+    lo, hi = 0.0, dof + 10.0 * math.sqrt(2.0 * dof) + 10.0
+    while _lower_gamma_regularised(dof / 2.0, hi / 2.0) < level:
+        lo, hi = hi, 2.0 * hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if _lower_gamma_regularised(dof / 2.0, mid / 2.0) < level:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-12 * hi:
+            break
+    return 0.5 * (lo + hi)
+
+
+def fit_rejected(chi2, dof, level=0.95):
+    """Whether a fit's χ² exceeds the `level` quantile of χ² with dof degrees of freedom (its model then
+    does not describe the data, and its parameters are not estimates of anything); None when there is no
+    test (no finite χ², or no degree of freedom left)."""
+    if not _finite(chi2) or not _finite(dof) or dof <= 0:
+        return None
+    return chi2 > chi2_quantile(dof, level)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 namespace budjam {
@@ -89,6 +90,29 @@ BootstrapResult bootstrap_median(std::span<const double> x, const BootstrapOptio
 BootstrapResult bootstrap_mean(std::span<const double> x, const BootstrapOptions& options) {
   return bootstrap(
       x, [](std::span<const double> s) { return mean(s); }, options);
+}
+
+BootstrapResult cluster_bootstrap(std::span<const double> x, std::span<const std::uint64_t> cluster,
+                                  const Statistic& statistic, const BootstrapOptions& options) {
+  if (x.size() != cluster.size()) throw std::invalid_argument("cluster_bootstrap: values and clusters differ in size");
+  if (x.empty()) throw std::invalid_argument("cluster_bootstrap: no data");
+  std::map<std::uint64_t, std::vector<double>> by_id;
+  for (std::size_t k = 0; k < x.size(); ++k) by_id[cluster[k]].push_back(x[k]);
+  std::vector<std::vector<double>> clusters;
+  for (auto& [id, v] : by_id) clusters.push_back(std::move(v));
+  std::vector<double> index(clusters.size()), pooled;
+  for (std::size_t k = 0; k < index.size(); ++k) index[k] = static_cast<double>(k);
+  const Statistic of_drawn = [&](std::span<const double> drawn) {
+    pooled.clear();
+    for (double i : drawn) {
+      const auto& c = clusters[static_cast<std::size_t>(i)];
+      pooled.insert(pooled.end(), c.begin(), c.end());
+    }
+    return statistic(pooled);
+  };
+  BootstrapResult r = bootstrap(index, of_drawn, options);  // its estimate pools every cluster once
+  r.n = clusters.size();
+  return r;
 }
 
 LinearFit linear_fit(std::span<const double> x, std::span<const double> y) {

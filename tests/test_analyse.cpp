@@ -2,6 +2,7 @@
 // (summary.json, the moduli files beside its packings), are deterministic, and a missing input is
 // refused. The estimators themselves are tested on known answers in test_statistics,
 // test_survival and test_depletion.
+#include "budjam/statistics.hpp"
 #include "io/json.hpp"
 
 #include <catch2/catch.hpp>
@@ -14,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <string>
@@ -427,6 +429,17 @@ TEST_CASE("analyse takes run directories or --tables, not both and not neither: 
 }
 
 // The columns of a hand-built runs.csv (the stored tables' layout).
+namespace {
+// A tables directory written by hand: `write` fills its runs.csv and targets.csv.
+fs::path hand_tables(const std::string& name, const std::function<void(std::ostream&, std::ostream&)>& write) {
+  const fs::path dir = work_dir() / name;
+  fs::create_directories(dir);
+  std::ofstream runs(dir / "runs.csv"), targets(dir / "targets.csv");
+  write(runs, targets);
+  return dir;
+}
+}  // namespace
+
 constexpr const char* kRunsHeader =
     "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
     "dphi_2_pred_diameter_sq,G_2\n";
@@ -485,47 +498,92 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "the ΔZ identity's error adds the no-feedback branch's SE to that over runs; a missing value in the "
+    "branch is left out of it",
+    "[analyse]") {
+  // No feedback: 7 runs jammed at P_J = 0, ΔZ_J = 0; at Δφ = 0.01 six give P = 0.01 and ΔZ = 0.10 …
+  // 0.15, the seventh no P. The branch there is ΔZ_0 = 0.125 ± SE(0.10 … 0.15). Feedback (P0 = 0.01):
+  // 5 runs at the same P and u = u_J with ΔZ = 0.125 + 0.002 k, residuals 0.002 k (k = 0 … 4).
+  const fs::path out = work_dir() / "branch_tables_out";
+  const fs::path dir = hand_tables("branch_tables", [](std::ostream& r, std::ostream& t) {
+    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,P_J,dZ_J\n";
+    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,u\n";
+    for (int k = 0; k < 7; ++k) {
+      const std::string run = "branch/none/seed" + std::to_string(100 + k);
+      r << run << ",15,," << 100 + k << ",finished," << k << ",0.84,0.2,0.76,172,170,0,0\n";
+      t << run << ",15,," << 100 + k << ",0.01,0.85,0,true," << (k < 6 ? "0.01" : "") << "," << 0.10 + 0.01 * k
+        << ",0.2\n";
+    }
+    for (int k = 0; k < 5; ++k) {
+      const std::string run = "branch/fed/seed" + std::to_string(200 + k);
+      r << run << ",15,0.01," << 200 + k << ",finished," << 7 + k << ",0.84,0.2,0.76,172,170,0,0\n";
+      t << run << ",15,0.01," << 200 + k << ",0.01,0.85,0,true,0.01," << 0.125 + 0.002 * k << ",0.2\n";
+    }
+  });
+  const auto res = run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15");
+  REQUIRE(res.code == 0);
+  const auto j = budjam::io::read_json(out / "analysis.json");
+  const auto& per = j["main"]["dZ_identity"]["per_P0_unrepopulated_by_run"];
+  REQUIRE(per.size() == 1);
+  const auto& x = per[0];
+  const std::vector<double> branch{0.10, 0.11, 0.12, 0.13, 0.14, 0.15}, runs{0, 0.002, 0.004, 0.006, 0.008};
+  CHECK(x["n"] == 5);
+  CHECK(x["mean"].get<double>() == Approx(0.004).margin(1e-12));
+  CHECK(x["se_runs"].get<double>() == Approx(budjam::standard_error(runs)));
+  CHECK(x["se_branch"].get<double>() == Approx(budjam::standard_error(branch)));
+  CHECK(x["se"].get<double>() == Approx(std::hypot(budjam::standard_error(runs), budjam::standard_error(branch))));
+  // the paper's figure: one (P0, Δφ) cell, ⟨ΔZ⟩ = 0.129 ± 0.0014 against ⟨prediction⟩ = 0.125 ± 0: more than
+  // 2 combined SE apart
+  const auto& cells = j["main"]["dZ_identity"]["paper_cells"];
+  REQUIRE(cells["cells"].size() == 1);
+  CHECK(cells["cells"][0]["measured"]["mean"].get<double>() == Approx(0.129));
+  CHECK(cells["cells"][0]["predicted"]["mean"].get<double>() == Approx(0.125));
+  CHECK(cells["cells_tested"] == 1);
+  CHECK(cells["cells_apart_2se"] == 1);
+}
+
+TEST_CASE(
     "analyse writes no SE, bootstrap SE or interval from fewer than five samples: B_grow test per group, "
     "ΔZ identity per P0, the P† fit",
     "[analyse]") {
-  // Three feedback groups of two runs with two targets each: 4 targets per group (no error bar),
-  // 12 pooled (an error bar), and a P† fit over 3 values of P0 (no error bar).
-  const fs::path dir = work_dir() / "few_tables", out = work_dir() / "few_tables_out";
-  fs::create_directories(dir);
-  {
-    std::ofstream r(dir / "runs.csv");
+  // Three feedback groups of two runs (seeds of their own) with two targets each: 2 seeds and 4 targets
+  // per group (no error bar), 6 seeds pooled (an error bar), and a P† fit over 3 values of P0 (no
+  // error bar).
+  const fs::path out = work_dir() / "few_tables_out";
+  const fs::path dir = hand_tables("few_tables", [](std::ostream& r, std::ostream& t) {
     r << kRunsHeader;
-    std::ofstream t(dir / "targets.csv");
     t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,dZ_pred,lambda_c,B_grow,B\n";
     const char* P0s[] = {"0.01", "0.001", "0.0001"};
     int k = 0;
     for (int p = 0; p < 3; ++p)
       for (int s = 1; s <= 2; ++s, ++k) {
         const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
-        r << run << ",15," << P0s[p] << "," << s << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
+        r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
           << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.01,0.011,1.0\n";
         for (int d = 0; d < 2; ++d)
-          t << run << ",15," << P0s[p] << "," << s << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841) << ",2,"
-            << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"
+          t << run << ",15," << P0s[p] << "," << k + 1 << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841)
+            << ",2," << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"
             << 1.0 + 0.1 * (k + d) << ",2.0\n";
       }
-  }
+  });
   REQUIRE(run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15").code == 0);
   const auto j = budjam::io::read_json(out / "analysis.json");
   REQUIRE(j["groups"].size() == 3);
   for (const auto& g : j["groups"]) {
     const auto& b = g["B_grow_over_lambda_B_log10"];
-    CHECK(b["n"] == 4);
+    CHECK(b["n"] == 2);
+    CHECK(b["targets"] == 4);
     CHECK(b["median"].is_number());
     CHECK(b["se"].is_null());
     CHECK(b["ci95"][0].is_null());
     CHECK(b["ci95"][1].is_null());
   }
   const auto& pooled = j["main"]["B_grow_over_lambda_B_log10"];
-  CHECK(pooled["n"] == 12);
+  CHECK(pooled["n"] == 6);
+  CHECK(pooled["targets"] == 12);
   CHECK(pooled["se"].is_number());
-  for (const auto& x : j["main"]["dZ_identity"]["per_P0_feedback"]) {
-    CHECK(x["n"] == 4);
+  for (const auto& x : j["main"]["dZ_identity"]["per_P0_unrepopulated_by_run"]) {
+    CHECK(x["n"] == 2);
     CHECK(x["se"].is_null());
   }
   CHECK(j["main"]["P_dagger_points"] == 3);

@@ -134,6 +134,13 @@ TEST_CASE("P* = n_J (6 + 2 u_J) a_c / (8 ln 10)") {
   CHECK(crossover_pressure(0.775, 0.2, 0.01) == Approx(0.0026927).epsilon(1e-4));
 }
 
+// Each target a cluster of its own: the targets of distinct seeds.
+std::vector<std::uint64_t> own_clusters(std::size_t n) {
+  std::vector<std::uint64_t> c(n);
+  for (std::size_t k = 0; k < n; ++k) c[k] = k;
+  return c;
+}
+
 TEST_CASE("B_grow = λ_c B_ext is tested by the median ratio: an arrested target (0 over 0) cannot move it") {
   // Ratios B_grow/(λ_c B): 10, 1, −0.5 (B_grow ≤ 0 ranks lowest), 0.1 and 10^139 (B_grow = 10⁻¹¹
   // fitted on a flat P against λ_c B = 10⁻¹⁵⁰); λ_c B = 0 and a NaN B_grow are left out. Sorted
@@ -141,27 +148,60 @@ TEST_CASE("B_grow = λ_c B_ext is tested by the median ratio: an arrested target
   const std::vector<double> B_grow{5, 1, -0.5, 1e-11, 0.05, 3, NAN};
   const std::vector<double> lambda{1, 0.5, 0.5, 1e-150, 0.25, 0, 1};
   const std::vector<double> B_ext{0.5, 2, 2, 1, 2, 0.4, 0.4};
-  const auto c = growth_bulk_check(B_grow, lambda, B_ext);
+  const auto c = growth_bulk_check(B_grow, lambda, B_ext, own_clusters(7));
   REQUIRE(c);
   CHECK(c->log10_median.n == 5);
+  CHECK(c->targets == 5);
   CHECK(c->nonpositive == 1);
   CHECK(c->log10_median.estimate == Approx(0).margin(1e-15));
   // without the arrested target the mean of the positive logs is 0 and the median log₁₀ 0.55 (the
   // mean of 0.1 and 1): that target moves the mean by 34.75 decades, the median by one rank
   CHECK(growth_bulk_check(std::vector<double>{5, 1, -0.5, 0.05}, std::vector<double>{1, 0.5, 0.5, 0.25},
-                          std::vector<double>{0.5, 2, 2, 2})
+                          std::vector<double>{0.5, 2, 2, 2}, own_clusters(4))
             ->log10_median.estimate == Approx(std::log10(0.55)));
 
   // ratios −1, −2, 2: the median −1 is ≤ 0, its log −∞; no target qualifying gives nullopt
-  const auto down =
-      growth_bulk_check(std::vector<double>{-1, -2, 2}, std::vector<double>{1, 1, 1}, std::vector<double>{1, 1, 1});
+  const auto down = growth_bulk_check(std::vector<double>{-1, -2, 2}, std::vector<double>{1, 1, 1},
+                                      std::vector<double>{1, 1, 1}, own_clusters(3));
   REQUIRE(down);
   CHECK(down->nonpositive == 2);
   CHECK(std::isinf(down->log10_median.estimate));
   CHECK(down->log10_median.estimate < 0);
-  CHECK_FALSE(growth_bulk_check(std::vector<double>{1}, std::vector<double>{0}, std::vector<double>{1}));
-  CHECK_THROWS_AS(growth_bulk_check(std::vector<double>{1, 2}, std::vector<double>{1}, std::vector<double>{1, 2}),
-                  std::invalid_argument);
+  CHECK_FALSE(
+      growth_bulk_check(std::vector<double>{1}, std::vector<double>{0}, std::vector<double>{1}, own_clusters(1)));
+  CHECK_THROWS_AS(
+      growth_bulk_check(std::vector<double>{1, 2}, std::vector<double>{1}, std::vector<double>{1, 2}, own_clusters(2)),
+      std::invalid_argument);
+}
+
+TEST_CASE("B_grow test: the targets of one seed are one sample, whatever their number or row order") {
+  // Eight seeds with ratios 0.5 … 4; each seed's targets repeated three times (one run's targets are
+  // alike) must give the same n, median and SE as one target per seed, and so must any row order.
+  const std::vector<double> per_seed{0.5, 0.8, 1.0, 1.3, 1.7, 2.2, 3.0, 4.0};
+  std::vector<double> B_grow, ones;
+  std::vector<std::uint64_t> seed;
+  for (int copy = 0; copy < 3; ++copy)
+    for (std::size_t k = 0; k < per_seed.size(); ++k) {
+      B_grow.push_back(per_seed[k]);
+      ones.push_back(1.0);
+      seed.push_back(10 + k);
+    }
+  const std::vector<double> ones8(8, 1.0);
+  const auto once = growth_bulk_check(per_seed, ones8, ones8, own_clusters(8));
+  const auto thrice = growth_bulk_check(B_grow, ones, ones, seed);
+  REQUIRE(once);
+  REQUIRE(thrice);
+  CHECK(thrice->log10_median.n == 8);
+  CHECK(thrice->targets == 24);
+  CHECK(thrice->log10_median.estimate == Approx(once->log10_median.estimate));
+  CHECK(thrice->log10_median.se == Approx(once->log10_median.se).epsilon(1e-12));
+  // rows reversed: the same draws of the same clusters
+  std::vector<double> rb(B_grow.rbegin(), B_grow.rend());
+  std::vector<std::uint64_t> rs(seed.rbegin(), seed.rend());
+  CHECK(growth_bulk_check(rb, ones, ones, rs)->log10_median.se == thrice->log10_median.se);
+  // counted as 24 independent targets, the error would shrink by about √3
+  const auto as_targets = growth_bulk_check(B_grow, ones, ones, own_clusters(24));
+  CHECK(as_targets->log10_median.se < 0.8 * thrice->log10_median.se);
 }
 
 TEST_CASE("excess contacts are integers whose sign is that of ΔZ") {

@@ -78,6 +78,37 @@ TEST_CASE("bootstrap is deterministic for a seed and changes with it") {
   CHECK_THROWS(bootstrap_median(std::vector<double>{}));
 }
 
+TEST_CASE("cluster bootstrap: a cluster is one sample, however many values it holds, in any row order") {
+  BootstrapOptions bo;
+  bo.resamples = 4000;
+  const std::vector<double> means{1.0, 2.5, 2.0, 4.0, 3.5, 6.0};
+  const auto mean_of = [](std::span<const double> s) { return mean(s); };
+  // one value per cluster: the plain bootstrap, draw for draw (clusters taken in id order)
+  std::vector<std::uint64_t> ids{0, 1, 2, 3, 4, 5};
+  const auto plain = bootstrap_mean(means, bo);
+  const auto single = cluster_bootstrap(means, ids, mean_of, bo);
+  CHECK(single.n == 6);
+  CHECK(single.estimate == Approx(plain.estimate));
+  CHECK(single.se == Approx(plain.se).epsilon(1e-12));
+  // every value four times in its cluster, rows shuffled: n, estimate and SE unchanged
+  std::vector<double> x;
+  std::vector<std::uint64_t> c;
+  for (int copy = 0; copy < 4; ++copy)
+    for (std::size_t k = 0; k < means.size(); ++k) {
+      x.push_back(means[(k + 2 * copy) % 6]);
+      c.push_back((k + 2 * copy) % 6);
+    }
+  const auto clustered = cluster_bootstrap(x, c, mean_of, bo);
+  CHECK(clustered.n == 6);
+  CHECK(clustered.estimate == Approx(plain.estimate));
+  CHECK(clustered.se == Approx(plain.se).epsilon(1e-12));
+  // the same 24 values as independent samples: an SE about half as large, which the data do not carry
+  CHECK(bootstrap_mean(x, bo).se == Approx(plain.se / 2).epsilon(0.15));
+  CHECK_THROWS_AS(cluster_bootstrap(x, ids, mean_of, bo), std::invalid_argument);
+  CHECK_THROWS_AS(cluster_bootstrap(std::vector<double>{}, std::vector<std::uint64_t>{}, mean_of, bo),
+                  std::invalid_argument);
+}
+
 TEST_CASE("linear fit is exact on a line") {
   const std::vector<double> x{0.5, 1.0, 2.0, 3.5, 7.0};
   std::vector<double> y;

@@ -57,6 +57,14 @@ BootstrapResult bootstrap(std::span<const double> x, const Statistic& statistic,
 BootstrapResult bootstrap_median(std::span<const double> x, const BootstrapOptions& options = {});
 BootstrapResult bootstrap_mean(std::span<const double> x, const BootstrapOptions& options = {});
 
+// Cluster bootstrap: whole clusters drawn with replacement, the statistic taken over the pooled values
+// of the drawn clusters. For values that are not independent one by one (the Δφ targets of one run,
+// the runs of one seed, which share their growth up to jamming) the cluster is the independent sample:
+// n = clusters. The clusters are ordered by id, so the result does not depend on the order of the
+// rows. Throws std::invalid_argument for mismatched sizes or no data.
+BootstrapResult cluster_bootstrap(std::span<const double> x, std::span<const std::uint64_t> cluster,
+                                  const Statistic& statistic, const BootstrapOptions& options = {});
+
 // Uniform integer in [0, n), unbiased (rejection of the top partial block of 2^64), the same on
 // every platform (std::uniform_int_distribution is not specified bit for bit). n > 0.
 std::uint64_t uniform_index(std::mt19937_64& rng, std::uint64_t n);

@@ -42,7 +42,7 @@ ACCURACY_HEADER = "date\thost\tsweep\trun\tsetting\tquantity\tvalue\tcommand\n"
 
 
 def test_analysis_page_shows_the_latest_run_of_every_accuracy_sweep():
-    r = bench_table("--check-accuracy", SOURCE_DIR / "docs" / "analysis.md")
+    r = bench_table("--check-accuracy", SOURCE_DIR / "docs" / "accuracy.md")
     assert r.returncode == 0, r.stderr
 
 

@@ -201,8 +201,11 @@ def test_h_gamma_without_feedback_is_exact_and_not_counted(tmp_path):
 def test_a_fraction_of_zero_or_one_is_judged_by_a_finite_error(tmp_path):
     A, J = quick()
     paper = A["main"]["dos"]["paper"]
+    se = paper["fraction_Z_minus_6_negative_se"]
     for p, word in ((0.0, "not confirmed"), (1.0, "confirmed"), (0.45, None)):
-        paper.update(packings=40, fraction_Z_minus_6_negative=p)
+        # a fraction of 0 or 1 is the same in every seed: its SE by seed is 0
+        paper.update(packings=40, fraction_Z_minus_6_negative=p,
+                     fraction_Z_minus_6_negative_se=0.0 if p in (0.0, 1.0) else se)
         r, out = report(fresh(tmp_path, f"p{p}"), A, J)
         row = row_of(out, "ω* collapses")
         cell = row.split(" | ")[4]
@@ -220,8 +223,16 @@ def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_pa
     s = seeds.pop()
     assert f"L = 8 with {s} seeds per point" in out and "not the paper's grid" in out
     assert f"n_p = n_b · 20/S for this preset's S = {s} seeds per point" in out
-    # a grid row: σ = s_b √(1 + n_b/n_p) with n_p = n_b · 20/S
-    x = next(g for g in main_L_groups(A) if g["P0_label"] == "0.1")["h_gamma"]
+    # the paper's h_γ is for L = 15: a value at L = 8 does not test it
+    assert "inconclusive (L = 8, the paper's number is for L = 15)" in row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
+    # the same grid said to be at L = 15: σ = s_b √(1 + n_b/n_p) with n_p = n_b · 20/S
+    main_L = A["main_L"]
+    for g in A["groups"]:
+        if g["L"] == main_L:
+            g["L"] = 15
+    A["main_L"] = 15
+    r, out = report(fresh(tmp_path, "at15"), A, J)
+    x = next(g for g in main_L_groups(A) if g["P0_label"] == "0.1")["h_gamma_paper"]
     row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
     sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
     assert math.isclose(sigma, x["se"] * math.sqrt(1 + s / 20), rel_tol=0.05), row
@@ -233,3 +244,79 @@ def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_pa
     row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
     sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
     assert math.isclose(sigma, x["se"] * math.sqrt(2), rel_tol=0.05), row
+
+
+def paper_tables():
+    return load(os.path.join(REF, "paper", "reanalysed", "analysis.json"))
+
+
+def verdict_of(out, start):
+    return row_of(out, start).split(" | ")[4]
+
+
+def test_a_finite_size_fit_its_chi2_rejects_prints_no_limit(tmp_path):
+    A, J = quick()
+    ext = J["finite_size_jamming"]["extrapolation"]
+    assert ext["u_J"]["chi2"] > 12.6 and ext["rattler_fraction"]["chi2"] < 12.6 and ext["u_J"]["dof"] == 6
+    # the depletion table: one rejected fit (χ² = 40 on 3 dof, above 7.81) and the others accepted
+    cols = ["dphi_2", "dphi_2_paper", "dphi_2_none_left", "N_div_2_over_N_J", "G_2_over_Pmax", "G_2_over_Pmax_paper"]
+    sizes = [{"L": L, "runs": 20, "N_J": {"mean": 0.77 * L * L},
+              **{k: {"value": 0.01, "se": 0.001, "n": 20} for k in cols}} for L in (8, 15, 20, 30, 40)]
+    fits = {k: {"sizes": 5, "limit": 0.0123, "limit_se": 4e-4, "chi2": 2.0, "dof": 3,
+                "residuals_in_se": [0.5, -0.5, 0.3, -0.3, 0.1]} for k in cols}
+    fits["dphi_2"].update(chi2=40.0, residuals_in_se=[3.1, -2.9, 2.5, -3.3, 1.0])
+    A["finite_size"] = [{"P0": 1e-3, "P0_label": "0.001", "sizes": sizes, "extrapolation": fits}]
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    rows = [line for line in out.splitlines() if line.startswith("| N → ∞")]
+    assert len(rows) == 2, rows
+    jam_cells, dep_cells = ([c.strip() for c in row.strip("|").split("|")] for row in rows)
+    u = jam_cells[7]  # after "N → ∞", five empty columns and n_J,∞
+    assert u.startswith("model rejected (χ²/dof = 86/6") and "+5.4" in u and "±" not in u, u
+    assert jam_cells[-1].startswith(f"{ext['rattler_fraction']['limit']:.3g} ± "), jam_cells[-1]
+    assert jam_cells[6].startswith(f"{J['finite_size_jamming']['n_J_limit']['value']:.3g} ± ")  # n_J,∞ as before
+    assert dep_cells[3].startswith("model rejected (χ²/dof = 40/3") and "+3.1" in dep_cells[3], dep_cells[3]
+    assert dep_cells[4].startswith("0.0123 ± 4.0e-04 (χ²/dof = 2/3"), dep_cells[4]
+
+
+def test_a_value_from_another_box_than_the_papers_number_is_not_judged(tmp_path):
+    # the quick preset (L = 8) without a jamming ensemble: u_J and n_J are from L = 8, the paper's from L = 15
+    A, J = quick()
+    assert A["main_L"] == 8
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0, r.stderr
+    for start in ("Unconstrained fraction at jamming u_J", "Nonrattler density at jamming n_J"):
+        assert verdict_of(out, start) == "inconclusive (L = 8, the paper's number is for L = 15)", row_of(out, start)
+    for lab in ("no feedback", "P0=0.1", "P0=1e-05"):
+        assert verdict_of(out, f"Median N_div(φ_2)/N_J, {lab}") == \
+            "inconclusive (L = 8, the paper's number is for L = 20)"
+    assert tally_and_cells(out)[0] == tally_and_cells(out)[1]
+    # with the jamming ensemble at L = 15 the jamming rows are judged
+    r, out = report(fresh(tmp_path, "ensemble"), A, J)
+    for start in ("Unconstrained fraction at jamming u_J", "Nonrattler density at jamming n_J"):
+        assert re.match(r"(not )?confirmed \(z", verdict_of(out, start)), row_of(out, start)
+    # the paper's grid (main L = 15, L = 20 runs): judged without an ensemble too
+    r, out = report(fresh(tmp_path, "paper"), paper_tables())
+    assert r.returncode == 0, r.stderr
+    for start in ("Unconstrained fraction at jamming u_J", "Nonrattler density at jamming n_J",
+                  "Median N_div(φ_2)/N_J, no feedback, L = 20"):
+        assert re.match(r"(not )?confirmed \(z", verdict_of(out, start)), row_of(out, start)
+
+
+def test_the_division_rows_print_the_bootstrap_se_beside_the_interval(tmp_path):
+    A = paper_tables()
+    g = next(g for g in A["groups"] if g["L"] == 20 and g["P0"] is None)
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0, r.stderr
+    cells = row_of(out, "Median N_div(φ_2)/N_J, no feedback, L = 20").split(" | ")
+    for cell, key in ((cells[2], "N_div_2_over_N_J"), (cells[3], "N_div_2_over_N_J_paper")):
+        m = re.match(r"(\S+) ± (\S+) \[95% CI (\S+), (\S+)\] \(n=(\d+)\)", cell)
+        assert m, cell
+        s = g[key]
+        assert math.isclose(float(m.group(2)), s["se"], rel_tol=0.01) and int(m.group(5)) == s["n"], cell
+    # fewer than 5 samples: neither SE nor interval
+    for key in ("N_div_2_over_N_J", "N_div_2_over_N_J_paper"):
+        g[key]["n"] = 4
+    r, out = report(fresh(tmp_path, "few"), A)
+    row = row_of(out, "Median N_div(φ_2)/N_J, no feedback, L = 20")
+    assert "±" not in row and "CI" not in row, row

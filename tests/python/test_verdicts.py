@@ -42,7 +42,7 @@ def test_a_fraction_within_noise_of_a_bound_is_consistent_with_it():
 def test_ranges_and_bounds():
     assert v.compare(0.15, 0.01, 20, v.interval(0.2, 1.0)).word == "not confirmed"
     assert v.compare(0.19, 0.01, 20, v.interval(0.2, 1.0)).word == "confirmed"
-    assert v.compare(0.0, 0.0, 20, v.at_most(3e-3)).word == "confirmed"
+    assert v.compare(0.0, 0.001, 20, v.at_most(3e-3)).word == "confirmed"
     assert v.compare(0.02, 0.001, 20, v.at_most(3e-3)).word == "not confirmed"
 
 
@@ -91,12 +91,6 @@ def test_no_verdict_without_a_finite_estimate_or_error_bar_and_the_reason_is_tru
 
 
 def test_zero_spread_is_never_a_division_into_a_verdict_of_chance():
-    # σ = 0 (every sample equal, n ≥ 5): inside the set z = 0, outside it z = ∞ — no 0/0, no NaN
-    assert str(v.compare(0.0, 0.0, 8, v.quoted(0.0, 0.0))) == "confirmed (z = 0, σ = 0)"
-    r = v.compare(1e-9, 0.0, 8, v.quoted(0.0, 0.0))
-    assert r.word == "not confirmed" and "z = inf" in r.why
-    assert v.compare(-0.5, 0.0, 8, v.at_least(0.0)).word == "not confirmed"
-    assert v.compare(-0.5, 0.0, 8, v.at_most(0.0)).word == "confirmed"
     # a negative estimate against an interval: the distance to its near end
     assert v.compare(-0.1, 0.1, 20, v.interval(0.2, 1.0)).word == "not confirmed"
     assert v.compare(-0.1, 0.2, 20, v.interval(0.2, 1.0)).word == "confirmed"
@@ -137,3 +131,76 @@ def test_the_wilson_interval_never_has_zero_width():
         assert 0.0 <= lo <= p <= hi <= 1.0 and hi - lo > 0.05
     lo, hi = v.wilson(0.0, 20)
     assert lo == 0.0 and math.isclose(hi, 0.161, abs_tol=1e-3)  # 1.96²/(20 + 1.96²)
+
+
+def z_of(r):
+    return float(r.why.split("z = ")[1].split(",")[0])
+
+
+def test_a_printed_z_is_on_the_same_side_of_two_as_its_verdict():
+    s = 0.01
+    sigma = math.sqrt(2) * s  # same n as the paper
+    c = v.quoted(0.5, 0.0)
+    for z in (0.5, 1.99, 1.999, 1.9999, 2.0, 2.00001, 2.0001, 2.001, 2.004, 2.04, 2.05, 2.4, 86.0):
+        r = v.compare(0.5 + z * sigma, s, 20, c)
+        if r.word == "confirmed":
+            assert z_of(r) <= 2, r
+        else:
+            assert r.word == "not confirmed" and z_of(r) > 2, r
+    r = v.compare(0.5 + 2.04 * sigma, s, 20, c)
+    assert str(r) == "not confirmed (z = 2.04, σ = 0.014)"
+    # a trend: its first-to-last z decides "confirmed" (> 2), its worst step "not confirmed" (< −2)
+    up = v.trend([(0.0, 0.01, 20), (2.004 * math.sqrt(2) * 0.01, 0.01, 20)], increasing=True)
+    assert up.word == "confirmed" and float(up.why.split("first to last z = ")[1].split(",")[0]) > 2, up
+    down = v.trend([(0.0, 0.01, 20), (2.004 * math.sqrt(2) * 0.01, 0.01, 20)], increasing=False)
+    assert down.word == "not confirmed" and float(down.why.split("worst step z = ")[1]) < -2, down
+
+
+def test_a_zero_standard_error_from_five_or_more_samples_gives_no_verdict():
+    # every value tied: SE 0 is no error bar, and z would be 0 or ∞ by the tie alone
+    for est, claim in ((0.0, v.quoted(0.0, 0.0)), (1e-9, v.quoted(0.0, 0.0)), (-0.5, v.at_least(0.0)),
+                       (-0.5, v.at_most(0.0)), (0.23, v.quoted(0.23, 0.01))):
+        r = v.compare(est, 0.0, 8, claim)
+        assert r.word == "inconclusive" and "SE = 0" in r.why and "n = 8" in r.why, r
+        assert "z =" not in r.why and "inf" not in r.why
+        assert v.compare(est, 0.0, 8, claim, n_paper=20).word == "inconclusive"
+    # fewer than 5 samples: the reason stays the count
+    assert v.compare(0.0, 0.0, 4, v.quoted(0.0, 0.0)).why == "n = 4 < 5"
+
+
+def test_a_proportion_at_a_claim_boundary_of_zero_or_one_keeps_a_finite_error():
+    # p0 = 0 or 1: the score SE √(p0(1 − p0)/n) is 0 there, so the SE is that of Wilson's interval at p̂
+    n = 40
+    for p, claim in ((0.0, v.at_most(0.0)), (0.025, v.at_most(0.0)), (0.5, v.at_most(0.0)),
+                     (1.0, v.at_least(1.0)), (0.9, v.at_least(1.0)), (0.0, v.quoted(0.0, 0.0)),
+                     (1.0, v.quoted(1.0, 0.0))):
+        r = v.proportion(p, n, claim)
+        assert r.word in ("confirmed", "not confirmed"), (p, r)
+        assert "inf" not in r.why and "σ = 0)" not in r.why and math.isfinite(z_of(r)), (p, r)
+        lo, hi = v.wilson(p, n)
+        se = (hi - lo) / (2 * 1.96)
+        assert math.isclose(z_of(r), claim.distance(p) / (math.sqrt(2) * se), rel_tol=0.01, abs_tol=1e-12), (p, r)
+    assert v.proportion(0.0, n, v.at_most(0.0)).word == "confirmed"
+    assert v.proportion(0.5, n, v.at_most(0.0)).word == "not confirmed"
+    # the boundary nearest to p̂ is inside (0, 1): the score SE as before
+    r = v.proportion(0.0, n, v.interval(0.5, 1.0))
+    assert math.isclose(z_of(r), 0.5 / (math.sqrt(2) * math.sqrt(0.25 / n)), rel_tol=0.01)
+
+
+def test_a_paper_sample_size_that_is_not_a_positive_number_gives_no_verdict():
+    c = v.quoted(0.5, 0.01)
+    for n_p in (0, 0.0, -5, -0.5, math.nan, math.inf, -math.inf):
+        for r in (v.compare(0.51, 0.01, 20, c, n_paper=n_p), v.proportion(0.4, 40, v.at_least(0.5), n_paper=n_p)):
+            assert r.word == "inconclusive" and "n_p" in r.why and "z =" not in r.why, (n_p, r)
+    # None is "the same as budjam's n"
+    assert v.compare(0.53, 0.01, 20, c, n_paper=None).why == v.compare(0.53, 0.01, 20, c, n_paper=20).why
+    assert v.compare(0.53, 0.01, 20, c, n_paper=None).word in ("confirmed", "not confirmed")
+
+
+def test_the_chi2_quantile_is_the_tabulated_one_and_decides_rejection():
+    # 95 % points of χ² (any statistics table)
+    for dof, q in ((1, 3.841), (2, 5.991), (3, 7.815), (6, 12.592), (10, 18.307), (30, 43.773), (100, 124.342)):
+        assert math.isclose(v.chi2_quantile(dof), q, abs_tol=1.5e-3), dof
+    assert math.isclose(v.chi2_quantile(6, 0.99), 16.812, abs_tol=1.5e-3)
+    assert v.fit_rejected(86, 6) is True and v.fit_rejected(12.5, 6) is False and v.fit_rejected(8.4, 6) is False
+    assert v.fit_rejected(5.0, 0) is None and v.fit_rejected(math.nan, 6) is None and v.fit_rejected(None, 6) is None

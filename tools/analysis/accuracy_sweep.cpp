@@ -669,7 +669,7 @@ void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std
                        "seconds: CPU seconds per run (growth) or per computation (best of interleaved repeats); "
                        "cost (what the front compares): the seconds, except for growth: force evaluations per run "
                        "times the sweep's mean CPU seconds per evaluation (deterministic); "
-                       "docs/analysis.md, 'Accuracy against cost'"},
+                       "docs/accuracy.md"},
                       {"reference", o.reference},
                       {"front_rule", Json{{"time_noise", o.time_noise},
                                           {"error_ratio", o.error_ratio},

@@ -1,5 +1,5 @@
 #pragma once
-// Accuracy against cost of the numerical knobs (docs/analysis.md, "Accuracy against cost").
+// Accuracy against cost of the numerical knobs (docs/accuracy.md).
 //
 // Growth knobs: each variant directory and the reference hold run directories seed<k>/ grown from the
 // same scene and seeds, differing in one knob (the reference has every knob tight). A variant directory

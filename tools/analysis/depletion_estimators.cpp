@@ -59,15 +59,18 @@ double crossover_pressure(double n_J, double u_J, double a_c_area) {
 }
 
 std::optional<GrowthBulkCheck> growth_bulk_check(std::span<const double> B_grow, std::span<const double> lambda_c,
-                                                 std::span<const double> B_ext, const BootstrapOptions& options) {
-  if (lambda_c.size() != B_grow.size() || B_ext.size() != B_grow.size())
-    throw std::invalid_argument("growth_bulk_check: B_grow, lambda_c and B_ext differ in length");
+                                                 std::span<const double> B_ext, std::span<const std::uint64_t> cluster,
+                                                 const BootstrapOptions& options) {
+  if (lambda_c.size() != B_grow.size() || B_ext.size() != B_grow.size() || cluster.size() != B_grow.size())
+    throw std::invalid_argument("growth_bulk_check: B_grow, lambda_c, B_ext and clusters differ in length");
   std::vector<double> ratio;
+  std::vector<std::uint64_t> of;
   GrowthBulkCheck c;
   for (std::size_t k = 0; k < B_grow.size(); ++k) {
     const double predicted = lambda_c[k] * B_ext[k];
     if (!std::isfinite(B_grow[k]) || !std::isfinite(predicted) || !(predicted > 0)) continue;
     ratio.push_back(B_grow[k] / predicted);
+    of.push_back(cluster[k]);
     if (B_grow[k] <= 0) ++c.nonpositive;
   }
   if (ratio.empty()) return std::nullopt;
@@ -75,7 +78,8 @@ std::optional<GrowthBulkCheck> growth_bulk_check(std::span<const double> B_grow,
     const double m = median(std::vector<double>(x.begin(), x.end()));
     return m > 0 ? std::log10(m) : -std::numeric_limits<double>::infinity();
   };
-  c.log10_median = bootstrap(ratio, log10_median, options);
+  c.targets = ratio.size();
+  c.log10_median = cluster_bootstrap(ratio, of, log10_median, options);
   return c;
 }
 

@@ -6,6 +6,7 @@
 #include "budjam/statistics.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
@@ -45,19 +46,22 @@ std::vector<bool> paper_G2_kept(std::span<const double> G_2, const std::vector<b
 double crossover_pressure(double n_J, double u_J, double a_c_area);
 
 // The test of B_grow = λ_c B_ext (Eq. 20) over the (run, Δφ) targets: the median of the ratios
-// B_grow/(λ_c B) over the targets with a finite B_grow and λ_c B > 0, quoted as log₁₀ (bootstrap SE
-// and percentile interval of log₁₀ of the resampled medians). A median, because the ratio has no
-// scale where growth is arrested: once the compressed buds grow at exp(−p/P0) ~ 10⁻¹⁵⁰ and one free
-// bud takes all the growth, λ_c B ~ 10⁻¹⁵⁰ and the fitted B_grow is zero within its error, so
-// log₁₀ of their ratio is ±100 and one such target outweighs hundreds of others in a mean. B_grow ≤ 0
-// (slope noise larger than the slope) ranks below every positive ratio instead of being dropped; a
-// median ≤ 0 is log₁₀ = −∞.
+// B_grow/(λ_c B) over the targets with a finite B_grow and λ_c B > 0, quoted as log₁₀. A median, because
+// the ratio has no scale where growth is arrested: once the compressed buds grow at exp(−p/P0) ~ 10⁻¹⁵⁰
+// and one free bud takes all the growth, λ_c B ~ 10⁻¹⁵⁰ and the fitted B_grow is zero within its
+// error, so log₁₀ of their ratio is ±100 and one such target outweighs hundreds of others in a mean.
+// B_grow ≤ 0 (slope noise larger than the slope) ranks below every positive ratio instead of being
+// dropped; a median ≤ 0 is log₁₀ = −∞. The targets of one run (and the runs of one seed, which share
+// their growth up to jamming) are not independent: the error is a cluster bootstrap over `cluster`
+// (SE and percentile interval of log₁₀ of the resampled medians), and n counts clusters.
 struct GrowthBulkCheck {
-  BootstrapResult log10_median;  // estimate, se, lo, hi of log₁₀ median(B_grow/(λ_c B)); n = targets
+  BootstrapResult log10_median;  // estimate, se, lo, hi of log₁₀ median(B_grow/(λ_c B)); n = clusters
+  std::size_t targets = 0;       // the targets that qualify
   std::size_t nonpositive = 0;   // targets with B_grow ≤ 0 among them
 };
 // nullopt if no target qualifies. Throws std::invalid_argument for spans of different lengths.
 std::optional<GrowthBulkCheck> growth_bulk_check(std::span<const double> B_grow, std::span<const double> lambda_c,
-                                                 std::span<const double> B_ext, const BootstrapOptions& options = {});
+                                                 std::span<const double> B_ext, std::span<const std::uint64_t> cluster,
+                                                 const BootstrapOptions& options = {});
 
 }  // namespace budjam::tools

@@ -40,6 +40,7 @@
 #include "io/text.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 #include <limits>
@@ -329,6 +330,29 @@ Json mean_se_json(const std::vector<double>& v0) {
   return j;
 }
 
+// The mean of values that come in clusters (the targets of a run, the runs of one seed): n counts
+// clusters, the SE is a bootstrap over them, "values" counts the values.
+Json clustered_mean_json(const std::vector<double>& v, const std::vector<std::uint64_t>& cluster,
+                         const BootstrapOptions& bo) {
+  std::vector<double> x;
+  std::vector<std::uint64_t> c;
+  for (std::size_t k = 0; k < v.size(); ++k)
+    if (std::isfinite(v[k])) {
+      x.push_back(v[k]);
+      c.push_back(cluster[k]);
+    }
+  Json j;
+  j["values"] = x.size();
+  j["n"] = std::set<std::uint64_t>(c.begin(), c.end()).size();
+  j["mean"] = io::number_or_null(mean(x));
+  j["se"] = nullptr;
+  if (j["n"].get<std::size_t>() >= kMinSamplesForError)
+    j["se"] = io::number_or_null(cluster_bootstrap(
+                                     x, c, [](std::span<const double> s) { return mean(s); }, bo)
+                                     .se);
+  return j;
+}
+
 Json median_json(const std::vector<double>& v0, const BootstrapOptions& bo) {
   const auto v = finite(v0);
   Json j;
@@ -406,6 +430,7 @@ DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& ru
   q.L = run.L;
   q.P0_label = run.P0_label;
   q.state = run.state;
+  q.seed = run.seed;
   q.target = q.packing.rfind("target_", 0) == 0;
   const io::PackingFile f = io::read_packing(pack);
   q.dphi = f.meta.has("dphi") ? f.meta.number("dphi")
@@ -479,27 +504,35 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   return e;
 }
 
-// ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at jamming and at each Δφ target.
-std::map<double, PiecewiseLinear> no_feedback_branch(const std::map<GroupKey, std::vector<const RunRow*>>& groups) {
-  std::map<double, PiecewiseLinear> branch;
+// ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at jamming and at each Δφ target — and the
+// SE of its ΔZ means (over the points that kMinSamplesForError runs or more give; the scatter of the
+// mean P along the branch is not propagated). Runs with a missing P or ΔZ at a point are left out
+// of that point.
+struct NoFeedbackBranch {
+  PiecewiseLinear dZ0, se;
+};
+std::map<double, NoFeedbackBranch> no_feedback_branch(const std::map<GroupKey, std::vector<const RunRow*>>& groups) {
+  std::map<double, NoFeedbackBranch> branch;
   for (const auto& [key, rs] : groups) {
     if (key.P0) continue;
-    std::map<double, std::pair<std::vector<double>, std::vector<double>>> by_dphi;
-    std::vector<double> PJ, dZJ;
-    for (const auto* r : rs) {
-      PJ.push_back(r->P_J);
-      dZJ.push_back(r->dZ_J);
-      for (const auto& t : r->targets) {
-        by_dphi[t.dphi].first.push_back(t.P);
-        by_dphi[t.dphi].second.push_back(t.dZ);
-      }
-    }
     // Tables without P_J (an earlier format) give no branch: their stored ΔZ_0(P) + 2(u_J − u) stands.
-    if (std::any_of(PJ.begin(), PJ.end(), [](double p) { return !std::isfinite(p); })) continue;
-    std::vector<std::pair<double, double>> pts;
-    if (!PJ.empty()) pts.emplace_back(mean(PJ), mean(dZJ));
-    for (auto& [d, v] : by_dphi) pts.emplace_back(mean(v.first), mean(v.second));
-    if (!pts.empty()) branch.emplace(key.L, PiecewiseLinear(pts));
+    if (std::none_of(rs.begin(), rs.end(), [](const RunRow* r) { return std::isfinite(r->P_J); })) continue;
+    std::map<double, std::pair<std::vector<double>, std::vector<double>>> at;  // Δφ (−1: jamming) → P, ΔZ
+    const auto add = [&](double dphi, double P, double dZ) {
+      if (!std::isfinite(P) || !std::isfinite(dZ)) return;
+      at[dphi].first.push_back(P);
+      at[dphi].second.push_back(dZ);
+    };
+    for (const auto* r : rs) {
+      add(-1.0, r->P_J, r->dZ_J);
+      for (const auto& t : r->targets) add(t.dphi, t.P, t.dZ);
+    }
+    std::vector<std::pair<double, double>> mean_pts, se_pts;
+    for (const auto& [d, v] : at) {
+      mean_pts.emplace_back(mean(v.first), mean(v.second));
+      if (v.second.size() >= kMinSamplesForError) se_pts.emplace_back(mean(v.first), standard_error(v.second));
+    }
+    if (!mean_pts.empty()) branch.emplace(key.L, NoFeedbackBranch{PiecewiseLinear(mean_pts), PiecewiseLinear(se_pts)});
   }
   return branch;
 }
@@ -568,22 +601,26 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
   g["G_2_over_P_2_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / r.P_2; }), bo));
 }
 
-// The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio.
+// The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio, its error a
+// bootstrap over seeds (a run's targets, and runs of one seed, are one sample).
 Json growth_bulk_json(const std::vector<const RunRow*>& rs, const BootstrapOptions& bo) {
   std::vector<double> b_grow, lambda, b_ext;
+  std::vector<std::uint64_t> seed;
   for (const auto* r : rs)
     for (const auto& t : r->targets) {
       b_grow.push_back(t.B_grow);
       lambda.push_back(t.lambda);
       b_ext.push_back(t.B);
+      seed.push_back(r->seed);
     }
   Json j;
   j["n"] = 0;
   j["median"] = nullptr;
-  if (const auto c = growth_bulk_check(b_grow, lambda, b_ext, bo)) {
+  if (const auto c = growth_bulk_check(b_grow, lambda, b_ext, seed, bo)) {
     const auto& b = c->log10_median;
     const bool error_bar = b.n >= kMinSamplesForError;
-    j["n"] = b.n;
+    j["n"] = b.n;  // seeds
+    j["targets"] = c->targets;
     j["median"] = io::number_or_null(b.estimate);
     j["se"] = error_bar ? io::number_or_null(b.se) : Json(nullptr);
     j["ci95"] =
@@ -664,6 +701,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_none_left / NJ; }), bo);
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
+  g["h_gamma_paper"] = mean_se_json(collect(rs, [](auto& r) { return r.h_gamma; }));  // its figure: mean ± SE
   g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
 
   // pooled Kaplan–Meier and the pooled prediction
@@ -786,49 +824,57 @@ Json shear_instability_by_PN2(const std::vector<const RunRow*>& m) {
 }
 
 // ΔZ = ΔZ_0(P) + 2(u_J − u) (Eq. 6): budjam's residual over every target of the main L, and the
-// paper's test per P0 over the feedback runs only (the no-feedback runs define ΔZ_0(P)).
-Json dz_identity_json(const std::vector<const RunRow*>& m) {
+// paper's test per P0 over the feedback runs only (the no-feedback runs define ΔZ_0(P)). The targets
+// of one run, and the runs of one seed, are one sample: pooled residuals are clustered by seed.
+Json dz_identity_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) {
   std::vector<double> res, res_fed;
+  std::vector<std::uint64_t> seed, seed_fed;
   std::vector<IdentityPoint> fed;
   for (const auto* r : m)
     for (const auto& t : r->targets) {
       if (!std::isfinite(t.dZ_pred)) continue;
       res.push_back(t.dZ - t.dZ_pred);
+      seed.push_back(r->seed);
       if (!r->P0) continue;
       fed.push_back({*r->P0, t.dZ - t.dZ_pred});
       res_fed.push_back(t.dZ - t.dZ_pred);
+      seed_fed.push_back(r->seed);
     }
   double sq = 0;
   for (double v : res) sq += v * v;
   Json j;
-  j["all_targets"] = mean_se_json(res);
+  j["all_targets"] = clustered_mean_json(res, seed, bo);
   j["all_targets"]["rms"] = res.empty() ? Json(nullptr) : Json(std::sqrt(sq / static_cast<double>(res.size())));
   Json per = Json::array();
-  for (const auto& x : dz_identity_residuals(fed)) {
-    Json p = Json{{"P0", x.P0},
-                  {"n", x.residual.n},
-                  {"mean", io::number_or_null(x.residual.mean)},
-                  {"se", x.residual.n >= kMinSamplesForError ? io::number_or_null(x.residual.se) : Json(nullptr)},
-                  {"rms", x.rms}};
-    per.push_back(p);
-  }
+  for (const auto& x : dz_identity_residuals(fed))
+    per.push_back(
+        Json{{"P0", x.P0}, {"targets", x.residual.n}, {"mean", io::number_or_null(x.residual.mean)}, {"rms", x.rms}});
   j["per_P0_feedback"] = per;
-  j["feedback_targets"] = mean_se_json(res_fed);
+  j["feedback_targets"] = clustered_mean_json(res_fed, seed_fed, bo);
   // The identity assumes that the buds free at jamming are not repopulated by divisions: over the
   // targets a run reached with at most kPaperMaxDivisions divisions after φ_J (the paper's own bound
   // for that), one mean residual per run — the targets of one run are not independent — and per P0
-  // the mean and SE over runs.
-  std::map<double, std::vector<double>> run_means;
+  // the mean over runs. Its error adds to the SE over runs that of the branch ΔZ_0(P) at those
+  // targets, which every run of the group shares (so it does not average down over runs).
+  std::map<double, std::pair<std::vector<double>, std::vector<double>>> by_P0;  // run means, branch SEs
   for (const auto* r : m) {
     if (!r->P0) continue;
     std::vector<double> v;
     for (const auto& t : r->targets)
-      if (std::isfinite(t.dZ_pred) && paper_admits(t.N_div)) v.push_back(t.dZ - t.dZ_pred);
-    if (!v.empty()) run_means[*r->P0].push_back(mean(v));
+      if (std::isfinite(t.dZ_pred) && paper_admits(t.N_div)) {
+        v.push_back(t.dZ - t.dZ_pred);
+        by_P0[*r->P0].second.push_back(t.dZ_pred_se);
+      }
+    if (!v.empty()) by_P0[*r->P0].first.push_back(mean(v));
   }
   Json unrep = Json::array();
-  for (auto it = run_means.rbegin(); it != run_means.rend(); ++it) {
-    Json p = mean_se_json(it->second);
+  for (auto it = by_P0.rbegin(); it != by_P0.rend(); ++it) {
+    Json p = mean_se_json(it->second.first);
+    const double se_runs = p["se"].is_number() ? p["se"].get<double>() : kNaN;
+    const double se_branch = mean(it->second.second);  // NaN when the branch has no error bar there
+    p["se_runs"] = p["se"];
+    p["se_branch"] = io::number_or_null(se_branch);
+    p["se"] = io::number_or_null(std::hypot(se_runs, se_branch));
     p["P0"] = it->first;
     unrep.push_back(p);
   }
@@ -836,11 +882,45 @@ Json dz_identity_json(const std::vector<const RunRow*>& m) {
   return j;
 }
 
+// The paper's figures of an identity "measured = predicted" over (P0, Δφ): per cell the means ± SE
+// over its runs of both sides, with no test. The whole counts the cells with kMinSamplesForError runs
+// or more and those whose two means lie more than 2 combined SE apart, √(SE_m² + SE_p²) — what a reader
+// of the figure sees as error bars that do not meet; about 1 in 20 by chance where the identity holds.
+template <class Measured, class Predicted>
+Json paper_cells_json(const std::vector<const RunRow*>& m, Measured measured, Predicted predicted) {
+  std::map<std::pair<double, double>, std::array<std::vector<double>, 2>> cells;  // (P0, Δφ) → both sides
+  for (const auto* r : m) {
+    if (!r->P0) continue;
+    for (const auto& t : r->targets) {
+      const double a = measured(t), b = predicted(t);
+      if (!std::isfinite(a) || !std::isfinite(b)) continue;
+      auto& c = cells[{*r->P0, t.dphi}];
+      c[0].push_back(a);
+      c[1].push_back(b);
+    }
+  }
+  Json list = Json::array();
+  std::size_t tested = 0, apart = 0;
+  for (auto it = cells.rbegin(); it != cells.rend(); ++it) {  // weak → strong feedback, as the groups
+    const auto& [P0, dphi] = it->first;
+    const Json a = mean_se_json(it->second[0]), b = mean_se_json(it->second[1]);
+    if (a["se"].is_number() && b["se"].is_number()) {
+      ++tested;
+      const double gap = std::abs(a["mean"].get<double>() - b["mean"].get<double>());
+      apart += gap > 2.0 * std::hypot(a["se"].get<double>(), b["se"].get<double>());
+    }
+    list.push_back(Json{{"P0", P0}, {"dphi", dphi}, {"measured", a}, {"predicted", b}});
+  }
+  return Json{{"cells", list}, {"cells_tested", tested}, {"cells_apart_2se", apart}};
+}
+
 // Spectrum: N_zero against N_u over distinct packings (a jammed packing shared by the runs of one
 // jamming state counts once), and ω* against ΔZ and Z − 6: budjam's free linear fit over every
-// packing, the paper's proportionality through the origin on the Δφ-target packings.
-Json spectrum_json(const std::vector<const DosRow*>& rows) {
-  std::vector<double> w, dz, z6, diff, signed_diff;
+// packing, the paper's proportionality through the origin on the Δφ-target packings. The packings of
+// one seed (its runs' targets at every P0) are one sample for the errors: n counts seeds.
+Json spectrum_json(const std::vector<const DosRow*>& rows, const BootstrapOptions& bo) {
+  std::vector<double> w, dz, z6, diff, signed_diff, target_below_six, target_N_u, target_N_zero;
+  std::vector<std::uint64_t> seed, target_seed;
   std::size_t equal = 0;
   std::set<std::size_t> jammed_seen;
   std::vector<CollapsePoint> targets;
@@ -851,8 +931,14 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
     z6.push_back(q->Z - 6.0);
     diff.push_back(std::abs(q->N_zero - q->N_u));
     signed_diff.push_back(q->N_zero - q->N_u);
+    seed.push_back(q->seed);
     equal += q->N_zero == q->N_u;
-    if (q->target) targets.push_back({q->omega_star, q->N_c, q->N_nr, static_cast<long>(q->N_u)});
+    if (!q->target) continue;
+    targets.push_back({q->omega_star, q->N_c, q->N_nr, static_cast<long>(q->N_u)});
+    target_N_u.push_back(q->N_u);
+    target_N_zero.push_back(q->N_zero);
+    target_below_six.push_back(q->N_c - 6 * q->N_nr < 0 ? 1.0 : 0.0);
+    target_seed.push_back(q->seed);
   }
   if (w.size() < 3) return nullptr;
   const double n = static_cast<double>(w.size());
@@ -861,7 +947,7 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
   Json j{{"packings", w.size()},
          {"N_zero_equals_N_u", equal / n},
          {"N_zero_minus_N_u_abs", mean(diff)},
-         {"N_zero_minus_N_u", mean_se_json(signed_diff)},
+         {"N_zero_minus_N_u", clustered_mean_json(signed_diff, seed, bo)},
          {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd.slope_se}, {"intercept", fd.intercept}}},
          {"r2_dZ", fd.r2},
          {"r2_Z_minus_6", f6.r2}};
@@ -871,11 +957,24 @@ Json spectrum_json(const std::vector<const DosRow*>& rows) {
       return Json{{"slope", f.slope}, {"slope_se", f.slope_se}, {"r2_uncentred", f.r2}, {"rms", f.rms}};
     };
     const double nt = static_cast<double>(c.packings);
+    const Json below_six = clustered_mean_json(target_below_six, target_seed, bo);
     j["paper"] = Json{{"packings", c.packings},
+                      {"seeds", below_six["n"]},
                       {"through_origin_dZ", fit(c.dZ)},
                       {"through_origin_Z_minus_6", fit(c.Z_minus_6)},
                       {"fraction_dZ_negative", c.dZ_negative / nt},
-                      {"fraction_Z_minus_6_negative", c.Z_minus_6_negative / nt}};
+                      {"fraction_Z_minus_6_negative", c.Z_minus_6_negative / nt},
+                      {"fraction_Z_minus_6_negative_se", below_six["se"]}};
+    // its N_zero panel: the packings with N_zero = N_u exactly, and the slope of N_zero on N_u through 0
+    std::size_t same = 0;
+    for (std::size_t k = 0; k < target_N_u.size(); ++k) same += target_N_zero[k] == target_N_u[k];
+    Json nz{{"packings", target_N_u.size()}, {"N_zero_equals_N_u", same}};
+    if (std::any_of(target_N_u.begin(), target_N_u.end(), [](double x) { return x != 0; })) {
+      const auto f = fit_through_origin(target_N_u, target_N_zero);
+      nz["slope_through_origin"] = f.slope;
+      nz["slope_se"] = f.slope_se;
+    }
+    j["paper"]["N_zero_vs_N_u"] = nz;
   }
   return j;
 }
@@ -939,8 +1038,12 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
   h["cells_per_area"] = states_json(
       m, [](auto& r) { return r.N_J / (r.L * r.L); }, bo);
   h["jamming_states"] = h["u_J"]["n"];
-  h["dZ_identity"] = dz_identity_json(m);
+  h["dZ_identity"] = dz_identity_json(m, bo);
+  h["dZ_identity"]["paper_cells"] = paper_cells_json(
+      m, [](const TargetRow& t) { return t.dZ; }, [](const TargetRow& t) { return t.dZ_pred; });
   h["B_grow_over_lambda_B_log10"] = growth_bulk_json(m, bo);
+  h["B_grow_over_lambda_B_log10"]["paper_cells"] = paper_cells_json(
+      m, [](const TargetRow& t) { return t.B_grow; }, [](const TargetRow& t) { return t.lambda * t.B; });
   return h;
 }
 
@@ -982,7 +1085,7 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
   std::vector<const DosRow*> dm;
   for (const auto& q : e.dos_rows)
     if (q.L == main_L) dm.push_back(&q);
-  h["dos"] = spectrum_json(dm);
+  h["dos"] = spectrum_json(dm, bo);
   return h;
 }
 
@@ -1059,7 +1162,10 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   for (auto& r : e.rows) {
     auto b = branch.find(r.L);
     if (b == branch.end()) continue;
-    for (auto& t : r.targets) t.dZ_pred = b->second(t.P) + 2.0 * (r.u_J - t.u);
+    for (auto& t : r.targets) {
+      t.dZ_pred = b->second.dZ0(t.P) + 2.0 * (r.u_J - t.u);
+      t.dZ_pred_se = b->second.se.empty() ? kNaN : b->second.se(t.P);
+    }
   }
 
   const fs::path out(o.out);
@@ -1070,7 +1176,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
 
   Json J;
   J["format"] = "budjam-analysis";
-  J["version"] = 3;  // 3: B_grow = λ_c B_ext as the median ratio
+  J["version"] = 4;  // 3: B_grow = λ_c B_ext as the median ratio; 4: errors of pooled targets by seed
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
@@ -1114,10 +1220,11 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   }
   {
     Json br = Json::array();
-    for (const auto& [L, f] : branch) {
-      Json pts = Json::array();
-      for (std::size_t k = 0; k < f.xs().size(); ++k) pts.push_back(Json::array({f.xs()[k], f.ys()[k]}));
-      br.push_back(Json{{"L", L}, {"points_P_dZ", pts}});
+    for (const auto& [L, b] : branch) {
+      Json pts = Json::array(), se = Json::array();
+      for (std::size_t k = 0; k < b.dZ0.xs().size(); ++k) pts.push_back(Json::array({b.dZ0.xs()[k], b.dZ0.ys()[k]}));
+      for (std::size_t k = 0; k < b.se.xs().size(); ++k) se.push_back(Json::array({b.se.xs()[k], b.se.ys()[k]}));
+      br.push_back(Json{{"L", L}, {"points_P_dZ", pts}, {"points_P_se", se}});
     }
     J["dZ0_branch"] = br;
   }

@@ -22,7 +22,8 @@ namespace budjam::tools {
 struct TargetRow {
   double dphi = kNaN, phi = kNaN, P = kNaN, Z = kNaN, dZ = kNaN, Z_iso = kNaN, u = kNaN, u_lobes = kNaN;
   double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
-  double dZ_pred = kNaN;  // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
+  double dZ_pred = kNaN;     // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
+  double dZ_pred_se = kNaN;  // the SE of ΔZ_0(P) there (the branch's, common to every run)
   double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
   double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
   bool below_phi2 = false;
@@ -75,6 +76,7 @@ struct DosRow {
   double dphi = kNaN, omega_star = kNaN, dZ = kNaN, Z = kNaN, N_zero = kNaN, N_u = kNaN, N_u_buds = kNaN;
   long N_c = 0, N_nr = 0;  // integer counts: the sign of ΔZ without rounding
   std::size_t state = 0;   // the run's jamming state (a jammed packing is shared by its runs)
+  std::uint64_t seed = 0;  // the run's seed: its runs at every P0 share their start (one sample)
   bool target = false;     // a Δφ-target packing (the paper's ω* figure uses only these)
 };
 

@@ -145,6 +145,7 @@ void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, st
     q.L = run.L;
     q.P0_label = run.P0_label;
     q.state = run.state;
+    q.seed = run.seed;
     q.target = q.packing.rfind("target_", 0) == 0;
     q.dphi = number_or_nan(D, "dphi", k);
     q.omega_star = D.number(k, D.column("omega_star"));

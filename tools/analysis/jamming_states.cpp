@@ -55,33 +55,20 @@ BootstrapResult cluster_bootstrap_mean(std::span<const double> values, std::span
     throw std::invalid_argument("cluster_bootstrap_mean: clusters and states differ in size");
   const auto means = state_means(values, state);
   if (means.empty()) throw std::invalid_argument("cluster_bootstrap_mean: no data");
-  // the state means of each cluster
-  std::map<std::uint64_t, std::vector<double>> by_cluster;
+  // one value per state, in the cluster of the state
+  std::vector<double> per_state;
+  std::vector<std::uint64_t> of;
   std::map<std::size_t, bool> placed;
   for (std::size_t k = 0; k < state.size(); ++k) {
     const auto m = means.find(state[k]);
     if (m == means.end() || placed[state[k]]) continue;
     placed[state[k]] = true;
-    by_cluster[cluster[k]].push_back(m->second);
+    per_state.push_back(m->second);
+    of.push_back(cluster[k]);
   }
-  std::vector<std::vector<double>> clusters;
-  for (auto& [c, v] : by_cluster) clusters.push_back(std::move(v));
-  std::vector<double> flat;
-  for (const auto& c : clusters) flat.insert(flat.end(), c.begin(), c.end());
-
-  // Bootstrap over cluster indices: the statistic pools the drawn clusters' state means.
-  std::vector<double> index(clusters.size());
-  for (std::size_t k = 0; k < index.size(); ++k) index[k] = static_cast<double>(k);
-  const Statistic pooled_mean = [&](std::span<const double> drawn) {
-    double s = 0;
-    std::size_t n = 0;
-    for (double i : drawn)
-      for (double v : clusters[static_cast<std::size_t>(i)]) s += v, ++n;
-    return s / static_cast<double>(n);
-  };
-  BootstrapResult b = bootstrap(index, pooled_mean, options);
-  b.estimate = mean(flat);
-  b.n = flat.size();
+  BootstrapResult b = cluster_bootstrap(
+      per_state, of, [](std::span<const double> x) { return mean(x); }, options);
+  b.n = per_state.size();
   return b;
 }
 

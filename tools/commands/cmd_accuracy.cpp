@@ -1,5 +1,5 @@
 // `budjam accuracy [--reference DIR VARIANT_DIR...] [--packings NAME=DIR...] --out DIR`
-// Accuracy against cost of the numerical knobs (docs/analysis.md, "Accuracy against cost";
+// Accuracy against cost of the numerical knobs (docs/accuracy.md;
 // analysis/accuracy_sweep.hpp): errors of every setting against a tight reference, each knob's Pareto
 // front and whether the defaults are on it. Writes DIR/accuracy.csv, DIR/accuracy.json and
 // DIR/accuracy.md.
