@@ -101,6 +101,20 @@ def limit_text(x):
     return f"{fmt(x['limit'])} ± {fmt(x['limit_se'], 2)} ({fit}; residuals/SE {res})"
 
 
+def n_J_limit_text(J):
+    """How n_J,∞ was made: the growth-only density over one period of its generation phase (or, from an
+    analysis.json before that, in one box at φ_J,∞) times the fitted non-rattler fraction 1 − r_∞."""
+    nl = J.get("n_J_limit") or {}
+    sides = nl.get("growth_only_L")
+    if isinstance(sides, list):
+        return (f"n_J,∞ is the growth-only density averaged over {nl.get('growth_only_boxes')} boxes of side "
+                f"{fmt(sides[0])} – {fmt(sides[1])} (one period of the phase at which a box catches a generation of "
+                f"divisions) at the ⟨φ_J⟩ of the largest size, times the fitted non-rattler fraction 1 − r_∞; its error "
+                f"holds the swing over that phase (± {fmt(nl.get('phase_swing'), 2)} from box to box).")
+    return (f"n_J,∞ is the growth-only density in a box of side {fmt(sides)} at φ_J,∞ times the fitted non-rattler "
+            "fraction 1 − r_∞ (one box: the swing of the density with the box's phase is not in its error).")
+
+
 def jamming_size_rows(J, source):
     """The finite-size table of the jamming ensembles (independent seeds per size)."""
     if not J:
@@ -113,9 +127,7 @@ def jamming_size_rows(J, source):
             "and division rules alone give at the same φ (400 growth histories per size, no mechanics): N/L² at fixed "
             "φ is not monotone in L, so it is not fitted. The other quantities are fitted by q(N) = q_∞ + c/N (weighted "
             "least squares, errors widened by √(χ²/dof) when it exceeds 1) where five sizes or more have an error bar; "
-            "χ²/dof and the residuals per size (in SE, smallest L first) test that form. n_J,∞ is the growth-only "
-            "density in a box of side " + fmt(J["n_J_limit"]["growth_only_L"] if J.get("n_J_limit") else None) +
-            " at φ_J,∞ times the fitted non-rattler fraction 1 − r_∞.", "",
+            "χ²/dof and the residuals per size (in SE, smallest L first) test that form. " + n_J_limit_text(J), "",
             head, "|" + " --- |" * (len(JAMMING_SIZE_COLUMNS) + 7)]
     for r in J["sizes"]:
         g = r.get("growth_only_cells_per_area", {})

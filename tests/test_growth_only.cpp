@@ -138,8 +138,21 @@ TEST_CASE("the 1/N extrapolation needs five sizes and reports its residuals") {
   CHECK(u["slope"].get<double>() == Approx(3.0).epsilon(1e-6));
   REQUIRE(u["residuals_in_se"].size() == 5);
   for (const auto& r : u["residuals_in_se"]) CHECK(r.get<double>() == Approx(0).margin(1e-6));
-  // n_J,∞ = ρ_growth(L = 100) (1 − r_∞)
+  // n_J,∞ = ρ_growth (1 − r_∞), ρ the same in every box: no phase swing
   CHECK(J["n_J_limit"]["value"].get<double>() == Approx(0.77 * 0.98).epsilon(1e-9));
+  CHECK(J["n_J_limit"]["phase_swing"].get<double>() == Approx(0).margin(1e-12));
+  // a density that swings with the generation a box catches, ρ = 0.77 + 0.006 sin(2π log₂ L²): the boxes
+  // spread over one period average the swing out, and its spread enters the error
+  const GrowthOnly waves = [](double L, double) {
+    const double rho = 0.77 + 0.006 * std::sin(2 * M_PI * std::log2(L * L));
+    return GrowthOnlyCount{rho * L * L, 1e-4 * L * L, 100};
+  };
+  const io::Json JW = jamming_finite_size_json(sizes, waves, 100);
+  const auto& w = JW["n_J_limit"];
+  CHECK(w["value"].get<double>() == Approx(0.77 * 0.98).epsilon(1e-9));
+  const double swing = 0.006 * 0.98 * std::sqrt(0.5 * 6.0 / 5.0);  // SD of six evenly spaced phases
+  CHECK(w["phase_swing"].get<double>() == Approx(swing).epsilon(1e-6));
+  CHECK(w["se"].get<double>() > swing / std::sqrt(6.0));
   // each size's density against the growth-only one, in combined SE
   const auto& row = J["sizes"][3];
   const double rho = 170.0 / 225.0, z = (rho - 0.77) / std::hypot(0.003, 0.01);

@@ -28,6 +28,9 @@ constexpr Quantity kDepletionQuantities[] = {
     {"G_2_over_Pmax", "median"},        // shear modulus at φ_2 over P_max, every run
     {"G_2_over_Pmax_paper", "median"},  // the same, the paper's selection and fences
 };
+// Boxes over one period of the growth-only density's phase (n_J,∞ below).
+constexpr int kPhaseBoxes = 6;
+
 constexpr Quantity kJammingQuantities[] = {
     {"u_J", "mean"},               // contact-free buds at jamming over N_nr
     {"u_J_lobes", "mean"},         // the paper's count: contact-free lobes
@@ -152,19 +155,36 @@ Json jamming_finite_size_json(const Json& sizes_in, const GrowthOnly& growth_onl
   J["sizes"] = rows;
   J["model"] = kModel;
   J["extrapolation"] = extrapolation;
-  // n_J,∞ = ρ_∞ (1 − r_∞): the growth-only density in a large box at φ_J,∞ times the extrapolated
-  // non-rattler fraction; its SE from both by propagation (they are independent).
-  const Json& phi = extrapolation["phi_J"];
+  // n_J,∞ = ρ_∞ (1 − r_∞): the growth-only density of a large box times the extrapolated non-rattler
+  // fraction. ρ at fixed φ is not monotone in L: divisions come in generations, N doubles each time L
+  // grows by √2, and a box catches a generation at a phase its size sets. An infinite box averages over
+  // that phase, so ρ_∞ is the mean over kPhaseBoxes sides spread evenly over one period in log L
+  // (large_L · 2^(k/2K)); its error holds the spread over the phase (SD/√K) with the histories' own.
+  // The boxes are filled to the ⟨φ_J⟩ of the largest size measured (no model needed).
   const Json& r = extrapolation["rattler_fraction"];
-  if (phi["limit"].is_number() && r["limit"].is_number()) {
-    const GrowthOnlyCount g = growth_only(large_L, phi["limit"].get<double>());
-    const double A = large_L * large_L, rho = g.mean / A, rho_se = g.se / A;
+  const double phi_ref = number(rows.back()["phi_J"], "value");
+  if (r["limit"].is_number() && std::isfinite(phi_ref)) {
+    std::vector<double> rho, rho_se;
+    std::size_t samples = 0;
+    for (int k = 0; k < kPhaseBoxes; ++k) {
+      const double side = large_L * std::exp2(k / (2.0 * kPhaseBoxes));
+      const GrowthOnlyCount g = growth_only(side, phi_ref);
+      rho.push_back(g.mean / (side * side));
+      rho_se.push_back(g.se / (side * side));
+      samples += g.samples;
+    }
+    const double K = kPhaseBoxes, rho_inf = mean(rho);
+    const double swing = std::sqrt(sample_variance(rho));
+    const double rho_inf_se = std::hypot(mean(rho_se), swing) / std::sqrt(K);
     const double keep = 1.0 - r["limit"].get<double>(), keep_se = r["limit_se"].get<double>();
-    J["n_J_limit"] = Json{{"value", rho * keep},
-                          {"se", std::hypot(rho_se * keep, rho * keep_se)},
-                          {"growth_only_cells_per_area", rho},
-                          {"growth_only_L", large_L},
-                          {"growth_only_samples", g.samples}};
+    J["n_J_limit"] = Json{{"value", rho_inf * keep},
+                          {"se", std::hypot(rho_inf_se * keep, rho_inf * keep_se)},
+                          {"phase_swing", swing * keep},
+                          {"growth_only_cells_per_area", rho_inf},
+                          {"growth_only_L", Json::array({large_L, large_L * std::exp2((K - 1) / (2 * K))})},
+                          {"growth_only_boxes", kPhaseBoxes},
+                          {"growth_only_at_phi", phi_ref},
+                          {"growth_only_samples", samples}};
   } else {
     J["n_J_limit"] = nullptr;
   }

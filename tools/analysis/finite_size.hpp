@@ -33,7 +33,8 @@ using GrowthOnly = std::function<GrowthOnlyCount(double L, double phi)>;
 // `sizes`: the "sizes" array that analyse writes (one entry per L, quantities fixed at jamming over
 // distinct jamming states). Per-size rows of u_J, u_J (lobes), φ_J, Z_J, the rattler fraction, N_J/L²
 // beside the growth-only density at ⟨φ_J⟩, and n_J; the 1/N extrapolations; and n_J,∞ from the
-// growth-only density in a box of side `large_L` at φ_J,∞. Null when fewer than two sizes.
+// growth-only density averaged over boxes of sides `large_L` … √2 `large_L` (one period of its phase) at
+// the ⟨φ_J⟩ of the largest size. Null when fewer than two sizes.
 io::Json jamming_finite_size_json(const io::Json& sizes, const GrowthOnly& growth_only, double large_L);
 
 }  // namespace budjam::tools
