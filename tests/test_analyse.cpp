@@ -342,6 +342,34 @@ TEST_CASE("analyse --tables recomputes from an analysis' own tables exactly what
         std::string::npos);
   CHECK(ja["unavailable"].empty());
   CHECK(jb["inputs"]["tables"] == a.string());
+
+  // the paper's N_zero panel from dos.csv: Δφ-target packings with N_zero = N_u exactly, and the slope
+  // of N_zero on N_u through the origin, Σ N_zero N_u / Σ N_u²
+  std::istringstream dos(slurp(a / "dos.csv"));
+  std::string line;
+  std::getline(dos, line);
+  std::vector<std::string> head;
+  for (std::istringstream h(line); std::getline(h, line, ',');) head.push_back(line);
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(head.begin(), head.end(), name) - head.begin());
+  };
+  std::size_t targets = 0, same = 0;
+  double zu = 0, uu = 0;
+  while (std::getline(dos, line)) {
+    std::vector<std::string> f;
+    for (std::istringstream r(line); std::getline(r, line, ',');) f.push_back(line);
+    if (f.at(col("packing")).rfind("target_", 0) != 0) continue;
+    const double nz = std::stod(f.at(col("N_zero"))), nu = std::stod(f.at(col("N_u")));
+    ++targets;
+    same += nz == nu;
+    zu += nz * nu;
+    uu += nu * nu;
+  }
+  const auto& panel = ja["main"]["dos"]["paper"]["N_zero_vs_N_u"];
+  REQUIRE(targets > 0);
+  CHECK(panel["packings"] == targets);
+  CHECK(panel["N_zero_equals_N_u"] == same);
+  CHECK(panel["slope_through_origin"].get<double>() == Approx(zu / uu));
 }
 
 TEST_CASE(
