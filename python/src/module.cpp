@@ -58,7 +58,7 @@ template <class T>
 std::vector<T> vector_of(const py::array_t<T, py::array::c_style | py::array::forcecast>& a, std::size_t n,
                          const char* name) {
   if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n)
-    throw py::value_error(std::string(name) + ": expected a 1-d array of length " + std::to_string(n));
+    throw InputError(std::string(name) + ": expected a 1-d array of length " + std::to_string(n));
   return std::vector<T>(a.data(), a.data() + n);
 }
 
@@ -515,7 +515,7 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
       [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
          const std::string& network) {
         if (!io::find_export_format(format))
-          throw py::value_error("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
+          throw InputError("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",

@@ -42,3 +42,27 @@ def test_a_parse_error_names_the_help_of_the_subcommand_used(run_budjam):
     assert r.returncode == 2 and r.stderr.rstrip().endswith("(see budjam moduli --help)")
     r = run_budjam("--no-such-option", check=False)
     assert r.returncode == 2 and r.stderr.rstrip().endswith("(see budjam --help)")
+
+
+def test_a_mistyped_command_is_named_with_the_commands_there_are(run_budjam):
+    r = run_budjam("gorw", DEMO, check=False)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
+    assert "unknown command 'gorw'" in r.stderr and "grow" in r.stderr and "moduli" in r.stderr
+    # no command at all is still the parser's own message
+    r = run_budjam(check=False)
+    assert r.returncode == 2 and "unknown command" not in r.stderr
+
+
+def test_a_value_out_of_range_from_set_is_blamed_on_the_set_not_the_file(run_budjam, tmp_path):
+    r = run_budjam("grow", DEMO, "--out", tmp_path / "r", "--set", "growth.P0=-1", check=False)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
+    assert "--set growth.P0=-1: growth.P0: must be positive" in r.stderr and "demo.toml" not in r.stderr
+    # the last --set of a key is the one blamed
+    r = run_budjam("grow", DEMO, "--out", tmp_path / "r", "--set", "growth.dt=1", "--set", "growth.dt=0", check=False)
+    assert "--set growth.dt=0: growth.dt:" in r.stderr
+    assert not (tmp_path / "r").exists()
+    # a rule the file's own value breaks names the file
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[growth]\ndt = 0\n")
+    r = run_budjam("grow", bad, "--out", tmp_path / "r", "--set", "growth.P0=1e-3", check=False)
+    assert r.returncode == 2 and f"{bad}: growth.dt:" in r.stderr and "--set" not in r.stderr

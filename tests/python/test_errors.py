@@ -83,6 +83,14 @@ def test_a_packing_with_coincident_cells_is_refused_by_input_error():
         budjam.Packing(L=8.0, x=[2.0, 2.0], y=[2.0, 2.0], theta=[0.0, 0.0], b=[0.5, 0.5])
 
 
+def test_arrays_of_unequal_length_and_an_unknown_export_format_raise_input_error(tmp_path):
+    with pytest.raises(budjam.InputError, match="y: expected a 1-d array of length 1"):
+        budjam.Packing(L=8.0, x=[0.1], y=[0.1, 0.2], theta=[0.0], b=[0.5])
+    with pytest.raises(budjam.InputError, match="format: must be one of"):
+        budjam.export(budjam.read_packing(PACKING), str(tmp_path / "x.pdb"), "pdb")
+    assert not any(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("name", ["sub/", "", ".", "d", "x" * 250])
 @pytest.mark.parametrize("write", [lambda p, path: p.write(path),
                                    lambda p, path: budjam.export(p, path, "xyz"),

@@ -60,6 +60,14 @@ int main(int argc, char** argv) {
     c.setup(*sub);
   }
 
+  // CLI11 reads a mistyped subcommand as a stray argument and says only that one is required.
+  if (argc > 1 && argv[1][0] != '-' && !seen.count(argv[1])) {
+    std::string names;
+    for (const std::string& n : seen) names += (names.empty() ? "" : ", ") + n;
+    return error("unknown command '" + std::string(argv[1]) + "' (commands: " + names + "; see budjam --help)",
+                 kExitBadInput);
+  }
+
   remove_temporaries_on_fatal_signals();  // `grow` replaces them with its own while it runs
   try {
     app.parse(argc, argv);  // runs the chosen subcommand's callback

@@ -263,7 +263,15 @@ Scene parse_scene(std::string_view toml_text, const std::string& source, const s
   try {
     validate(scene);
   } catch (const InputError& err) {
-    throw InputError(source + ": " + err.what());
+    // A rule broken by a value that --set gave (the last --set of that key) is the command line's,
+    // not the file's: the message names the key first ("growth.P0: must be positive").
+    const std::string what = err.what();
+    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o) {
+      std::string key = o->substr(0, o->find('='));
+      key.erase(std::remove_if(key.begin(), key.end(), [](char c) { return c == ' ' || c == '\t'; }), key.end());
+      if (!key.empty() && what.rfind(key + ":", 0) == 0) throw InputError("--set " + *o + ": " + what);
+    }
+    throw InputError(source + ": " + what);
   }
   return scene;
 }
