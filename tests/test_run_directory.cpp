@@ -215,6 +215,22 @@ TEST_CASE("a link or an entry of the wrong kind among a run's entries is refused
       CHECK(snapshot() == before);
     }
   }
+  // The same entries as a second hard link of a foreign file: written in place, it would change that file.
+  for (const char* entry : {".budjam-lock", ".budjam-temporaries", "steps.csv.partial", "checkpoint.txt"}) {
+    for (bool resume : {false, true}) {
+      const fs::path d = fresh("hard_linked");
+      { RunDirectory::create(d, false, kOwned); }
+      fs::remove(d / entry);
+      fs::create_hard_link(outside / "precious.txt", d / entry);
+      INFO(entry << (resume ? " (resume)" : " (overwrite)"));
+      if (resume)
+        CHECK_THROWS_WITH(RunDirectory::resume(d, kOwned), Contains(entry) && Contains("hard link"));
+      else
+        CHECK_THROWS_WITH(RunDirectory::create(d, true, kOwned), Contains(entry) && Contains("hard link"));
+      CHECK(fs::hard_link_count(d / entry) == 2);
+      CHECK(snapshot() == before);
+    }
+  }
   // Entries of the wrong kind: a directory where a log is expected, a file for packings/.
   for (const char* entry : {"steps.csv.partial", "packings"}) {
     const fs::path d = fresh("wrong_kind");

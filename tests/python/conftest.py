@@ -27,8 +27,8 @@ def budjam_exe():
 def run_budjam(budjam_exe):
     """Runs `budjam ARGS...`; returns the CompletedProcess (stdout/stderr as text)."""
 
-    def run(*args, check=True):
-        r = subprocess.run([budjam_exe, *map(str, args)], capture_output=True, text=True)
+    def run(*args, check=True, cwd=None):
+        r = subprocess.run([budjam_exe, *map(str, args)], capture_output=True, text=True, cwd=cwd)
         if check and r.returncode != 0:
             pytest.fail(f"budjam {' '.join(map(str, args))} exited {r.returncode}: {r.stderr}")
         return r

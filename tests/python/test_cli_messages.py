@@ -2,7 +2,9 @@
 that agrees with the exit code, and parse errors that point to the help of the subcommand used."""
 import re
 
-from conftest import SOURCE_DIR
+import pytest
+
+from conftest import PACKING, SOURCE_DIR
 
 DEMO = SOURCE_DIR / "data" / "scenes" / "demo.toml"
 
@@ -66,3 +68,15 @@ def test_a_value_out_of_range_from_set_is_blamed_on_the_set_not_the_file(run_bud
     bad.write_text("[growth]\ndt = 0\n")
     r = run_budjam("grow", bad, "--out", tmp_path / "r", "--set", "growth.P0=1e-3", check=False)
     assert r.returncode == 2 and f"{bad}: growth.dt:" in r.stderr and "--set" not in r.stderr
+
+
+@pytest.mark.parametrize("args", [
+    ["grow", DEMO, "--out", ""], ["moduli", PACKING, "--out", ""], ["dos", PACKING, "--out", " "],
+    ["rigidity", PACKING, "--out", ""], ["export", PACKING, "--format", "xyz", "--out", ""],
+    ["render", PACKING, "-o", ""], ["analyse", SOURCE_DIR / "data", "--out", ""],
+], ids=["grow", "moduli", "dos", "rigidity", "export", "render", "analyse"])
+def test_an_empty_output_name_is_refused_not_read_as_not_given(run_budjam, tmp_path, args):
+    r = run_budjam(*args, check=False, cwd=tmp_path)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
+    assert "an empty name names no file or directory" in r.stderr
+    assert not any(tmp_path.iterdir())

@@ -44,7 +44,7 @@ const bool registered = budjam::cli::register_command(
                       "folders of growth variant runs (seed*/), named <knob>_<value> or default");
        sub.add_option("--packings", s.packings,
                       "NAME=DIR: measure the moduli solvers and ARPACK settings on DIR's packings/*.pack (repeatable)");
-       sub.add_option("--out", o->out, "output directory")->required();
+       sub.add_option("--out", o->out, "output directory")->required()->check(budjam::cli::names_a_path());
        sub.add_option("--time-noise", s.time_noise,
                       "front rule: relative cost difference that is a tie (post-processing: at least 3x the measured "
                       "timing noise)")

@@ -38,7 +38,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("RUNDIR", e.inputs, "run directories, or folders holding them");
        sub.add_option("--tables", e.tables,
                       "instead of runs: the runs.csv, targets.csv, dos.csv, survival.csv of an earlier analysis");
-       sub.add_option("--out", e.out, "output directory")->required();
+       sub.add_option("--out", e.out, "output directory")->required()->check(budjam::cli::names_a_path());
        sub.add_option("--main-L", e.main_L,
                       "system size of the main figures (default 15 if present, else the largest)");
        sub.add_option("--resamples", e.bootstrap.resamples, "bootstrap resamples (default 2000)");

@@ -66,7 +66,8 @@ const bool registered = budjam::cli::register_command(
            ->required()
            ->check(CLI::IsMember(format_names()));
        sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
-           ->type_name("BASE");
+           ->type_name("BASE")
+           ->check(budjam::cli::names_a_path());
        const CLI::Option* network = sub.add_option(
            "--network", o->network, "network whose rigid clusters label the lobes: load-bearing (default) or raw");
        sub.callback([o, network] {

@@ -199,7 +199,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--threads", o->threads,
                       "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
            ->check(budjam::cli::non_negative());
-       sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)");
+       sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)")
+           ->check(budjam::cli::names_a_path());
        sub.add_option("--resume", o->resume, "continue the interrupted run in DIR from its checkpoint")
            ->type_name("DIR");
        sub.add_option("--set", o->overrides, "override a scene key, e.g. --set growth.P0=1e-4 (repeatable)")

@@ -42,9 +42,11 @@ constexpr long kMaxConvertedPixels = 32767;
 // rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` in `dir` is complete or untouched.
 void convert_svg(const fs::path& svg, const io::Directory& dir, const std::string& to, const std::string& format) {
   io::TempFile tmp(dir, to);
-  // "--output=" and "--": a file name that starts with "-" is a file, not an option.
-  const int rc = io::run_program({"rsvg-convert", "-f", format, "--output=" + tmp.path().string(), "--", svg.string()},
-                                 "render", "install Debian's librsvg2-bin");
+  // On standard output, into the temporary's descriptor: rsvg-convert given a name writes a
+  // temporary of its own beside it, which a signal would leave behind. "--": a file name that
+  // starts with "-" is a file, not an option.
+  const int rc = io::run_program({"rsvg-convert", "-f", format, "--", svg.string()}, "render",
+                                 "install Debian's librsvg2-bin", tmp.fd());
   if (rc != 0) throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
   tmp.commit();
 }
@@ -98,6 +100,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("PACKING", o->packing, "packing file (.pack)")->required();
        sub.add_option("-o,--out", o->out, "output file: SVG, or PNG/PDF converted by rsvg-convert")
            ->required()
+           ->check(budjam::cli::names_a_path())
            ->type_name("FILE.svg|.png|.pdf");
        sub.add_flag("--png", o->png, "with an SVG output, also write FILE.png beside it (rsvg-convert)");
        sub.add_option("--scale", o->scale, "pixels per mother diameter (default 48)");

@@ -120,6 +120,16 @@ inline CLI::Validator seed_range() {
       "0 ≤ N < 2^63");
 }
 
+// An output path given empty would be read as "not given" (a default name, or nothing written):
+// a script whose variable is unset must hear of it.
+inline CLI::Validator names_a_path() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        return text.find_first_not_of(" \t") == std::string::npos ? "an empty name names no file or directory" : "";
+      },
+      "");
+}
+
 // --out BASE, --json and --quiet of the output convention (io/result_files.hpp). `files` names
 // what --out writes, e.g. "BASE.json (summary) and BASE.csv (the curve)". `short_o` also accepts
 // -o, for the commands that took it before the convention.
@@ -127,7 +137,8 @@ inline void add_output_options(CLI::App& sub, io::OutputRequest& request, const 
                                bool short_o = false) {
   sub.add_option(short_o ? "-o,--out" : "--out", request.base,
                  "write " + files + ", atomically; a trailing .json or .csv of BASE is dropped")
-      ->type_name("BASE");
+      ->type_name("BASE")
+      ->check(names_a_path());
   sub.add_flag("--json", request.json, "print the JSON on stdout (also with --out)");
   sub.add_flag("--quiet", request.quiet, "no summary line on stdout");
 }

@@ -1,6 +1,7 @@
 #include "commands/stop_signals.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/run_program.hpp"
 
 namespace budjam::cli {
 
@@ -9,6 +10,7 @@ namespace {
 volatile std::sig_atomic_t g_received = 0;
 
 extern "C" void on_fatal_signal(int sig) {
+  io::stop_running_program();  // first: a converter still running would write its file anew
   io::remove_open_temporaries();
   std::signal(sig, SIG_DFL);
   std::raise(sig);

@@ -192,6 +192,11 @@ int Directory::open_file(std::string_view name, int flags) const {
     ::close(f);
     wrong_kind(where, st, "a regular file");
   }
+  // Written in place, a file with another hard link would change under that other name too.
+  if ((flags & (O_WRONLY | O_RDWR)) != 0 && st.st_nlink > 1) {
+    ::close(f);
+    throw InputError(where.string() + ": has another hard link; budjam writes in place only files of its own");
+  }
   ::fcntl(f, F_SETFL, ::fcntl(f, F_GETFL) & ~O_NONBLOCK);
   return f;
 }

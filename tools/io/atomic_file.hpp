@@ -112,8 +112,9 @@ class TempFile {
   TempFile(const TempFile&) = delete;
   TempFile& operator=(const TempFile&) = delete;
 
-  // For a program that writes the file by its name.
+  // For a program that writes the file by its name, or on its standard output (the descriptor).
   std::filesystem::path path() const { return dir_ / name_; }
+  int fd() const { return fd_; }
   void write(std::string_view data);
   // Makes the content durable with the output mode (also when a program wrote or replaced the
   // file by name), renames it onto the final name and syncs the directory.

@@ -93,6 +93,11 @@ void expect_regular(const Directory& dir, std::string_view name) {
                        ": is a symbolic link; budjam does not follow links in a run directory (nothing was changed)");
     throw InputError((dir / name).string() + ": is not a regular file (nothing was changed)");
   }
+  // A file with another hard link is also a file outside the run: writing it in place (the lock,
+  // the logs) would change the other name's contents.
+  if (const auto st = dir.entry(name); st && S_ISREG(st->st_mode) && st->st_nlink > 1)
+    throw InputError((dir / name).string() + ": has " + std::to_string(st->st_nlink - 1) +
+                     " other hard link(s); budjam writes only files of its own (nothing was changed)");
 }
 
 std::string host_name() {
@@ -172,6 +177,11 @@ std::vector<std::string> remove_run_outputs(const Directory& dir, const OwnedEnt
   const auto top = patterns_in(owned, "");
   const auto subs = owned_subdirectories(owned);
   std::vector<std::string> kept;
+  // The summary says the run finished: it goes first, so that a removal stopped half-way (a file it
+  // may not delete) leaves a run that no reader takes for a finished one.
+  if (const auto st = dir.entry(run_files::summary);
+      st && S_ISREG(st->st_mode) && owned_name(top, run_files::summary, false))
+    dir.remove(run_files::summary);
   for (const std::string& name : dir.names()) {
     if (is_bookkeeping(name)) continue;  // still a run, if an empty one
     const auto st = dir.entry(name);
