@@ -80,3 +80,19 @@ def test_an_empty_output_name_is_refused_not_read_as_not_given(run_budjam, tmp_p
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
     assert "an empty name names no file or directory" in r.stderr
     assert not any(tmp_path.iterdir())
+
+
+def test_no_other_command_writes_into_the_top_level_of_a_run_directory(run_budjam, tmp_path):
+    run = tmp_path / "run"
+    run_budjam("grow", DEMO, "--out", run, "--quiet")
+    before = {p: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    pack = run / "packings" / "jammed.pack"
+    for args in (["moduli", pack, "--out", run / "summary"], ["survival", run, "-o", run / "bud_events.csv"],
+                 ["analyse", run, "--out", run], ["render", pack, "-o", run / "jammed.svg"],
+                 ["export", pack, "--format", "xyz", "--out", run / "steps"]):
+        r = run_budjam(*args, check=False)
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (args, r.stderr)
+        assert "is a budjam run directory" in r.stderr, (args, r.stderr)
+    assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+    # beside the packings, where the moduli and spectra of a run go, is fine
+    run_budjam("moduli", pack, "--out", run / "packings" / "jammed.moduli", "--quiet")

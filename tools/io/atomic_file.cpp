@@ -1,6 +1,7 @@
 #include "io/atomic_file.hpp"
 
 #include "budjam/errors.hpp"
+#include "io/run_directory.hpp"
 #include "io/text.hpp"
 
 #include <dirent.h>
@@ -407,6 +408,16 @@ void check_output_spelling(std::string_view option, const fs::path& path) {
                      " bytes; at most " + std::to_string(kMaxOutputName) + ")");
 }
 
+// A run directory's top level holds its run's files, which budjam grow writes: another command's
+// output there could replace one of them (summary.json, a log) and break the run for every reader.
+void refuse_run_directory(std::string_view option, const fs::path& shown, const fs::path& dir) {
+  const fs::path d = dir.empty() ? fs::path(".") : dir;
+  if (is_run_directory(d))
+    throw InputError(output_at(option, shown) + escape_control(d.string()) +
+                     " is a budjam run directory, whose top level holds only the run's own files (write "
+                     "elsewhere, or beside its packings in packings/)");
+}
+
 }  // namespace
 
 void check_output_path(std::string_view option, const fs::path& path) {
@@ -417,6 +428,7 @@ void check_output_path(std::string_view option, const fs::path& path) {
 
 void check_output_name(std::string_view option, const fs::path& path) {
   check_output_path(option, path);
+  refuse_run_directory(option, path, path.parent_path());
   if (path.filename().string().front() == '=')
     throw InputError(output_at(option, path) + "a file name may not start with '='");
 }
@@ -425,6 +437,7 @@ void check_output_base(std::string_view option, const fs::path& base,
                        std::initializer_list<std::string_view> extensions) {
   check_output_spelling(option, base);
   check_output_directory(option, base.parent_path(), {});
+  refuse_run_directory(option, base, base.parent_path());
   for (const std::string_view ext : extensions) {
     fs::path file = base;
     file += ext;
@@ -446,6 +459,7 @@ void check_output_directory(std::string_view option, const fs::path& dir, const 
       throw InputError(output_at(option, dir) + which + "is a symbolic link to nothing");
     if (p == p.parent_path()) break;
   }
+  refuse_run_directory(option, dir, dir);
   for (const std::string_view name : names) check_output_path(option, dir / name);
 }
 

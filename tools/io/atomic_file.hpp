@@ -152,7 +152,8 @@ inline constexpr std::size_t kMaxOutputName = 255 - 12;
 // kMaxOutputName bytes, and it is not an existing directory.
 void check_output_path(std::string_view option, const std::filesystem::path& path);
 // check_output_path, and the name does not start with '=' (which converters' option parsers take
-// as part of an option).
+// as part of an option). This and the two below refuse the top level of a budjam run directory (its
+// run's own files live there): InputError.
 void check_output_name(std::string_view option, const std::filesystem::path& path);
 // `--out BASE` of a command writing BASE<ext> for each extension: BASE names a file (as above) and
 // each BASE<ext> passes check_output_path. Before any work, so nothing is computed to be lost.
