@@ -6,7 +6,7 @@
 
 Grows every (P0, seed) with budjam.grow (nothing written to disk) and follows the bud events:
 a tagged bud stops being free when it completes (gets a load-bearing contact) or its cell divides.
-Defaults: L = 8, 4 seeds, P0 ∈ {none, 1e-3}: about a minute on one core.
+Defaults: L = 8, 4 seeds, P0 ∈ {none, 1e-3}: a few seconds on one core.
 """
 import argparse
 import pathlib
