@@ -610,6 +610,16 @@ TEST_CASE(
   CHECK(pooled["n"] == 6);
   CHECK(pooled["targets"] == 12);
   CHECK(pooled["se"].is_number());
+  // the paper's figure: a cell per (P0, Δφ), weak to strong feedback, Δφ increasing; two runs a cell
+  // give no SE, so no cell is tested
+  const auto& cells = pooled["paper_cells"];
+  REQUIRE(cells["cells"].size() == 6);
+  CHECK(cells["cells"][0]["P0"].get<double>() == Approx(0.01));
+  CHECK(cells["cells"][0]["dphi"].get<double>() == Approx(0.001));
+  CHECK(cells["cells"][1]["dphi"].get<double>() == Approx(0.03));
+  CHECK(cells["cells"][5]["P0"].get<double>() == Approx(0.0001));
+  CHECK(cells["cells"][0]["measured"]["n"] == 2);
+  CHECK(cells["cells_tested"] == 0);
   for (const auto& x : j["main"]["dZ_identity"]["per_P0_unrepopulated_by_run"]) {
     CHECK(x["n"] == 2);
     CHECK(x["se"].is_null());

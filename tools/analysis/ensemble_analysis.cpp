@@ -883,33 +883,41 @@ Json dz_identity_json(const std::vector<const RunRow*>& m, const BootstrapOption
 }
 
 // The paper's figures of an identity "measured = predicted" over (P0, Δφ): per cell the means ± SE
-// over its runs of both sides, with no test. The whole counts the cells with kMinSamplesForError runs
-// or more and those whose two means lie more than 2 combined SE apart, √(SE_m² + SE_p²) — what a reader
-// of the figure sees as error bars that do not meet; about 1 in 20 by chance where the identity holds.
+// over its runs of both sides, with no test; its no-feedback runs are cells too where
+// `with_no_feedback` (B_grow; the ΔZ identity takes its ΔZ_0(P) from them). The whole counts the cells with
+// kMinSamplesForError runs or more and those whose two means lie more than 2 combined SE apart, √(SE_m² + SE_p²) — what
+// a reader of the figure sees as error bars that do not meet; about 1 in 20 by chance where the identity holds.
 template <class Measured, class Predicted>
-Json paper_cells_json(const std::vector<const RunRow*>& m, Measured measured, Predicted predicted) {
-  std::map<std::pair<double, double>, std::array<std::vector<double>, 2>> cells;  // (P0, Δφ) → both sides
+Json paper_cells_json(const std::vector<const RunRow*>& m, bool with_no_feedback, Measured measured,
+                      Predicted predicted) {
+  // (P0, −Δφ) → both sides; no feedback as P0 = ∞, the weakest: read backwards, weak to strong
+  // feedback and each group's targets in increasing Δφ
+  std::map<std::pair<double, double>, std::array<std::vector<double>, 2>> cells;
   for (const auto* r : m) {
-    if (!r->P0) continue;
+    if (!r->P0 && !with_no_feedback) continue;
+    const double P0 = r->P0.value_or(std::numeric_limits<double>::infinity());
     for (const auto& t : r->targets) {
       const double a = measured(t), b = predicted(t);
       if (!std::isfinite(a) || !std::isfinite(b)) continue;
-      auto& c = cells[{*r->P0, t.dphi}];
+      auto& c = cells[{P0, -t.dphi}];
       c[0].push_back(a);
       c[1].push_back(b);
     }
   }
   Json list = Json::array();
   std::size_t tested = 0, apart = 0;
-  for (auto it = cells.rbegin(); it != cells.rend(); ++it) {  // weak → strong feedback, as the groups
-    const auto& [P0, dphi] = it->first;
+  for (auto it = cells.rbegin(); it != cells.rend(); ++it) {
+    const auto& [P0, minus_dphi] = it->first;
     const Json a = mean_se_json(it->second[0]), b = mean_se_json(it->second[1]);
     if (a["se"].is_number() && b["se"].is_number()) {
       ++tested;
       const double gap = std::abs(a["mean"].get<double>() - b["mean"].get<double>());
       apart += gap > 2.0 * std::hypot(a["se"].get<double>(), b["se"].get<double>());
     }
-    list.push_back(Json{{"P0", P0}, {"dphi", dphi}, {"measured", a}, {"predicted", b}});
+    list.push_back(Json{{"P0", std::isfinite(P0) ? Json(P0) : Json(nullptr)},
+                        {"dphi", -minus_dphi},
+                        {"measured", a},
+                        {"predicted", b}});
   }
   return Json{{"cells", list}, {"cells_tested", tested}, {"cells_apart_2se", apart}};
 }
@@ -1040,10 +1048,10 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m, bo);
   h["dZ_identity"]["paper_cells"] = paper_cells_json(
-      m, [](const TargetRow& t) { return t.dZ; }, [](const TargetRow& t) { return t.dZ_pred; });
+      m, false, [](const TargetRow& t) { return t.dZ; }, [](const TargetRow& t) { return t.dZ_pred; });
   h["B_grow_over_lambda_B_log10"] = growth_bulk_json(m, bo);
   h["B_grow_over_lambda_B_log10"]["paper_cells"] = paper_cells_json(
-      m, [](const TargetRow& t) { return t.B_grow; }, [](const TargetRow& t) { return t.lambda * t.B; });
+      m, true, [](const TargetRow& t) { return t.B_grow; }, [](const TargetRow& t) { return t.lambda * t.B; });
   return h;
 }
 
