@@ -194,9 +194,10 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
   }
 }
 
-TEST_CASE("render stopped by SIGINT while its converter runs leaves neither a temporary nor the output, and "
-          "no converter behind",
-          "[cli]") {
+TEST_CASE(
+    "render stopped by SIGINT while its converter runs leaves neither a temporary nor the output, and "
+    "no converter behind",
+    "[cli]") {
   const fs::path dir = work_dir() / "render_sigint";
   fs::remove_all(dir);
   fs::create_directories(dir / "bin");
