@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"
 #include "scratch.hpp"
+#include "small_disk.hpp"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -283,4 +284,37 @@ TEST_CASE(
   std::sort(left.begin(), left.end());
   std::sort(expected.begin(), expected.end());
   CHECK(left == expected);
+}
+
+TEST_CASE("an output that fills its disk is exit 3 with one line naming that output, never its temporary", "[cli]") {
+  budjam::testing::SmallDisk disk(work_dir() / "full_disk", 16 * 1024);
+  if (!disk.mounted) {
+    WARN(disk.why_not);
+    return;
+  }
+  {
+    std::ofstream fill(disk.path / "fill", std::ios::binary);
+    const std::string block(1024, 'x');
+    for (int k = 0; k < 64 && fill; ++k) fill << block << std::flush;
+  }
+  const fs::path pack = work_dir() / "full_disk.pack";
+  std::ofstream(pack) << "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
+                         "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n";
+  const std::string out = budjam::testing::shell_quoted(disk.path / "out");
+  std::vector<std::pair<std::string, std::string>> commands{
+      {"export " + budjam::testing::shell_quoted(pack) + " --format xyz --out " + out, "out.xyz"},
+      {"rigidity " + budjam::testing::shell_quoted(pack) + " --out " + out, "out.csv"}};
+  if (std::system("/usr/bin/python3 -c 'import gsd.hoomd' >/dev/null 2>&1") == 0)
+    commands.emplace_back("export " + budjam::testing::shell_quoted(pack) + " --format gsd --out " + out, "out.gsd");
+  for (const auto& [args, named] : commands) {
+    const Result r = budjam::testing::run_budjam(args);
+    INFO(args << "\n" << r.err);
+    CHECK(r.code == 3);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find((disk.path / named).string() + ": ") != std::string::npos);
+    CHECK(r.err.find(".tmp-") == std::string::npos);
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(disk.path)) left.push_back(e.path().filename().string());
+    CHECK(left == std::vector<std::string>{"fill"});
+  }
 }

@@ -117,6 +117,25 @@ TEST_CASE("grow writes the documented run directory and lands the targets", "[gr
   CHECK(rows == s["accepted_steps"].get<long>() + 1);
 }
 
+TEST_CASE("without --out a run goes to runs/NAME-seedS, NAME the run's name made safe and never hidden", "[grow_cli]") {
+  const fs::path here = work_dir() / "default_dirs";
+  fs::create_directories(here);
+  const fs::path scene = small_scene("named", "", "[]");
+  const std::vector<std::pair<std::string, std::string>> names{
+      {"demo run", "demo_run"}, {".", "_"}, {"..hidden", "_hidden"}, {"a/../b", "a_.._b"}};
+  for (const auto& [name, dir] : names) {
+    INFO(name);
+    const auto r = budjam::testing::run_budjam_in(
+        here, "grow " + q(scene) + " --quiet --set 'run.name=\"" + name + "\"' --set growth.max_steps=2");
+    CHECK(r.code == 0);
+    CHECK(fs::exists(here / "runs" / (dir + "-seed3") / "scene.toml"));
+  }
+  std::vector<std::string> made;
+  for (const auto& e : fs::directory_iterator(here / "runs")) made.push_back(e.path().filename().string());
+  CHECK(made.size() == names.size());
+  for (const auto& m : made) CHECK(m.front() != '.');
+}
+
 TEST_CASE("the same scene and seed give a byte-identical summary.json; another seed does not", "[grow_cli]") {
   const fs::path scene = small_scene("det");
   const fs::path a = work_dir() / "det_a", b = work_dir() / "det_b", c = work_dir() / "det_c";

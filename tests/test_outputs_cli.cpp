@@ -239,8 +239,10 @@ TEST_CASE("analyse --tables reads the P0 \"none\" of earlier tables and writes i
                     [](const auto& g) { return g.at("P0").is_null() && g.at("P0_label") == "none"; }));
 }
 
-TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JSON, neither prints one summary line",
-          "[cli]") {
+TEST_CASE(
+    "--out BASE writes BASE.json (and BASE.csv), --json prints the same JSON, neither prints one summary line; "
+    "a BASE of only \".json\" is refused",
+    "[cli]") {
   const fs::path pack = demo_run() / "packings/phi2.pack", out = work_dir() / "convention";
   fs::create_directories(out);
   const std::vector<std::pair<std::string, bool>> commands{{"moduli " + shell_quoted(pack), false},
@@ -267,6 +269,16 @@ TEST_CASE("--out BASE writes BASE.json (and BASE.csv), --json prints the same JS
     CHECK(fs::exists(base.string() + ".csv") == has_table);
     CHECK(slurp(base.string() + ".json") == json.out);
     CHECK(run_budjam(command + " --quiet --out " + shell_quoted(base)).out.empty());
+
+    // a BASE that is only the extension names no file: refused, nothing written (not ".json.json")
+    fs::remove_all(out);
+    fs::create_directories(out);
+    for (const std::string bare : {".json", ".csv"}) {
+      const auto refused = run_budjam(command + " --out " + shell_quoted((out / bare).string()));
+      CHECK(refused.code == 2);
+      CHECK(one_line(refused.err).find("no file name before the extension " + bare) != std::string::npos);
+      CHECK(fs::is_empty(out));
+    }
     fs::remove_all(out);
     fs::create_directories(out);
   }

@@ -200,3 +200,16 @@ def test_a_trajectory_exports_to_gsd_only(run_budjam, tmp_path):
     run_budjam("export", PACKING, "--format", "xyz", "--out", tmp_path / "trajectory")
     r = run_budjam("export", tmp_path / "trajectory.xyz", "--format", "vtk", check=False)
     assert r.returncode == 2 and "exports to gsd only" in r.stderr
+
+
+def test_a_packing_named_xyz_is_read_as_a_packing_and_never_replaced_by_its_export(run_budjam, tmp_path):
+    """What a file is follows its first line, not its name: a packing called p.xyz exports as a
+    packing, and its default output p.xyz (the input itself) is refused, the input unchanged."""
+    packing = tmp_path / "p.xyz"
+    packing.write_bytes(open(PACKING, "rb").read())
+    run_budjam("export", packing, "--format", "vtk")
+    run_budjam("export", PACKING, "--format", "vtk", "--out", tmp_path / "q")
+    assert (tmp_path / "p.vtk").read_bytes() == (tmp_path / "q.vtk").read_bytes()
+    r = run_budjam("export", packing, "--format", "xyz", check=False)
+    assert r.returncode == 2 and "is the input file" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert packing.read_bytes() == open(PACKING, "rb").read()

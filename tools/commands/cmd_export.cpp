@@ -10,8 +10,10 @@
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
+#include "io/text.hpp"
 
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +44,17 @@ void export_trajectory(const Options& o, const std::filesystem::path& out) {
   io::write_gsd(out, io::read_extxyz(o.packing));
 }
 
+// A packing file names its format on its first line, whatever the file is called (p.xyz included);
+// any other *.xyz is taken for an extended XYZ trajectory.
+bool is_trajectory(const std::string& path) {
+  if (std::filesystem::path(path).extension() != ".xyz") return false;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(64, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return !io::looks_like_packing(head);
+}
+
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
   if (!o.out.empty()) io::check_output_name("--out", o.out);
@@ -49,7 +62,10 @@ void run(const Options& o) {
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
   io::check_output_name("--out", out);
-  if (std::filesystem::path(o.packing).extension() == ".xyz") return export_trajectory(o, out);
+  std::error_code ec;
+  if (std::filesystem::equivalent(o.packing, out, ec))  // `export p.xyz --format xyz` with no --out
+    throw InputError("--out: " + io::escape_control(out.string()) + " is the input file (give another --out)");
+  if (is_trajectory(o.packing)) return export_trajectory(o, out);
   const io::PackingFile file = io::read_packing(o.packing);
   io::write_particles(out, io::particle_frame(file, which), o.format);
 }

@@ -19,6 +19,7 @@
 #include "io/scene_file.hpp"
 #include "io/text.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <filesystem>
@@ -47,6 +48,9 @@ struct Options {
 std::string safe_name(const std::string& s) {
   std::string out;
   for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+  // A leading dot would hide the run directory from ls.
+  const std::size_t dots = std::min(out.find_first_not_of('.'), out.size());
+  if (dots > 0) out.replace(0, dots, "_");
   return out.empty() ? "run" : out;
 }
 

@@ -373,17 +373,18 @@ TempFile::~TempFile() {
   }
 }
 
-void TempFile::write(std::string_view data) { write_all(fd_, data, path()); }
+// Errors name the file being written, not its temporary: the user never asked for that name.
+void TempFile::write(std::string_view data) { write_all(fd_, data, dir_ / final_); }
 
 void TempFile::commit() {
   const int ours = std::exchange(fd_, -1);
-  if (::close(ours) != 0) io_fail(path(), "cannot close", errno);
+  if (::close(ours) != 0) io_fail(dir_ / final_, "cannot close", errno);
   // By name again: a program given path() may have written or replaced it.
   const int fd = dir_.open_file(name_, O_RDONLY);
   const bool ok = ::fchmod(fd, file_mode()) == 0 && ::fsync(fd) == 0;
   const int err = errno;
   ::close(fd);
-  if (!ok) io_fail(path(), "cannot sync", err);
+  if (!ok) io_fail(dir_ / final_, "cannot sync", err);
   dir_.rename(name_, final_);
   committed_ = true;
   unlist_temporary(std::exchange(slot_, -1));

@@ -409,7 +409,9 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
   for (const auto& f : frames) all.push_back(particle_frame_json(f));
   const Directory dir = Directory::open(path.parent_path(), true);
   const std::string name = path.filename().string();
-  TempFile input(dir, name + ".frames.json");  // never committed: removed on every way out
+  // Named for the output, so that a failure to write it names the file the user asked for; never
+  // committed, it is removed on every way out.
+  TempFile input(dir, name);
   input.write(all.dump());
   TempFile out(dir, name);
   const char* env = std::getenv("BUDJAM_PYTHON");

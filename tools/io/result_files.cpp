@@ -7,20 +7,25 @@
 
 #include <ostream>
 #include <sstream>
+#include <string_view>
 
 namespace budjam::io {
 
 namespace fs = std::filesystem;
 
 fs::path result_base(const std::string& base) {
-  fs::path p(base);
-  if (p.extension() == ".json" || p.extension() == ".csv") p.replace_extension();
-  return p;
+  // By the name's text: std::filesystem takes ".json" for a stem without an extension.
+  for (const std::string_view ext : {".json", ".csv"})
+    if (base.ends_with(ext)) return fs::path(base.substr(0, base.size() - ext.size()));
+  return fs::path(base);
 }
 
 void check_output_request(const OutputRequest& request, bool table) {
   if (request.base.empty()) return;
   const fs::path base = result_base(request.base);
+  const std::string name = fs::path(request.base).filename().string();
+  if (base.filename().empty() && !name.empty() && name != "." && name != "..")
+    throw InputError("--out: " + escape_control(request.base) + ": no file name before the extension " + name);
   if (table)
     check_output_base("--out", base, {".json", ".csv"});
   else
