@@ -48,7 +48,7 @@ BASE_COMMANDS = [
 
 
 @pytest.mark.parametrize("command,args,extensions,option", BASE_COMMANDS)
-@pytest.mark.parametrize("base", ["d/", ".", "..", "sub/.", "x" * 250])
+@pytest.mark.parametrize("base", ["d/", ".", "..", "sub/.", "x" * 250, ".json", "d/.csv"])
 def test_a_base_that_names_no_file_or_too_long_a_name_is_refused(run_budjam, tmp_path, command, args, extensions,
                                                                  option, base):
     (tmp_path / "d").mkdir()
@@ -56,6 +56,17 @@ def test_a_base_that_names_no_file_or_too_long_a_name_is_refused(run_budjam, tmp
     before = snapshot(tmp_path)
     r = run_budjam(command, *args, option, f"{tmp_path}/{base}", check=False)
     assert_refused(r, option)
+    assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("name", [".png", ".svg", "d/.pdf", "d/", ".", "x" * 250 + ".svg"])
+def test_a_render_output_that_names_no_file_is_refused(run_budjam, tmp_path, name):
+    (tmp_path / "d").mkdir()
+    before = snapshot(tmp_path)
+    r = run_budjam("render", PACKING, "-o", f"{tmp_path}/{name}", check=False)
+    assert_refused(r, "-o")
+    if name.split("/")[-1] in (".png", ".svg", ".pdf"):
+        assert "no file name before the extension" in r.stderr
     assert snapshot(tmp_path) == before
 
 

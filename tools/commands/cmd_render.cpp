@@ -13,6 +13,7 @@
 #include "io/packing_file.hpp"
 
 #include "io/run_program.hpp"
+#include "io/text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -56,8 +57,11 @@ void run(const Options& o) {
   const fs::path out = o.out;
   io::check_output_name("-o", out);
   const std::string ext = out.extension().string();
+  const std::string name = out.filename().string();
+  if (name == ".svg" || name == ".png" || name == ".pdf")  // std::filesystem: a stem, no extension
+    throw InputError("-o: " + io::escape_control(o.out) + ": no file name before the extension " + name);
   if (ext != ".svg" && ext != ".png" && ext != ".pdf")
-    throw InputError("-o: the output must end in .svg, .png or .pdf (got " + o.out + ")");
+    throw InputError("-o: the output must end in .svg, .png or .pdf (got " + io::escape_control(o.out) + ")");
   if (o.png) io::check_output_name("--png", fs::path(out).replace_extension(".png"));
   const io::PackingFile f = io::read_packing(o.packing);
   const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
@@ -81,7 +85,6 @@ void run(const Options& o) {
                        std::to_string(kMaxConvertedPixels) + " a side: lower --scale, or write an SVG");
   }
   const io::Directory dir = io::Directory::open(out.parent_path(), true);
-  const std::string name = out.filename().string();
   const std::string picture = render_svg(f.packing, pc.contacts, pc.network, ro);
   if (ext != ".svg") {
     io::TempFile svg(dir, name);  // only the converted file is an output: never committed
