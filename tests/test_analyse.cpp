@@ -162,6 +162,32 @@ TEST_CASE("analyse --require moduli refuses a packing without its moduli file: e
   CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6").code == 0);
 }
 
+TEST_CASE(
+    "analyse refuses a sidecar whose N, L or φ are not its packing's (the packing replaced since): exit 2 "
+    "naming it",
+    "[analyse]") {
+  const fs::path copy = work_dir() / "replaced";
+  fs::copy(runs().front(), copy, fs::copy_options::recursive);
+  REQUIRE(run_budjam("dos " + q(copy / "packings" / "target_0.pack") + " --quiet --out " +
+                     q(copy / "packings" / "target_0.dos"))
+              .code == 0);
+  REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_matching") + " --main-L 6").code == 0);
+  // The packing replaced by another of the run, its sidecars left: each kind is refused in turn.
+  fs::copy_file(copy / "packings" / "target_1.pack", copy / "packings" / "target_0.pack",
+                fs::copy_options::overwrite_existing);
+  for (const char* kind : {"moduli", "dos"}) {
+    INFO(kind);
+    const fs::path err = work_dir() / "replaced.err";
+    CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_replaced") + " --main-L 6",
+                                "/dev/null", err) == 2);
+    const std::string e = slurp(err);
+    CHECK(e.find("target_0." + std::string(kind) + ".json: results of another packing than") != std::string::npos);
+    CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+    fs::remove(copy / "packings" / ("target_0." + std::string(kind) + ".json"));
+  }
+  CHECK_FALSE(fs::exists(work_dir() / "t_replaced"));
+}
+
 TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of the moduli and counts it", "[analyse]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
@@ -171,6 +197,11 @@ TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of t
   REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack") + " --quiet --out " +
                      q(copy / "packings" / "target_0.moduli"))
               .code == 1);
+  // given the N, L and φ of target_0's packing, which analyse checks a sidecar against
+  const auto own = budjam::io::read_json(runs().front() / "packings" / "target_0.moduli.json");
+  auto saddle = budjam::io::read_json(copy / "packings" / "target_0.moduli.json");
+  for (const char* key : {"N", "L", "phi"}) saddle[key] = own.at(key);
+  budjam::io::write_json(copy / "packings" / "target_0.moduli.json", saddle);
   const fs::path out = work_dir() / "t_saddle";
   REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli").code == 0);
   CHECK(budjam::io::read_json(out / "analysis.json").at("inputs").at("moduli_saddles").get<long>() == 1);

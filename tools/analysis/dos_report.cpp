@@ -18,6 +18,8 @@ DosReport dos_report(const Packing& p, const std::vector<Contact>& contacts, con
                      const DosRequest& request) {
   DosReport r;
   r.network = net;
+  r.L = p.box.L;
+  r.phi = p.packing_fraction();
   const auto t0 = std::chrono::steady_clock::now();
   r.result = packing_spectrum(p, contacts, net, request.spectrum, request.rule);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -43,6 +45,8 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
   j["N"] = net.N;
   j["N_nr"] = net.N_nr;
   j["N_f"] = net.N_f;
+  j["L"] = r.L;
+  j["phi"] = r.phi;
   j["n_dof"] = s.n_dof;
   j["modes_computed"] = m.computed;
   j["complete"] = s.complete();

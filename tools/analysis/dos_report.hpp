@@ -33,7 +33,8 @@ struct DosReport {
   bool has_rigidity = false;
   RigidityState rigidity;
   DosHistogram histogram;
-  double seconds = 0;  // wall time of the spectrum (not written to the files)
+  double L = 0, phi = 0;  // of the packing: they tie a sidecar to it (tools::sidecar)
+  double seconds = 0;     // wall time of the spectrum (not written to the files)
 };
 
 // Spectrum, observables and the independent counts of one relaxed packing. Throws InputError if

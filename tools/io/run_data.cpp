@@ -3,6 +3,7 @@
 #include "budjam/cell_list.hpp"
 #include "budjam/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/packing_file.hpp"
 #include "io/run_directory.hpp"
 #include "io/text.hpp"
 
@@ -268,11 +269,36 @@ PackingContacts analyse_contacts(const Packing& p) {
   return pc;
 }
 
+namespace {
+
+// A sidecar belongs to the packing beside it only while that packing is unchanged: a run grown
+// again into its directory (--overwrite) or a packing replaced by hand would otherwise lend it the
+// numbers of another packing. What the sidecar records of its packing (N, L, φ) must match it.
+void check_sidecar_matches(const fs::path& pack, const fs::path& file, const io::Json& j) {
+  if (!fs::exists(pack)) return;
+  const io::PackingFile p = io::read_packing(pack);
+  const auto check = [&](const char* key, double of_packing) {
+    if (!j.contains(key) || !j[key].is_number()) return;
+    const double recorded = j[key].get<double>();
+    if (recorded != of_packing)
+      throw InputError(file.string() + ": results of another packing than " + pack.string() + " (" + key + " " +
+                       io::format_double(recorded) + " against the packing's " + io::format_double(of_packing) +
+                       "): compute them again");
+  };
+  check("N", static_cast<double>(p.packing.size()));
+  check("L", p.packing.box.L);
+  check("phi", p.packing.packing_fraction());
+}
+
+}  // namespace
+
 std::optional<io::Json> sidecar(const fs::path& pack, const std::string& kind) {
   fs::path f = pack;
   f.replace_extension("." + kind + ".json");
   if (!fs::exists(f)) return std::nullopt;
-  return io::read_json(f);
+  io::Json j = io::read_json(f);
+  check_sidecar_matches(pack, f, j);
+  return j;
 }
 
 }  // namespace budjam::tools

@@ -99,7 +99,8 @@ struct PackingContacts {
 PackingContacts analyse_contacts(const Packing& p);
 
 // Results of `budjam moduli` / `budjam dos` kept beside a packing: packings/<name>.moduli.json,
-// packings/<name>.dos.json (the Makefile writes them). nullopt when absent.
+// packings/<name>.dos.json (the Makefile writes them). nullopt when absent; InputError when the N,
+// L or φ it records differ from the packing's (results of an earlier packing of that name).
 std::optional<io::Json> sidecar(const std::filesystem::path& pack, const std::string& kind);
 
 }  // namespace budjam::tools
