@@ -19,6 +19,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -160,6 +161,45 @@ TEST_CASE("analyse --require moduli refuses a packing without its moduli file: e
   CHECK(std::count(e.begin(), e.end(), '\n') == 1);
   // without --require the same run is analysed, its moduli left empty
   CHECK(run_budjam("analyse " + q(copy) + " --out " + q(work_dir() / "t_lenient") + " --main-L 6").code == 0);
+}
+
+TEST_CASE("analyse pools runs of one L and P0 only under one protocol, and every run under one set of cells",
+          "[analyse]") {
+  const fs::path scene = work_dir() / "protocol.toml";
+  std::ofstream(scene) << "[run]\nname = \"protocol\"\nseed = 7\n[box]\nL = 6.0\n[growth]\nP0 = 1e-3\n"
+                       << "[jamming]\ntargets = [1e-3]\n";
+  const auto grow = [&](const std::string& name, const std::string& sets) {
+    const fs::path dir = work_dir() / "protocol" / name;
+    REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir) + " " + sets).code == 0);
+    return dir;
+  };
+  // What a run records, is called or runs on, its seed and step limit may differ within a group.
+  const fs::path same = grow("same",
+                             "--seed 8 --set run.name=other --set 'jamming.targets=[1e-3, 1e-2]' "
+                             "--set jamming.continue_to_phi2=true --set growth.max_steps=100000 "
+                             "--set observe.trials=true --set minimiser.threads=2");
+  CHECK(run_budjam("analyse " + all_runs() + q(same) + " --out " + q(work_dir() / "t_same") + " --main-L 6").code == 0);
+  // (name, how the run differs, the key named, its value in that run)
+  const std::vector<std::tuple<std::string, std::string, std::string, std::string>> refused{
+      {"epsilon", "--seed 9 --set jamming.epsilon_U=1e-12", "jamming.epsilon_U", "1e-12"},
+      {"search", "--seed 9 --set jamming.search=bisection", "jamming.search", "\"bisection\""},
+      {"cells", "--seed 9 --set growth.P0=1e-1 --set cells.alpha0=1.02", "cells.alpha0", "1.02"}};
+  for (const auto& [name, sets, key, value] : refused) {
+    INFO(name);
+    const fs::path dir = grow(name, sets);
+    const fs::path err = work_dir() / "protocol.err";
+    CHECK(
+        run_budjam_redirected("analyse " + all_runs() + q(dir) + " --out " + q(work_dir() / "t_mixed") + " --main-L 6",
+                              "/dev/null", err) == 2);
+    const std::string e = slurp(err);
+    INFO(e);
+    CHECK(e.find(": " + key + " = ") != std::string::npos);  // one scene's value, then the other's
+    CHECK(e.find(value) != std::string::npos);
+    CHECK(e.find((dir / "scene.toml").string()) != std::string::npos);
+    CHECK(e.find("analyse them apart") != std::string::npos);
+    CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+  }
+  CHECK_FALSE(fs::exists(work_dir() / "t_mixed"));
 }
 
 TEST_CASE(

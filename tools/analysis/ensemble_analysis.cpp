@@ -31,6 +31,7 @@
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"
 #include "budjam/scene.hpp"
+#include "budjam/scene_keys.hpp"
 #include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 #include "io/atomic_file.hpp"
@@ -449,6 +450,39 @@ DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& ru
   return q;
 }
 
+// Keys in which the runs of one group may differ: what a run is called, records or runs on, and its
+// seed and step limit. Every other key (ε_U, Δt, the search, the minimiser, ...) sets which states a
+// run reaches, so runs that differ in one are samples of different protocols.
+bool may_differ_within_group(const SceneKey& k) {
+  static const std::set<std::string> keys{"growth.max_steps", "jamming.targets", "jamming.continue_to_phi2",
+                                          "minimiser.threads"};
+  return k.section == "run" || k.section.starts_with("observe") || keys.contains(k.key());
+}
+
+// The runs of a group (L, P0) are pooled as samples of one protocol, and the growth-only baseline
+// takes the cell parameters of the first run for every group: InputError naming the first scene that
+// breaks either, its key and both values.
+void check_one_protocol(const std::vector<RunRow>& rows) {
+  std::map<GroupKey, std::pair<fs::path, Scene>> first_of_group;
+  std::optional<std::pair<fs::path, Scene>> first;
+  for (const RunRow& r : rows) {
+    const fs::path file = r.dir / io::run_files::scene;
+    const Scene scene = io::load_scene(file);
+    if (!first) first.emplace(file, scene);
+    const auto [it, added] = first_of_group.try_emplace(GroupKey{r.L, r.P0}, file, scene);
+    for (const SceneKey& k : scene_keys()) {
+      const bool cell = k.section == "cells";
+      if (!cell && may_differ_within_group(k)) continue;
+      const auto& [other_file, other] = cell ? *first : it->second;
+      if (k.get(scene) == k.get(other)) continue;
+      throw InputError(file.string() + ": " + k.key() + " = " + value_text(k.get(scene)) + ", but " +
+                       other_file.string() + " has " + value_text(k.get(other)) +
+                       (cell ? " (the runs of one analysis share their cells): analyse them apart"
+                             : " (the runs of one L and P0 are samples of one protocol): analyse them apart"));
+    }
+  }
+}
+
 Ensemble read_ensemble(const EnsembleOptions& o) {
   Ensemble e;
   const auto dirs = find_runs(o.inputs);
@@ -472,7 +506,8 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
     }
   }
   // The growth parameters of the runs, for the growth-only baseline (the first run stands for all:
-  // an ensemble shares its cell parameters and initial state, and only those enter).
+  // check_one_protocol holds every run to its cell parameters).
+  check_one_protocol(e.rows);
   if (!e.rows.empty()) e.growth_scene = io::load_scene(e.rows.front().dir / io::run_files::scene);
   std::vector<JammingKey> keys;
   for (const auto& r : e.rows) keys.push_back({r.L, r.seed, r.step_J, r.N_J, r.phi_J});
