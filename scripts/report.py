@@ -270,6 +270,14 @@ def shear_note(bins):
     ] + [f"| {fmt(b['PN2_lo'])} – {fmt(b['PN2_hi'])} | {b['packings']} | {fmt(b['fraction'])} |" for b in bins]
 
 
+def survival_text(name, surv):
+    """One P0's Kaplan–Meier summary: a_ε, ∫S and the completions and censorings behind them."""
+    events, records = surv.get("events"), surv.get("records")
+    censored = records - events if events is not None and records is not None else None
+    return (f"{name}: a_ε = {fmt(surv.get('a_eps'))}, ∫S = {fmt(surv.get('integral_S'))}, ε = {fmt(surv.get('epsilon'))} "
+            f"({events} completions, {censored} censored)")
+
+
 def p0_name(label):
     return "no feedback" if label == "none" else f"P0={label}"
 
@@ -295,15 +303,12 @@ def main():
     ap.add_argument("--preset", required=True)
     ap.add_argument("--moduli", default="1")
     ap.add_argument("--dos", default="1")
-    ap.add_argument("--survival", help="`budjam survival` JSON of the main L (default: TABLES/survival_main_L.json)")
     ap.add_argument("--jamming", help="tables of the jamming ensembles (`make -f Makefile.analysis PRESET=jamming analysis`); "
                                       "without them the jamming rows use the preset's own runs")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     with open(os.path.join(a.tables, "analysis.json")) as f:
         A = json.load(f)
-    with open(a.survival or os.path.join(a.tables, "survival_main_L.json")) as f:
-        surv = json.load(f)
     AJ = None
     if a.jamming:
         path = os.path.join(a.jamming, "analysis.json")
@@ -437,9 +442,9 @@ def main():
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order) +
           f" (the trend is tested on these {len(order)} groups, in this order: no feedback is the weakest)",
           trend_of([groups[l]["dphi_2_paper"] for l in order], increasing=False), fig("fig2"))
-    claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da (pooled, diameter²)", "—",
-          f"a_ε = {fmt(surv.get('a_eps'))}, ∫S = {fmt(surv.get('integral_S'))}, ε = {fmt(surv.get('epsilon'))} "
-          f"({surv.get('events')} completions, {surv.get('censored')} censored)", "same", "—", fig("figS"))
+    claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da per P0 (each P0's runs pooled, diameter²)", "—",
+          "; ".join(survival_text(p0_name(l), groups[l].get("pooled_survival") or {}) for l in order),
+          "same", "—", fig("figS"))
     # ---- mechanics ----
     bg_name, bg_text, bg = growth_bulk(M["B_grow_over_lambda_B_log10"])
     if have_moduli and bg is not None:

@@ -97,11 +97,14 @@ TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
 }
 
 // ---- `budjam survival` on a hand-made run directory -------------------------------------------------
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "run_budjam.hpp"
 #include "scratch.hpp"
@@ -112,11 +115,15 @@ using budjam::testing::slurp;
 
 // The eight buds of the hand-worked example, logged as the growth driver logs them: a tag, then one
 // terminal row each (completed = event; divided / censored_end = censored). Episode 0 is an earlier
-// jamming episode that unjammed: its rows must be ignored.
-void write_run(const std::filesystem::path& d) {
+// jamming episode that unjammed: its rows must be ignored. `scene` is the run's scene.toml; `seed`
+// tells its summary from another run's.
+void write_run(const std::filesystem::path& d, const std::string& scene = "[run]\nseed = 1\n[growth]\nP0 = 1e-3\n",
+               int seed = 1) {
   std::filesystem::create_directories(d / "packings");
-  std::ofstream(d / "summary.json") << R"({"format": "budjam-summary", "version": 1, "status": "finished",
-    "seed": 1, "L": 8.0, "P0": 0.001, "phi_J": 0.83, "u_J": 0.25, "N_nr_J": 32, "n_J": 0.5, "targets": []})";
+  std::ofstream(d / "scene.toml") << scene;
+  std::ofstream(d / "summary.json") << R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": )"
+                                    << seed << R"(, "L": 8.0, "P0": 0.001, "phi_J": 0.83, "u_J": 0.25, "N_nr_J": 32,
+    "n_J": 0.5, "targets": []})";
   std::ofstream(d / "steps.csv") << "step,phi\n";
   std::ofstream(d / "divisions.csv") << "step,phi\n";
   std::ofstream ev(d / "bud_events.csv");
@@ -177,6 +184,40 @@ TEST_CASE("budjam survival counts a run once when it is given twice or copied, a
   CHECK(j1 == j3);  // the same curve and a_eps as from the run alone
   const auto line = budjam::testing::run_budjam("survival " + run + " " + copy);
   CHECK(line.out.find("1 runs (1 duplicate copies left out)") != std::string::npos);
+}
+
+TEST_CASE(
+    "budjam survival pools runs of one protocol only: another seed or observer is pooled, another P0 or L "
+    "is refused naming the key") {
+  namespace fs = std::filesystem;
+  const auto dir = budjam::testing::work_dir() / "protocol";
+  fs::remove_all(dir);
+  const auto q = [](const fs::path& p) { return budjam::testing::shell_quoted(p); };
+  write_run(dir / "a");
+  write_run(dir / "b", "[run]\nseed = 2\nname = \"b\"\n[growth]\nP0 = 1e-3\nmax_steps = 99\n[observe]\ntrials = true\n",
+            2);
+  const auto pooled = budjam::testing::run_budjam("survival " + q(dir / "a") + " " + q(dir / "b") + " --json");
+  REQUIRE(pooled.code == 0);
+  CHECK(nlohmann::json::parse(pooled.out)["records"] == 16);
+  // (run, its scene, the key named, its value there)
+  const std::vector<std::array<std::string, 4>> refused{
+      {"p0", "[run]\nseed = 3\n[growth]\nP0 = 1e-1\n", "growth.P0", "0.1"},
+      {"feedback_off", "[run]\nseed = 3\n[growth]\nP0 = \"none\"\n", "growth.P0", "none"},
+      {"box", "[run]\nseed = 3\n[box]\nL = 20.0\n[growth]\nP0 = 1e-3\n", "box.L", "20"}};
+  for (const auto& [name, scene, key, value] : refused) {
+    INFO(name);
+    write_run(dir / name, scene, 3);
+    const fs::path out = dir / ("km_" + name);
+    const auto r = budjam::testing::run_budjam("survival " + q(dir / "a") + " " + q(dir / "b") + " " + q(dir / name) +
+                                               " --out " + q(out));
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find((dir / name / "scene.toml").string() + ": " + key + " = ") != std::string::npos);
+    CHECK(r.err.find(value) != std::string::npos);
+    CHECK(r.err.find("give them to survival apart") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_FALSE(fs::exists(out.string() + ".json"));
+  }
 }
 
 TEST_CASE("Kaplan-Meier and Greenwood reproduce the textbook 6-MP leukaemia table") {

@@ -64,8 +64,7 @@ def test_report_refuses_jamming_tables_that_are_not_there(tmp_path):
     ref = os.path.join(src, "data", "reference", "paper")
     out = tmp_path / "R.md"
     r = subprocess.run([sys.executable, os.path.join(src, "scripts", "report.py"), "--tables",
-                        os.path.join(ref, "reanalysed"), "--survival", os.path.join(ref, "tables", "survival_main_L.json"),
-                        "--figures", os.path.join(ref, "figures"), "--preset", "paper", "--jamming", str(tmp_path / "none"),
+                        os.path.join(ref, "reanalysed"), "--figures", os.path.join(ref, "figures"), "--preset", "paper", "--jamming", str(tmp_path / "none"),
                         "--out", str(out)], capture_output=True, text=True)
     assert r.returncode != 0
     assert r.stderr.count("\n") == 1 and "--jamming" in r.stderr

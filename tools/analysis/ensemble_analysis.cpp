@@ -24,6 +24,7 @@
 #include "analysis/finite_size.hpp"
 #include "analysis/growth_only.hpp"
 #include "analysis/jamming_states.hpp"
+#include "analysis/run_protocol.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "io/run_data.hpp"
 #include "io/run_directory.hpp"
@@ -450,36 +451,23 @@ DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& ru
   return q;
 }
 
-// Keys in which the runs of one group may differ: what a run is called, records or runs on, and its
-// seed and step limit. Every other key (ε_U, Δt, the search, the minimiser, ...) sets which states a
-// run reaches, so runs that differ in one are samples of different protocols.
-bool may_differ_within_group(const SceneKey& k) {
-  static const std::set<std::string> keys{"growth.max_steps", "jamming.targets", "jamming.continue_to_phi2",
-                                          "minimiser.threads"};
-  return k.section == "run" || k.section.starts_with("observe") || keys.contains(k.key());
-}
-
 // The runs of a group (L, P0) are pooled as samples of one protocol, and the growth-only baseline
 // takes the cell parameters of the first run for every group: InputError naming the first scene that
 // breaks either, its key and both values.
 void check_one_protocol(const std::vector<RunRow>& rows) {
-  std::map<GroupKey, std::pair<fs::path, Scene>> first_of_group;
-  std::optional<std::pair<fs::path, Scene>> first;
+  std::map<GroupKey, RunScene> first_of_group;
+  std::optional<RunScene> first;
   for (const RunRow& r : rows) {
     const fs::path file = r.dir / io::run_files::scene;
-    const Scene scene = io::load_scene(file);
-    if (!first) first.emplace(file, scene);
-    const auto [it, added] = first_of_group.try_emplace(GroupKey{r.L, r.P0}, file, scene);
-    for (const SceneKey& k : scene_keys()) {
-      const bool cell = k.section == "cells";
-      if (!cell && may_differ_within_group(k)) continue;
-      const auto& [other_file, other] = cell ? *first : it->second;
-      if (k.get(scene) == k.get(other)) continue;
-      throw InputError(file.string() + ": " + k.key() + " = " + value_text(k.get(scene)) + ", but " +
-                       other_file.string() + " has " + value_text(k.get(other)) +
-                       (cell ? " (the runs of one analysis share their cells): analyse them apart"
-                             : " (the runs of one L and P0 are samples of one protocol): analyse them apart"));
-    }
+    const RunScene run{file, io::load_scene(file)};
+    if (!first) first = run;
+    const RunScene& group_first = first_of_group.try_emplace(GroupKey{r.L, r.P0}, run).first->second;
+    require_same_keys(
+        run, group_first, [](const SceneKey& k) { return k.section != "cells" && !may_differ_between_samples(k); },
+        "the runs of one L and P0 are samples of one protocol", "analyse them apart");
+    require_same_keys(
+        run, *first, [](const SceneKey& k) { return k.section == "cells"; },
+        "the runs of one analysis share their cells", "analyse them apart");
   }
 }
 

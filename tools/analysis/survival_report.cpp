@@ -1,6 +1,7 @@
 #include "analysis/survival_report.hpp"
 
 #include "analysis/jamming_states.hpp"
+#include "analysis/run_protocol.hpp"
 #include "budjam/depletion.hpp"
 #include "budjam/errors.hpp"
 #include "budjam/statistics.hpp"
@@ -19,6 +20,10 @@ using io::Json;
 
 SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std::optional<double> epsilon) {
   const DistinctRuns loaded = load_distinct_runs(runs);
+  std::vector<std::filesystem::path> distinct;
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    if (!loaded.later_copy[k]) distinct.push_back(runs[k]);
+  require_one_protocol(distinct, "give them to survival apart");
   SurvivalReport report;
   report.duplicates = Json::array();
   for (const auto& group : loaded.copy_groups) report.duplicates.push_back(group);
