@@ -61,6 +61,16 @@ def test_survival_on_a_summary_that_is_a_json_array_raises_input_error_naming_th
         budjam.survival([make_run(tmp_path / "run", summary=[1, 2])])
 
 
+def test_survival_of_runs_of_two_feedback_strengths_raises_input_error_naming_the_key(tmp_path):
+    runs = []
+    for seed, p0 in ((1, "1e-3"), (2, "1e-1")):
+        run = make_run(tmp_path / f"run{seed}", summary=dict(SUMMARY, seed=seed))
+        (run / "scene.toml").write_text(f"[run]\nseed = {seed}\n[growth]\nP0 = {p0}\n")
+        runs.append(run)
+    with pytest.raises(budjam.InputError, match=r"run2/scene.toml: growth\.P0 = 0\.1, but .*give them to survival apart"):
+        budjam.survival(runs)
+
+
 def test_messages_escape_control_bytes_and_stay_on_one_line(tmp_path):
     with pytest.raises(budjam.InputError) as e:
         budjam.load_run(make_run(tmp_path / "run\x1b[2J\x07", summary=b'{"a": '))
