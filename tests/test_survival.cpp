@@ -150,6 +150,8 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   REQUIRE(r.code == 0);
   CHECK(slurp(dir / "km.json") == r.out);
   const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["L"] == 8.0);  // the runs' protocol
+  CHECK(j["P0"] == 0.001);
   CHECK(j["records"] == 8);
   CHECK(j["events"] == 5);
   // ε = 1/N_nr = 1/32, u_J = 1/4 → level 1/8: Ŝ first ≤ 1/8 at a = 7 (Ŝ = 0); ∫_0^7 S = 169/36

@@ -33,6 +33,10 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
     if (loaded.later_copy[k]) continue;
     const std::string d = runs[k].string();
     const RunData& r = loaded.runs[k];
+    if (report.L.is_null()) {
+      report.L = r.summary.value("L", Json());
+      report.P0 = r.summary.value("P0", Json());
+    }
     if (!r.jammed()) throw InputError(d + ": the run never jammed (phi_J is null)");
     if (!r.bud_events) throw InputError(d + ": no bud_events.csv (the scene turned observe.bud_events off)");
     const auto rec = survival_records(*r.bud_events);
@@ -55,6 +59,8 @@ Json survival_json(const SurvivalReport& r) {
   const KaplanMeierCurve& km = r.km;
   Json j;
   j["runs"] = r.runs;
+  j["L"] = r.L;
+  j["P0"] = r.P0;
   j["duplicates"] = r.duplicates;
   j["records"] = km.records();
   j["events"] = km.events();

@@ -19,6 +19,7 @@ struct SurvivalReport {
   std::size_t runs = 0;    // distinct runs pooled
   std::size_t copies = 0;  // directories left out as copies of an earlier one
   io::Json duplicates;     // the groups of directories holding one run
+  io::Json L, P0;          // of the runs (one protocol); P0 null without feedback
   KaplanMeierCurve km;
   double u_J = 0, N_nr_J = 0;  // means over the runs
   double epsilon = 0;
