@@ -1,10 +1,18 @@
 #include "budjam/survival.hpp"
 
+#include "budjam/statistics.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace budjam {
+
+std::optional<SurvivalBand> greenwood_band(const KaplanMeierStep& step) {
+  if (step.at_risk < kMinSamplesForError) return std::nullopt;
+  const double se = std::sqrt(step.greenwood_var);
+  return SurvivalBand{se, std::max(0.0, step.S - 1.96 * se), std::min(1.0, step.S + 1.96 * se)};
+}
 
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records) {
   std::vector<SurvivalRecord> r = records;

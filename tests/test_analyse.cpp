@@ -519,6 +519,40 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
   CHECK(!fs::exists(work_dir() / "orphan_out" / "analysis.json"));
 }
 
+TEST_CASE(
+    "analyse --tables refuses a survival curve whose steps do not add up to its buds: exit 2, one line naming "
+    "file and line",
+    "[analyse]") {
+  runs();
+  const fs::path a = work_dir() / "km_runs";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  const std::string good = slurp(a / "survival.csv");
+  // (what is changed, the line named): the first row's count of buds one more; the second step's risk
+  // set larger than the first's
+  const auto field = [](const std::string& t, std::size_t line, std::size_t column) {
+    std::size_t at = 0;
+    for (std::size_t k = 1; k < line; ++k) at = t.find('\n', at) + 1;
+    for (std::size_t k = 0; k < column; ++k) at = t.find(',', at) + 1;
+    return std::pair{at, t.find_first_of(",\n", at) - at};
+  };
+  const std::size_t risk = 7;  // L,P0,a,S,se,lo,hi,at_risk
+  for (const std::size_t line : {2, 4}) {
+    INFO("line " << line);
+    std::string t = good;
+    const auto [at, n] = field(t, line, risk);
+    t.replace(at, n, std::to_string(std::stoul(t.substr(at, n)) + 1));
+    std::ofstream(a / "survival.csv") << t;
+    const fs::path err = work_dir() / "km.err";
+    CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "km_out") + " --main-L 6",
+                                "/dev/null", err) == 2);
+    const std::string msg = slurp(err);
+    INFO(msg);
+    CHECK(msg.find((a / "survival.csv").string() + ":" + std::to_string(line) + ": ") != std::string::npos);
+    CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
+    CHECK(!fs::exists(work_dir() / "km_out" / "analysis.json"));
+  }
+}
+
 TEST_CASE("analyse takes run directories or --tables, not both and not neither: exit 2", "[analyse]") {
   runs();
   CHECK(run_budjam("analyse --out " + q(work_dir() / "none_out")).code == 2);

@@ -1,6 +1,9 @@
 // Kaplan–Meier survival with censoring and Greenwood's variance, against a hand-worked example.
 #include "budjam/survival.hpp"
 
+#include "budjam/statistics.hpp"
+
+#include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -79,6 +82,24 @@ TEST_CASE("a_eps reaches an exact level despite rounding of the product-limit") 
   const double N_nr = 48.0;
   REQUIRE(a_epsilon(km, 5.0 / N_nr, 1.0 / N_nr).has_value());
   CHECK(*a_epsilon(km, 5.0 / N_nr, 1.0 / N_nr) == 0.4);
+}
+
+TEST_CASE("the Greenwood band is given where at least five records are at risk, clipped to [0, 1]") {
+  const auto km = kaplan_meier(example());
+  for (const auto& st : km.steps()) {
+    INFO("a = " << st.a << ", at risk " << st.at_risk);
+    const auto band = greenwood_band(st);
+    REQUIRE(band.has_value() == (st.at_risk >= kMinSamplesForError));
+    if (!band) continue;
+    CHECK(band->se == Approx(std::sqrt(st.greenwood_var)));
+    CHECK(band->lo == Approx(std::max(0.0, st.S - 1.96 * band->se)));
+    CHECK(band->hi == Approx(std::min(1.0, st.S + 1.96 * band->se)));
+  }
+  // the first event of the example: Ŝ = 7/8 with eight at risk, Ŝ + 1.96 se > 1 is clipped
+  const auto first = greenwood_band(km.steps().front());
+  REQUIRE(first);
+  CHECK(first->hi == 1.0);
+  CHECK(first->lo == Approx(7.0 / 8 - 1.96 * std::sqrt(7.0 / 8 * 7.0 / 8 / 56)));
 }
 
 TEST_CASE("without censoring Kaplan-Meier is the empirical survival function") {
@@ -161,6 +182,9 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   const std::string csv = slurp(dir / "km.csv");
   CHECK(csv.find("\n3,") != std::string::npos);
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
+  // a band while at least five buds are at risk (six at a = 3), none in the tail (three at a = 5)
+  CHECK(csv.find(",0.5833333333333334,,,,6,") == std::string::npos);
+  CHECK(csv.find("\n5,3.9269908169872414,0.38888888888888895,,,,3,1,0\n") != std::string::npos);
 }
 
 TEST_CASE("budjam survival counts a run once when it is given twice or copied, as budjam analyse does") {

@@ -50,6 +50,15 @@ class KaplanMeierCurve {
   std::size_t n_ = 0, events_ = 0;
 };
 
+// The pointwise 95 % band of Ŝ at a step: se = √(Greenwood variance), Ŝ ± 1.96 se clipped to [0, 1].
+// None where fewer than kMinSamplesForError records are at risk: the tail of the curve, where
+// Greenwood's variance rests on a handful of buds and is itself unreliable (no error bar from fewer
+// samples, statistics.hpp).
+struct SurvivalBand {
+  double se = 0, lo = 0, hi = 0;
+};
+std::optional<SurvivalBand> greenwood_band(const KaplanMeierStep& step);
+
 // Throws std::invalid_argument for a negative or non-finite a.
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records);
 

@@ -26,6 +26,7 @@
 #include "analysis/jamming_states.hpp"
 #include "analysis/run_protocol.hpp"
 #include "analysis/structure_estimators.hpp"
+#include "analysis/survival_report.hpp"
 #include "io/run_data.hpp"
 #include "io/run_directory.hpp"
 
@@ -750,12 +751,12 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   const auto a_med = median_completion_size(km);
   pooled["a_c_median_area"] = a_med ? Json(kDiameterSquaredToArea * *a_med) : Json(nullptr);
   g["pooled_survival"] = pooled;
-  t.survival.push_back({num(key.L), P0s, "0", "1", "0", "1", "1", std::to_string(km.records())});
-  for (const auto& st : km.steps()) {
-    const double se = std::sqrt(st.greenwood_var);
-    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), num(se), num(std::max(0.0, st.S - 1.96 * se)),
-                          num(std::min(1.0, st.S + 1.96 * se)), std::to_string(st.at_risk)});
-  }
+  const auto survival_row = [&](const KaplanMeierStep& st) {
+    const auto [se, lo, hi] = band_cells(st);
+    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, std::to_string(st.at_risk)});
+  };
+  survival_row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
+  for (const auto& st : km.steps()) survival_row(st);
 
   // Fig. 2B and D1A curves
   const auto grid = dphi_grid();

@@ -2,6 +2,7 @@
 
 #include "analysis/jamming_states.hpp"
 #include "budjam/scene.hpp"
+#include "budjam/survival.hpp"
 #include "io/json.hpp"
 #include "io/run_data.hpp"
 
@@ -170,39 +171,48 @@ void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, st
 }
 
 // The pooled Kaplan–Meier curve of each group from survival.csv: per group a first row at a = 0 with
-// the number of records at risk, then one row per step (a, Ŝ, Greenwood SE, at risk). The events at
-// a step follow from Ŝ_k = Ŝ_{k−1} (1 − d_k / n_k), the censored from the drop of the risk set.
+// the number of records at risk, then one row per step (a, Ŝ, at risk). The events at a step follow
+// from Ŝ_k = Ŝ_{k−1} (1 − d_k / n_k), the censored from the drop of the risk set; the curve is made
+// again from those records, so Ŝ and the Greenwood variance (whose band the table leaves out where
+// few are at risk) come back as the runs gave them.
 void read_survival(const CsvTable& S, Ensemble& e) {
   std::map<std::pair<double, std::string>, GroupKey> groups;
   for (const auto& r : e.rows) groups.emplace(std::pair{r.L, r.P0_label}, GroupKey{r.L, r.P0});
   const std::size_t c_L = S.column("L"), c_P0 = S.column("P0"), c_a = S.column("a"), c_S = S.column("S"),
-                    c_se = S.column("se"), c_risk = S.column("at_risk");
+                    c_risk = S.column("at_risk");
   std::size_t k = 0;
   while (k < S.size()) {
+    const std::size_t first_row = k;
     const auto g = groups.find({S.number(k, c_L), P0_label_from_csv(S.text(k, c_P0))});
     if (g == groups.end())
       throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) +
                        ", P0 = " + S.text(k, c_P0) + " has no run in runs.csv");
     const auto records = static_cast<std::size_t>(S.integer(k, c_risk, 0, std::numeric_limits<long long>::max()));
-    std::vector<KaplanMeierStep> steps;
-    std::size_t events = 0;
-    double S_prev = 1;
+    std::vector<SurvivalRecord> kept;
+    double S_prev = 1, a_prev = 0;
+    std::size_t at_risk_prev = records, events_prev = 0;
+    const auto censored_before = [&](std::size_t at_risk) { return at_risk_prev - events_prev - at_risk; };
     for (++k;
          k < S.size() && S.number(k, c_L) == g->first.first && P0_label_from_csv(S.text(k, c_P0)) == g->first.second;
          ++k) {
-      KaplanMeierStep st;
-      st.a = S.number(k, c_a);
-      st.S = S.number(k, c_S);
-      st.greenwood_var = std::pow(S.number(k, c_se), 2);
-      st.at_risk = static_cast<std::size_t>(S.integer(k, c_risk, 1, std::numeric_limits<long long>::max()));
-      st.events = static_cast<std::size_t>(std::lround(static_cast<double>(st.at_risk) * (1.0 - st.S / S_prev)));
-      if (!steps.empty()) steps.back().censored = steps.back().at_risk - steps.back().events - st.at_risk;
-      events += st.events;
-      S_prev = st.S;
-      steps.push_back(st);
+      const double a = S.number(k, c_a), S_k = S.number(k, c_S);
+      const auto at_risk = static_cast<std::size_t>(S.integer(k, c_risk, 1, static_cast<long long>(at_risk_prev)));
+      if (!(S_prev > 0 && S_k >= 0 && S_k <= S_prev && a >= a_prev) || at_risk + events_prev > at_risk_prev)
+        throw InputError(S.source + ":" + std::to_string(k + 2) +
+                         ": not a step of a Kaplan-Meier curve after the row before (a, S or at_risk)");
+      if (k > first_row + 1) kept.insert(kept.end(), censored_before(at_risk), SurvivalRecord{a_prev, false});
+      events_prev = static_cast<std::size_t>(std::lround(static_cast<double>(at_risk) * (1.0 - S_k / S_prev)));
+      kept.insert(kept.end(), events_prev, SurvivalRecord{a, true});
+      S_prev = S_k;
+      a_prev = a;
+      at_risk_prev = at_risk;
     }
-    if (!steps.empty()) steps.back().censored = steps.back().at_risk - steps.back().events;
-    e.survival[g->second] = KaplanMeierCurve(std::move(steps), records, events);
+    if (k > first_row + 1) kept.insert(kept.end(), at_risk_prev - events_prev, SurvivalRecord{a_prev, false});
+    if (kept.size() != records)
+      throw InputError(S.source + ":" + std::to_string(first_row + 2) + ": group L = " + S.text(first_row, c_L) +
+                       ", P0 = " + S.text(first_row, c_P0) + ": its steps account for " + std::to_string(kept.size()) +
+                       " records, its first row for " + std::to_string(records));
+    e.survival[g->second] = kaplan_meier(kept);
   }
 }
 

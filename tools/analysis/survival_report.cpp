@@ -78,6 +78,12 @@ Json survival_json(const SurvivalReport& r) {
   return j;
 }
 
+std::array<std::string, 3> band_cells(const KaplanMeierStep& step) {
+  const auto band = greenwood_band(step);
+  if (!band) return {};
+  return {io::format_double(band->se), io::format_double(band->lo), io::format_double(band->hi)};
+}
+
 namespace {
 
 std::string summary_line(const SurvivalReport& r) {
@@ -96,14 +102,14 @@ io::CommandResult survival_result(const SurvivalReport& r) {
   io::CommandResult result{survival_json(r), {}, summary_line(r)};
   result.csv = [&km = r.km](std::ostream& os) {
     os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
-    auto row = [&](double a, double S, double var, std::size_t n, std::size_t d, std::size_t c) {
-      const double se = std::sqrt(var);
-      os << io::format_double(a) << ',' << io::format_double(kDiameterSquaredToArea * a) << ',' << io::format_double(S)
-         << ',' << io::format_double(se) << ',' << io::format_double(std::max(0.0, S - 1.96 * se)) << ','
-         << io::format_double(std::min(1.0, S + 1.96 * se)) << ',' << n << ',' << d << ',' << c << '\n';
+    auto row = [&](const KaplanMeierStep& st) {
+      const auto [se, lo, hi] = band_cells(st);
+      os << io::format_double(st.a) << ',' << io::format_double(kDiameterSquaredToArea * st.a) << ','
+         << io::format_double(st.S) << ',' << se << ',' << lo << ',' << hi << ',' << st.at_risk << ',' << st.events
+         << ',' << st.censored << '\n';
     };
-    row(0.0, 1.0, 0.0, km.records(), 0, 0);
-    for (const auto& st : km.steps()) row(st.a, st.S, st.greenwood_var, st.at_risk, st.events, st.censored);
+    row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
+    for (const auto& st : km.steps()) row(st);
   };
   return result;
 }

@@ -8,10 +8,12 @@
 #include "io/json.hpp"
 #include "io/result_files.hpp"
 
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <span>
+#include <string>
 
 namespace budjam::tools {
 
@@ -32,6 +34,9 @@ struct SurvivalReport {
 SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std::optional<double> epsilon);
 
 io::Json survival_json(const SurvivalReport& report);
+
+// The se, lo and hi cells of a step of a survival table (greenwood_band), empty where it gives none.
+std::array<std::string, 3> band_cells(const KaplanMeierStep& step);
 
 // The JSON, the curve's table and the summary line. The table starts at a = 0 with S = 1 and every
 // record at risk: a, a_area, S, se (Greenwood), lo and hi (95 % band clipped to [0, 1]), at_risk,
