@@ -31,7 +31,7 @@ one_run() {  # protocol P0 seed
   nice -n 5 "$budjam" grow "$scene" --out "$dir" --overwrite --seed "$3" --quiet --set box.L="$L" --set growth.P0="$2" \
     --set "jamming.targets=${targets[$2]}" --set jamming.continue_to_phi2=true "${minimiser[@]}" "${protocol[@]}" || [ $? = 1 ]
   for p in "$dir"/packings/target_*.pack; do
-    [ -e "$p" ] && nice -n 5 "$budjam" moduli "$p" > "${p%.pack}.moduli.json" || [ $? = 1 ]
+    [ -e "$p" ] && nice -n 5 "$budjam" moduli "$p" --out "${p%.pack}.moduli" || [ $? = 1 ]
   done
 }
 for protocol in adaptive nominal; do

@@ -4,10 +4,12 @@
 Reads the run directories made by scripts/adaptive_dt_study.sh, OUT/<protocol>/P0_<P0>/seed<S>,
 protocol = nominal or adaptive, and prints a Markdown table: for every P0 and target Δφ, the mean
 ± standard error over seeds of P, Z, u, G (budjam moduli, target_<k>.moduli.json) and the divisions
-since jamming, for both protocols, the number of runs that reached the target, and whether every
-difference is within the combined standard error, |Δ| ≤ √(se_a² + se_b²).
-Only seeds that reached the target with both protocols are compared (paired); the status of every
-run and the steps past jamming are summarised below the table.
+since jamming, for both protocols, the number of runs that reached the target, and the verdict on "the
+two protocols agree" by the one rule of the reports (scripts/verdicts.py, `paired`): for each quantity
+the per-seed differences, z = |mean| / paired SE, confirmed when z ≤ 2 for every quantity, not confirmed
+when one has z > 2, inconclusive with fewer than 5 paired seeds (no ± is printed from fewer either).
+Only seeds that reached the target with both protocols are compared; the status of every run and the
+steps past jamming are summarised below the table.
 
 Usage: python3 scripts/adaptive_dt_table.py OUT
 """
@@ -16,6 +18,9 @@ import math
 import pathlib
 import statistics
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import verdicts  # noqa: E402
 
 QUANTITIES = [("P", "P"), ("Z", "Z"), ("u", "u"), ("G", "G"), ("N_div", "divisions")]
 
@@ -46,7 +51,7 @@ def mean_se(values):
     if not values:
         return math.nan, math.nan, 0
     m = statistics.fmean(values)
-    se = statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else math.nan
+    se = statistics.stdev(values) / math.sqrt(len(values)) if len(values) >= verdicts.MIN_SAMPLES else math.nan
     return m, se, len(values)
 
 
@@ -54,6 +59,16 @@ def fmt(m, se):
     if math.isnan(m):
         return "–"
     return f"{m:.4g} ± {se:.2g}" if not math.isnan(se) else f"{m:.4g}"
+
+
+def agreement(judged):
+    """One verdict over the quantities (label, Verdict): not confirmed if one is, confirmed if all are."""
+    words = [v.word for _, v in judged]
+    if "not confirmed" in words:
+        return "not confirmed: " + ", ".join(f"{label} ({v.why})" for label, v in judged if v.word == "not confirmed")
+    if all(w == "confirmed" for w in words):
+        return "confirmed"
+    return "inconclusive: " + next(f"{label} ({v.why})" for label, v in judged if v.word == "inconclusive")
 
 
 def main():
@@ -73,15 +88,16 @@ def main():
             n_nom = sum(dphi in nominal[(P0, s)]["targets"] for s in seeds)
             n_ad = sum(dphi in adaptive[(P0, s)]["targets"] for s in seeds)
             both = [s for s in seeds if dphi in nominal[(P0, s)]["targets"] and dphi in adaptive[(P0, s)]["targets"]]
-            cells, agree = [], True
-            for key, _ in QUANTITIES:
-                a = mean_se([float(nominal[(P0, s)]["targets"][dphi][key]) for s in both])
-                b = mean_se([float(adaptive[(P0, s)]["targets"][dphi][key]) for s in both])
+            cells, judged = [], []
+            for key, label in QUANTITIES:
+                x = [float(nominal[(P0, s)]["targets"][dphi][key]) for s in both]
+                y = [float(adaptive[(P0, s)]["targets"][dphi][key]) for s in both]
+                a, b = mean_se(x), mean_se(y)
                 cells += [fmt(a[0], a[1]), fmt(b[0], b[1])]
-                if len(both) > 1 and not any(math.isnan(x) for x in (a[0], b[0], a[1], b[1])):
-                    agree &= abs(a[0] - b[0]) <= math.hypot(a[1], b[1])
-            verdict = ("yes" if agree else "**no**") if len(both) > 1 else "–"
-            print(f"| {P0} | {dphi:g} | {n_nom}/{n_ad} | " + " | ".join(cells) + f" | {verdict} |")
+                # a G that is not a minimum's (NaN) in either run leaves that seed out of G's test
+                pairs = [(u, w) for u, w in zip(x, y) if not (math.isnan(u) and math.isnan(w))]
+                judged.append((label, verdicts.paired([w - u for u, w in pairs])))
+            print(f"| {P0} | {dphi:g} | {n_nom}/{n_ad} | " + " | ".join(cells) + f" | {agreement(judged)} |")
     print()
     for name, runs in (("nominal", nominal), ("adaptive", adaptive)):
         for P0 in sorted({k[0] for k in runs}, key=float, reverse=True):

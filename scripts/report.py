@@ -41,9 +41,15 @@ def fmt(v, digits=3):
 
 
 def error_bar(se, n):
-    """Whether an error (SE, bootstrap SE, interval) may be printed: a finite SE ≥ 0 from at least
-    verdicts.MIN_SAMPLES samples — never from fewer, whatever the input holds."""
-    return verdicts.unusable(0.0, se, n) is None
+    """Whether an error (SE, bootstrap SE, interval) may be printed: a finite SE > 0 from at least
+    verdicts.MIN_SAMPLES samples — never from fewer, whatever the input holds, and never "± 0": no spread
+    is no error bar (verdicts.compare)."""
+    return verdicts.unusable(0.0, se, n) is None and se > 0
+
+
+def enough_samples(n):
+    """Whether n samples may carry an error bar, an interval or a verdict: at least verdicts.MIN_SAMPLES."""
+    return verdicts.unusable(0.0, 0.0, n) is None
 
 
 def n_text(n):
@@ -168,7 +174,7 @@ def ci(stat):
         return "not measured"
     lo, hi = stat.get("ci95") or (None, None)
     n = stat.get("n")
-    if not error_bar(0.0, n):
+    if not enough_samples(n):
         return f"{fmt(stat['median'])} (n={n_text(n)}, no interval below {verdicts.MIN_SAMPLES})"
     se = stat.get("se")
     s = fmt(stat["median"]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "")
@@ -198,6 +204,7 @@ def effective_n(p, se, n):
     return min(n, p * (1 - p) / (se * se))
 
 
+PAPER_P0_LABELS = {1e-1: "0.1", 1e-2: "0.01", 1e-3: "0.001", 1e-4: "0.0001", 1e-5: "1e-05"}  # the paper's grid
 PAPER_SEEDS = 20  # the paper's seeds per point (docs/model.md, "Reference parameters")
 PAPER_L_JAMMING = 15    # the box of the paper's u_J and n_J
 PAPER_L_DIVISIONS = 20  # the box of the paper's N_div medians
@@ -337,7 +344,7 @@ def main():
 
     # keyed by the label a reader expects ("none", "0.1", ..., "1e-05"), whatever budjam printed
     def label(p0):
-        return "none" if p0 is None else {1e-1: "0.1", 1e-2: "0.01", 1e-3: "0.001", 1e-4: "0.0001", 1e-5: "1e-05"}.get(p0, repr(p0))
+        return "none" if p0 is None else PAPER_P0_LABELS.get(p0, repr(p0))
     groups_at = {}
     for g_ in A["groups"]:
         groups_at.setdefault(g_["L"], {})[label(g_["P0"])] = g_
@@ -373,7 +380,10 @@ def main():
         return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "") +
                 f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted)")
 
-    order = [l for l in ("none", "0.1", "0.01", "0.001", "0.0001", "1e-05") if l in groups]
+    order = [l for l in ("none", *PAPER_P0_LABELS.values()) if l in groups]
+    # Groups of feedback strengths the paper did not run have no number of the paper to test: they are
+    # named, not silently dropped.
+    unpaired = sorted(l for l in groups if l not in order)
     fed = [l for l in order if l != "none"]
 
     # Seeds per point of this preset's grid: the paper's sample of a grid statistic is paper_n(n, seeds).
@@ -381,7 +391,10 @@ def main():
         return g_.get("runs") if g_ else None
 
     grid_seeds = sorted({seeds_in(groups[l]) for l in order if seeds_in(groups[l])})
-    main_seeds = (M.get("runs") / len(order)) if order and M.get("runs") else None
+    # The pooled statistics of the main box are clustered by seed over its groups (n = the distinct seeds;
+    # the presets, like the paper, grow seeds 1 … S at every point), so the paper's sample of one is
+    # paper_n(n, S) with S the largest group, not the mean runs per group, which unequal groups lower.
+    main_seeds = max(grid_seeds) if grid_seeds else None
     # ---- jamming: the jamming ensembles at the paper's L = 15 (independent seeds), else this preset ----
     jam_L = PAPER_L_JAMMING
     jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
@@ -474,7 +487,7 @@ def main():
               f"P† = {fmt(M['P_dagger'])}" + (f" ± {fmt(M['P_dagger_se'], 2)}" if error_bar(
                   M.get("P_dagger_se"), M.get("P_dagger_points")) else "") +
               f" (fit over {n_text(M.get('P_dagger_points'))} P0 ≤ 1e-2" +
-              ("" if error_bar(0.0, M.get("P_dagger_points")) else f"; no error bar from fewer than "
+              ("" if enough_samples(M.get("P_dagger_points")) else f"; no error bar from fewer than "
                f"{verdicts.MIN_SAMPLES}") + ")",
               "same", "—", fig("fig3"))
     for lab in order:
@@ -562,7 +575,11 @@ def main():
                     "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled") + peak_text,
               (size_mismatch(L, PAPER_L_MAIN) or judged(w, verdicts.quoted(paper_w[lab], 0.01), seeds=seeds_in(x)))
               if lab in paper_w else "—", fig("figE1"))
-    if "P_star_range_paper" in M:
+    if "P_star_range_paper" not in M:
+        claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
+              "not measured: no completion sizes a_c (no bud events, or no survival.csv in the tables)", "same",
+              verdicts.Verdict("inconclusive", "not measured"), fig("figE1"))
+    else:
         lo, hi = M["P_star_range_paper"]
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
               f"{fmt(M['P_star_range'][0])} – {fmt(M['P_star_range'][1])} (a_c = mean completion size "
@@ -594,7 +611,7 @@ def main():
         p = Dp["fraction_Z_minus_6_negative"]
         half = verdicts.at_least(0.5)
         n_eff = effective_n(p, Dp.get("fraction_Z_minus_6_negative_se"), n)
-        if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and error_bar(0.0, n_eff):
+        if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and enough_samples(n_eff):
             lo, hi = verdicts.wilson(p, n_eff)
             frac_text = (f"{fmt(p)} [95% Wilson CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)} packings of "
                          f"{n_text(Dp.get('seeds'))} seeds, effective n = {n_eff:.0f}; score test at 1/2)")
@@ -603,8 +620,13 @@ def main():
         theirs = (f"through the origin on {n} Δφ-target packings: RMS residual {fmt(od['rms'])} for ΔZ, "
                   f"{fmt(o6['rms'])} for Z − 6 (no error bar: not judged); from integer contact counts ΔZ < 0 in "
                   f"{fmt(Dp['fraction_dZ_negative'])}, Z − 6 < 0 in {frac_text}")
-        verdict = (verdicts.proportion(p, n_eff, half, n_paper=paper_n(n_eff, main_seeds)) if n_eff is not None else
-                   verdicts.Verdict("inconclusive", "no error by seed (an analysis.json before version 4)"))
+        seeds = Dp.get("seeds")
+        if n_eff is not None:
+            verdict = verdicts.proportion(p, n_eff, half, n_paper=paper_n(n_eff, main_seeds))
+        elif isinstance(seeds, (int, float)) and seeds < verdicts.MIN_SAMPLES:
+            verdict = verdicts.inconclusive_n(seeds)  # too few seeds for an error by seed
+        else:
+            verdict = verdicts.Verdict("inconclusive", "no error by seed (an analysis.json before version 4)")
     else:
         theirs, verdict = "not measured (dos stage off or unavailable)", verdicts.Verdict("inconclusive", "not measured")
     claim("ω* collapses against ΔZ, not Z − 6 (Eq. F5): more than half of the packings have Z − 6 < 0",
@@ -667,7 +689,9 @@ def main():
         + ". "
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
         f"resamples, seed {A['bootstrap']['seed']}. Jamming rows: {jam_src}"
-        + (f" ({jam.get('runs')} runs)" if AJ else "") + ".",
+        + (f" ({jam.get('runs')} runs)" if AJ else "") + "."
+        + (f" Groups at L = {L:g} with a P0 outside the paper's grid, in no row (the paper has no number for "
+           f"them): P0 = {', '.join(unpaired)}." if unpaired else ""),
         "",
         f"**Verdicts: {tally}** (docs/analysis.md, \"Verdicts\"). One rule for every row: a claim is the set of values "
         "it allows (a number quoted to its last digit, a range, a bound); z is the distance of budjam's estimate from "

@@ -29,7 +29,8 @@ A trend over the feedback groups ("decreases with feedback") is budjam's own dat
 direction, each group with its SE: not confirmed when a step between neighbouring groups goes against
 the claimed direction by more than 2σ of that step, confirmed when the change from the first group to
 the last goes the claimed way by more than 2σ and no step goes against it by more than 2σ, and
-inconclusive otherwise (the data do not resolve the trend) or when a group has fewer than 5 samples.
+inconclusive otherwise (the data do not resolve the trend) or when a group has no error bar by the rule
+for one claim (fewer than 5 samples, none, or an SE of 0).
 
 Nothing here measures: the estimates and their errors come from `budjam analyse`.
 """
@@ -128,10 +129,34 @@ def compare(estimate, se, n, claim, n_paper=None):
         return Verdict("inconclusive", f"n_p = {shown}: the paper's sample size must be a positive number")
     if se == 0:
         return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
-    sigma = math.hypot(se, se * math.sqrt(n / n_paper))
+    return _judged(estimate, math.hypot(se, se * math.sqrt(n / n_paper)), claim)
+
+
+def _judged(estimate, sigma, claim):
     z = claim.distance(estimate) / sigma
     word = "confirmed" if z <= Z_MAX else "not confirmed"
     return Verdict(word, f"z = {_fmt_z(z)}, σ = {_fmt(sigma)}")
+
+
+def paired(differences):
+    """The verdict on "no difference" between two of budjam's own protocols run on the same seeds, from the
+    per-seed differences: the same rule with the paired standard error as σ (both sides are budjam's, on
+    the same samples, so there is no second sampling error). Differences that are all exactly 0 are the
+    same results: confirmed without a z."""
+    d = [x for x in differences if _finite(x)]
+    if len(d) != len(differences):
+        return Verdict("inconclusive", f"{len(differences) - len(d)} of {len(differences)} differences not finite")
+    n = len(d)
+    if n >= MIN_SAMPLES and all(x == 0 for x in d):
+        return Verdict("confirmed", f"identical in all n = {n}")
+    mean = math.fsum(d) / n if n else math.nan
+    se = math.sqrt(math.fsum((x - mean) ** 2 for x in d) / (n - 1) / n) if n > 1 else math.nan
+    why_not = unusable(mean, se, n)
+    if why_not is not None:
+        return why_not
+    if se == 0:
+        return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
+    return _judged(mean, se, Claim(0.0, 0.0))
 
 
 def _clamp01(x):
@@ -173,12 +198,12 @@ def trend(points, increasing):
         why_not = unusable(est, se, n)
         if why_not is not None:
             return why_not
+        if se == 0:  # as in compare(): a step between two such groups would be z = 0 or ∞ by the tie alone
+            return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
     sign = 1.0 if increasing else -1.0
 
     def z(a, b):
-        s = math.hypot(a[1], b[1])
-        d = sign * (b[0] - a[0])
-        return math.copysign(math.inf, d) if s == 0 and d != 0 else (0.0 if s == 0 else d / s)
+        return sign * (b[0] - a[0]) / math.hypot(a[1], b[1])
 
     steps = [z(a, b) for a, b in zip(points, points[1:])]
     worst = min(steps)

@@ -93,10 +93,12 @@ def test_zero_spread_is_never_a_division_into_a_verdict_of_chance():
     # a negative estimate against an interval: the distance to its near end
     assert v.compare(-0.1, 0.1, 20, v.interval(0.2, 1.0)).word == "not confirmed"
     assert v.compare(-0.1, 0.2, 20, v.interval(0.2, 1.0)).word == "confirmed"
-    flat = [(1.0, 0.0, 8), (1.0, 0.0, 8)]
-    assert v.trend(flat, increasing=True).word == "inconclusive"
-    assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=True).word == "confirmed"
-    assert v.trend([(1.0, 0.0, 8), (2.0, 0.0, 8)], increasing=False).word == "not confirmed"
+    # a trend is judged by the same rule as one claim: a group with an SE of 0 has no error bar, so a
+    # step to or from it would be z = 0 or ±∞ by the tie alone, whichever way it goes
+    for points in ([(1.0, 0.0, 8), (1.0, 0.0, 8)], [(1.0, 0.0, 8), (2.0, 0.0, 8)], [(1.0, 0.1, 8), (0.5, 0.0, 10)]):
+        for increasing in (True, False):
+            r = v.trend(points, increasing=increasing)
+            assert r.word == "inconclusive" and "SE = 0" in r.why, (points, r)
 
 
 def test_a_proportion_at_zero_or_one_keeps_a_finite_error():
@@ -203,3 +205,59 @@ def test_the_chi2_quantile_is_the_tabulated_one_and_decides_rejection():
     assert math.isclose(v.chi2_quantile(6, 0.99), 16.812, abs_tol=1.5e-3)
     assert v.fit_rejected(86, 6) is True and v.fit_rejected(12.5, 6) is False and v.fit_rejected(8.4, 6) is False
     assert v.fit_rejected(5.0, 0) is None and v.fit_rejected(math.nan, 6) is None and v.fit_rejected(None, 6) is None
+
+
+def test_two_protocols_on_the_same_seeds_are_judged_by_their_paired_differences():
+    # the same results: confirmed; one seed that differs is judged by the spread of the differences
+    assert v.paired([0.0] * 5).word == "confirmed"
+    assert v.paired([0.0] * 4).word == "inconclusive"  # n < 5, even when identical
+    r = v.paired([0.1, 0.12, 0.09, 0.11, 0.1])
+    assert r.word == "not confirmed" and "z =" in r.why  # a consistent shift: z ≫ 2
+    assert v.paired([0.1, -0.12, 0.09, -0.11, 0.02]).word == "confirmed"
+    # z is |mean| over the paired SE, no second sampling error
+    d = [1.0, 2.0, 3.0, 4.0, 5.0]
+    se = math.sqrt(sum((x - 3.0) ** 2 for x in d) / 4 / 5)
+    assert f"σ = {v._fmt(se)}" in v.paired(d).why
+    assert v.paired([0.3] * 6).word == "inconclusive"  # SE = 0 without identity: no error bar
+    assert v.paired([0.1, math.nan, 0.2, 0.1, 0.0]).word == "inconclusive"
+
+
+def adaptive_study(root, seeds, shift=0.0):
+    """A hand-built OUT tree of scripts/adaptive_dt_study.sh: one target, P and G per seed, the adaptive
+    runs' P moved by `shift` times the seed's own scatter."""
+    import json
+    import pathlib
+    for protocol in ("nominal", "adaptive"):
+        for s in seeds:
+            d = pathlib.Path(root) / protocol / "P0_1e-3" / f"seed{s}"
+            (d / "packings").mkdir(parents=True)
+            P = 1e-3 * (1 + 0.1 * math.sin(s)) + (shift * 1e-5 * (1 + 0.2 * math.cos(3 * s)) if protocol == "adaptive" else 0)
+            target = {"index": 1, "dphi": 1e-3, "P": P, "Z": 6.0, "u": 0.2, "N_div": 0}
+            (d / "summary.json").write_text(json.dumps({"status": "finished", "targets": [target], "accepted_steps": 10,
+                                                        "rejected_steps": 0, "step_J": 5}))
+            (d / "packings" / "target_1.moduli.json").write_text(json.dumps({"G": 0.01, "energy_minimum": True}))
+
+
+def adaptive_row(tmp_path, seeds, shift=0.0):
+    import subprocess
+    import sys
+    root = tmp_path / f"study{len(seeds)}_{shift}"
+    adaptive_study(root, seeds, shift)
+    out = subprocess.run([sys.executable, str(pathlib_src() / "scripts" / "adaptive_dt_table.py"), str(root)],
+                         capture_output=True, text=True, check=True).stdout
+    return next(line for line in out.splitlines() if line.startswith("| 1e-3 |"))
+
+
+def pathlib_src():
+    import pathlib
+    return pathlib.Path(__file__).resolve().parents[2]
+
+
+def test_the_adaptive_step_table_judges_agreement_by_the_one_rule(tmp_path):
+    # the same results in every seed: confirmed; a shift of the adaptive runs' P: not confirmed, naming P
+    assert adaptive_row(tmp_path, range(1, 7)).endswith("| confirmed |")
+    row = adaptive_row(tmp_path, range(1, 7), shift=1.0)
+    assert "not confirmed: P (z =" in row, row
+    # fewer than 5 paired seeds: no verdict and no ± (the old table said "yes" from 2 seeds)
+    row = adaptive_row(tmp_path, range(1, 3), shift=1.0)
+    assert "inconclusive" in row and "(n = 2 < 5)" in row and "±" not in row, row
