@@ -71,6 +71,17 @@ def agreement(judged):
     return "inconclusive: " + next(f"{label} ({v.why})" for label, v in judged if v.word == "inconclusive")
 
 
+def family_line(family):
+    """Many quantities at many targets are many tests: with no difference at all, each has z > 2 with
+    probability p = 2(1 − Φ(2)) ≈ 0.0455, so a few rows "not confirmed" are expected by chance. The line
+    gives their count against that expectation and the binomial chance of as many or more."""
+    n, k = len(family), sum(v.word == "not confirmed" for v in family)
+    p = math.erfc(verdicts.Z_MAX / math.sqrt(2))
+    tail = math.fsum(math.comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(k, n + 1))
+    return (f"Of the {n} paired tests that differ from identity, {k} have z > {verdicts.Z_MAX:g}; with no difference "
+            f"{n * p:.1f} are expected by chance (p = {p:.4f} each), and {k} or more with probability {tail:.2f}.")
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: adaptive_dt_table.py OUT")
@@ -80,6 +91,7 @@ def main():
         sys.exit(f"{root}: no nominal/ or adaptive/ run directories with summary.json")
     header = "| P0 | Δφ | runs n/a | " + " | ".join(f"{label} nominal | {label} adaptive" for _, label in QUANTITIES)
     print(header + " | agree |")
+    family = []  # every quantity's verdict with a z (not the identical ones, not the inconclusive)
     print("|" + "---|" * (header.count("|")))
     for P0 in sorted({k[0] for k in nominal}, key=float, reverse=True):
         seeds = sorted(s for p, s in nominal if p == P0 and (p, s) in adaptive)
@@ -97,7 +109,10 @@ def main():
                 # a G that is not a minimum's (NaN) in either run leaves that seed out of G's test
                 pairs = [(u, w) for u, w in zip(x, y) if not (math.isnan(u) and math.isnan(w))]
                 judged.append((label, verdicts.paired([w - u for u, w in pairs])))
+            family += [v for _, v in judged if v.why.startswith("z =")]
             print(f"| {P0} | {dphi:g} | {n_nom}/{n_ad} | " + " | ".join(cells) + f" | {agreement(judged)} |")
+    print()
+    print(family_line(family))
     print()
     for name, runs in (("nominal", nominal), ("adaptive", adaptive)):
         for P0 in sorted({k[0] for k in runs}, key=float, reverse=True):
