@@ -594,7 +594,11 @@ def main():
     if have_dos and D:
         diff = D.get("N_zero_minus_N_u")
         nz = Dp.get("N_zero_vs_N_u") or {}
-        slope = (f"; slope of N_zero on N_u through 0: {fmt(nz['slope_through_origin'])} ± {fmt(nz['slope_se'], 2)}"
+        # slope_se is a bootstrap over seeds, null from fewer than 5 (analysis.json version 5; before it, over packings)
+        nz_se = (f" ± {fmt(nz['slope_se'], 2)}" if error_bar(nz.get("slope_se"), nz.get("seeds")) else
+                 " (no error bar by seed: an analysis.json before version 5)" if nz.get("seeds") is None else
+                 " (no error bar: n seeds < 5)")
+        slope = (f"; slope of N_zero on N_u through 0: {fmt(nz['slope_through_origin'])}{nz_se}"
                  if nz.get("slope_through_origin") is not None else "")
         claim("N_zero ≃ N_u (Eq. F4)", "tracks",
               f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "

@@ -17,6 +17,8 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
+#include <span>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -732,4 +734,260 @@ TEST_CASE(
   CHECK(j["main"]["P_dagger_points"] == 3);
   CHECK(j["main"]["P_dagger"].is_number());
   CHECK(j["main"]["P_dagger_se"].is_null());
+}
+
+namespace {
+// Lines on stderr that say what tables of an earlier format left unchecked.
+std::size_t unchecked_notices(const std::string& err) {
+  std::size_t n = 0;
+  for (std::size_t at = 0; (at = err.find("cannot be checked", at)) != std::string::npos; ++at) ++n;
+  return n;
+}
+
+// runs.csv of hand-built tables: six runs of L = 15 in two groups (P0 = 0.01 and 0.001, three seeds
+// each), each row's protocol and cells from `protocol(k)` and `cells(k)` (no columns where null).
+fs::path protocol_tables(const std::string& name, std::string (*protocol)(int), std::string (*cells)(int)) {
+  return hand_tables(name, [&](std::ostream& r, std::ostream& t) {
+    r << "run,L,P0,seed,status,jamming_state" << (protocol ? ",protocol" : "") << (cells ? ",cells" : "")
+      << ",phi_J,u_J,n_J,N_J,N_nr_J\n";
+    t << "run,L,P0,seed,dphi,below_phi2\n";
+    for (int k = 0; k < 6; ++k) {
+      r << name << "/seed" << k + 1 << ",15," << (k < 3 ? "0.01" : "0.001") << "," << k + 1 << ",finished," << k;
+      if (protocol) r << "," << protocol(k);
+      if (cells) r << "," << cells(k);
+      r << ",0.84,0.2,0.76,172,170\n";
+    }
+  });
+}
+std::string one_protocol(int k) { return k < 3 ? "0123456789abcdef" : "00000000000000ff"; }  // one per group
+std::string one_cells(int) { return "b1779c6cab5be437"; }
+}  // namespace
+
+TEST_CASE(
+    "analyse --tables pools runs of one L and P0 only under one protocol and all under one set of cells: "
+    "runs.csv's protocol and cells columns",
+    "[analyse]") {
+  const auto analyse = [](const fs::path& dir) {
+    return run_budjam("analyse --tables " + q(dir) + " --out " + q(fs::path(dir) += "_out") + " --main-L 15");
+  };
+  // one protocol per group (the groups differ: P0 is part of it), one set of cells: analysed, nothing unchecked
+  {
+    const auto res = analyse(protocol_tables("protocols_same", one_protocol, one_cells));
+    INFO(res.err);
+    CHECK(res.code == 0);
+    CHECK(unchecked_notices(res.err) == 0);
+  }
+  // (name, protocol, cells, what the one line says)
+  using Column = std::string (*)(int);
+  const std::vector<std::tuple<std::string, Column, Column, std::string>> refused{
+      {"protocols_two", [](int k) { return k == 2 ? std::string("fedcba9876543210") : one_protocol(k); }, one_cells,
+       "runs.csv:4: runs protocols_two/seed1 and protocols_two/seed3 differ in protocol (0123456789abcdef, "
+       "fedcba9876543210): the runs of one L = 15, P0 = 0.01 are samples of one protocol"},
+      {"cells_two", one_protocol, [](int k) { return k == 4 ? std::string("0000000000000001") : one_cells(k); },
+       "runs.csv:6: runs cells_two/seed1 and cells_two/seed5 differ in cells"},
+      {"protocols_some_empty", [](int k) { return k == 3 ? std::string() : one_protocol(k); }, one_cells,
+       "runs.csv:5: run protocols_some_empty/seed4 has no protocol, but run protocols_some_empty/seed1 (line 2) has "
+       "one"}};
+  for (const auto& [name, protocol, cells, message] : refused) {
+    INFO(name);
+    const auto res = analyse(protocol_tables(name, protocol, cells));
+    INFO(res.err);
+    CHECK(res.code == 2);
+    CHECK(res.err.find(message) != std::string::npos);
+    CHECK(std::count(res.err.begin(), res.err.end(), '\n') == 1);
+    CHECK(!fs::exists(work_dir() / (name + "_out") / "analysis.json"));
+  }
+  // tables from before the columns: analysed, with one line saying which file leaves the protocol unchecked
+  const fs::path legacy = protocol_tables("protocols_legacy", nullptr, nullptr);
+  const auto res = analyse(legacy);
+  INFO(res.err);
+  CHECK(res.code == 0);
+  CHECK(unchecked_notices(res.err) == 1);
+  CHECK(res.err.find((legacy / "runs.csv").string() + " has no protocol or cells column") != std::string::npos);
+  const auto j = budjam::io::read_json(fs::path(legacy) += "_out/analysis.json");
+  CHECK(j["inputs"]["unchecked"].size() == 1);
+}
+
+TEST_CASE(
+    "analyse writes each run's protocol and cells hashes to runs.csv and the runs of each pooled survival curve, "
+    "and its own tables pass their checks",
+    "[analyse]") {
+  runs();
+  const fs::path a = work_dir() / "hashes", b = work_dir() / "hashes_again";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  const auto rows = read_csv(a / "runs.csv");
+  REQUIRE(rows.size() == 3);
+  std::map<std::string, std::set<std::string>> protocols;  // P0 → protocols
+  std::set<std::string> cells;
+  for (const auto& r : rows) {
+    for (const char* c : {"protocol", "cells"}) {
+      INFO(c);
+      CHECK(r.at(c).size() == 16);
+      CHECK(r.at(c).find_first_not_of("0123456789abcdef") == std::string::npos);
+    }
+    protocols[r.at("P0")].insert(r.at("protocol"));
+    cells.insert(r.at("cells"));
+    CHECK(number(r.at("bud_records")) > 0);  // every fixture run records bud events
+  }
+  CHECK(protocols.at("0.001").size() == 1);                            // seeds 3 and 4: one protocol
+  CHECK(*protocols.at("0.001").begin() != *protocols.at("").begin());  // P0 is part of it
+  CHECK(cells.size() == 1);
+  for (const auto& s : read_csv(a / "survival.csv")) CHECK(s.at("runs") == (s.at("P0").empty() ? "1" : "2"));
+  const auto res = run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6");
+  INFO(res.err);
+  CHECK(res.code == 0);
+  CHECK(unchecked_notices(res.err) == 0);
+  CHECK(slurp(b / "survival.csv") == slurp(a / "survival.csv"));
+}
+
+TEST_CASE(
+    "analyse --tables refuses a survival.csv whose curves do not pool the runs of runs.csv: exit 2, one line naming "
+    "survival.csv and the group",
+    "[analyse]") {
+  runs();
+  const fs::path a = work_dir() / "pooled";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  // a copy of the tables with `edit` applied to its runs.csv, targets.csv or survival.csv (by line)
+  const auto edited = [&](const std::string& name, const std::string& file,
+                          const std::function<bool(std::string&)>& keep) {
+    const fs::path dir = work_dir() / name;
+    fs::remove_all(dir);
+    fs::copy(a, dir, fs::copy_options::recursive);
+    std::istringstream in(slurp(dir / file));
+    std::string text;
+    for (std::string line; std::getline(in, line);)
+      if (keep(line)) text += line + "\n";
+    std::ofstream(dir / file) << text;
+    return dir;
+  };
+  const std::string seed4 = runs()[2].string();
+  const auto analyse = [](const fs::path& dir) {
+    return run_budjam("analyse --tables " + q(dir) + " --out " + q(fs::path(dir) += "_out") + " --main-L 6");
+  };
+  {  // runs.csv cut to one of the two runs of P0 = 1e-3 (and targets.csv with it), survival.csv kept whole
+    const fs::path dir = edited("pooled_cut", "runs.csv", [&](std::string& l) { return l.rfind(seed4, 0) != 0; });
+    std::string t;
+    std::istringstream in(slurp(dir / "targets.csv"));
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind(seed4, 0) != 0) t += line + "\n";
+    std::ofstream(dir / "targets.csv") << t;
+    const auto res = analyse(dir);
+    INFO(res.err);
+    CHECK(res.code == 2);
+    CHECK(res.err.find((dir / "survival.csv").string() + ":") != std::string::npos);
+    CHECK(res.err.find("group L = 6, P0 = 0.001 pools 2 runs, but runs.csv has 1") != std::string::npos);
+    CHECK(std::count(res.err.begin(), res.err.end(), '\n') == 1);
+  }
+  {  // the curve of the no-feedback group left out
+    const fs::path dir =
+        edited("pooled_missing", "survival.csv", [](std::string& l) { return l.rfind("6,,", 0) != 0; });
+    const auto res = analyse(dir);
+    INFO(res.err);
+    CHECK(res.code == 2);
+    CHECK(res.err.find((dir / "survival.csv").string() + ": no curve of group L = 6, P0 = none, whose 1 runs") !=
+          std::string::npos);
+    CHECK(std::count(res.err.begin(), res.err.end(), '\n') == 1);
+  }
+  {  // one group's runs emptied: rows of two formats
+    const fs::path dir = edited("pooled_mixed", "survival.csv", [](std::string& l) {
+      if (l.rfind("6,,", 0) == 0) l.erase(l.rfind(',') + 1);
+      return true;
+    });
+    const auto res = analyse(dir);
+    INFO(res.err);
+    CHECK(res.code == 2);
+    CHECK(res.err.find((dir / "survival.csv").string() + ":") != std::string::npos);
+    CHECK(res.err.find("rows of tables of different formats") != std::string::npos);
+  }
+  {  // survival.csv from before its runs column: analysed, one line says it cannot be checked
+    const fs::path dir = edited("pooled_legacy", "survival.csv", [](std::string& l) {
+      l.erase(l.rfind(','));
+      return true;
+    });
+    const auto res = analyse(dir);
+    INFO(res.err);
+    CHECK(res.code == 0);
+    CHECK(unchecked_notices(res.err) == 1);
+    CHECK(res.err.find((dir / "survival.csv").string() + " has no runs column") != std::string::npos);
+  }
+}
+
+namespace {
+// Hand-built tables of L = 15 with one spectrum per Δφ-target packing: `seeds` runs (one a seed) of two
+// packings each, every packing written `copies` times. N_zero on N_u is not exactly proportional.
+fs::path spectrum_tables(const std::string& name, int seeds, int copies) {
+  const fs::path dir = hand_tables(name, [&](std::ostream& r, std::ostream& t) {
+    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J\n";
+    t << "run,L,P0,seed,dphi,below_phi2\n";
+    for (int s = 1; s <= seeds; ++s)
+      r << name << "/seed" << s << ",15,0.01," << s << ",finished," << s << ",0.84,0.2,0.76,172,170\n";
+  });
+  std::ofstream d(dir / "dos.csv");
+  d << "run,packing,dphi,omega_star,dZ,Z_minus_6,N_c,N_nr,N_zero,N_u\n";
+  for (int s = 1; s <= seeds; ++s)
+    for (int p = 0; p < 2; ++p)
+      for (int c = 0; c < copies; ++c) {
+        const int N_u = 10 + 3 * s + p, N_zero = N_u + (s % 3 == 0 ? 2 : 0) - p, N_c = 560 + 5 * s + 7 * p;
+        d << name << "/seed" << s << ",target_" << p * copies + c << ",0.01," << 0.01 * (s + p) << ","
+          << (N_c - (600 - 2 * N_u - 2)) / 100.0 << "," << (N_c - 600) / 100.0 << "," << N_c << ",100," << N_zero << ","
+          << N_u << "\n";
+      }
+  return dir;
+}
+
+budjam::io::Json spectrum_of(const fs::path& dir) {
+  const fs::path out = fs::path(dir) += "_out";
+  REQUIRE(run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15").code == 0);
+  return budjam::io::read_json(out / "analysis.json")["main"]["dos"];
+}
+}  // namespace
+
+TEST_CASE(
+    "the SEs of the spectrum's slopes are bootstraps over seeds: none from fewer than five seeds, and copies of a "
+    "seed's packings do not shrink them",
+    "[analyse]") {
+  const auto few = spectrum_of(spectrum_tables("spectrum_4_seeds", 4, 1));
+  REQUIRE(few.is_object());
+  CHECK(few["paper"]["N_zero_vs_N_u"]["seeds"] == 4);
+  CHECK(few["paper"]["N_zero_vs_N_u"]["slope_through_origin"].is_number());
+  CHECK(few["paper"]["N_zero_vs_N_u"]["slope_se"].is_null());
+  CHECK(few["paper"]["through_origin_dZ"]["slope_se"].is_null());
+  CHECK(few["paper"]["through_origin_Z_minus_6"]["slope_se"].is_null());
+  CHECK(few["omega_star_vs_dZ"]["slope_se"].is_null());
+
+  const auto once = spectrum_of(spectrum_tables("spectrum_6_seeds", 6, 1));
+  const auto twice = spectrum_of(spectrum_tables("spectrum_6_seeds_twice", 6, 2));
+  const auto& nz = once["paper"]["N_zero_vs_N_u"];
+  REQUIRE(nz["slope_se"].is_number());
+  // the seed-clustered bootstrap with analyse's default options (2000 resamples, seed 1)
+  std::vector<double> N_u, N_zero, index;
+  std::vector<std::uint64_t> seed;
+  for (int s = 1; s <= 6; ++s)
+    for (int p = 0; p < 2; ++p) {
+      index.push_back(static_cast<double>(N_u.size()));
+      N_u.push_back(10 + 3 * s + p);
+      N_zero.push_back(10 + 3 * s + p + (s % 3 == 0 ? 2 : 0) - p);
+      seed.push_back(static_cast<std::uint64_t>(s));
+    }
+  const auto by_seed = budjam::cluster_bootstrap(index, seed, [&](std::span<const double> drawn) {
+    double xy = 0, xx = 0;
+    for (double i : drawn) {
+      xy += N_u[static_cast<std::size_t>(i)] * N_zero[static_cast<std::size_t>(i)];
+      xx += N_u[static_cast<std::size_t>(i)] * N_u[static_cast<std::size_t>(i)];
+    }
+    return xy / xx;
+  });
+  CHECK(nz["slope_se"].get<double>() == Approx(by_seed.se).epsilon(1e-9));
+  // every packing twice: twice the packings, the same seeds, the same slopes and SEs (an SE over packings
+  // would shrink by √2)
+  CHECK(twice["paper"]["N_zero_vs_N_u"]["packings"] == 2 * nz["packings"].get<int>());
+  for (const char* fit : {"N_zero_vs_N_u", "through_origin_dZ", "through_origin_Z_minus_6"}) {
+    INFO(fit);
+    const auto &a = once["paper"][fit], &b = twice["paper"][fit];
+    REQUIRE(a["slope_se"].is_number());
+    CHECK(b["slope_se"].get<double>() == Approx(a["slope_se"].get<double>()).epsilon(1e-9));
+  }
+  REQUIRE(once["omega_star_vs_dZ"]["slope_se"].is_number());
+  CHECK(twice["omega_star_vs_dZ"]["slope_se"].get<double>() ==
+        Approx(once["omega_star_vs_dZ"]["slope_se"].get<double>()).epsilon(1e-9));
 }

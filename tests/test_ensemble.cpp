@@ -6,6 +6,7 @@
 #include "analysis/ensemble_tables.hpp"
 #include "analysis/finite_size.hpp"
 #include "analysis/jamming_states.hpp"
+#include "analysis/run_protocol.hpp"
 #include "analysis/structure_estimators.hpp"
 #include "budjam/depletion.hpp"
 #include "budjam/survival.hpp"
@@ -15,6 +16,7 @@
 #include "scratch.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -311,6 +313,16 @@ io::Json size_group(double L, const char* P0_label, double N_J, double se) {
   g["G_2_over_Pmax"] = {{"n", 20}, {"median", 0.4}, {"se", se}};
   return g;
 }
+
+// Seeds of their own per size and P0 label: 20 from L·1000 on.
+std::map<std::string, SeedsBySize> own_seeds(const io::Json& groups) {
+  std::map<std::string, SeedsBySize> seeds;
+  for (const auto& g : groups) {
+    auto& s = seeds[g["P0_label"].get<std::string>()][g["L"].get<double>()];
+    for (std::uint64_t k = 0; k < 20; ++k) s.insert(static_cast<std::uint64_t>(g["L"].get<double>()) * 1000 + k);
+  }
+  return seeds;
+}
 }  // namespace
 
 TEST_CASE("the depletion finite-size table extrapolates with five sizes per P0, not with three") {
@@ -319,7 +331,7 @@ TEST_CASE("the depletion finite-size table extrapolates with five sizes per P0, 
   for (std::size_t k = 0; k < Ls.size(); ++k) groups.push_back(size_group(Ls[k], "0.001", Ns[k], 0.001));
   for (double L : {8.0, 15.0, 20.0}) groups.push_back(size_group(L, "none", L * L * 0.77, 0.001));
   groups.push_back(size_group(15, "1e-05", 176, 0.001));  // one size only: no entry
-  const auto fs = finite_size_json(groups);
+  const auto fs = finite_size_json(groups, own_seeds(groups));
   REQUIRE(fs.size() == 2);
   const auto& fed = fs[0]["P0_label"] == "0.001" ? fs[0] : fs[1];
   const auto& none = fs[0]["P0_label"] == "none" ? fs[0] : fs[1];
@@ -338,4 +350,65 @@ TEST_CASE("the depletion finite-size table extrapolates with five sizes per P0, 
   CHECK(none["sizes"].size() == 3);
   CHECK(none["extrapolation"]["dphi_2"]["limit"].is_null());
   CHECK(none["extrapolation"]["dphi_2"]["why"].get<std::string>().find("needs 5") != std::string::npos);
+}
+
+TEST_CASE("a finite-size fit is made only over sizes with no seed in common; the per-size rows stay") {
+  // Δφ_2 = 0.02 + 3/N_J exactly at five sizes (one P0): fitted with disjoint seeds; with one seed grown
+  // at two sizes (its random stream does not depend on L: correlated sizes) no limit, and the reason.
+  io::Json groups = io::Json::array();
+  const std::vector<double> Ls{8, 10, 12, 15, 20}, Ns{48, 75, 108, 176, 300};
+  for (std::size_t k = 0; k < Ls.size(); ++k) groups.push_back(size_group(Ls[k], "0.001", Ns[k], 0.001));
+  auto seeds = own_seeds(groups);
+  const auto disjoint = finite_size_json(groups, seeds);
+  REQUIRE(disjoint.size() == 1);
+  CHECK(disjoint[0]["extrapolation"]["dphi_2"]["limit"].get<double>() == Approx(0.02).epsilon(1e-9));
+  seeds["0.001"][20.0].insert(12005);  // seed 12005 of L = 12 grown at L = 20 as well
+  const auto shared = finite_size_json(groups, seeds);
+  REQUIRE(shared.size() == 1);
+  const auto& d = shared[0]["extrapolation"]["dphi_2"];
+  CHECK(d["limit"].is_null());
+  CHECK(!d.contains("chi2"));
+  CHECK(d["why"].get<std::string>().find("share seeds (1 seed grown at more than one size)") != std::string::npos);
+  CHECK(shared[0]["sizes"].size() == 5);
+  CHECK(shared[0]["sizes"][4]["dphi_2"]["value"].get<double>() == Approx(0.02 + 3.0 / 300));
+  // a size whose quantity has no error bar is not used, and its seeds do not count: Δφ_2 of L = 20 without
+  // an SE leaves four sizes, too few, whatever their seeds
+  groups[4]["dphi_2"]["se"] = nullptr;
+  CHECK(finite_size_json(groups, seeds)[0]["extrapolation"]["dphi_2"]["why"].get<std::string>().find("needs 5") !=
+        std::string::npos);
+}
+
+TEST_CASE("a run's protocol hash is FNV-1a 64 of its canonical key text: equal where runs may be pooled, not else") {
+  // the published FNV-1a 64 test vectors: the hash is a format, the same on every platform
+  CHECK(fnv1a_64("") == 0xcbf29ce484222325ULL);
+  CHECK(fnv1a_64("a") == 0xaf63dc4c8601ec8cULL);
+  CHECK(fnv1a_64("foobar") == 0x85944171f73967e8ULL);
+  const Scene a;
+  const std::string text = protocol_text(a, group_protocol_key);
+  CHECK(text.find("box.L = 8\n") != std::string::npos);
+  CHECK(text.find("jamming.epsilon_U = 1e-16\n") != std::string::npos);
+  CHECK(text.find("run.") == std::string::npos);
+  CHECK(text.find("cells.") == std::string::npos);
+  CHECK(protocol_text(a, cells_key).find("cells.alpha0 = 1.01\n") != std::string::npos);
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a_64(text)));
+  CHECK(protocol_hash(a, group_protocol_key) == hex);
+  // what a run is called, records, runs on, its seed and step limit leave the hash as it is
+  Scene same = a;
+  same.name = "other";
+  same.seed = 9;
+  same.bud_events = false;
+  same.max_steps = 100;
+  same.targets = {1e-3, 1e-2};
+  same.threads = 2;
+  CHECK(protocol_hash(same, group_protocol_key) == protocol_hash(a, group_protocol_key));
+  CHECK(protocol_hash(same, cells_key) == protocol_hash(a, cells_key));
+  // a protocol key changes it; a cell parameter changes the cells hash only
+  Scene eps = a;
+  eps.epsilon_U = 1e-12;
+  CHECK(protocol_hash(eps, group_protocol_key) != protocol_hash(a, group_protocol_key));
+  Scene cells = a;
+  cells.alpha0 = 1.02;
+  CHECK(protocol_hash(cells, group_protocol_key) == protocol_hash(a, group_protocol_key));
+  CHECK(protocol_hash(cells, cells_key) != protocol_hash(a, cells_key));
 }

@@ -131,7 +131,11 @@ TEST_CASE("the 1/N extrapolation needs five sizes and reports its residuals") {
   }
   // a stand-in for the growth process: 0.77 cells per unit area at any size
   const GrowthOnly growth = [](double L, double) { return GrowthOnlyCount{0.77 * L * L, 0.01 * L * L, 100}; };
-  const io::Json J = jamming_finite_size_json(sizes, growth, 100);
+  // seeds of their own per size, L·10000 + k as the jamming presets grow them
+  SeedsBySize seeds;
+  for (double L : Ls)
+    for (std::uint64_t k = 0; k < 200; ++k) seeds[L].insert(static_cast<std::uint64_t>(L) * 10000 + k);
+  const io::Json J = jamming_finite_size_json(sizes, seeds, growth, 100);
   const auto& u = J["extrapolation"]["u_J"];
   REQUIRE(u["limit"].is_number());
   CHECK(u["limit"].get<double>() == Approx(0.2).epsilon(1e-9));
@@ -147,7 +151,7 @@ TEST_CASE("the 1/N extrapolation needs five sizes and reports its residuals") {
     const double rho = 0.77 + 0.006 * std::sin(2 * M_PI * std::log2(L * L));
     return GrowthOnlyCount{rho * L * L, 1e-4 * L * L, 100};
   };
-  const io::Json JW = jamming_finite_size_json(sizes, waves, 100);
+  const io::Json JW = jamming_finite_size_json(sizes, seeds, waves, 100);
   const auto& w = JW["n_J_limit"];
   CHECK(w["value"].get<double>() == Approx(0.77 * 0.98).epsilon(1e-9));
   const double swing = 0.006 * 0.98 * std::sqrt(0.5 * 6.0 / 5.0);  // SD of six evenly spaced phases
@@ -159,9 +163,20 @@ TEST_CASE("the 1/N extrapolation needs five sizes and reports its residuals") {
   CHECK(row["cells_per_area_minus_growth_only_in_se"].get<double>() == Approx(z).epsilon(1e-9));
   // three sizes: rows, no extrapolation, and the reason
   io::Json three = io::Json::array({sizes[0], sizes[2], sizes[4]});
-  const io::Json J3 = jamming_finite_size_json(three, growth, 100);
+  const io::Json J3 = jamming_finite_size_json(three, seeds, growth, 100);
   CHECK(J3["sizes"].size() == 3);
   CHECK(J3["extrapolation"]["u_J"]["limit"].is_null());
   CHECK(J3["extrapolation"]["u_J"]["why"].get<std::string>().find("needs 5") != std::string::npos);
   CHECK(J3["n_J_limit"].is_null());
+  // the same seeds 1…200 at every size (the stream does not depend on L): correlated sizes, no fit, no
+  // n_J,∞ (it needs r_∞), and the reason; the per-size rows stay
+  SeedsBySize same;
+  for (double L : Ls)
+    for (std::uint64_t k = 1; k <= 200; ++k) same[L].insert(k);
+  const io::Json JS = jamming_finite_size_json(sizes, same, growth, 100);
+  CHECK(JS["sizes"].size() == 5);
+  CHECK(JS["extrapolation"]["u_J"]["limit"].is_null());
+  CHECK(JS["extrapolation"]["u_J"]["why"].get<std::string>().find(
+            "share seeds (200 seeds grown at more than one size)") != std::string::npos);
+  CHECK(JS["n_J_limit"].is_null());
 }

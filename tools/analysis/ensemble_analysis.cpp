@@ -52,7 +52,9 @@
 #include <numbers>
 #include <optional>
 #include <set>
+#include <span>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -205,6 +207,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   // Survival of the tagged buds: per-run a_ε with ε = 1/N_nr,J (at most one left = φ_2's definition)
   if (r.bud_events) {
     x.survival = tools::survival_records(*r.bud_events);
+    x.bud_records = static_cast<double>(x.survival.size());
     if (!x.survival.empty() && x.u_J > 0) {
       const auto km = kaplan_meier(x.survival);
       if (const auto ae = a_epsilon(km, x.u_J, 1.0 / x.N_nr_J)) {
@@ -356,6 +359,41 @@ Json clustered_mean_json(const std::vector<double>& v, const std::vector<std::ui
   return j;
 }
 
+// The SE of a statistic of items that come in clusters (the packings of one seed, which share their
+// growth up to jamming): a bootstrap over clusters, with the options of every other error. `of(items)`
+// takes the indices of the drawn items; a resample where it is undefined (throws
+// std::invalid_argument: a fit with all x equal) leaves the SE undefined. Null from fewer than
+// kMinSamplesForError clusters.
+template <class Of>
+Json se_by_cluster(const std::vector<std::uint64_t>& cluster, Of of, const BootstrapOptions& bo) {
+  if (std::set<std::uint64_t>(cluster.begin(), cluster.end()).size() < kMinSamplesForError) return nullptr;
+  std::vector<double> index(cluster.size());
+  for (std::size_t k = 0; k < index.size(); ++k) index[k] = static_cast<double>(k);
+  std::vector<std::size_t> items;
+  const auto b = cluster_bootstrap(
+      index, cluster,
+      [&](std::span<const double> drawn) {
+        items.clear();
+        for (double i : drawn) items.push_back(static_cast<std::size_t>(i));
+        try {
+          return of(items);
+        } catch (const std::invalid_argument&) {
+          return kNaN;
+        }
+      },
+      bo);
+  return io::number_or_null(b.se);
+}
+
+// The items of `v` at `items`.
+template <class T>
+std::vector<T> pick(const std::vector<T>& v, const std::vector<std::size_t>& items) {
+  std::vector<T> out;
+  out.reserve(items.size());
+  for (std::size_t i : items) out.push_back(v[i]);
+  return out;
+}
+
 Json median_json(const std::vector<double>& v0, const BootstrapOptions& bo) {
   const auto v = finite(v0);
   Json j;
@@ -454,21 +492,21 @@ DosRow read_spectrum(const fs::path& pack, const io::Json& dos, const RunRow& ru
 
 // The runs of a group (L, P0) are pooled as samples of one protocol, and the growth-only baseline
 // takes the cell parameters of the first run for every group: InputError naming the first scene that
-// breaks either, its key and both values.
-void check_one_protocol(const std::vector<RunRow>& rows) {
+// breaks either, its key and both values. Each run's protocol and cells hashes go to runs.csv, so
+// that `analyse --tables` can hold the tables to the same rule without the scenes.
+void check_one_protocol(std::vector<RunRow>& rows) {
   std::map<GroupKey, RunScene> first_of_group;
   std::optional<RunScene> first;
-  for (const RunRow& r : rows) {
+  for (RunRow& r : rows) {
     const fs::path file = r.dir / io::run_files::scene;
     const RunScene run{file, io::load_scene(file)};
     if (!first) first = run;
     const RunScene& group_first = first_of_group.try_emplace(GroupKey{r.L, r.P0}, run).first->second;
-    require_same_keys(
-        run, group_first, [](const SceneKey& k) { return k.section != "cells" && !may_differ_between_samples(k); },
-        "the runs of one L and P0 are samples of one protocol", "analyse them apart");
-    require_same_keys(
-        run, *first, [](const SceneKey& k) { return k.section == "cells"; },
-        "the runs of one analysis share their cells", "analyse them apart");
+    require_same_keys(run, group_first, group_protocol_key, "the runs of one L and P0 are samples of one protocol",
+                      "analyse them apart");
+    require_same_keys(run, *first, cells_key, "the runs of one analysis share their cells", "analyse them apart");
+    r.protocol = protocol_hash(run.scene, group_protocol_key);
+    r.cells = protocol_hash(run.scene, cells_key);
   }
 }
 
@@ -521,8 +559,10 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   if (e.rows.empty()) throw InputError("analyse: no run among the inputs reached jamming");
   std::map<GroupKey, std::vector<SurvivalRecord>> pools;
   for (const auto& r : e.rows) {
-    auto& pool = pools[{r.L, r.P0}];
+    const GroupKey key{r.L, r.P0};
+    auto& pool = pools[key];
     pool.insert(pool.end(), r.survival.begin(), r.survival.end());
+    e.survival_runs[key] += std::isfinite(r.bud_records);  // a run without bud events adds no run to the pool
   }
   for (const auto& [key, pool] : pools) e.survival.emplace(key, kaplan_meier(pool));
   return e;
@@ -658,8 +698,9 @@ struct Tables {
   std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
 };
 
+// `pooled_runs`: how many runs `km` pools, where known (survival.csv's `runs`).
 Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km,
-                const BootstrapOptions& bo, Tables& t) {
+                std::optional<std::size_t> pooled_runs, const BootstrapOptions& bo, Tables& t) {
   const std::string P0_label = key.P0 ? num(*key.P0) : "none", P0s = P0_csv(P0_label);
   std::vector<const RunRow*> dep;
   for (const auto* r : rs)
@@ -751,9 +792,10 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   const auto a_med = median_completion_size(km);
   pooled["a_c_median_area"] = a_med ? Json(kDiameterSquaredToArea * *a_med) : Json(nullptr);
   g["pooled_survival"] = pooled;
+  const std::string runs_cell = pooled_runs ? std::to_string(*pooled_runs) : std::string();
   const auto survival_row = [&](const KaplanMeierStep& st) {
     const auto [se, lo, hi] = band_cells(st);
-    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, std::to_string(st.at_risk)});
+    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, std::to_string(st.at_risk), runs_cell});
   };
   survival_row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
   for (const auto& st : km.steps()) survival_row(st);
@@ -976,35 +1018,45 @@ Json spectrum_json(const std::vector<const DosRow*>& rows, const BootstrapOption
   const double n = static_cast<double>(w.size());
   const auto fd = linear_fit(dz, w);
   const auto f6 = linear_fit(z6, w);
+  // The SEs of the slopes are bootstraps over seeds: the fits' own SEs would count every packing of a
+  // seed as an independent sample.
+  const Json fd_se = se_by_cluster(
+      seed, [&](const auto& k) { return linear_fit(pick(dz, k), pick(w, k)).slope; }, bo);
   Json j{{"packings", w.size()},
+         {"seeds", std::set<std::uint64_t>(seed.begin(), seed.end()).size()},
          {"N_zero_equals_N_u", equal / n},
          {"N_zero_minus_N_u_abs", mean(diff)},
          {"N_zero_minus_N_u", clustered_mean_json(signed_diff, seed, bo)},
-         {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd.slope_se}, {"intercept", fd.intercept}}},
+         {"omega_star_vs_dZ", Json{{"slope", fd.slope}, {"slope_se", fd_se}, {"intercept", fd.intercept}}},
          {"r2_dZ", fd.r2},
          {"r2_Z_minus_6", f6.r2}};
   if (!targets.empty()) {
     const auto c = omega_collapse(targets);
-    auto fit = [](const OriginFit& f) {
-      return Json{{"slope", f.slope}, {"slope_se", f.slope_se}, {"r2_uncentred", f.r2}, {"rms", f.rms}};
+    const auto fit = [&](const OriginFit& f, OriginFit OmegaCollapse::*which) {
+      const Json se = se_by_cluster(
+          target_seed, [&](const auto& k) { return (omega_collapse(pick(targets, k)).*which).slope; }, bo);
+      return Json{{"slope", f.slope}, {"slope_se", se}, {"r2_uncentred", f.r2}, {"rms", f.rms}};
     };
     const double nt = static_cast<double>(c.packings);
     const Json below_six = clustered_mean_json(target_below_six, target_seed, bo);
     j["paper"] = Json{{"packings", c.packings},
                       {"seeds", below_six["n"]},
-                      {"through_origin_dZ", fit(c.dZ)},
-                      {"through_origin_Z_minus_6", fit(c.Z_minus_6)},
+                      {"through_origin_dZ", fit(c.dZ, &OmegaCollapse::dZ)},
+                      {"through_origin_Z_minus_6", fit(c.Z_minus_6, &OmegaCollapse::Z_minus_6)},
                       {"fraction_dZ_negative", c.dZ_negative / nt},
                       {"fraction_Z_minus_6_negative", c.Z_minus_6_negative / nt},
                       {"fraction_Z_minus_6_negative_se", below_six["se"]}};
     // its N_zero panel: the packings with N_zero = N_u exactly, and the slope of N_zero on N_u through 0
     std::size_t same = 0;
     for (std::size_t k = 0; k < target_N_u.size(); ++k) same += target_N_zero[k] == target_N_u[k];
-    Json nz{{"packings", target_N_u.size()}, {"N_zero_equals_N_u", same}};
+    Json nz{{"packings", target_N_u.size()},
+            {"seeds", std::set<std::uint64_t>(target_seed.begin(), target_seed.end()).size()},
+            {"N_zero_equals_N_u", same}};
     if (std::any_of(target_N_u.begin(), target_N_u.end(), [](double x) { return x != 0; })) {
-      const auto f = fit_through_origin(target_N_u, target_N_zero);
-      nz["slope_through_origin"] = f.slope;
-      nz["slope_se"] = f.slope_se;
+      nz["slope_through_origin"] = fit_through_origin(target_N_u, target_N_zero).slope;
+      nz["slope_se"] = se_by_cluster(
+          target_seed,
+          [&](const auto& k) { return fit_through_origin(pick(target_N_u, k), pick(target_N_zero, k)).slope; }, bo);
     }
     j["paper"]["N_zero_vs_N_u"] = nz;
   }
@@ -1129,15 +1181,16 @@ const std::vector<std::string_view> kOutputFiles{"analysis.json",    "runs.csv",
 // A table the inputs could not give (Ensemble::unavailable names it) is not written: an empty file
 // would read as "measured, nothing there".
 void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
-  std::vector<std::string> run_header{"run", "L", "P0", "seed", "status", "jamming_state"};
+  std::vector<std::string> run_header{"run", "L", "P0", "seed", "status", "jamming_state", "protocol", "cells"};
   std::vector<std::string> tgt_header{"run", "L", "P0", "seed", "dphi"};
   for (const auto& c : kRunColumns) run_header.push_back(c.name);
   for (const auto& c : kTargetColumns) tgt_header.push_back(c.name);
   tgt_header.push_back("below_phi2");
   std::vector<std::vector<std::string>> run_rows, tgt_rows, dos_out;
   for (const auto& r : e.rows) {
-    std::vector<std::string> row{r.dir.string(),         num(r.L), P0_csv(r.P0_label),
-                                 std::to_string(r.seed), r.status, std::to_string(r.state)};
+    std::vector<std::string> row{
+        r.dir.string(), num(r.L), P0_csv(r.P0_label), std::to_string(r.seed), r.status, std::to_string(r.state),
+        r.protocol,     r.cells};
     for (const auto& c : kRunColumns) row.push_back(cell(r.*c.field));
     run_rows.push_back(row);
     for (const auto& x : r.targets) {
@@ -1159,7 +1212,7 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
   };
   write("runs.csv", run_header, run_rows);
   write("targets.csv", tgt_header, tgt_rows);
-  write("survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk"}, t.survival);
+  write("survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk", "runs"}, t.survival);
   write("remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
   write("division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, t.divisions);
   write("growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
@@ -1172,7 +1225,7 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
 
 }  // namespace
 
-std::string analyse_ensemble(const EnsembleOptions& o) {
+EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   if (o.out.empty()) throw InputError("--out: an output directory is required");
   io::check_output_directory("--out", o.out, kOutputFiles);  // before the work, not after it
   if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
@@ -1204,11 +1257,18 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   io::Directory::open(out, true);
   Tables tables;
   Json jgroups = Json::array();
-  for (const auto& [key, rs] : groups) jgroups.push_back(group_json(key, rs, e.survival.at(key), o.bootstrap, tables));
+  for (const auto& [key, rs] : groups) {
+    const auto pooled = e.survival_runs.find(key);
+    jgroups.push_back(group_json(key, rs, e.survival.at(key),
+                                 pooled != e.survival_runs.end() ? std::optional(pooled->second) : std::nullopt,
+                                 o.bootstrap, tables));
+  }
 
   Json J;
   J["format"] = "budjam-analysis";
-  J["version"] = 4;  // 3: B_grow = λ_c B_ext as the median ratio; 4: errors of pooled targets by seed
+  // 3: B_grow = λ_c B_ext as the median ratio; 4: errors of pooled targets by seed; 5: the SEs of the
+  // spectrum's slopes by seed, finite-size fits only over sizes of disjoint seeds
+  J["version"] = 5;
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
@@ -1217,6 +1277,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
                      {"moduli_saddles", e.moduli.saddles},
                      {"dos_files", e.dos_found}};
   if (!o.tables.empty()) J["inputs"]["tables"] = o.tables;
+  J["inputs"]["unchecked"] = e.unchecked;
   J["unavailable"] = e.unavailable;
   J["main_L"] = main_L;
   J["bootstrap"] = Json{{"resamples", o.bootstrap.resamples}, {"seed", o.bootstrap.seed}};
@@ -1239,7 +1300,14 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
     }
     J["sizes"] = sizes;
   }
-  J["finite_size"] = finite_size_json(J["groups"]);
+  // The seeds behind each size, so that the 1/N fits use only sizes that are independent samples.
+  std::map<std::string, SeedsBySize> group_seeds;
+  SeedsBySize size_seeds;
+  for (const auto& r : e.rows) {
+    group_seeds[r.P0 ? num(*r.P0) : "none"][r.L].insert(r.seed);  // the P0_label of group_json
+    size_seeds[r.L].insert(r.seed);
+  }
+  J["finite_size"] = finite_size_json(J["groups"], group_seeds);
   {
     // The growth-only baseline with the growth parameters of the runs (every run of an ensemble shares
     // them; tables carry none, so there the scene defaults, which are the paper's, stand in).
@@ -1248,7 +1316,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
       scene.L = L;
       return growth_only_cells(scene, phi, kGrowthOnlySamples, kGrowthOnlyFirstSeed);
     };
-    J["finite_size_jamming"] = jamming_finite_size_json(J["sizes"], growth_only, kGrowthOnlyLargeL);
+    J["finite_size_jamming"] = jamming_finite_size_json(J["sizes"], size_seeds, growth_only, kGrowthOnlyLargeL);
   }
   {
     Json br = Json::array();
@@ -1272,7 +1340,7 @@ std::string analyse_ensemble(const EnsembleOptions& o) {
   }
   msg << ") in " << groups.size() << " groups; moduli files " << e.moduli.found << " (" << e.moduli.saddles
       << " saddles), spectra " << e.dos_found << " -> " << out.string();
-  return msg.str();
+  return {msg.str(), e.unchecked};
 }
 
 }  // namespace budjam::tools

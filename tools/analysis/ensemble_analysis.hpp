@@ -20,8 +20,13 @@ struct EnsembleOptions {
   bool require_moduli = false, require_dos = false;  // their absence is an error, not empty columns
 };
 
+struct EnsembleAccount {
+  std::string used;                    // one line: what was used and where the tables went
+  std::vector<std::string> unchecked;  // one line each: what tables of an earlier format left unchecked
+};
+
 // Reads the runs (or the tables), writes the tables listed in docs/analysis.md ("analyse outputs") into
-// options.out, and returns a one-line account of what was used. InputError for bad input.
-std::string analyse_ensemble(const EnsembleOptions& options);
+// options.out, and returns the account of what was used. InputError for bad input.
+EnsembleAccount analyse_ensemble(const EnsembleOptions& options);
 
 }  // namespace budjam::tools

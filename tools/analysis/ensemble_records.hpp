@@ -42,6 +42,9 @@ struct RunRow {
   std::uint64_t seed = 0;
   std::string status;
   std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
+  // The run's protocol within its group and its cell parameters (run_protocol.hpp, protocol_hash);
+  // empty where tables from before those columns do not say.
+  std::string protocol, cells;
   bool depleted = false;
   double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN,
          P_J = kNaN;
@@ -61,6 +64,9 @@ struct RunRow {
   double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;     // at budjam's φ_2, if saved there
   double G_2_none_left = kNaN;  // at the first state with none left, where the run saved that packing
   double h_gamma = kNaN;
+  // The records the run gave the pooled survival of its group: NaN where it recorded no bud events
+  // (observe.bud_events off), and so contributed no run to that pool.
+  double bud_records = kNaN;
   std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
   std::vector<TargetRow> targets;
@@ -110,6 +116,12 @@ struct Ensemble {
   std::size_t dos_found = 0;
   std::size_t runs = 0;
   std::map<GroupKey, KaplanMeierCurve> survival;  // pooled over the runs of each group
+  // How many runs each pooled curve pools (those that recorded bud events); absent where tables from
+  // before survival.csv's `runs` column do not say.
+  std::map<GroupKey, std::size_t> survival_runs;
+  // One line each on what the inputs did not allow to be checked (tables of an earlier format), for
+  // stderr and analysis.json "inputs.unchecked".
+  std::vector<std::string> unchecked;
   // The cell parameters and initial state the runs were grown with (the scene defaults, which are the
   // paper's, for tables: they record none).
   Scene growth_scene;
@@ -130,7 +142,7 @@ struct TargetColumn {
   double TargetRow::*field;
 };
 
-// runs.csv after its leading columns run, L, P0, seed, status, jamming_state.
+// runs.csv after its leading columns run, L, P0, seed, status, jamming_state, protocol, cells.
 inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"u_J", &RunRow::u_J},
                                             {"u_J_lobes", &RunRow::u_J_lobes},
@@ -167,7 +179,8 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"lc2_J", &RunRow::lc2_J},
                                             {"P_J", &RunRow::P_J},
                                             {"step_J", &RunRow::step_J},
-                                            {"tagged_J", &RunRow::tagged}};
+                                            {"tagged_J", &RunRow::tagged},
+                                            {"bud_records", &RunRow::bud_records}};
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
 inline constexpr TargetColumn kTargetColumns[] = {{"phi", &TargetRow::phi},

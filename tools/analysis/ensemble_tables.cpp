@@ -5,11 +5,15 @@
 #include "budjam/survival.hpp"
 #include "io/json.hpp"
 #include "io/run_data.hpp"
+#include "io/text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace budjam::tools {
@@ -30,6 +34,7 @@ std::string needs(const std::string& column) {
                                                        {"N_div_end", "steps.csv"},
                                                        {"a_eps", "bud_events.csv"},
                                                        {"integral_S", "bud_events.csv"},
+                                                       {"bud_records", "bud_events.csv"},
                                                        {"B_2", "the moduli at φ_2"},
                                                        {"G_2", "the moduli at φ_2"},
                                                        {"G_2_energy", "the moduli at φ_2"},
@@ -50,6 +55,56 @@ const char* run_column(const CsvTable& R, const RunColumn& c) {
   return c.legacy && R.has_column(c.legacy) ? c.legacy : nullptr;
 }
 
+std::string group_text(double L, const std::string& P0_label) {
+  return "L = " + io::format_double(L) + ", P0 = " + P0_label;
+}
+
+// runs.csv's protocol and cells columns (run_protocol.hpp) held to the rule the run-directory reader
+// applies to the scenes (check_one_protocol): one protocol within each (L, P0), one set of cells
+// over the table. A column that is absent, or empty in every row (as an analysis of such tables writes
+// it), comes from tables before it: nothing to check, and a notice says so. One filled in some rows
+// and empty in others is refused: its rows were not written by one analysis.
+void check_protocol_columns(const CsvTable& R, Ensemble& e) {
+  std::vector<std::string> lacking;
+  for (const auto& [column, field, in_group] :
+       {std::tuple{"protocol", &RunRow::protocol, true}, std::tuple{"cells", &RunRow::cells, false}}) {
+    std::optional<std::size_t> filled, empty;  // first such rows
+    for (std::size_t k = 0; k < e.rows.size(); ++k) {
+      auto& first = (e.rows[k].*field).empty() ? empty : filled;
+      if (!first) first = k;
+    }
+    if (!filled) {
+      lacking.push_back(column);
+      continue;
+    }
+    if (empty) {
+      const std::size_t a = std::min(*filled, *empty), b = std::max(*filled, *empty);
+      const bool later_empty = b == *empty;
+      throw InputError(
+          R.source + ":" + std::to_string(b + 2) + ": run " + e.rows[b].dir.string() +
+          (later_empty ? " has no " + std::string(column) : " has " + std::string(column) + " " + e.rows[b].*field) +
+          ", but run " + e.rows[a].dir.string() + " (line " + std::to_string(a + 2) + ") has " +
+          (later_empty ? "one" : "none") + ": rows of tables of different formats");
+    }
+    std::map<std::pair<double, std::string>, std::size_t> first;  // group (or the whole table) → first row
+    for (std::size_t k = 0; k < e.rows.size(); ++k) {
+      const RunRow& r = e.rows[k];
+      const auto at = first.try_emplace(in_group ? std::pair{r.L, r.P0_label} : std::pair{0.0, std::string()}, k);
+      const RunRow& f = e.rows[at.first->second];
+      if (r.*field == f.*field) continue;
+      throw InputError(R.source + ":" + std::to_string(k + 2) + ": runs " + f.dir.string() + " and " + r.dir.string() +
+                       " differ in " + column + " (" + f.*field + ", " + r.*field + "): " +
+                       (in_group ? "the runs of one " + group_text(r.L, r.P0_label) +
+                                       " are samples of one protocol; analyse them apart"
+                                 : std::string("the runs of one analysis share their cells; analyse them apart")));
+    }
+  }
+  if (!lacking.empty())
+    e.unchecked.push_back(R.source + " has no " + lacking.front() + (lacking.size() > 1 ? " or " + lacking[1] : "") +
+                          " column (tables from before it): whether the runs pooled per L and P0 are of one " +
+                          "protocol cannot be checked");
+}
+
 void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t>& index) {
   // Tables from before jamming.phi2_tagged_left hold budjam's φ_2 only, which is what the default says.
   for (const auto& c : kRunColumns)
@@ -65,6 +120,8 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     if (x.P0_label != "none") x.P0 = R.number(k, c_P0);
     x.seed = static_cast<std::uint64_t>(R.integer(k, c_seed, 0, std::numeric_limits<long long>::max()));
     x.status = R.text(k, c_status);
+    if (R.has_column("protocol")) x.protocol = R.text(k, R.column("protocol"));
+    if (R.has_column("cells")) x.cells = R.text(k, R.column("cells"));
     for (const auto& c : kRunColumns)
       if (const char* name = run_column(R, c)) x.*c.field = R.number(k, R.column(name));
     x.depleted = std::isfinite(x.phi_2);
@@ -74,6 +131,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     e.rows.push_back(std::move(x));
   }
   if (e.rows.empty()) throw InputError(R.source + ": no runs");
+  check_protocol_columns(R, e);
   if (e.unavailable.count("P_J"))
     e.unavailable["P_J"] +=
         "; ΔZ_0(P) + 2(u_J − u) is taken from targets.csv (dZ_pred) as the earlier analysis computed it";
@@ -175,11 +233,48 @@ void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, st
 // from Ŝ_k = Ŝ_{k−1} (1 − d_k / n_k), the censored from the drop of the risk set; the curve is made
 // again from those records, so Ŝ and the Greenwood variance (whose band the table leaves out where
 // few are at risk) come back as the runs gave them.
-void read_survival(const CsvTable& S, Ensemble& e) {
-  std::map<std::pair<double, std::string>, GroupKey> groups;
-  for (const auto& r : e.rows) groups.emplace(std::pair{r.L, r.P0_label}, GroupKey{r.L, r.P0});
+//
+// Each group's `runs` (the runs it pools) and records are held to runs.csv: the runs of the group
+// there that recorded bud events (bud_records, the rule of the run-directory reader) and the sum of
+// their records; a group of such runs without a curve is refused too. Tables from before `runs`
+// (absent, or empty in every row) or before bud_records cannot be checked: a notice says so.
+void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
+  struct Group {
+    GroupKey key;
+    std::size_t runs = 0;  // that recorded bud events
+    double records = 0;
+    bool has_curve = false;
+  };
+  std::map<std::pair<double, std::string>, Group> groups;
+  for (const auto& r : e.rows) {
+    auto& g = groups.try_emplace(std::pair{r.L, r.P0_label}, Group{GroupKey{r.L, r.P0}}).first->second;
+    if (std::isfinite(r.bud_records)) ++g.runs, g.records += r.bud_records;
+  }
   const std::size_t c_L = S.column("L"), c_P0 = S.column("P0"), c_a = S.column("a"), c_S = S.column("S"),
                     c_risk = S.column("at_risk");
+  // The runs column, where the table has one filled in: filled in every row, or refused.
+  std::optional<std::size_t> c_runs;
+  if (S.has_column("runs")) {
+    const std::size_t c = S.column("runs");
+    std::optional<std::size_t> filled, empty;
+    for (std::size_t k = 0; k < S.size(); ++k) {
+      auto& first = S.text(k, c).empty() ? empty : filled;
+      if (!first) first = k;
+    }
+    if (filled && empty)
+      throw InputError(S.source + ":" + std::to_string(std::max(*filled, *empty) + 2) + ": runs " +
+                       (*empty > *filled ? "empty, but filled in at line " : "filled in, but empty at line ") +
+                       std::to_string(std::min(*filled, *empty) + 2) + ": rows of tables of different formats");
+    if (filled) c_runs = c;
+  }
+  if (!c_runs)
+    e.unchecked.push_back(S.source +
+                          " has no runs column (tables from before it): whether its pooled curves are of the runs "
+                          "in runs.csv cannot be checked");
+  else if (!runs_have_bud_records)
+    e.unchecked.push_back(S.source + "'s pooled curves cannot be checked against runs.csv: it has no bud_records " +
+                          "column (tables from before it)");
+  const bool check = c_runs && runs_have_bud_records;
   std::size_t k = 0;
   while (k < S.size()) {
     const std::size_t first_row = k;
@@ -187,7 +282,21 @@ void read_survival(const CsvTable& S, Ensemble& e) {
     if (g == groups.end())
       throw InputError(S.source + ":" + std::to_string(k + 2) + ": group L = " + S.text(k, c_L) +
                        ", P0 = " + S.text(k, c_P0) + " has no run in runs.csv");
+    g->second.has_curve = true;
     const auto records = static_cast<std::size_t>(S.integer(k, c_risk, 0, std::numeric_limits<long long>::max()));
+    const std::string group = group_text(g->first.first, g->first.second);
+    if (c_runs) {
+      const auto runs = static_cast<std::size_t>(S.integer(k, *c_runs, 0, std::numeric_limits<long long>::max()));
+      e.survival_runs[g->second.key] = runs;
+      if (check && runs != g->second.runs)
+        throw InputError(S.source + ":" + std::to_string(k + 2) + ": group " + group + " pools " +
+                         std::to_string(runs) + " runs, but runs.csv has " + std::to_string(g->second.runs) +
+                         " of that group with bud events: the curve is not of these runs");
+      if (check && static_cast<double>(records) != g->second.records)
+        throw InputError(S.source + ":" + std::to_string(k + 2) + ": group " + group + " pools " +
+                         std::to_string(records) + " bud records, but its runs in runs.csv recorded " +
+                         io::format_double(g->second.records) + ": the curve is not of these runs");
+    }
     std::vector<SurvivalRecord> kept;
     double S_prev = 1, a_prev = 0;
     std::size_t at_risk_prev = records, events_prev = 0;
@@ -195,6 +304,10 @@ void read_survival(const CsvTable& S, Ensemble& e) {
     for (++k;
          k < S.size() && S.number(k, c_L) == g->first.first && P0_label_from_csv(S.text(k, c_P0)) == g->first.second;
          ++k) {
+      if (c_runs && S.text(k, *c_runs) != S.text(first_row, *c_runs))
+        throw InputError(S.source + ":" + std::to_string(k + 2) + ": group " + group + ": runs " + S.text(k, *c_runs) +
+                         ", but " + S.text(first_row, *c_runs) + " in its first row (line " +
+                         std::to_string(first_row + 2) + ")");
       const double a = S.number(k, c_a), S_k = S.number(k, c_S);
       const auto at_risk = static_cast<std::size_t>(S.integer(k, c_risk, 1, static_cast<long long>(at_risk_prev)));
       if (!(S_prev > 0 && S_k >= 0 && S_k <= S_prev && a >= a_prev) || at_risk + events_prev > at_risk_prev)
@@ -212,8 +325,13 @@ void read_survival(const CsvTable& S, Ensemble& e) {
       throw InputError(S.source + ":" + std::to_string(first_row + 2) + ": group L = " + S.text(first_row, c_L) +
                        ", P0 = " + S.text(first_row, c_P0) + ": its steps account for " + std::to_string(kept.size()) +
                        " records, its first row for " + std::to_string(records));
-    e.survival[g->second] = kaplan_meier(kept);
+    e.survival[g->second.key] = kaplan_meier(kept);
   }
+  if (check)
+    for (const auto& [label, g] : groups)
+      if (!g.has_curve && g.runs > 0)
+        throw InputError(S.source + ": no curve of group " + group_text(label.first, label.second) + ", whose " +
+                         std::to_string(g.runs) + " runs in runs.csv recorded bud events");
 }
 
 // Format 1 of the tables (analysis.json "version": 1) holds χ̄ and λ̄_c as trapezoids in φ, which weight
@@ -244,7 +362,7 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
     e.unavailable["dos.csv"] = (dir / "dos.csv").string() + " absent: no spectra";
   for (const auto& r : e.rows) e.survival.emplace(GroupKey{r.L, r.P0}, KaplanMeierCurve{});
   if (fs::exists(dir / "survival.csv"))
-    read_survival(read_csv(dir / "survival.csv"), e);
+    read_survival(read_csv(dir / "survival.csv"), e, !e.unavailable.count("bud_records"));
   else
     e.unavailable["survival.csv"] =
         (dir / "survival.csv").string() + " absent: no pooled survival (needs bud_events.csv)";

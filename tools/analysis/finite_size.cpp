@@ -49,13 +49,30 @@ Json cell(const Json& entry, const Quantity& q) {
   return Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
 }
 
-Json extrapolation_json(const std::vector<double>& N, const std::vector<double>& q, const std::vector<double>& se) {
+// How many seeds were grown at more than one of these sizes.
+std::size_t seeds_shared(const std::vector<const std::set<std::uint64_t>*>& seeds) {
+  std::map<std::uint64_t, std::size_t> sizes_of;
+  for (const auto* s : seeds)
+    for (const std::uint64_t seed : *s) ++sizes_of[seed];
+  return static_cast<std::size_t>(
+      std::count_if(sizes_of.begin(), sizes_of.end(), [](auto& x) { return x.second > 1; }));
+}
+
+Json extrapolation_json(const std::vector<double>& N, const std::vector<double>& q, const std::vector<double>& se,
+                        const std::vector<const std::set<std::uint64_t>*>& seeds) {
   Json x;
   x["sizes"] = N.size();
   if (N.size() < kMinSizesToExtrapolate) {
     x["limit"] = nullptr;
     x["why"] = std::to_string(N.size()) + " sizes with an error bar; the fit needs " +
                std::to_string(kMinSizesToExtrapolate) + " to test its form";
+    return x;
+  }
+  if (const std::size_t shared = seeds_shared(seeds)) {
+    x["limit"] = nullptr;
+    x["why"] = "the " + std::to_string(N.size()) + " sizes share seeds (" + std::to_string(shared) +
+               (shared == 1 ? " seed" : " seeds") +
+               " grown at more than one size): they are correlated, and the fit's chi2 needs independent sizes";
     return x;
   }
   std::vector<double> inv_N;
@@ -74,26 +91,29 @@ Json extrapolation_json(const std::vector<double>& N, const std::vector<double>&
 }
 
 // The extrapolation of one quantity over the per-size rows: the sizes whose value has an error bar.
-Json extrapolate(const Json& rows, const char* name) {
+// `seeds`: the seeds of the runs of each row's L.
+Json extrapolate(const Json& rows, const char* name, const SeedsBySize& seeds) {
   std::vector<double> N, value, se;
+  std::vector<const std::set<std::uint64_t>*> used_seeds;
   for (const auto& row : rows) {
     const double n = number(row["N_J"], "mean"), v = number(row[name], "value"), s = number(row[name], "se");
     if (std::isfinite(n) && n > 0 && std::isfinite(v) && std::isfinite(s) && s > 0) {
       N.push_back(n);
       value.push_back(v);
       se.push_back(s);
+      used_seeds.push_back(&seeds.at(number(row, "L")));
     }
   }
-  return extrapolation_json(N, value, se);
+  return extrapolation_json(N, value, se, used_seeds);
 }
 
 constexpr const char* kModel =
     "q(N_J) = q_inf + c/N_J, weighted least squares (weights 1/SE^2), errors scaled by max(1, sqrt(chi2/dof)); "
-    "fitted with at least 5 sizes";
+    "fitted with at least 5 sizes, no seed grown at two of them";
 
 }  // namespace
 
-Json finite_size_json(const Json& groups) {
+Json finite_size_json(const Json& groups, const std::map<std::string, SeedsBySize>& seeds) {
   // groups of one P0 in increasing L; "none" (no feedback) is its own P0
   std::map<std::string, std::vector<const Json*>> by_P0;
   for (const auto& g : groups) by_P0[g.value("P0_label", "none")].push_back(&g);
@@ -114,7 +134,7 @@ Json finite_size_json(const Json& groups) {
       sizes.push_back(row);
     }
     Json extrapolation;
-    for (const auto& q : kDepletionQuantities) extrapolation[q.name] = extrapolate(sizes, q.name);
+    for (const auto& q : kDepletionQuantities) extrapolation[q.name] = extrapolate(sizes, q.name, seeds.at(label));
     entry["sizes"] = sizes;
     entry["model"] = kModel;
     entry["extrapolation"] = extrapolation;
@@ -123,7 +143,8 @@ Json finite_size_json(const Json& groups) {
   return out;
 }
 
-Json jamming_finite_size_json(const Json& sizes_in, const GrowthOnly& growth_only, double large_L) {
+Json jamming_finite_size_json(const Json& sizes_in, const SeedsBySize& seeds, const GrowthOnly& growth_only,
+                              double large_L) {
   std::vector<const Json*> sizes;
   for (const auto& s : sizes_in) sizes.push_back(&s);
   if (sizes.size() < 2) return nullptr;
@@ -150,7 +171,7 @@ Json jamming_finite_size_json(const Json& sizes_in, const GrowthOnly& growth_onl
     rows.push_back(row);
   }
   Json extrapolation;
-  for (const auto& q : kJammingQuantities) extrapolation[q.name] = extrapolate(rows, q.name);
+  for (const auto& q : kJammingQuantities) extrapolation[q.name] = extrapolate(rows, q.name, seeds);
   Json J;
   J["sizes"] = rows;
   J["model"] = kModel;

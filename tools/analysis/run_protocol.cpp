@@ -1,12 +1,15 @@
 #include "analysis/run_protocol.hpp"
 
 #include "budjam/errors.hpp"
+#include "budjam/number_text.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 
+#include <cstdio>
 #include <optional>
 #include <set>
 #include <string>
+#include <variant>
 
 namespace budjam::tools {
 
@@ -14,6 +17,44 @@ bool may_differ_between_samples(const SceneKey& k) {
   static const std::set<std::string> keys{"growth.max_steps", "jamming.targets", "jamming.continue_to_phi2",
                                           "minimiser.threads"};
   return k.section == "run" || k.section.starts_with("observe") || keys.contains(k.key());
+}
+
+bool group_protocol_key(const SceneKey& k) { return !cells_key(k) && !may_differ_between_samples(k); }
+
+bool cells_key(const SceneKey& k) { return k.section == "cells"; }
+
+std::string protocol_text(const Scene& scene, bool (*selected)(const SceneKey&)) {
+  std::string text;
+  for (const SceneKey& k : scene_keys()) {
+    if (!selected(k)) continue;
+    const SceneValue v = k.get(scene);
+    std::string value;
+    if (const auto* list = std::get_if<std::vector<double>>(&v)) {
+      // value_text shortens a long list for messages; a name of the protocol must hold every value
+      value = "[";
+      for (std::size_t i = 0; i < list->size(); ++i) value += (i ? ", " : "") + shortest_text((*list)[i]);
+      value += "]";
+    } else {
+      value = value_text(v);
+    }
+    text += k.key() + " = " + value + "\n";
+  }
+  return text;
+}
+
+std::uint64_t fnv1a_64(std::string_view bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+std::string protocol_hash(const Scene& scene, bool (*selected)(const SceneKey&)) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a_64(protocol_text(scene, selected))));
+  return hex;
 }
 
 void require_same_keys(const RunScene& run, const RunScene& first, bool (*compared)(const SceneKey&),

@@ -7,8 +7,10 @@
 #include "budjam/scene.hpp"
 #include "budjam/scene_keys.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace budjam::tools {
@@ -16,6 +18,21 @@ namespace budjam::tools {
 // Whether runs pooled as samples of one protocol may differ in this key: run.*, observe.*,
 // growth.max_steps, jamming.targets, jamming.continue_to_phi2 and minimiser.threads.
 bool may_differ_between_samples(const SceneKey& key);
+
+// The keys `budjam analyse` holds equal within a group (L, P0): every key but those above and the
+// cell parameters, which it holds equal across all its runs instead (cells_key).
+bool group_protocol_key(const SceneKey& key);
+bool cells_key(const SceneKey& key);
+
+// The protocol of a run as a stable name, so that tables (runs.csv) can say which runs may be pooled
+// without the scenes: FNV-1a (64 bit) of the canonical text of the keys `selected` admits, one line
+// "section.name = value\n" each in scene_keys() order, the value as value_text() writes it (a list
+// in full), written as 16 lowercase hex digits. Scenes that agree in every selected key have equal
+// hashes on every platform (the text holds shortest round-trip numbers, no locale); a budjam that adds
+// a key to the selection changes every hash, so tables of two such versions are not pooled.
+std::string protocol_text(const Scene& scene, bool (*selected)(const SceneKey&));
+std::uint64_t fnv1a_64(std::string_view bytes);
+std::string protocol_hash(const Scene& scene, bool (*selected)(const SceneKey&));
 
 // A run's scene and the file it was read from (for messages).
 struct RunScene {

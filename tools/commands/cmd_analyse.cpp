@@ -26,8 +26,10 @@ void run(Options o) {
       throw InputError("--require: unknown item '" + w + "' (known: moduli, dos)");
   }
   if (o.ensemble.bootstrap.resamples < 2) throw InputError("--resamples: must be at least 2");
-  const std::string done = tools::analyse_ensemble(o.ensemble);  // first: an error line stands alone
-  std::cerr << "analyse: " << done << "\n";
+  // after the work: an error line stands alone
+  const tools::EnsembleAccount done = tools::analyse_ensemble(o.ensemble);
+  for (const auto& line : done.unchecked) cli::notice("analyse: " + line);
+  std::cerr << "analyse: " << done.used << "\n";
 }
 
 const bool registered = budjam::cli::register_command(
