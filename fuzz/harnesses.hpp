@@ -12,6 +12,7 @@
 #include "io/packing_file.hpp"
 #include "io/run_data.hpp"
 #include "io/scene_file.hpp"
+#include "io/text.hpp"
 
 #include <cmath>
 #include <cstdint>

@@ -380,9 +380,9 @@ TEST_CASE("a finite-size fit is made only over sizes with no seed in common; the
 
 TEST_CASE("a run's protocol hash is FNV-1a 64 of its canonical key text: equal where runs may be pooled, not else") {
   // the published FNV-1a 64 test vectors: the hash is a format, the same on every platform
-  CHECK(fnv1a_64("") == 0xcbf29ce484222325ULL);
-  CHECK(fnv1a_64("a") == 0xaf63dc4c8601ec8cULL);
-  CHECK(fnv1a_64("foobar") == 0x85944171f73967e8ULL);
+  CHECK(io::fnv1a64("") == 0xcbf29ce484222325ULL);
+  CHECK(io::fnv1a64("a") == 0xaf63dc4c8601ec8cULL);
+  CHECK(io::fnv1a64("foobar") == 0x85944171f73967e8ULL);
   const Scene a;
   const std::string text = protocol_text(a, group_protocol_key);
   CHECK(text.find("box.L = 8\n") != std::string::npos);
@@ -391,7 +391,7 @@ TEST_CASE("a run's protocol hash is FNV-1a 64 of its canonical key text: equal w
   CHECK(text.find("cells.") == std::string::npos);
   CHECK(protocol_text(a, cells_key).find("cells.alpha0 = 1.01\n") != std::string::npos);
   char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a_64(text)));
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(io::fnv1a64(text)));
   CHECK(protocol_hash(a, group_protocol_key) == hex);
   // what a run is called, records, runs on, its seed and step limit leave the hash as it is
   Scene same = a;

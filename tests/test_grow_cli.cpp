@@ -4,6 +4,7 @@
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
 #include "io/scene_file.hpp"
+#include "io/text.hpp"
 
 #include <catch2/catch.hpp>
 #include "run_budjam.hpp"

@@ -4,8 +4,8 @@
 #include "budjam/number_text.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
+#include "io/text.hpp"
 
-#include <cstdio>
 #include <optional>
 #include <set>
 #include <string>
@@ -42,19 +42,8 @@ std::string protocol_text(const Scene& scene, bool (*selected)(const SceneKey&))
   return text;
 }
 
-std::uint64_t fnv1a_64(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (const char c : bytes) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 std::string protocol_hash(const Scene& scene, bool (*selected)(const SceneKey&)) {
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a_64(protocol_text(scene, selected))));
-  return hex;
+  return io::hex64(io::fnv1a64(protocol_text(scene, selected)));
 }
 
 void require_same_keys(const RunScene& run, const RunScene& first, bool (*compared)(const SceneKey&),

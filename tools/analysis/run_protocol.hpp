@@ -31,7 +31,6 @@ bool cells_key(const SceneKey& key);
 // hashes on every platform (the text holds shortest round-trip numbers, no locale); a budjam that adds
 // a key to the selection changes every hash, so tables of two such versions are not pooled.
 std::string protocol_text(const Scene& scene, bool (*selected)(const SceneKey&));
-std::uint64_t fnv1a_64(std::string_view bytes);
 std::string protocol_hash(const Scene& scene, bool (*selected)(const SceneKey&));
 
 // A run's scene and the file it was read from (for messages).

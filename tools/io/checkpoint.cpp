@@ -29,12 +29,6 @@ std::string num(double v) {
   return buf;
 }
 
-std::string hex64(std::uint64_t v) {
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-
 constexpr std::string_view kCheckpointMagic = "budjam-checkpoint";
 constexpr std::string_view kChecksum = "checksum ";
 
@@ -206,15 +200,6 @@ void write_relaxation(std::ostream& os, const std::optional<RelaxationState>& re
 }
 
 }  // namespace
-
-std::uint64_t fnv1a64(std::string_view bytes) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (const char c : bytes) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 bool CheckpointSchedule::due(long step, long evaluations, bool signal, bool complete) {
   if (step == 0) return false;

@@ -66,9 +66,6 @@ struct CheckpointLines {
 // uninterrupted run would have had.
 std::string checkpoint_blas();
 
-// FNV-1a, 64 bit: the content checksum of a checkpoint and the hash of its scene.
-std::uint64_t fnv1a64(std::string_view bytes);
-
 // The hash a checkpoint records of the effective scene: FNV-1a of scene_to_toml, every key
 // included but minimiser.threads (a run resumed on another number of threads continues
 // identically).

@@ -114,4 +114,23 @@ inline std::string one_line(std::string_view s) {
          escape_control(s.substr(tail));
 }
 
+// FNV-1a, 64 bit: the checksum of a checkpoint and the hashes of scenes and protocols. Stable across
+// platforms: the hashes are written into files (checkpoints, runs.csv) and compared there.
+inline std::uint64_t fnv1a64(std::string_view bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// A 64-bit hash as files write it: 16 lowercase hex digits.
+inline std::string hex64(std::uint64_t v) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string s(16, '0');
+  for (int k = 15; k >= 0; --k, v >>= 4) s[static_cast<std::size_t>(k)] = kDigits[v & 0xf];
+  return s;
+}
+
 }  // namespace budjam::io
