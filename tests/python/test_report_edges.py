@@ -376,8 +376,15 @@ def test_the_committed_survival_tables_are_what_the_estimators_write_from_their_
     r = subprocess.run([budjam_exe, "analyse", "--tables", tables, "--out", str(tmp_path / "re")],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+    import csv
     with open(os.path.join(tables, "survival.csv")) as f:
-        assert (tmp_path / "re" / "survival.csv").read_text() == f.read()
+        committed = list(csv.DictReader(f))
+    with open(tmp_path / "re" / "survival.csv") as f:
+        rebuilt = list(csv.DictReader(f))
+    # the committed columns, value for value (a table may predate a column analyse adds)
+    columns = list(committed[0])
+    differ = [k for k, (a, b) in enumerate(zip(committed, rebuilt)) if any(a[c] != b[c] for c in columns)]
+    assert len(committed) == len(rebuilt) and not differ, f"{len(differ)} rows differ, the first: line {differ[:1]}"
 
 
 def test_no_committed_survival_table_has_a_band_where_fewer_than_five_buds_are_at_risk():
