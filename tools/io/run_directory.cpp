@@ -159,6 +159,15 @@ bool is_run_directory(const fs::path& dir) {
   return fs::is_regular_file(fs::symlink_status(dir / run_files::marker, ec));
 }
 
+bool is_run_trajectory_conversion(const fs::path& input, const fs::path& output) {
+  if (input.filename() != run_files::trajectory || output.filename() != run_files::trajectory_gsd) return false;
+  const fs::path dir = input.parent_path().empty() ? fs::path(".") : input.parent_path();
+  const fs::path out_dir = output.parent_path().empty() ? fs::path(".") : output.parent_path();
+  std::error_code ec;
+  if (!is_run_directory(dir) || !fs::is_regular_file(fs::symlink_status(input, ec))) return false;
+  return fs::equivalent(dir, out_dir, ec);
+}
+
 void check_run_entries(const Directory& dir, const OwnedEntries& owned) {
   const auto top = patterns_in(owned, "");
   for (const std::string& name : dir.names())

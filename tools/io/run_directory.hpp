@@ -79,8 +79,9 @@ class RunDirectory {
   // the earlier run is a link or of the wrong kind. With `overwrite`, the recorded temporaries
   // and the `owned` entries of the earlier run are removed.
   static RunDirectory create(const std::filesystem::path& dir, bool overwrite, const OwnedEntries& owned);
-  // Claims the run in `dir` to continue it: marker, lock and entries checked as above. Changes
-  // nothing but the lock file; remove_recorded_temporaries() once the resume has been validated.
+  // Claims the run in `dir` to continue it (or to add its trajectory.gsd): marker, lock and entries
+  // checked as above. Changes nothing but the lock file; remove_recorded_temporaries() once the
+  // resume has been validated.
   static RunDirectory resume(const std::filesystem::path& dir, const OwnedEntries& owned);
 
   RunDirectory(RunDirectory&& other) noexcept;
@@ -108,6 +109,12 @@ class RunDirectory {
 
 // True if `dir` holds the marker of a budjam run.
 bool is_run_directory(const std::filesystem::path& dir);
+
+// True if `input` is a run's own trajectory.xyz (the entry of a run directory's top level, not a
+// link) and `output` that run's trajectory.gsd: the one output of another command at a run's top
+// level, an entry the run declares (`budjam export RUN/trajectory.xyz --format gsd`). The caller
+// claims the run (RunDirectory::resume) and writes relative to its descriptor.
+bool is_run_trajectory_conversion(const std::filesystem::path& input, const std::filesystem::path& output);
 
 // InputError naming the first entry of `dir` that budjam uses (the lock, the marker, the list of
 // temporaries, the `owned` entries and their directories) and that is a symbolic link or not of
