@@ -26,6 +26,26 @@ bool is_run_packing_stem(std::string_view stem) {
   return stem == jammed || stem == phi2 || matches_pattern("target_#", stem);
 }
 
+const std::vector<std::string_view>& packing_suffixes() {
+  static const std::vector<std::string_view> suffixes{".pack",          ".moduli.json",  ".dos.json", ".dos.csv",
+                                                      ".rigidity.json", ".rigidity.csv", ".svg",      ".png",
+                                                      ".pdf",           ".xyz",          ".gsd",      ".vtk"};
+  return suffixes;
+}
+
+const std::vector<std::string_view>& spectrum_suffixes() {
+  static const std::vector<std::string_view> suffixes{".dos.json", ".dos.csv"};
+  return suffixes;
+}
+
+OwnedEntries entries_with_suffixes(std::string_view sub, std::string_view stem,
+                                   const std::vector<std::string_view>& suffixes) {
+  OwnedEntries out;
+  for (const std::string_view suffix : suffixes)
+    out.push_back(std::string(sub) + "/" + std::string(stem) + std::string(suffix));
+  return out;
+}
+
 }  // namespace run_files
 
 bool matches_pattern(std::string_view pattern, std::string_view name) {

@@ -66,10 +66,30 @@ bool is_run_packing_stem(std::string_view stem);
 bool matches_pattern(std::string_view pattern, std::string_view name);
 
 // The entries of a run directory its writers declare, as patterns of relative paths
-// ("steps.csv", "packings/target_#.*", "spectra/step_#.dos.*"). A top-level file pattern also
+// ("steps.csv", "packings/target_#.pack", "spectra/step_#.dos.json"). A top-level file pattern also
 // owns the file's `.partial` log; a pattern with a directory owns entries of that directory
 // (one level), and the directory itself once empty.
 using OwnedEntries = std::vector<std::string>;
+
+namespace run_files {
+// The files a run owns beside a packing packings/<stem>.pack (stem jammed, phi2 or target_<k>):
+// the packing and exactly what budjam's commands and Makefile.analysis write beside it, the one
+// list of them (docs/files.md, "Run directories"):
+//   .pack                                   grow
+//   .moduli.json                            moduli --out STEM.moduli (Makefile.analysis; analyse reads it)
+//   .dos.json .dos.csv                      dos --out STEM.dos, the dos observer (Makefile.analysis)
+//   .rigidity.json .rigidity.csv            rigidity --out STEM.rigidity
+//   .svg .png .pdf                          render -o STEM.svg (--png, or -o STEM.png/.pdf)
+//   .xyz .gsd .vtk                          export STEM.pack (its default BASE is STEM)
+// Anything else there (another suffix, a backup such as STEM.pack~ or STEM.pack.bak, a
+// directory) is not the run's: --overwrite leaves it, and it does not make a claim refuse.
+const std::vector<std::string_view>& packing_suffixes();
+// The files a run owns in spectra/ beside a spectrum spectra/step_<n>: .dos.json and .dos.csv.
+const std::vector<std::string_view>& spectrum_suffixes();
+// "<sub>/<stem><suffix>" for each suffix (stem may be a pattern: "target_#", "step_#").
+OwnedEntries entries_with_suffixes(std::string_view sub, std::string_view stem,
+                                   const std::vector<std::string_view>& suffixes);
+}  // namespace run_files
 
 class RunDirectory {
  public:
