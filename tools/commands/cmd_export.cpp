@@ -10,6 +10,7 @@
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
+#include "io/result_files.hpp"
 #include "io/run_directory.hpp"
 #include "io/text.hpp"
 #include "observers/run_outputs.hpp"
@@ -81,9 +82,7 @@ void run(const Options& o) {
   if (io::is_run_trajectory_conversion(o.packing, out)) return export_run_trajectory(o, out);
   if (!o.out.empty()) io::check_output_name("--out", o.out);
   io::check_output_name("--out", out);
-  std::error_code ec;
-  if (std::filesystem::equivalent(o.packing, out, ec))  // `export p.xyz --format xyz` with no --out
-    throw InputError("--out: " + io::escape_control(out.string()) + " is the input file (give another --out)");
+  io::check_not_an_input("--out", out, {o.packing});  // `export p.xyz --format xyz` with no --out
   if (is_trajectory(o.packing)) return export_trajectory(o, out);
   const io::PackingFile file = io::read_packing(o.packing);
   io::write_particles(out, io::particle_frame(file, which), o.format);
