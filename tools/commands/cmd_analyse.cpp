@@ -4,6 +4,7 @@
 #include "analysis/ensemble_analysis.hpp"
 #include "budjam/errors.hpp"
 #include "commands/command.hpp"
+#include "io/text.hpp"
 
 #include <iostream>
 #include <memory>
@@ -27,7 +28,7 @@ void run(Options o) {
   }
   if (o.ensemble.bootstrap.resamples < 2) throw InputError("--resamples: must be at least 2");
   const std::string done = tools::analyse_ensemble(o.ensemble);  // first: an error line stands alone
-  std::cerr << "analyse: " << done << "\n";
+  std::cerr << "analyse: " << io::one_line(done) << "\n";
 }
 
 const bool registered = budjam::cli::register_command(
