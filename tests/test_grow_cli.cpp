@@ -972,3 +972,32 @@ TEST_CASE("--overwrite after a run with every observer on leaves no file of the 
   for (const auto& [name, content] : expected) names_expected.push_back(name);
   CHECK(names_after == names_expected);
 }
+
+TEST_CASE("--overwrite keeps a user's files and directories in packings/ and removes the run's derived files",
+          "[grow_cli]") {
+  const fs::path scene = small_scene("overwrite_packings");
+  const fs::path dir = work_dir() / "overwrite_packings";
+  fs::remove_all(dir);
+  REQUIRE(grow(q(scene) + " --quiet --out " + q(dir)).code == 0);
+  REQUIRE(fs::exists(dir / "packings/target_1.pack"));
+  // The run's own: a derived file budjam writes beside a packing.
+  REQUIRE(budjam::testing::run_budjam("moduli " + q(dir / "packings/target_1.pack") + " --quiet --out " +
+                                      q(dir / "packings/target_1.moduli"))
+              .code == 0);
+  REQUIRE(fs::exists(dir / "packings/target_1.moduli.json"));
+  // The user's: a backup, another suffix, an editor's backup, a directory named like a packing.
+  fs::copy_file(dir / "packings/jammed.pack", dir / "packings/jammed.pack.bak");
+  std::ofstream(dir / "packings/target_7.mine") << "n\n";
+  std::ofstream(dir / "packings/target_0.pack~") << "n\n";
+  fs::create_directories(dir / "packings/phi2.d");
+  std::ofstream(dir / "packings/phi2.d/notes") << "mine\n";
+  const std::string backup = slurp(dir / "packings/jammed.pack.bak");
+  const Result r = grow(q(scene) + " --quiet --overwrite --out " + q(dir));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(slurp(dir / "packings/jammed.pack.bak") == backup);
+  CHECK(slurp(dir / "packings/target_7.mine") == "n\n");
+  CHECK(slurp(dir / "packings/target_0.pack~") == "n\n");
+  CHECK(slurp(dir / "packings/phi2.d/notes") == "mine\n");
+  CHECK_FALSE(fs::exists(dir / "packings/target_1.moduli.json"));
+}

@@ -33,10 +33,17 @@ void put(const fs::path& p, const std::string& text) {
 
 // What a run of every observer may write (the growth command derives it from the observers'
 // declarations: tools::run_owned_entries).
-const OwnedEntries kOwned{"scene.toml",        "checkpoint.txt",  "summary.json",        "timing.json",
-                          "steps.csv",         "divisions.csv",   "bud_events.csv",      "moduli.csv",
-                          "dos.csv",           "trials.csv",      "rigidity_events.csv", "trajectory.xyz",
-                          "packings/jammed.*", "packings/phi2.*", "packings/target_#.*", "spectra/step_#.dos.*"};
+const OwnedEntries kOwned = [] {
+  OwnedEntries owned{"scene.toml", "checkpoint.txt", "summary.json",        "timing.json",
+                     "steps.csv",  "divisions.csv",  "bud_events.csv",      "moduli.csv",
+                     "dos.csv",    "trials.csv",     "rigidity_events.csv", "trajectory.xyz"};
+  for (const char* stem : {"jammed", "phi2", "target_#"})
+    for (auto& e : run_files::entries_with_suffixes("packings", stem, run_files::packing_suffixes()))
+      owned.push_back(e);
+  for (auto& e : run_files::entries_with_suffixes("spectra", "step_#", run_files::spectrum_suffixes()))
+    owned.push_back(e);
+  return owned;
+}();
 
 }  // namespace
 
@@ -86,9 +93,13 @@ TEST_CASE("an existing run is replaced only with overwrite, and only the declare
   const std::vector<std::string> mine{".summary.json.tmp-XyZ123",
                                       "notes.txt",
                                       "packings/.target_1.pack.tmp-abc123",
+                                      "packings/jammed.pack.bak",
                                       "packings/mine.pack",
+                                      "packings/target_0.pack~",
+                                      "packings/target_7.mine",
                                       "packings/target_x.pack",
                                       "spectra/plot.py",
+                                      "spectra/step_40.dos.json.orig",
                                       "steps.csv.bak"};
   for (const auto& f : mine) put(d / f, "mine");
 
@@ -106,6 +117,35 @@ TEST_CASE("an existing run is replaced only with overwrite, and only the declare
   CHECK_FALSE(fs::exists(d / "summary.json"));
   CHECK(is_run_directory(d));
   CHECK(slurp(d / "notes.txt") == "mine");
+}
+
+TEST_CASE("in packings/ only the run's stems with budjam's own suffixes are the run's", "[run_directory]") {
+  const fs::path d = fresh("packings_owned");
+  { RunDirectory::create(d, false, kOwned); }
+  const std::vector<std::string> owned{"packings/jammed.pack",    "packings/target_1.moduli.json",
+                                       "packings/phi2.dos.csv",   "packings/target_0.rigidity.json",
+                                       "packings/jammed.svg",     "packings/target_3.gsd",
+                                       "spectra/step_40.dos.json"};
+  const std::vector<std::string> mine{"packings/jammed.pack.bak", "packings/target_0.pack~", "packings/target_7.mine",
+                                      "packings/phi2.d/notes", "packings/jammed.moduli.json.old"};
+  for (const auto& f : owned) put(d / f, "old");
+  for (const auto& f : mine) put(d / f, "mine");
+  // A user's directory named like a stem with another suffix does not make the claim refuse.
+  const RunDirectory again = RunDirectory::create(d, true, kOwned);
+  for (const auto& f : mine) CHECK(slurp(d / f) == "mine");
+  for (const auto& f : owned) {
+    INFO(f);
+    CHECK_FALSE(fs::exists(d / f));
+  }
+}
+
+TEST_CASE("a directory at a name the run owns in packings/ is refused before anything changes", "[run_directory]") {
+  const fs::path d = fresh("packings_wrong_kind");
+  { RunDirectory::create(d, false, kOwned); }
+  put(d / "summary.json", "old");
+  fs::create_directories(d / "packings/target_1.moduli.json");
+  CHECK_THROWS_WITH(RunDirectory::create(d, true, kOwned), Contains("target_1.moduli.json") && Contains("is not"));
+  CHECK(slurp(d / "summary.json") == "old");
 }
 
 TEST_CASE("one writer at a time: a second claim names the holder", "[run_directory]") {

@@ -431,6 +431,7 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
            "Lobe centres and radii (D0): dict of arrays x, y, radius of length 2N; lobe 2i is the mother "
            "of cell i, 2i+1 its bud.")
       .def("write", [](const io::PackingFile& f, const std::filesystem::path& path) {
+             io::check_output_file("", path);  // the command line's output-name rules
              io::write_packing(path, f.packing, f.meta);
            },
            "path"_a, "Write the packing file (.pack), atomically; reads back bit-identically.")
@@ -516,6 +517,7 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
          const std::string& network) {
         if (!io::find_export_format(format))
           throw InputError("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
+        io::check_output_file("", path);  // the command line's output-name rules
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",

@@ -96,3 +96,20 @@ def test_no_other_command_writes_into_the_top_level_of_a_run_directory(run_budja
     assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
     # beside the packings, where the moduli and spectra of a run go, is fine
     run_budjam("moduli", pack, "--out", run / "packings" / "jammed.moduli", "--quiet")
+
+
+def test_a_path_with_control_bytes_is_printed_escaped_on_every_line(run_budjam, run_dir, tmp_path):
+    """A newline in --out never splits a progress line, a step-limit notice, or the closing line of analyse
+    and accuracy: it is printed as \\x0a, as every other message prints it."""
+    runs = {
+        "grow": ["grow", DEMO, "--out", tmp_path / "g\nh"],
+        "step_limit": ["grow", DEMO, "--out", tmp_path / "s\nt", "--set", "growth.max_steps=40"],
+        "analyse": ["analyse", run_dir, "--out", tmp_path / "a\nb"],
+        "accuracy": ["accuracy", "--packings", f"x={run_dir}", "--out", tmp_path / "acc\nx"],
+    }
+    for what, args in runs.items():
+        r = run_budjam(*args)
+        assert r.stderr, what
+        for line in r.stderr.splitlines():
+            assert line.startswith(("grow: ", "budjam: ", "analyse: ", "accuracy: ")), (what, line)
+        assert "\\x0a" in r.stderr, (what, r.stderr)

@@ -125,3 +125,25 @@ def test_reading_a_fifo_or_a_device_raises_input_error_at_once(tmp_path, kind):
         path = "/dev/zero"
     with pytest.raises(budjam.InputError, match="not a regular file"):
         budjam.read_packing(path)
+
+
+@pytest.mark.parametrize("name", ["summary.json", "scene.toml", "notes.xyz", "packings/target_0.pack",
+                                  "packings/jammed.pack", "packings/../steps.csv"])
+@pytest.mark.parametrize("write", [lambda p, path: p.write(path),
+                                   lambda p, path: budjam.export(p, path, "xyz")], ids=["write", "xyz"])
+def test_the_python_writers_refuse_a_runs_own_files_as_the_command_line_does(tmp_path, write, name):
+    """Packing.write and budjam.export apply the command line's output-name rules (one check): nothing at a
+    run directory's top level, and no run packing, which only grow writes; the run is byte-identical after."""
+    run = make_run(tmp_path / "run")
+    (run / ".budjam-run").write_text("budjam-run 1\n")
+    (run / "scene.toml").write_text("[run]\n")
+    (run / "packings" / "target_0.pack").write_bytes(PACKING.read_bytes())
+    (run / "packings" / "jammed.pack").write_bytes(PACKING.read_bytes())
+    before = {p: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    with pytest.raises(budjam.InputError, match="budjam run") as e:
+        write(budjam.read_packing(PACKING), str(run / name))
+    assert "\n" not in str(e.value)
+    assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+    # Beside the packings, under a name of its own, the same writers write.
+    write(budjam.read_packing(PACKING), str(run / "packings" / "mine.out"))
+    assert (run / "packings" / "mine.out").is_file()

@@ -139,3 +139,30 @@ def test_analyse_refuses_a_directory_where_a_table_goes_before_writing_any(run_b
     r = run_budjam("analyse", run_dir, "--out", out, "--resamples", "10", check=False)
     assert_refused(r, "targets.csv", "is a directory")
     assert snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("command,output", [("render", ["-o", "p.svg"]), ("render", ["-o", "q.svg", "--png"]),
+                                           ("moduli", ["--out", "p"]), ("dos", ["--out", "p"]),
+                                           ("rigidity", ["--out", "p"]), ("export", ["--format", "xyz", "--out", "p"]),
+                                           ("moduli", ["--out", "link"])])
+def test_an_output_that_is_the_commands_input_file_is_refused_and_the_input_kept(run_budjam, tmp_path, command,
+                                                                                 output):
+    """The input under an output's name (p.svg, p.json, p.csv, q.png, p.xyz), or reached through a link or a
+    hard link: writing the output would replace the input, so the command refuses before any work."""
+    data = PACKING.read_bytes()
+    ext = {"render": ".png" if "--png" in output else ".svg", "export": ".xyz"}.get(command, ".json")
+    if command in ("dos", "rigidity"):
+        ext = ".csv"
+    name = output[output.index("--out") + 1 if "--out" in output else output.index("-o") + 1]
+    stem = name.rsplit(".", 1)[0] if "." in name else name
+    input_path = tmp_path / ("p" + ext)
+    input_path.write_bytes(data)
+    if stem == "link":
+        os.link(input_path, tmp_path / "link.json")
+    if stem == "q":
+        os.symlink(input_path, tmp_path / "q.png")
+    before = snapshot(tmp_path)
+    r = run_budjam(command, input_path, *output, check=False, cwd=tmp_path)
+    assert_refused(r, "is the input file")
+    assert snapshot(tmp_path) == before
+    assert input_path.read_bytes() == data

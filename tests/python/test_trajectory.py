@@ -71,3 +71,31 @@ def test_the_trajectory_exports_to_one_gsd_file_with_every_frame(reference, run_
     """N changes from frame to frame (divisions); gsd reads every frame as ASE reads the XYZ."""
     run_budjam("export", reference / "trajectory.xyz", "--format", "gsd", "--out", tmp_path / "traj")
     assert assert_gsd_frames_are_the_xyz_frames(tmp_path / "traj.gsd", reference / "trajectory.xyz") > 3
+
+
+def test_a_runs_trajectory_exports_by_default_to_the_runs_own_trajectory_gsd(reference, run_budjam, tmp_path):
+    """`budjam export RUN/trajectory.xyz --format gsd` without --out writes RUN/trajectory.gsd (an entry
+    the run declares), also run from inside the run; any other output at the run's top level is still
+    refused, and a link at trajectory.gsd is refused without writing through it."""
+    import os
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(reference, run, symlinks=True)
+    (run / "trajectory.gsd").unlink(missing_ok=True)
+    before = sorted(p.name for p in run.iterdir())
+    run_budjam("export", run / "trajectory.xyz", "--format", "gsd")
+    assert assert_gsd_frames_are_the_xyz_frames(run / "trajectory.gsd", run / "trajectory.xyz") > 3
+    assert sorted(p.name for p in run.iterdir()) == sorted(before + ["trajectory.gsd"])  # no temporary left
+    (run / "trajectory.gsd").unlink()
+    run_budjam("export", "trajectory.xyz", "--format", "gsd", cwd=run)
+    assert (run / "trajectory.gsd").is_file()
+    for args in (["--format", "gsd", "--out", run / "other"], ["--format", "xyz", "--out", run / "trajectory"]):
+        r = run_budjam("export", run / "trajectory.xyz", *args, check=False)
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+        assert "budjam run directory" in r.stderr
+    (run / "trajectory.gsd").unlink()
+    os.symlink(tmp_path / "elsewhere.gsd", run / "trajectory.gsd")
+    r = run_budjam("export", run / "trajectory.xyz", "--format", "gsd", check=False)
+    assert r.returncode == 2 and "symbolic link" in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
+    assert not (tmp_path / "elsewhere.gsd").exists() and (run / "trajectory.gsd").is_symlink()

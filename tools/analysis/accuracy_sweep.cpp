@@ -275,7 +275,7 @@ std::vector<SweepRow> post_rows(const SweepOptions& o) {
     if (name.find_first_of(",\"\n") != std::string::npos)
       throw InputError("--packings: NAME must not contain , \" or a newline");
     const auto packs = tools::find_packings(spec.substr(eq + 1));
-    std::cerr << "accuracy: " << name << ": " << packs.size() << " packings\n";
+    std::cerr << "accuracy: " << io::escape_control(name) << ": " << packs.size() << " packings\n";
     for (const tools::PostRow& p : tools::measure_postprocessing(name, packs, po)) {
       SweepRow r;
       r.family = p.family;

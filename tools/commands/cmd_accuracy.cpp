@@ -5,6 +5,7 @@
 // DIR/accuracy.md.
 #include "analysis/accuracy_sweep.hpp"
 #include "commands/command.hpp"
+#include "io/text.hpp"
 
 #include <iostream>
 #include <memory>
@@ -29,7 +30,7 @@ void run(const Options& o) {
   const tools::SweepVerdict verdict = tools::judge_fronts(rows, o.sweep);
   const std::filesystem::path out(o.out);
   tools::write_accuracy_tables(out, o.sweep, rows, verdict);
-  std::cerr << "accuracy: " << rows.size() << " settings -> " << (out / "accuracy.csv").string()
+  std::cerr << "accuracy: " << rows.size() << " settings -> " << io::escape_control((out / "accuracy.csv").string())
             << (verdict.all_on_front ? "; every default is on its front\n"
                                      : "; a default is NOT on its front (accuracy.md)\n");
 }

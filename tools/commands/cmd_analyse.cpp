@@ -4,6 +4,7 @@
 #include "analysis/ensemble_analysis.hpp"
 #include "budjam/errors.hpp"
 #include "commands/command.hpp"
+#include "io/text.hpp"
 
 #include <iostream>
 #include <memory>
@@ -28,8 +29,8 @@ void run(Options o) {
   if (o.ensemble.bootstrap.resamples < 2) throw InputError("--resamples: must be at least 2");
   // after the work: an error line stands alone
   const tools::EnsembleAccount done = tools::analyse_ensemble(o.ensemble);
-  for (const auto& line : done.unchecked) cli::notice("analyse: " + line);
-  std::cerr << "analyse: " << done.used << "\n";
+  for (const auto& line : done.unchecked) cli::notice("analyse: " + io::one_line(line));
+  std::cerr << "analyse: " << io::one_line(done.used) << "\n";
 }
 
 const bool registered = budjam::cli::register_command(

@@ -34,7 +34,7 @@ struct Options {
 };
 
 void run(const Options& o) {
-  io::check_output_request(o.output, true);
+  io::check_output_request(o.output, true, {o.packing});
   tools::DosRequest req;
   req.spectrum.method = parse_spectrum_method(o.method, "--method");
   if (o.modes < 0) throw InputError("--modes: must be ≥ 0 (0 = as many as ω* needs), got " + std::to_string(o.modes));

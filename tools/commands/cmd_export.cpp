@@ -10,7 +10,10 @@
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
+#include "io/result_files.hpp"
+#include "io/run_directory.hpp"
 #include "io/text.hpp"
+#include "observers/run_outputs.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -55,16 +58,31 @@ bool is_trajectory(const std::string& path) {
   return !io::looks_like_packing(head);
 }
 
+// RUN/trajectory.xyz to RUN/trajectory.gsd, an entry the run declares: the run is claimed as a
+// writer claims it (its lock, its entries checked: a link or another kind at trajectory.gsd is
+// refused), and the file is written relative to the run directory's descriptor, atomically, its
+// temporaries recorded in the run's list.
+void export_run_trajectory(const Options& o, const std::filesystem::path& out) {
+  if (o.format != "gsd" || o.network_given) return export_trajectory(o, out);  // refused there
+  std::filesystem::path dir = std::filesystem::path(o.packing).parent_path();
+  if (dir.empty()) dir = ".";
+  const io::RunDirectory run = io::RunDirectory::resume(dir, tools::run_owned_entries());
+  const auto input = run.root().entry(io::run_files::trajectory);
+  if (!input || !S_ISREG(input->st_mode))
+    throw InputError(io::escape_control(o.packing) + ": not a regular file of the run");
+  io::write_gsd(run.root(), io::run_files::trajectory_gsd, io::read_extxyz(run / io::run_files::trajectory));
+}
+
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
-  if (!o.out.empty()) io::check_output_name("--out", o.out);
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
+  // The documented default: a run's trajectory.xyz converts to the run's own trajectory.gsd.
+  if (io::is_run_trajectory_conversion(o.packing, out)) return export_run_trajectory(o, out);
+  if (!o.out.empty()) io::check_output_name("--out", o.out);
   io::check_output_name("--out", out);
-  std::error_code ec;
-  if (std::filesystem::equivalent(o.packing, out, ec))  // `export p.xyz --format xyz` with no --out
-    throw InputError("--out: " + io::escape_control(out.string()) + " is the input file (give another --out)");
+  io::check_not_an_input("--out", out, {o.packing});  // `export p.xyz --format xyz` with no --out
   if (is_trajectory(o.packing)) return export_trajectory(o, out);
   const io::PackingFile file = io::read_packing(o.packing);
   io::write_particles(out, io::particle_frame(file, which), o.format);

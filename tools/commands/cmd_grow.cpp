@@ -186,7 +186,7 @@ void run(const Options& o) {
   tools::write_summary(root, driver, timing);
   root.remove(run_files::checkpoint);  // a finished (or failed) run is not resumed
   if (status == RunStatus::step_limit) {
-    std::cerr << step_limit_notice(scene, driver.result(), dir / run_files::summary) << std::endl;
+    std::cerr << io::one_line(step_limit_notice(scene, driver.result(), dir / run_files::summary)) << std::endl;
     return;
   }
   if (status != RunStatus::finished)

@@ -73,7 +73,7 @@ ModuliOptions moduli_options(const Options& o) {
 constexpr double kMaxStrainStep = 1e-3;
 
 void run(const Options& o) {
-  io::check_output_request(o.output, false);
+  io::check_output_request(o.output, false, {o.packing});
   const ModuliOptions options = moduli_options(o);
   if (o.strain && !(*o.strain > 0 && *o.strain <= kMaxStrainStep))
     throw InputError("--strain: must lie in (0, " + io::format_double(kMaxStrainStep) +

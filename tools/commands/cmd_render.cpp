@@ -11,6 +11,7 @@
 #include "budjam/render.hpp"
 #include "io/atomic_file.hpp"
 #include "io/packing_file.hpp"
+#include "io/result_files.hpp"
 
 #include "io/run_program.hpp"
 #include "io/text.hpp"
@@ -63,6 +64,8 @@ void run(const Options& o) {
   if (ext != ".svg" && ext != ".png" && ext != ".pdf")
     throw InputError("-o: the output must end in .svg, .png or .pdf (got " + io::escape_control(o.out) + ")");
   if (o.png) io::check_output_name("--png", fs::path(out).replace_extension(".png"));
+  io::check_not_an_input("-o", out, {o.packing});
+  if (o.png) io::check_not_an_input("--png", fs::path(out).replace_extension(".png"), {o.packing});
   const io::PackingFile f = io::read_packing(o.packing);
   const tools::PackingContacts pc = tools::analyse_contacts(f.packing);
 

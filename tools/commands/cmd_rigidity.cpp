@@ -31,7 +31,7 @@ struct Options {
 };
 
 void run(const Options& o) {
-  io::check_output_request(o.output, true);
+  io::check_output_request(o.output, true, {o.packing});
   const RigidityNetwork which = parse_rigidity_network(o.network);
   const io::PackingFile file = io::read_packing(o.packing);
   const Packing& p = file.packing;

@@ -419,7 +419,24 @@ void refuse_run_directory(std::string_view option, const fs::path& shown, const 
                      "elsewhere, or beside its packings in packings/)");
 }
 
+// A run's packings are its data, written only by grow: no other output replaces one.
+void refuse_run_packing(std::string_view option, const fs::path& path) {
+  const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (path.extension() != ".pack" || !run_files::is_run_packing_stem(path.stem().string())) return;
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(dir, ec);
+  if (ec || canonical.filename() != run_files::packings || !is_run_directory(canonical.parent_path())) return;
+  throw InputError(output_at(option, path) + "is a packing of the budjam run " +
+                   escape_control(canonical.parent_path().string()) + ", which only budjam grow writes");
+}
+
 }  // namespace
+
+void check_output_file(std::string_view option, const fs::path& path) {
+  check_output_path(option, path);
+  refuse_run_directory(option, path, path.parent_path());
+  refuse_run_packing(option, path);
+}
 
 void check_output_path(std::string_view option, const fs::path& path) {
   check_output_spelling(option, path);
@@ -428,8 +445,7 @@ void check_output_path(std::string_view option, const fs::path& path) {
 }
 
 void check_output_name(std::string_view option, const fs::path& path) {
-  check_output_path(option, path);
-  refuse_run_directory(option, path, path.parent_path());
+  check_output_file(option, path);
   if (path.filename().string().front() == '=')
     throw InputError(output_at(option, path) + "a file name may not start with '='");
 }

@@ -151,7 +151,12 @@ inline constexpr std::size_t kMaxOutputName = 255 - 12;
 // budjam may write: a name is given (not empty, no trailing '/', not "." or ".."), at most
 // kMaxOutputName bytes, and it is not an existing directory.
 void check_output_path(std::string_view option, const std::filesystem::path& path);
-// check_output_path, and the name does not start with '=' (which converters' option parsers take
+// check_output_path, and `path` is none of a budjam run's own files: not at the top level of a run
+// directory (the run's files live there) and not a run's packing packings/<stem>.pack, which only
+// grow writes. The output-name rules of every writer of a named file (the commands' outputs and
+// the Python module's Packing.write and export): InputError.
+void check_output_file(std::string_view option, const std::filesystem::path& path);
+// check_output_file, and the name does not start with '=' (which converters' option parsers take
 // as part of an option). This and the two below refuse the top level of a budjam run directory (its
 // run's own files live there): InputError.
 void check_output_name(std::string_view option, const std::filesystem::path& path);

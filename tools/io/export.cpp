@@ -405,10 +405,14 @@ except Exception as e:
 
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames) {
   check_output_path("", path);
+  write_gsd(Directory::open(path.parent_path(), true), path.filename().string(), frames);
+}
+
+void write_gsd(const Directory& dir, std::string_view name_view, const std::vector<ParticleFrame>& frames) {
+  const std::filesystem::path path = dir / name_view;
+  const std::string name(name_view);
   Json all = Json::array();
   for (const auto& f : frames) all.push_back(particle_frame_json(f));
-  const Directory dir = Directory::open(path.parent_path(), true);
-  const std::string name = path.filename().string();
   // Named for the output, so that a failure to write it names the file the user asked for; never
   // committed, it is removed on every way out.
   TempFile input(dir, name);

@@ -97,6 +97,9 @@ std::string format_vtk(const ParticleFrame& frame);
 // interpreter found at build time, or $BUDJAM_PYTHON. Atomic: `path` is complete or untouched.
 // IoError if the interpreter or its gsd package is missing or the write fails.
 void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFrame>& frames);
+// The same as the entry `name` of `dir`, relative to its descriptor (a link there is replaced,
+// never written through); its temporaries are recorded as the directory records them.
+void write_gsd(const Directory& dir, std::string_view name, const std::vector<ParticleFrame>& frames);
 
 // An export format: its name is the value of `--format` and the file's extension. The one list of
 // formats: the command line, its help and completion, and the docs table follow it.

@@ -5,6 +5,8 @@
 
 #include "budjam/errors.hpp"
 
+#include <sys/stat.h>
+
 #include <ostream>
 #include <sstream>
 #include <string_view>
@@ -20,7 +22,18 @@ fs::path result_base(const std::string& base) {
   return fs::path(base);
 }
 
-void check_output_request(const OutputRequest& request, bool table) {
+void check_not_an_input(std::string_view option, const fs::path& output, const std::vector<fs::path>& inputs) {
+  struct ::stat out {};
+  if (::stat(output.c_str(), &out) != 0) return;  // not there: replaces nothing
+  for (const fs::path& input : inputs) {
+    struct ::stat in {};
+    if (::stat(input.c_str(), &in) == 0 && in.st_dev == out.st_dev && in.st_ino == out.st_ino)
+      throw InputError(std::string(option) + ": " + escape_control(output.string()) + ": is the input file " +
+                       escape_control(input.string()) + " (writing it would replace the input; give another name)");
+  }
+}
+
+void check_output_request(const OutputRequest& request, bool table, const std::vector<fs::path>& inputs) {
   if (request.base.empty()) return;
   const fs::path base = result_base(request.base);
   const std::string name = fs::path(request.base).filename().string();
@@ -30,6 +43,12 @@ void check_output_request(const OutputRequest& request, bool table) {
     check_output_base("--out", base, {".json", ".csv"});
   else
     check_output_base("--out", base, {".json"});
+  for (const char* ext : {".json", ".csv"}) {
+    if (!table && std::string_view(ext) == ".csv") continue;
+    fs::path file = base;
+    file += ext;
+    check_not_an_input("--out", file, inputs);
+  }
 }
 
 std::vector<fs::path> write_result_files(const fs::path& base, const CommandResult& result) {

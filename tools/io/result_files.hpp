@@ -11,6 +11,7 @@
 #include <functional>
 #include <iosfwd>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace budjam::io {
@@ -33,8 +34,16 @@ std::filesystem::path result_base(const std::string& base);
 
 // InputError naming --out unless BASE (without a trailing .json or .csv) names files budjam may
 // write: BASE.json, and BASE.csv if the result has a `table` (check_output_base). Call it before the
-// work, so that a bad name costs nothing; without --out it checks nothing.
-void check_output_request(const OutputRequest& request, bool table);
+// work, so that a bad name costs nothing; without --out it checks nothing. Neither file may be one of
+// the command's `inputs` (check_not_an_input).
+void check_output_request(const OutputRequest& request, bool table,
+                          const std::vector<std::filesystem::path>& inputs = {});
+
+// InputError "<option>: <output>: is the input file <input> ..." when `output` exists and is the
+// same file as one of the command's `inputs` (same device and inode: also through a link, a hard
+// link or another spelling), which writing it would replace.
+void check_not_an_input(std::string_view option, const std::filesystem::path& output,
+                        const std::vector<std::filesystem::path>& inputs);
 
 // Writes BASE.csv (if the result has a table) and BASE.json as one (write_atomically of both: both
 // contents are complete before the first rename, and a SIGINT, SIGTERM or SIGHUP never falls

@@ -26,6 +26,26 @@ bool is_run_packing_stem(std::string_view stem) {
   return stem == jammed || stem == phi2 || matches_pattern("target_#", stem);
 }
 
+const std::vector<std::string_view>& packing_suffixes() {
+  static const std::vector<std::string_view> suffixes{".pack",          ".moduli.json",  ".dos.json", ".dos.csv",
+                                                      ".rigidity.json", ".rigidity.csv", ".svg",      ".png",
+                                                      ".pdf",           ".xyz",          ".gsd",      ".vtk"};
+  return suffixes;
+}
+
+const std::vector<std::string_view>& spectrum_suffixes() {
+  static const std::vector<std::string_view> suffixes{".dos.json", ".dos.csv"};
+  return suffixes;
+}
+
+OwnedEntries entries_with_suffixes(std::string_view sub, std::string_view stem,
+                                   const std::vector<std::string_view>& suffixes) {
+  OwnedEntries out;
+  for (const std::string_view suffix : suffixes)
+    out.push_back(std::string(sub) + "/" + std::string(stem) + std::string(suffix));
+  return out;
+}
+
 }  // namespace run_files
 
 bool matches_pattern(std::string_view pattern, std::string_view name) {
@@ -157,6 +177,15 @@ bool empty_but_lock(const Directory& dir) {
 bool is_run_directory(const fs::path& dir) {
   std::error_code ec;
   return fs::is_regular_file(fs::symlink_status(dir / run_files::marker, ec));
+}
+
+bool is_run_trajectory_conversion(const fs::path& input, const fs::path& output) {
+  if (input.filename() != run_files::trajectory || output.filename() != run_files::trajectory_gsd) return false;
+  const fs::path dir = input.parent_path().empty() ? fs::path(".") : input.parent_path();
+  const fs::path out_dir = output.parent_path().empty() ? fs::path(".") : output.parent_path();
+  std::error_code ec;
+  if (!is_run_directory(dir) || !fs::is_regular_file(fs::symlink_status(input, ec))) return false;
+  return fs::equivalent(dir, out_dir, ec);
 }
 
 void check_run_entries(const Directory& dir, const OwnedEntries& owned) {

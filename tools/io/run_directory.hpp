@@ -66,10 +66,30 @@ bool is_run_packing_stem(std::string_view stem);
 bool matches_pattern(std::string_view pattern, std::string_view name);
 
 // The entries of a run directory its writers declare, as patterns of relative paths
-// ("steps.csv", "packings/target_#.*", "spectra/step_#.dos.*"). A top-level file pattern also
+// ("steps.csv", "packings/target_#.pack", "spectra/step_#.dos.json"). A top-level file pattern also
 // owns the file's `.partial` log; a pattern with a directory owns entries of that directory
 // (one level), and the directory itself once empty.
 using OwnedEntries = std::vector<std::string>;
+
+namespace run_files {
+// The files a run owns beside a packing packings/<stem>.pack (stem jammed, phi2 or target_<k>):
+// the packing and exactly what budjam's commands and Makefile.analysis write beside it, the one
+// list of them (docs/files.md, "Run directories"):
+//   .pack                                   grow
+//   .moduli.json                            moduli --out STEM.moduli (Makefile.analysis; analyse reads it)
+//   .dos.json .dos.csv                      dos --out STEM.dos, the dos observer (Makefile.analysis)
+//   .rigidity.json .rigidity.csv            rigidity --out STEM.rigidity
+//   .svg .png .pdf                          render -o STEM.svg (--png, or -o STEM.png/.pdf)
+//   .xyz .gsd .vtk                          export STEM.pack (its default BASE is STEM)
+// Anything else there (another suffix, a backup such as STEM.pack~ or STEM.pack.bak, a
+// directory) is not the run's: --overwrite leaves it, and it does not make a claim refuse.
+const std::vector<std::string_view>& packing_suffixes();
+// The files a run owns in spectra/ beside a spectrum spectra/step_<n>: .dos.json and .dos.csv.
+const std::vector<std::string_view>& spectrum_suffixes();
+// "<sub>/<stem><suffix>" for each suffix (stem may be a pattern: "target_#", "step_#").
+OwnedEntries entries_with_suffixes(std::string_view sub, std::string_view stem,
+                                   const std::vector<std::string_view>& suffixes);
+}  // namespace run_files
 
 class RunDirectory {
  public:
@@ -79,8 +99,9 @@ class RunDirectory {
   // the earlier run is a link or of the wrong kind. With `overwrite`, the recorded temporaries
   // and the `owned` entries of the earlier run are removed.
   static RunDirectory create(const std::filesystem::path& dir, bool overwrite, const OwnedEntries& owned);
-  // Claims the run in `dir` to continue it: marker, lock and entries checked as above. Changes
-  // nothing but the lock file; remove_recorded_temporaries() once the resume has been validated.
+  // Claims the run in `dir` to continue it (or to add its trajectory.gsd): marker, lock and entries
+  // checked as above. Changes nothing but the lock file; remove_recorded_temporaries() once the
+  // resume has been validated.
   static RunDirectory resume(const std::filesystem::path& dir, const OwnedEntries& owned);
 
   RunDirectory(RunDirectory&& other) noexcept;
@@ -108,6 +129,12 @@ class RunDirectory {
 
 // True if `dir` holds the marker of a budjam run.
 bool is_run_directory(const std::filesystem::path& dir);
+
+// True if `input` is a run's own trajectory.xyz (the entry of a run directory's top level, not a
+// link) and `output` that run's trajectory.gsd: the one output of another command at a run's top
+// level, an entry the run declares (`budjam export RUN/trajectory.xyz --format gsd`). The caller
+// claims the run (RunDirectory::resume) and writes relative to its descriptor.
+bool is_run_trajectory_conversion(const std::filesystem::path& input, const std::filesystem::path& output);
 
 // InputError naming the first entry of `dir` that budjam uses (the lock, the marker, the list of
 // temporaries, the `owned` entries and their directories) and that is a symbolic link or not of

@@ -79,13 +79,19 @@ class DosObserver : public tools::CsvLogObserver {
   tools::DosRequest request_;
 };
 
-const tools::ObserverRegistration registration{"dos",
-                                               "observe.dos.*",
-                                               {std::string(io::run_files::dos), "spectra/step_#.dos.*"},
-                                               [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
-                                                 if (!c.scene.dos.any()) return nullptr;
-                                                 return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
-                                               }};
+const tools::ObserverRegistration registration{
+    "dos", "observe.dos.*",
+    [] {
+      io::OwnedEntries files{std::string(io::run_files::dos)};
+      for (auto& e :
+           io::run_files::entries_with_suffixes(io::run_files::spectra, "step_#", io::run_files::spectrum_suffixes()))
+        files.push_back(std::move(e));
+      return files;
+    }(),
+    [](const tools::ObserverContext& c) -> std::unique_ptr<Observer> {
+      if (!c.scene.dos.any()) return nullptr;
+      return std::make_unique<DosObserver>(c.scene, c.run_dir, c.resuming);
+    }};
 
 }  // namespace
 }  // namespace budjam::tools::dos_observer

@@ -63,7 +63,7 @@ class Progress : public Observer {
     char buf[160];
     std::snprintf(buf, sizeof buf, "step %ld  phi %.8f  %s  N %zu  P %.3e  %s  %.1f steps/s  -> ", s.step, s.phi,
                   heading(s).c_str(), s.packing->size(), s.P, to_string(s.phase), rate);
-    std::cerr << "grow: " << what << buf << dir_.string() << '\n';
+    std::cerr << "grow: " << what << buf << io::escape_control(dir_.string()) << '\n';
     last_ = now;
   }
 

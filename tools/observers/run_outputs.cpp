@@ -71,9 +71,11 @@ void RunLog::on_resumed() {
 }
 
 io::OwnedEntries RunLog::files() {
-  const std::string p = std::string(run_files::packings) + "/";
-  return {std::string(run_files::steps), std::string(run_files::divisions), p + std::string(run_files::jammed) + ".*",
-          p + std::string(run_files::phi2) + ".*", p + "target_#.*"};
+  io::OwnedEntries out{std::string(run_files::steps), std::string(run_files::divisions)};
+  for (const std::string_view stem : {run_files::jammed, run_files::phi2, std::string_view("target_#")})
+    for (auto& e : run_files::entries_with_suffixes(run_files::packings, stem, run_files::packing_suffixes()))
+      out.push_back(std::move(e));
+  return out;
 }
 
 io::OwnedEntries run_owned_entries() {
