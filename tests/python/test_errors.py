@@ -11,10 +11,13 @@ import budjam
 from conftest import PACKING
 
 SUMMARY = {"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1, "L": 8, "P0": None,
-           "phi_J": 0.84, "targets": [], "unjammings": []}
+           "phi_J": 0.84, "N_nr_J": 30, "u_J": 0.1, "targets": [], "unjammings": []}
+# The columns of steps.csv that the analyses read; the network columns are empty before jamming.
+STEPS = "step,phi,P,N,N_f,N_u_buds,chi_c,tagged_active,divisions_since_jamming,Z,dZ\n0,0.5,0,2,,,,,,,\n"
+BUD_EVENTS = "episode,cell_id,event,step,phi,a\n0,7,tagged,10,0.84,0\n0,7,completed,12,0.85,0.25\n"
 
 
-def make_run(directory, summary=None, steps="step,phi\n0,0.5\n"):
+def make_run(directory, summary=None, steps=STEPS):
     directory.mkdir()
     (directory / "packings").mkdir()
     (directory / "summary.json").write_bytes(summary if isinstance(summary, bytes) else
@@ -125,3 +128,50 @@ def test_reading_a_fifo_or_a_device_raises_input_error_at_once(tmp_path, kind):
         path = "/dev/zero"
     with pytest.raises(budjam.InputError, match="not a regular file"):
         budjam.read_packing(path)
+
+
+def test_survival_of_no_runs_raises_input_error_saying_so():
+    with pytest.raises(budjam.InputError, match="^survival: no run directories given$"):
+        budjam.survival([])
+
+
+@pytest.mark.parametrize("a, problem", [("inf", "not a finite number"), ("nan", "not a finite number"),
+                                        ("-0.5", "expected a number >= 0"), ("", "empty, expected a number >= 0")])
+def test_load_run_and_survival_refuse_a_bud_size_out_of_range_naming_file_line_and_column(tmp_path, a, problem):
+    run = make_run(tmp_path / "run")
+    (run / "bud_events.csv").write_text(BUD_EVENTS.replace(",0.25\n", f",{a}\n"))
+    for read in (budjam.load_run, lambda r: budjam.survival([r])):
+        with pytest.raises(budjam.InputError, match=f"bud_events.csv:3: column a: {problem}") as e:
+            read(run)
+        assert type(e.value) is budjam.InputError
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"N_nr_J": -5}, r"N_nr_J: expected a non-negative integer or null \(got -5\)"),
+    ({"version": 2}, r"version: 2 is not a summary format this budjam reads"),
+    ({"phi_J": "0.84"}, r"phi_J: expected a number > 0 or null"),
+    ({"tagged_J": "6"}, r"tagged_J: expected a non-negative integer"),
+    ({"status": 3}, r"status: expected a string"),
+    ({"targets": {}}, r"targets: not a list"),
+    ({"targets": [{"dphi": "x"}]}, r"targets\[0\]\.dphi: expected a number > 0"),
+])
+def test_load_run_and_survival_check_summary_json_as_analyse_does(tmp_path, change, message):
+    run = make_run(tmp_path / "run", summary=dict(SUMMARY, **change))
+    (run / "bud_events.csv").write_text(BUD_EVENTS)
+    for read in (budjam.load_run, lambda r: budjam.survival([r])):
+        with pytest.raises(budjam.InputError, match="summary.json: " + message) as e:
+            read(run)
+        assert type(e.value) is budjam.InputError
+
+
+def test_load_run_and_survival_name_the_file_of_a_number_overflow_and_a_missing_column(tmp_path):
+    text = json.dumps(SUMMARY).replace('"N_nr_J": 30', '"N_nr_J": 1e999')
+    overflow = make_run(tmp_path / "overflow", summary=text.encode())
+    column = make_run(tmp_path / "column", steps=STEPS.replace(",dZ\n", "\n", 1).replace(",,\n", ",\n"))
+    for run, message in ((overflow, "overflow/summary.json: invalid JSON: number overflow"),
+                         (column, "column/steps.csv: no column 'dZ'")):
+        (run / "bud_events.csv").write_text(BUD_EVENTS)
+        for read in (budjam.load_run, lambda r: budjam.survival([r])):
+            with pytest.raises(budjam.InputError, match=message) as e:
+                read(run)
+            assert type(e.value) is budjam.InputError
