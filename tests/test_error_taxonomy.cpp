@@ -225,3 +225,20 @@ TEST_CASE("moduli names the simple-shear modulus it prints, and a negative one c
   CHECK(positive.code == 0);
   CHECK(positive.err.empty());
 }
+
+TEST_CASE(
+    "validate (also --json), export and render refuse a packing whose meta value is not UTF-8 or that starts with a "
+    "byte-order mark, naming file and line (exit 2)",
+    "[taxonomy]") {
+  write(work_dir() / "latin1.pack", with(kPacking, "meta kind jammed", "meta kind t\xe9rget"));
+  write(work_dir() / "bom.pack", "\xEF\xBB\xBF" + kPacking);
+  for (const std::string command : {"validate", "validate --json", "export --format xyz --out o", "render -o o.svg"}) {
+    INFO(command);
+    const auto latin1 = run_budjam(command.substr(0, command.find(' ')) + " latin1.pack" +
+                                   (command.find(' ') == std::string::npos ? "" : command.substr(command.find(' '))));
+    check_one_input_error(latin1, "latin1.pack:6: meta kind: the value is not valid UTF-8");
+    const auto bom = run_budjam(command.substr(0, command.find(' ')) + " bom.pack" +
+                                (command.find(' ') == std::string::npos ? "" : command.substr(command.find(' '))));
+    check_one_input_error(bom, "bom.pack:1: the file starts with a UTF-8 byte-order mark");
+  }
+}

@@ -175,3 +175,35 @@ def test_load_run_and_survival_name_the_file_of_a_number_overflow_and_a_missing_
             with pytest.raises(budjam.InputError, match=message) as e:
                 read(run)
             assert type(e.value) is budjam.InputError
+
+
+NAN = float("nan")
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (dict(L=0.0), r"^L: must be finite and > 0 \(got 0\)$"),
+    (dict(L=-8.0), r"^L: must be finite and > 0 \(got -8\)$"),
+    (dict(L=NAN), r"^L: must be finite and > 0 \(got nan\)$"),
+    (dict(x=[NAN]), r"^x\[0\]: not finite \(got nan\)$"),
+    (dict(b=[-0.5]), r"^b\[0\]: must be >= 0 \(got -0.5\)$"),
+    (dict(gamma0=[NAN]), r"^gamma0\[0\]: not finite \(got nan\)$"),
+    (dict(shear=NAN), r"^shear: must be finite \(got nan\)$"),
+    (dict(meta={"a b": 1}), r'^meta key "a b": letters, digits, _ \. - only$'),
+    (dict(meta={"a": "x\ny"}), r'^meta\["a"\]: the value must be one line'),
+    (dict(L=1e39), r"box side L = 1e\+39 must be at most 10000"),
+])
+def test_packing_constructor_refuses_what_a_file_cannot_hold_with_input_error_naming_the_argument(arguments, message):
+    values = dict(dict(L=8.0, x=[2.0], y=[2.0], theta=[0.0], b=[0.5]), **arguments)
+    with pytest.raises(budjam.InputError, match=message) as e:
+        budjam.Packing(**values)
+    assert type(e.value) is budjam.InputError
+    assert "format_packing" not in str(e.value)
+
+
+def test_a_packing_whose_meta_value_is_not_utf8_raises_input_error_naming_file_and_line(tmp_path):
+    path = tmp_path / "latin1.pack"
+    path.write_bytes(b"budjam-packing 1\nL 8\nshear 0\nN 1\nnext_id 1\nmeta kind t\xe9rget\n"
+                     b"cells id parent x y theta b gamma0\n0 -1 4 4 0 0.5 0.002\nend\n")
+    with pytest.raises(budjam.InputError, match=r"latin1.pack:6: meta kind: the value is not valid UTF-8") as e:
+        budjam.read_packing(path)
+    assert type(e.value) is budjam.InputError
