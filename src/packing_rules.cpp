@@ -1,6 +1,7 @@
 #include "budjam/packing_rules.hpp"
 
 #include "budjam/number_text.hpp"
+#include "budjam/scene_keys.hpp"  // kMaxBoxSide
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +27,9 @@ std::optional<std::string> cell_problem(const Packing& p, std::size_t i, double 
 std::optional<std::string> box_problem(const Packing& p, double skin) {
   if (!(std::isfinite(p.box.L) && p.box.L > 0))
     return "box side L = " + shortest_text(p.box.L) + " must be finite and positive";
+  if (!(p.box.L <= kMaxBoxSide))
+    return "box side L = " + shortest_text(p.box.L) + " must be at most " + shortest_text(kMaxBoxSide) +
+           " (the largest box.L of a scene)";
   if (!(std::abs(p.box.shear) <= kMaxBoxesAway))
     return "box shear = " + shortest_text(p.box.shear) + " must be finite and at most " + shortest_text(kMaxBoxesAway) +
            " in size";

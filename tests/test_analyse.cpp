@@ -359,7 +359,7 @@ TEST_CASE("analyse refuses an episode number no integer holds: exit 2, one line 
   CHECK(run_budjam_redirected("analyse " + q(copy) + " --out " + q(work_dir() / "t_huge") + " --main-L 6", "/dev/null",
                               err) == 2);
   const std::string e = slurp(err);
-  CHECK(e.find("bud_events.csv:2: episode") != std::string::npos);
+  CHECK(e.find("bud_events.csv:2: column episode") != std::string::npos);
   CHECK(std::count(e.begin(), e.end(), '\n') == 1);
 }
 

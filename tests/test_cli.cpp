@@ -182,7 +182,9 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
            {"moduli " + p + " --check --out " + o + " --strain 0", "--strain"},
            // rsvg-convert draws at most 32767 pixels a side
            {"render " + p + " -o " + quoted(outputs / "big.png") + " --scale 1e6", "--scale"},
-           {"render " + p + " -o " + quoted(outputs / "big.svg") + " --png --scale 1e6", "--scale"}}) {
+           {"render " + p + " -o " + quoted(outputs / "big.svg") + " --png --scale 1e6", "--scale"},
+           // a scale whose pixel count no integer holds
+           {"render " + p + " -o " + quoted(outputs / "huge.png") + " --scale 1e300", "--scale"}}) {
     fs::remove_all(outputs);
     fs::create_directory(outputs);
     const Result r = run_budjam(args);
@@ -191,6 +193,7 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
     require_one_error_line(r);
     CHECK_THAT(r.err, Contains(option + ": "));
     CHECK(r.err.find("internal") == std::string::npos);
+    CHECK(r.err.find("-9223372036854775808") == std::string::npos);  // no integer overflow in the message
     CHECK(fs::is_empty(outputs));
   }
 }

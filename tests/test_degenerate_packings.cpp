@@ -181,11 +181,13 @@ TEST_CASE("the reader refuses phi >= 4 before looking for pairs: 10^5 cells stac
   const auto t0 = std::chrono::steady_clock::now();
   CHECK_THAT(error_of(q), Contains("the mother of cell 0 and the mother of cell 1 are r = 0 apart"));
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 5);
-  // A vast box with two cells: no bins for the empty space.
+  // A vast box with two cells: no bins for the empty space (the pair check alone; the reader refuses
+  // a box beyond the scene's box.L bound before it).
   Packing vast = box_of(1e300);
   vast.add_cell(1, 1, 0, 0.5, 0.002, -1);
   vast.add_cell(1.1, 1, 0, 0.5, 0.002, -1);
-  CHECK_THAT(error_of(vast), Contains("the mother of cell 0 and the mother of cell 1 are r = 0.1"));
+  CHECK_THAT(overlap_problem(vast).value_or(""), Contains("the mother of cell 0 and the mother of cell 1 are r = 0.1"));
+  CHECK_THAT(error_of(vast), Contains("d.pack:2: box side L = 1e+300 must be at most 10000"));
 }
 
 TEST_CASE("packings grown and compressed by budjam obey the geometric rules", "[degenerate]") {

@@ -119,7 +119,7 @@ fs::path run_with_summary(const std::string& name, const std::string& summary) {
 }
 
 const std::string kSummary = R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1,
-    "L": 8, "P0": null, "phi_J": 0.84, "targets": [], "unjammings": []})";
+    "L": 8, "P0": null, "phi_J": 0.84, "N_nr_J": 30, "targets": [], "unjammings": []})";
 
 void check_one_input_error(const budjam::testing::BudjamRun& r, const std::string& start) {
   INFO(r.err);
@@ -133,10 +133,11 @@ void check_one_input_error(const budjam::testing::BudjamRun& r, const std::strin
 
 TEST_CASE("analyse on a summary.json field of the wrong type is exit 2 naming the file and the key", "[taxonomy]") {
   run_with_summary("str-run", with(kSummary, "\"phi_J\": 0.84", "\"phi_J\": \"0.84\""));
-  check_one_input_error(run_budjam("analyse str-run --out str-out"), "str-run/summary.json: phi_J: not a number");
+  check_one_input_error(run_budjam("analyse str-run --out str-out"),
+                        "str-run/summary.json: phi_J: expected a number > 0 or null (got \"0.84\")");
   run_with_summary("tgt-run", with(kSummary, "\"targets\": []", "\"targets\": [{\"dphi\": \"x\"}]"));
   check_one_input_error(run_budjam("analyse tgt-run --out tgt-out"),
-                        "tgt-run/summary.json: targets[0].dphi: not a number");
+                        "tgt-run/summary.json: targets[0].dphi: expected a number > 0 (got \"x\")");
   run_with_summary("arr-run", "[1, 2, 3]");
   check_one_input_error(run_budjam("analyse arr-run --out arr-out"),
                         "arr-run/summary.json: not a budjam run summary (not a JSON object)");
@@ -223,4 +224,21 @@ TEST_CASE("moduli names the simple-shear modulus it prints, and a negative one c
       "moduli '" + budjam::testing::source_file("tests/data/shear_conventions_differ_L8.pack").string() + "'");
   CHECK(positive.code == 0);
   CHECK(positive.err.empty());
+}
+
+TEST_CASE(
+    "validate (also --json), export and render refuse a packing whose meta value is not UTF-8 or that starts with a "
+    "byte-order mark, naming file and line (exit 2)",
+    "[taxonomy]") {
+  write(work_dir() / "latin1.pack", with(kPacking, "meta kind jammed", "meta kind t\xe9rget"));
+  write(work_dir() / "bom.pack", "\xEF\xBB\xBF" + kPacking);
+  for (const std::string command : {"validate", "validate --json", "export --format xyz --out o", "render -o o.svg"}) {
+    INFO(command);
+    const auto latin1 = run_budjam(command.substr(0, command.find(' ')) + " latin1.pack" +
+                                   (command.find(' ') == std::string::npos ? "" : command.substr(command.find(' '))));
+    check_one_input_error(latin1, "latin1.pack:6: meta kind: the value is not valid UTF-8");
+    const auto bom = run_budjam(command.substr(0, command.find(' ')) + " bom.pack" +
+                                (command.find(' ') == std::string::npos ? "" : command.substr(command.find(' '))));
+    check_one_input_error(bom, "bom.pack:1: the file starts with a UTF-8 byte-order mark");
+  }
 }

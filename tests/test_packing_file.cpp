@@ -256,6 +256,8 @@ TEST_CASE("format_packing refuses packings that could not be read back", "[packi
 TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[packing_file]") {
   const std::vector<std::pair<std::string, std::string>> cases{
       {replace(kValid, "L 8\n", "L 1e-300\n"), "t.pack:2: box side L = 1e-300 must exceed"},
+      {replace(kValid, "L 8\n", "L 1e39\n"), "t.pack:2: box side L = 1e+39 must be at most 10000"},
+      {replace(kValid, "L 8\n", "L 10000.5\n"), "t.pack:2: box side L = 10000.5 must be at most 10000"},
       {replace(kValid, "L 8\n", "L 2.25\n"),
        "t.pack:2: box side L = 2.25 must exceed 2 (largest lobe diameter + skin) = 2.3"},
       {replace(kValid, "shear 0\n", "shear 1e308\n"),
@@ -266,4 +268,48 @@ TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[
       {replace(kValid, "0.25 0.5 0.002", "0.25 3.5 0.002"), "t.pack:8: cell 0: bud diameter b = 3.5 outside"},
   };
   for (const auto& [text, message] : cases) CHECK_THROWS_WITH(parse_packing(text, "t.pack"), Contains(message));
+}
+
+TEST_CASE("the box side L is bounded by the scene's box.L bound, so positions stay within every export's range",
+          "[packing_file]") {
+  CHECK(parse_packing(replace(kValid, "L 8\n", "L 10000\n"), "t.pack").packing.box.L == 10000);
+  CHECK_THROWS_WITH(parse_packing(replace(kValid, "L 8\n", "L 1e300\n"), "t.pack"),
+                    "t.pack:2: box side L = 1e+300 must be at most 10000 (the largest box.L of a scene)");
+}
+
+TEST_CASE("a meta value that is not UTF-8 is refused naming the line, as one a file cannot hold", "[packing_file]") {
+  CHECK_THROWS_WITH(parse_packing(replace(kValid, "meta phase jammed", "meta phase t\xe9rget"), "t.pack"),
+                    StartsWith("t.pack:6: meta phase: the value is not valid UTF-8 (byte 2 of the value"));
+  CHECK(parse_packing(replace(kValid, "meta phase jammed", "meta phase t\xc3\xa9rget"), "t.pack")
+            .meta.values.at("phase") == "t\xc3\xa9rget");
+  PackingMeta meta;
+  CHECK_THROWS_AS(meta.set("k", "t\xe9"), std::invalid_argument);
+  meta.values["k"] = "t\xe9";
+  CHECK(unwritable_problem(random_packing(3, 1), meta) == "meta[\"k\"]: the value is not valid UTF-8");
+}
+
+TEST_CASE(
+    "a packing file with a UTF-8 byte-order mark is refused saying so, also where validate tells packings "
+    "from scenes",
+    "[packing_file]") {
+  const std::string bom = "\xEF\xBB\xBF" + kValid;
+  CHECK(looks_like_packing(bom));
+  CHECK_THROWS_WITH(parse_packing(bom, "t.pack"), StartsWith("t.pack:1: the file starts with a UTF-8 byte-order mark"));
+}
+
+TEST_CASE("unwritable_problem names the quantity as Packing(...) names its arguments", "[packing_file]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto problem = [](auto change) {
+    Packing p = random_packing(3, 1);
+    change(p);
+    return unwritable_problem(p, {}).value_or("");
+  };
+  CHECK(problem([](Packing& p) { p.box.L = 0; }) == "L: must be finite and > 0 (got 0)");
+  CHECK(problem([&](Packing& p) { p.box.L = nan; }) == "L: must be finite and > 0 (got nan)");
+  CHECK(problem([&](Packing& p) { p.box.shear = nan; }) == "shear: must be finite (got nan)");
+  CHECK(problem([&](Packing& p) { p.q[3] = nan; }) == "x[1]: not finite (got nan)");
+  CHECK(problem([&](Packing& p) { p.q[8] = nan; }) == "theta[2]: not finite (got nan)");
+  CHECK(problem([](Packing& p) { p.b[0] = -0.5; }) == "b[0]: must be >= 0 (got -0.5)");
+  CHECK(problem([&](Packing& p) { p.gamma0[1] = nan; }) == "gamma0[1]: not finite (got nan)");
+  CHECK(problem([](Packing&) {}).empty());
 }

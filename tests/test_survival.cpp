@@ -145,7 +145,7 @@ void write_run(const std::filesystem::path& d, const std::string& scene = "[run]
   std::ofstream(d / "summary.json") << R"({"format": "budjam-summary", "version": 1, "status": "finished", "seed": )"
                                     << seed << R"(, "L": 8.0, "P0": 0.001, "phi_J": 0.83, "u_J": 0.25, "N_nr_J": 32,
     "n_J": 0.5, "targets": []})";
-  std::ofstream(d / "steps.csv") << "step,phi\n";
+  std::ofstream(d / "steps.csv") << "step,phi,P,N,N_f,N_u_buds,chi_c,tagged_active,divisions_since_jamming,Z,dZ\n";
   std::ofstream(d / "divisions.csv") << "step,phi\n";
   std::ofstream ev(d / "bud_events.csv");
   ev << "episode,cell_id,event,step,phi,a\n";
@@ -243,6 +243,107 @@ TEST_CASE(
     CHECK(r.err.find("give them to survival apart") != std::string::npos);
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     CHECK_FALSE(fs::exists(out.string() + ".json"));
+  }
+}
+
+namespace {
+
+// `text` with its first `from` replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+
+// survival and analyse on `run`: both exit 2 with one line starting `start`, never "internal".
+void check_both_refuse(const std::filesystem::path& run, const std::string& start) {
+  const std::string q = budjam::testing::shell_quoted(run);
+  for (const std::string command : {"survival " + q, "analyse " + q + " --out " + q + "_an"}) {
+    const auto r = budjam::testing::run_budjam(command);
+    INFO(command);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.rfind("budjam: error: " + start, 0) == 0);
+    CHECK(r.err.find("internal") == std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+}
+
+}  // namespace
+
+TEST_CASE(
+    "survival and analyse refuse a bud size a that is empty, NaN, infinite or negative, naming file, line and "
+    "column a (exit 2, never internal)") {
+  namespace fs = std::filesystem;
+  const auto dir = budjam::testing::work_dir() / "bad_a";
+  fs::remove_all(dir);
+  write_run(dir / "good");
+  const std::string events = slurp(dir / "good" / "bud_events.csv");
+  // line 21 is the completed row of bud 0 (a = 3); its a is the last field
+  const std::string row = "1,0,completed,12,0.85,3\n";
+  REQUIRE(events.find(row) != std::string::npos);
+  int line = 1;
+  for (std::size_t k = 0; k < events.find(row); ++k) line += events[k] == '\n';
+  const std::vector<std::pair<std::string, std::string>> cases{{"inf", "not a finite number"},
+                                                               {"-inf", "not a finite number"},
+                                                               {"nan", "not a finite number"},
+                                                               {"-0.5", "expected a number >= 0"},
+                                                               {"", "empty, expected a number >= 0"}};
+  int n = 0;
+  for (const auto& [value, problem] : cases) {
+    const fs::path run = dir / ("run" + std::to_string(n++));
+    fs::copy(dir / "good", run, fs::copy_options::recursive);
+    std::ofstream(run / "bud_events.csv") << replaced(events, row, "1,0,completed,12,0.85," + value + "\n");
+    check_both_refuse(run, (run / "bud_events.csv").string() + ":" + std::to_string(line) + ": column a: " + problem);
+  }
+}
+
+TEST_CASE(
+    "survival and analyse refuse a summary.json value out of its type or range, another format version, a "
+    "number overflow and a missing steps.csv column, naming the file and key (exit 2, never internal)") {
+  namespace fs = std::filesystem;
+  const auto dir = budjam::testing::work_dir() / "bad_summary";
+  fs::remove_all(dir);
+  write_run(dir / "good");
+  const std::string summary = slurp(dir / "good" / "summary.json");
+  // (what summary.json says instead, the message after "RUN/summary.json: ")
+  const std::vector<std::array<std::string, 3>> cases{
+      {"\"N_nr_J\": 32", "\"N_nr_J\": -5", "N_nr_J: expected a non-negative integer or null (got -5)"},
+      {"\"N_nr_J\": 32", "\"N_nr_J\": 0", "N_nr_J: 0, but a jammed run"},
+      {"\"N_nr_J\": 32", "\"N_nr_J\": 1e999", "invalid JSON: number overflow"},
+      {"\"N_nr_J\": 32", "\"N_nr_J\": 32, \"tagged_J\": \"6\"", "tagged_J: expected a non-negative integer"},
+      {"\"phi_J\": 0.83", "\"phi_J\": \"0.83\"", "phi_J: expected a number > 0 or null (got \"0.83\")"},
+      {"\"u_J\": 0.25", "\"u_J\": 1.5", "u_J: expected a number in [0, 1] or null (got 1.5)"},
+      {"\"status\": \"finished\"", "\"status\": 3", "status: expected a string (got 3)"},
+      {"\"status\": \"finished\"", "\"status\": \"running\"",
+       "status: \"running\" is not the status of a finished run"},
+      {"\"version\": 1", "\"version\": 2", "version: 2 is not a summary format this budjam reads (expected 1)"},
+      {"\"targets\": []", "\"targets\": {}", "targets: not a list"},
+      {"\"targets\": []", "\"targets\": [{\"dphi\": \"x\"}]", "targets[0].dphi: expected a number > 0 (got \"x\")"},
+      {"\"targets\": []", "\"targets\": [{\"dphi\": 0.01}]", "targets[0].index: missing"}};
+  int n = 0;
+  for (const auto& [from, to, message] : cases) {
+    const fs::path run = dir / ("run" + std::to_string(n++));
+    fs::copy(dir / "good", run, fs::copy_options::recursive);
+    std::ofstream(run / "summary.json") << replaced(summary, from, to);
+    check_both_refuse(run, (run / "summary.json").string() + ": " + message);
+  }
+  const fs::path run = dir / "no_column";
+  fs::copy(dir / "good", run, fs::copy_options::recursive);
+  std::ofstream(run / "steps.csv") << "step,phi,P,N,N_f,N_u_buds,chi_c,tagged_active,Z,dZ\n";
+  check_both_refuse(run, (run / "steps.csv").string() + ": no column 'divisions_since_jamming'");
+}
+
+TEST_CASE("survival refuses an epsilon that is negative or not finite, naming the option") {
+  const auto dir = budjam::testing::work_dir() / "bad_epsilon";
+  std::filesystem::remove_all(dir);
+  write_run(dir / "run");
+  for (const char* e : {"-1", "inf", "nan"}) {
+    const auto r =
+        budjam::testing::run_budjam("survival " + budjam::testing::shell_quoted(dir / "run") + " --epsilon " + e);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.rfind("budjam: error: epsilon: must be a finite number >= 0", 0) == 0);
   }
 }
 

@@ -2,7 +2,9 @@
 // The physical rules every packing obeys, wherever it comes from (a packing file, a checkpoint,
 // a grown state); the scene's box rule (src/scene.cpp, box.L) is the same as box_problem's.
 //  - the box: L finite, L > 2 (σ_max + skin) with σ_max the largest lobe diameter, so that every
-//    neighbour pair has a single periodic image; |shear| ≤ kMaxBoxesAway (image shifts stay finite);
+//    neighbour pair has a single periodic image, and L ≤ kMaxBoxSide (scene_keys.hpp, the scene's
+//    box.L bound: positions within kMaxBoxesAway boxes then stay below 1e10, which every export
+//    format, float32 included, holds); |shear| ≤ kMaxBoxesAway (image shifts stay finite);
 //  - each cell: finite x, y, θ within kMaxBoxesAway boxes of the origin (unwrapped positions drift,
 //    but not that far), 0 ≤ b ≤ b_max, finite γ0 ≥ 0;
 //  - the geometry (packing files): φ < kMaxPackingFraction, and every overlapping pair of lobes of

@@ -387,8 +387,10 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
              f.packing.box.L = L;
              f.packing.box.shear = shear;
              for (std::size_t i = 0; i < n; ++i) f.packing.add_cell(xs[i], ys[i], ts[i], bs[i], gs[i], -1);
-             for (const auto& [k, v] : meta) f.meta.set(py::str(k), meta_text(v));
-             // The file format's checks (positive L, b in range, ...) apply to packings built here too.
+             for (const auto& [k, v] : meta) f.meta.values[py::str(k)] = meta_text(v);
+             // What a file cannot hold, named by argument (L, x[i], meta[...]); then the file format's
+             // checks (the box, b in range, overlaps, ...) apply to packings built here too.
+             if (const auto problem = io::unwritable_problem(f.packing, f.meta)) throw InputError(*problem);
              return io::parse_packing(io::format_packing(f.packing, f.meta), "Packing(...)");
            }),
            "L"_a, "x"_a, "y"_a, "theta"_a, "b"_a, "gamma0"_a = py::none(), "shear"_a = 0.0,

@@ -11,10 +11,13 @@ import budjam
 from conftest import PACKING
 
 SUMMARY = {"format": "budjam-summary", "version": 1, "status": "finished", "seed": 1, "L": 8, "P0": None,
-           "phi_J": 0.84, "targets": [], "unjammings": []}
+           "phi_J": 0.84, "N_nr_J": 30, "u_J": 0.1, "targets": [], "unjammings": []}
+# The columns of steps.csv that the analyses read; the network columns are empty before jamming.
+STEPS = "step,phi,P,N,N_f,N_u_buds,chi_c,tagged_active,divisions_since_jamming,Z,dZ\n0,0.5,0,2,,,,,,,\n"
+BUD_EVENTS = "episode,cell_id,event,step,phi,a\n0,7,tagged,10,0.84,0\n0,7,completed,12,0.85,0.25\n"
 
 
-def make_run(directory, summary=None, steps="step,phi\n0,0.5\n"):
+def make_run(directory, summary=None, steps=STEPS):
     directory.mkdir()
     (directory / "packings").mkdir()
     (directory / "summary.json").write_bytes(summary if isinstance(summary, bytes) else
@@ -147,3 +150,82 @@ def test_the_python_writers_refuse_a_runs_own_files_as_the_command_line_does(tmp
     # Beside the packings, under a name of its own, the same writers write.
     write(budjam.read_packing(PACKING), str(run / "packings" / "mine.out"))
     assert (run / "packings" / "mine.out").is_file()
+
+
+def test_survival_of_no_runs_raises_input_error_saying_so():
+    with pytest.raises(budjam.InputError, match="^survival: no run directories given$"):
+        budjam.survival([])
+
+
+@pytest.mark.parametrize("a, problem", [("inf", "not a finite number"), ("nan", "not a finite number"),
+                                        ("-0.5", "expected a number >= 0"), ("", "empty, expected a number >= 0")])
+def test_load_run_and_survival_refuse_a_bud_size_out_of_range_naming_file_line_and_column(tmp_path, a, problem):
+    run = make_run(tmp_path / "run")
+    (run / "bud_events.csv").write_text(BUD_EVENTS.replace(",0.25\n", f",{a}\n"))
+    for read in (budjam.load_run, lambda r: budjam.survival([r])):
+        with pytest.raises(budjam.InputError, match=f"bud_events.csv:3: column a: {problem}") as e:
+            read(run)
+        assert type(e.value) is budjam.InputError
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"N_nr_J": -5}, r"N_nr_J: expected a non-negative integer or null \(got -5\)"),
+    ({"version": 2}, r"version: 2 is not a summary format this budjam reads"),
+    ({"phi_J": "0.84"}, r"phi_J: expected a number > 0 or null"),
+    ({"tagged_J": "6"}, r"tagged_J: expected a non-negative integer"),
+    ({"status": 3}, r"status: expected a string"),
+    ({"targets": {}}, r"targets: not a list"),
+    ({"targets": [{"dphi": "x"}]}, r"targets\[0\]\.dphi: expected a number > 0"),
+])
+def test_load_run_and_survival_check_summary_json_as_analyse_does(tmp_path, change, message):
+    run = make_run(tmp_path / "run", summary=dict(SUMMARY, **change))
+    (run / "bud_events.csv").write_text(BUD_EVENTS)
+    for read in (budjam.load_run, lambda r: budjam.survival([r])):
+        with pytest.raises(budjam.InputError, match="summary.json: " + message) as e:
+            read(run)
+        assert type(e.value) is budjam.InputError
+
+
+def test_load_run_and_survival_name_the_file_of_a_number_overflow_and_a_missing_column(tmp_path):
+    text = json.dumps(SUMMARY).replace('"N_nr_J": 30', '"N_nr_J": 1e999')
+    overflow = make_run(tmp_path / "overflow", summary=text.encode())
+    column = make_run(tmp_path / "column", steps=STEPS.replace(",dZ\n", "\n", 1).replace(",,\n", ",\n"))
+    for run, message in ((overflow, "overflow/summary.json: invalid JSON: number overflow"),
+                         (column, "column/steps.csv: no column 'dZ'")):
+        (run / "bud_events.csv").write_text(BUD_EVENTS)
+        for read in (budjam.load_run, lambda r: budjam.survival([r])):
+            with pytest.raises(budjam.InputError, match=message) as e:
+                read(run)
+            assert type(e.value) is budjam.InputError
+
+
+NAN = float("nan")
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (dict(L=0.0), r"^L: must be finite and > 0 \(got 0\)$"),
+    (dict(L=-8.0), r"^L: must be finite and > 0 \(got -8\)$"),
+    (dict(L=NAN), r"^L: must be finite and > 0 \(got nan\)$"),
+    (dict(x=[NAN]), r"^x\[0\]: not finite \(got nan\)$"),
+    (dict(b=[-0.5]), r"^b\[0\]: must be >= 0 \(got -0.5\)$"),
+    (dict(gamma0=[NAN]), r"^gamma0\[0\]: not finite \(got nan\)$"),
+    (dict(shear=NAN), r"^shear: must be finite \(got nan\)$"),
+    (dict(meta={"a b": 1}), r'^meta key "a b": letters, digits, _ \. - only$'),
+    (dict(meta={"a": "x\ny"}), r'^meta\["a"\]: the value must be one line'),
+    (dict(L=1e39), r"box side L = 1e\+39 must be at most 10000"),
+])
+def test_packing_constructor_refuses_what_a_file_cannot_hold_with_input_error_naming_the_argument(arguments, message):
+    values = dict(dict(L=8.0, x=[2.0], y=[2.0], theta=[0.0], b=[0.5]), **arguments)
+    with pytest.raises(budjam.InputError, match=message) as e:
+        budjam.Packing(**values)
+    assert type(e.value) is budjam.InputError
+    assert "format_packing" not in str(e.value)
+
+
+def test_a_packing_whose_meta_value_is_not_utf8_raises_input_error_naming_file_and_line(tmp_path):
+    path = tmp_path / "latin1.pack"
+    path.write_bytes(b"budjam-packing 1\nL 8\nshear 0\nN 1\nnext_id 1\nmeta kind t\xe9rget\n"
+                     b"cells id parent x y theta b gamma0\n0 -1 4 4 0 0.5 0.002\nend\n")
+    with pytest.raises(budjam.InputError, match=r"latin1.pack:6: meta kind: the value is not valid UTF-8") as e:
+        budjam.read_packing(path)
+    assert type(e.value) is budjam.InputError

@@ -27,7 +27,7 @@ def test_packing_from_arrays_is_the_same_packing():
 
 
 def test_packing_from_arrays_is_checked_like_a_file():
-    with pytest.raises(ValueError, match="box"):
+    with pytest.raises(budjam.InputError, match=r"^L: must be finite and > 0 \(got -1\)$"):
         budjam.Packing(L=-1.0, x=[1.0], y=[1.0], theta=[0.0], b=[0.5], gamma0=[0.002])
     with pytest.raises(ValueError, match="length 1"):
         budjam.Packing(L=5.0, x=[1.0, 2.0], y=[1.0], theta=[0.0], b=[0.5])

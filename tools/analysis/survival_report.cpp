@@ -24,6 +24,7 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
   for (std::size_t k = 0; k < runs.size(); ++k)
     if (!loaded.later_copy[k]) distinct.push_back(runs[k]);
   require_one_protocol(distinct, "give them to survival apart");
+  if (runs.empty()) throw InputError("survival: no run directories given");
   SurvivalReport report;
   report.duplicates = Json::array();
   for (const auto& group : loaded.copy_groups) report.duplicates.push_back(group);
@@ -48,8 +49,10 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
   report.copies = runs.size() - report.runs;
   report.u_J = mean(uJ);
   report.N_nr_J = mean(nrJ);
+  // N_nr_J >= 1 in every jammed run (load_run checks it): 1/<N_nr,J> is finite and positive.
+  if (epsilon && !(*epsilon >= 0 && std::isfinite(*epsilon)))
+    throw InputError("epsilon: must be a finite number >= 0 (got " + io::format_double(*epsilon) + ")");
   report.epsilon = epsilon.value_or(1.0 / report.N_nr_J);
-  if (!(report.epsilon >= 0)) throw InputError("--epsilon: must be >= 0");
   report.km = kaplan_meier(records);
   if (report.u_J > 0) report.a_eps = a_epsilon(report.km, report.u_J, report.epsilon);
   return report;

@@ -82,10 +82,19 @@ void run(const Options& o) {
   ro.caption = buf;
   if (ext != ".svg" || o.png) {
     const RenderSize size = render_size(f.packing.box.L, ro);
-    if (!(std::max(size.width, size.height) <= kMaxConvertedPixels))
-      throw InputError("--scale: the picture would be " + std::to_string(std::lround(size.width)) + " × " +
-                       std::to_string(std::lround(size.height)) + " pixels, and rsvg-convert draws at most " +
-                       std::to_string(kMaxConvertedPixels) + " a side: lower --scale, or write an SVG");
+    // Pixel counts as text without converting to an integer type (a huge --scale overflows any).
+    const auto pixels = [](double v) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%.0f", std::round(v));
+      return std::string(text);
+    };
+    const double largest = std::max(size.width, size.height);
+    if (!(largest <= kMaxConvertedPixels))
+      throw InputError("--scale: the picture would be " +
+                       (largest < 1e15 ? pixels(size.width) + " × " + pixels(size.height)
+                                       : std::string("more than 10^15 a side in")) +
+                       " pixels, and rsvg-convert draws at most " + std::to_string(kMaxConvertedPixels) +
+                       " a side: lower --scale, or write an SVG");
   }
   const io::Directory dir = io::Directory::open(out.parent_path(), true);
   const std::string picture = render_svg(f.packing, pc.contacts, pc.network, ro);

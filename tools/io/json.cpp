@@ -17,8 +17,9 @@ Json read_json(const std::filesystem::path& path) {
   const std::string text = read_text_file(path);
   try {
     return Json::parse(text);
-  } catch (const Json::parse_error& e) {
-    // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
+  } catch (const Json::exception& e) {
+    // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 5: ..." (or
+    // out_of_range.406 for a number no double holds, such as 1e999)
     std::string what = e.what();
     if (const auto at = what.find("] "); at != std::string::npos) what = what.substr(at + 2);
     throw InputError(path.string() + ": invalid JSON: " + what);

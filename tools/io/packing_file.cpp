@@ -18,6 +18,7 @@ namespace budjam::io {
 namespace {
 
 constexpr std::string_view kPackingMagic = "budjam-packing";
+constexpr std::string_view kUtf8ByteOrderMark = "\xEF\xBB\xBF";
 constexpr std::array<std::string_view, 7> kCellColumns = {"id", "parent", "x", "y", "theta", "b", "gamma0"};
 
 bool valid_meta_key(std::string_view key) {
@@ -27,7 +28,9 @@ bool valid_meta_key(std::string_view key) {
   });
 }
 
-bool valid_meta_value(std::string_view value) { return value.find_first_of("\r\n") == std::string_view::npos; }
+bool valid_meta_value(std::string_view value) {
+  return value.find_first_of("\r\n") == std::string_view::npos && first_invalid_utf8(value).empty();
+}
 
 std::vector<std::string_view> tokens_of(std::string_view line) {
   std::vector<std::string_view> out;
@@ -95,6 +98,9 @@ class Reader {
 
   void read_magic() {
     if (at_eof()) fail(1, "empty file, not a budjam packing file");
+    if (lines_.lines[0].starts_with(kUtf8ByteOrderMark))
+      fail(1, "the file starts with a UTF-8 byte-order mark before \"" + std::string(kPackingMagic) +
+                  "\" (a packing file has none: save it without one)");
     const auto t = tokens_of(lines_.lines[0]);
     if (t.empty() || t[0] != kPackingMagic)
       fail(1, "not a budjam packing file (the first line must be \"budjam-packing " +
@@ -160,8 +166,12 @@ class Reader {
         const std::string mkey(rest.substr(0, sp));
         const std::string value(sp == std::string_view::npos ? std::string_view() : rest.substr(sp + 1));
         if (!valid_meta_key(mkey)) fail(n, "invalid meta key " + shown(mkey) + " (letters, digits, _ . -)");
-        // Only what can be written back is read: a value is one line, with no carriage return.
-        if (!valid_meta_value(value)) fail(n, "meta " + mkey + ": the value holds a carriage return");
+        // Only what can be written back is read: a value is one line, with no carriage return, of
+        // UTF-8 text (a JSON output or a Python str holds nothing else).
+        if (value.find('\r') != std::string::npos) fail(n, "meta " + mkey + ": the value holds a carriage return");
+        if (const std::string at = first_invalid_utf8(value); !at.empty())
+          fail(n, "meta " + mkey + ": the value is not valid UTF-8 (byte " + at.substr(at.find(':') + 1) +
+                      " of the value; packing files are UTF-8 text)");
         if (!out.meta.values.emplace(mkey, value).second) fail(n, "duplicate meta key \"" + mkey + "\"");
       } else if (key == "cells") {
         if (t.size() != kCellColumns.size() + 1 || !std::equal(kCellColumns.begin(), kCellColumns.end(), t.begin() + 1))
@@ -261,10 +271,16 @@ class Reader {
 
 }  // namespace
 
+std::optional<std::string> meta_problem(const std::string& key, std::string_view value) {
+  if (!valid_meta_key(key)) return "meta key " + shown(key) + ": letters, digits, _ . - only";
+  if (value.find_first_of("\r\n") != std::string_view::npos)
+    return "meta[" + shown(key) + "]: the value must be one line (no line break)";
+  if (!first_invalid_utf8(value).empty()) return "meta[" + shown(key) + "]: the value is not valid UTF-8";
+  return std::nullopt;
+}
+
 void PackingMeta::set(const std::string& key, std::string value) {
-  if (!valid_meta_key(key))
-    throw std::invalid_argument("packing meta key \"" + key + "\": letters, digits, _ . - only");
-  if (!valid_meta_value(value)) throw std::invalid_argument("packing meta value of \"" + key + "\": must be one line");
+  if (const auto problem = meta_problem(key, value)) throw std::invalid_argument("packing " + *problem);
   values[key] = std::move(value);
 }
 void PackingMeta::set_number(const std::string& key, double value) { set(key, format_double(value)); }
@@ -292,17 +308,34 @@ std::int64_t PackingMeta::integer(const std::string& key) const {
   return *i;
 }
 
-std::string format_packing(const Packing& p, const PackingMeta& meta) {
+std::optional<std::string> unwritable_problem(const Packing& p, const PackingMeta& meta) {
   const std::size_t n = p.size();
   if (static_cast<std::size_t>(p.q.size()) != 3 * n || p.gamma0.size() != n || p.id.size() != n || p.parent.size() != n)
-    throw std::invalid_argument("format_packing: the packing's arrays have inconsistent sizes");
-  if (!(std::isfinite(p.box.L) && p.box.L > 0) || !std::isfinite(p.box.shear))
-    throw std::invalid_argument("format_packing: the box is not finite and positive");
+    return "the packing's arrays have inconsistent sizes";
+  if (!(std::isfinite(p.box.L) && p.box.L > 0)) return "L: must be finite and > 0 (got " + format_double(p.box.L) + ")";
+  if (!std::isfinite(p.box.shear)) return "shear: must be finite (got " + format_double(p.box.shear) + ")";
   std::vector<std::int64_t> ids = p.id;
   std::sort(ids.begin(), ids.end());
-  if (std::adjacent_find(ids.begin(), ids.end()) != ids.end())
-    throw std::invalid_argument("format_packing: duplicate cell ids");
+  if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) return "duplicate cell ids";
+  for (const auto& [key, value] : meta.values)
+    if (auto problem = meta_problem(key, value)) return problem;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    if (p.id[i] < 0 || p.id[i] >= p.next_id || p.parent[i] < -1 || p.parent[i] >= p.next_id)
+      return "cell " + std::to_string(i) + ": id or parent outside [0, next_id)";
+    const std::pair<const char*, double> v[5] = {
+        {"x", p.q[3 * i]}, {"y", p.q[3 * i + 1]}, {"theta", p.q[3 * i + 2]}, {"b", p.b[i]}, {"gamma0", p.gamma0[i]}};
+    for (const auto& [name, x] : v)
+      if (!std::isfinite(x)) return name + at + ": not finite (got " + format_double(x) + ")";
+    if (!(p.b[i] >= 0)) return "b" + at + ": must be >= 0 (got " + format_double(p.b[i]) + ")";
+    if (!(p.gamma0[i] >= 0)) return "gamma0" + at + ": must be >= 0 (got " + format_double(p.gamma0[i]) + ")";
+  }
+  return std::nullopt;
+}
 
+std::string format_packing(const Packing& p, const PackingMeta& meta) {
+  if (const auto problem = unwritable_problem(p, meta)) throw std::invalid_argument("format_packing: " + *problem);
+  const std::size_t n = p.size();
   std::string s;
   s.reserve(64 * n + 256);
   s += std::string(kPackingMagic) + " " + std::to_string(kPackingFormatVersion) + "\n";
@@ -311,8 +344,6 @@ std::string format_packing(const Packing& p, const PackingMeta& meta) {
   s += "N " + std::to_string(n) + "\n";
   s += "next_id " + std::to_string(p.next_id) + "\n";
   for (const auto& [key, value] : meta.values) {
-    if (!valid_meta_key(key) || !valid_meta_value(value))
-      throw std::invalid_argument("format_packing: meta entry \"" + key + "\" cannot be written");
     s += "meta " + key;
     if (!value.empty()) s += " " + value;
     s += "\n";
@@ -320,16 +351,10 @@ std::string format_packing(const Packing& p, const PackingMeta& meta) {
   s += "cells id parent x y theta b gamma0\n";
   for (std::size_t i = 0; i < n; ++i) {
     const double v[5] = {p.q[3 * i], p.q[3 * i + 1], p.q[3 * i + 2], p.b[i], p.gamma0[i]};
-    if (p.id[i] < 0 || p.id[i] >= p.next_id || p.parent[i] < -1 || p.parent[i] >= p.next_id || !(v[3] >= 0) ||
-        !(v[4] >= 0))
-      throw std::invalid_argument("format_packing: cell " + std::to_string(i) +
-                                  " has an invalid id, parent, b or gamma0");
     s += std::to_string(p.id[i]);
     s += ' ';
     s += std::to_string(p.parent[i]);
     for (double x : v) {
-      if (!std::isfinite(x))
-        throw std::invalid_argument("format_packing: cell " + std::to_string(i) + " is not finite");
       s += ' ';
       s += format_double(x);
     }
@@ -353,6 +378,9 @@ PackingFile read_packing(const std::filesystem::path& path) {
   return parse_packing(read_text_file(path), path.string());
 }
 
-bool looks_like_packing(std::string_view text) { return text.substr(0, kPackingMagic.size()) == kPackingMagic; }
+bool looks_like_packing(std::string_view text) {
+  if (text.starts_with(kUtf8ByteOrderMark)) text.remove_prefix(kUtf8ByteOrderMark.size());  // refused by the reader
+  return text.starts_with(kPackingMagic);
+}
 
 }  // namespace budjam::io

@@ -52,8 +52,20 @@ struct PackingFile {
   PackingMeta meta;
 };
 
-// The file text. std::invalid_argument if the packing is inconsistent (array sizes, a meta key
-// or value that cannot be written) — a programming error, never a user's.
+// Why the packing and its metadata cannot be written as a packing file, naming the quantity as a
+// Python Packing(...) names its arguments: "L: must be finite and > 0 (got nan)", "x[3]: not
+// finite (got nan)", "b[0]: must be >= 0 (got -0.5)", "meta key \"a b\": ...", "meta[\"k\"]: ...";
+// nothing if it can. The physical rules of a packing (include/budjam/packing_rules.hpp) are the
+// reader's.
+std::optional<std::string> unwritable_problem(const Packing& packing, const PackingMeta& meta);
+
+// A meta key or value that a packing file cannot hold (a key outside [A-Za-z0-9_.-]+, a value with
+// a line break or that is not UTF-8), as one line; nothing if it can.
+std::optional<std::string> meta_problem(const std::string& key, std::string_view value);
+
+// The file text. std::invalid_argument "format_packing: <unwritable_problem>" if the packing cannot
+// be written (inconsistent arrays, non-finite numbers, a meta key or value that cannot be written):
+// a programming error where budjam made the packing; Python's Packing(...) checks first.
 std::string format_packing(const Packing& packing, const PackingMeta& meta = {});
 
 // Parses file text; `source` names it in errors. Refuses anything not exactly in the format with
@@ -68,7 +80,8 @@ void write_packing(const std::filesystem::path& path, const Packing& packing, co
 void write_packing(const Directory& dir, std::string_view name, const Packing& packing, const PackingMeta& meta);
 PackingFile read_packing(const std::filesystem::path& path);
 
-// True if `text` starts like a packing file (its first line is "budjam-packing ...").
+// True if `text` starts like a packing file (its first line is "budjam-packing ...", after a UTF-8
+// byte-order mark that the reader refuses, so that `validate` says so rather than read TOML).
 bool looks_like_packing(std::string_view text);
 
 }  // namespace budjam::io

@@ -27,18 +27,24 @@ struct CsvTable {
   // Index of a column; InputError "<source>: no column '<name>'".
   std::size_t column(const std::string& name) const;
   bool has_column(const std::string& name) const;
-  // NaN for an empty field; InputError "<source>:<line>: <column>: not a number".
+  // NaN for an empty field; InputError "<source>:<line>: column <name>: not a number" for text that
+  // is not a number (also "nan" and "inf": budjam writes a value that does not exist as an empty field).
   double number(std::size_t row, std::size_t col) const;
+  // A number in [lo, hi] (finite: budjam writes no NaN or inf). An empty field is NaN where
+  // `required` is false; InputError "<source>:<line>: column <name>: ..." for an empty field where
+  // a value is required, text, or a value out of range.
+  double number_in(std::size_t row, std::size_t col, double lo, double hi, bool required = true) const;
   const std::string& text(std::size_t row, std::size_t col) const { return rows[row][col]; }
-  // A whole number in [lo, hi]; InputError "<source>:<line>: <column>: not an integer in [lo, hi]"
+  // A whole number in [lo, hi]; InputError "<source>:<line>: column <name>: not an integer in [lo, hi]"
   // for anything else (a fraction, NaN, or a value no integer type holds).
   long long integer(std::size_t row, std::size_t col, long long lo, long long hi) const;
   std::vector<double> numbers(const std::string& name) const;
   std::size_t size() const { return rows.size(); }
 };
 
-// A field as a number: NaN for an empty field, ±∞ or 0 beyond the double range, nullopt for
-// anything else.
+// A field as a number: NaN for an empty field, ±∞ or 0 for decimal text beyond the double range
+// (steps.csv writes Δt and χ_c exactly at any size), nullopt for anything else, "nan" and "inf"
+// included.
 std::optional<double> csv_number(const std::string& field);
 
 // InputError "<path>:<line>: ..." for a malformed file (wrong field count, unterminated quote,
@@ -75,8 +81,20 @@ long long json_integer(const io::Json& j, const std::string& key, const std::fil
 double json_double(const io::Json& j, const std::string& key, const std::filesystem::path& file,
                    const std::string& shown);
 
-// Reads a finished run (summary.json present, a JSON object). InputError naming the file otherwise.
+// Reads a finished run and checks it, for every reader of runs alike (`budjam analyse`, `budjam
+// survival`, Python's load_run and survival): summary.json is a JSON object of format
+// "budjam-summary", version 1, each key budjam writes there of its type and range (counts
+// non-negative integers, fractions in [0, 1], L > 0, ...; null where a quantity was not reached;
+// a jammed run records N_nr_J >= 1), its targets a list of objects with the keys analyse reads;
+// steps.csv, divisions.csv and bud_events.csv hold the columns the analyses read, every field a
+// number of its range where a value is required (check_run_tables). InputError naming the file and
+// key, or file, line and column, otherwise.
 RunData load_run(const std::filesystem::path& dir);
+
+// The checks of load_run on summary.json, read from `file`.
+void check_summary(const io::Json& summary, const std::filesystem::path& file);
+// The checks of load_run on the tables of a run.
+void check_run_tables(const RunData& run);
 
 // The tables budjam wrote in a run directory, named by their file without .csv: steps, divisions,
 // and bud_events, moduli, dos, rigidity_events, trials where the scene asked for them (docs/files.md).

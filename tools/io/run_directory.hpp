@@ -37,6 +37,7 @@ inline constexpr std::string_view temporaries = ".budjam-temporaries";  // Tempo
 inline constexpr std::string_view scene = "scene.toml";                 // the effective scene, seed included
 inline constexpr std::string_view checkpoint = "checkpoint.txt";
 inline constexpr std::string_view summary = "summary.json";  // written last: the run is over
+inline constexpr int summary_version = 1;                    // its "version"; readers refuse others
 inline constexpr std::string_view timing = "timing.json";
 inline constexpr std::string_view steps = "steps.csv";
 inline constexpr std::string_view divisions = "divisions.csv";

@@ -186,7 +186,7 @@ Json summary_json(const GrowthDriver& driver) {
   const StateView now = driver.view();
   Json j;
   j["format"] = "budjam-summary";
-  j["version"] = 1;
+  j["version"] = run_files::summary_version;
   j["status"] = to_string(r.status);
   j["message"] = r.message;
   j["scene"] = sc.name;
