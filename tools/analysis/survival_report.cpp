@@ -49,6 +49,9 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
   report.u_J = mean(uJ);
   report.N_nr_J = mean(nrJ);
   report.epsilon = epsilon.value_or(1.0 / report.N_nr_J);
+  // The one check of ε (the command line and Python both pass it here): u_J S(a) lies in [0, 1].
+  if (epsilon && !(std::isfinite(*epsilon) && *epsilon >= 0 && *epsilon <= 1))
+    throw InputError("--epsilon: must be a finite number in [0, 1] (got " + io::format_double(*epsilon) + ")");
   if (!(report.epsilon >= 0)) throw InputError("--epsilon: must be >= 0");
   report.km = kaplan_meier(records);
   if (report.u_J > 0) report.a_eps = a_epsilon(report.km, report.u_J, report.epsilon);
