@@ -4,6 +4,7 @@
 #include "budjam/errors.hpp"
 #include "budjam/hessian.hpp"
 #include "budjam/orientation.hpp"
+#include "budjam/stability.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -106,23 +107,19 @@ Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
 Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, const ModuliOptions& options,
                                        KernelTreatment& k) {
   k.method = SolveMethod::regularised_refinement;
-  const double diag = Hf.diagonal().cwiseAbs().maxCoeff();
   CholmodSolver ldl(Factorisation::ldlt);
-  double delta = options.regularisation * diag;
-  bool ok = false;
-  for (int attempt = 0; attempt < 4 && !ok; ++attempt, delta *= 100) ok = ldl.factor(Hf, -delta, Eigen::VectorXd());
-  delta /= 100;
-  if (!ok)
+  // The saddle test (stability.hpp), whose factor of H_ff + δ1 the iteration below uses.
+  const Stability st = hessian_stability(Hf, options.regularisation, &ldl);
+  if (!st.factored)
     throw NoResultError("elastic_response: no LDLᵀ factor of the regularised Hessian (zero pivot at column " +
-                        std::to_string(ldl.failed_column()) +
-                        "); try the dense or cg solver, or relax the packing first");
-  k.regularisation = delta;
+                        std::to_string(st.failed_column) + "); try the dense or cg solver, or relax the packing first");
+  k.regularisation = st.delta;
   k.rcond = ldl.rcond();
-  // Sylvester's law of inertia: the negative pivots of LDLᵀ(H_ff + δ1) count the eigenvalues of H_ff
-  // below −δ, and pinning kernel dofs leaves that count unchanged, so they are the unstable modes of H.
-  if (ldl.negative_pivots() > 0) {
+  // Pinning kernel dofs leaves the count of eigenvalues below −δ unchanged, so they are the unstable
+  // modes of H.
+  if (!st.minimum()) {
     k.method = SolveMethod::unstable;
-    k.unstable_modes = static_cast<std::size_t>(ldl.negative_pivots());
+    k.unstable_modes = st.unstable_modes;
     return Eigen::MatrixXd::Constant(Hf.rows(), Xf.cols(), std::numeric_limits<double>::quiet_NaN());
   }
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());

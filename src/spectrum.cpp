@@ -4,6 +4,7 @@
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/errors.hpp"
 #include "budjam/hessian.hpp"
+#include "budjam/stability.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Householder>
@@ -92,6 +93,35 @@ double max_abs(const Sparse& A) {
   return m;
 }
 
+// A number for a message (%g: 6 significant digits, exponent when needed).
+std::string io_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+// ‖·‖_∞ of a symmetric matrix: the largest absolute row sum, a bound on its largest |eigenvalue|.
+double norm_inf(const Sparse& A) {
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(A.rows());
+  for (int k = 0; k < A.outerSize(); ++k)
+    for (Sparse::InnerIterator it(A, k); it; ++it) rows[it.row()] += std::abs(it.value());
+  return rows.size() ? rows.maxCoeff() : 0.0;
+}
+
+// max_k ‖K v_k − λ_k v_k‖ / (‖K‖_∞ ‖v_k‖) over the columns of V (0 without columns).
+double ritz_residual(const Sparse& K, const Eigen::VectorXd& lambda, const Eigen::MatrixXd& V) {
+  if (V.cols() == 0 || V.cols() != lambda.size()) return 0;
+  const double scale = norm_inf(K);
+  if (!(scale > 0)) return 0;
+  const Eigen::MatrixXd R = K * V - V * lambda.asDiagonal();
+  double worst = 0;
+  for (Eigen::Index k = 0; k < V.cols(); ++k) {
+    const double r = R.col(k).norm() / (scale * V.col(k).norm());
+    worst = std::isfinite(r) ? std::max(worst, r) : std::numeric_limits<double>::infinity();
+  }
+  return worst;
+}
+
 double translation_residual(const Sparse& K, const Eigen::MatrixXd& T) {
   const double scale = max_abs(K);
   if (scale == 0) return 0;
@@ -172,6 +202,12 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
   return s;
 }
 
+// Thrown by solve_arpack before any work when the Lanczos run would need as many modes as the problem
+// has after deflation; solve_spectrum then takes the dense method (auto) or refuses (arpack asked for).
+struct ArpackTooSmall {
+  long nev = 0, dim = 0, n_local = 0;
+};
+
 // ARPACK's failures on a valid problem (too few iterations, no shifts, a Lanczos breakdown) are
 // outcomes of the input, not errors of budjam.
 template <class Op>
@@ -225,20 +261,26 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
     }
   }
   const Eigen::Index dim = nd - n_local;  // dimension of the space Lanczos works in
-  if (nev >= dim)
-    throw std::invalid_argument("spectrum: ARPACK computes fewer modes than the problem has (asked for " +
-                                std::to_string(nev) + " of " + std::to_string(dim) +
-                                " after deflation); use the dense method for the whole spectrum");
+  if (nev >= dim) throw ArpackTooSmall{nev, static_cast<long>(dim), static_cast<long>(n_local)};
 
   double sigma = opt.sigma;
   CholmodSolver chol(Factorisation::llt);
   const Eigen::VectorXd unit;  // empty: identity mass (K is already mass-weighted)
   for (int attempt = 0;; ++attempt) {
     if (chol.factor(K, sigma, unit)) break;
-    if (attempt == 4)
-      throw NoResultError("spectrum: K − σ is not positive definite down to σ = " + std::to_string(sigma) +
-                          " (k/m): the packing has a negative eigenvalue (not an energy minimum?); "
-                          "try the dense method to see it, or relax the packing first");
+    if (attempt == 4) {
+      // Why: an eigenvalue below σ (the saddle test of moduli, stability.hpp), or a shift so close to 0
+      // that the exact zero modes (translations) are not lifted above rounding.
+      const Stability st = hessian_stability(H);
+      if (st.factored && !st.minimum())
+        throw NoResultError("spectrum: K − σ is not positive definite down to σ = " + io_number(sigma) +
+                            " (k/m): the packing is a saddle, not an energy minimum (" +
+                            std::to_string(st.unstable_modes) +
+                            " unstable modes); try the dense method to see them, or relax the packing first");
+      throw NoResultError("spectrum: K − σ could not be factored down to σ = " + io_number(sigma) +
+                          " (k/m): the shift is too close to the zero modes to lift them above rounding; "
+                          "try a shift (--sigma) of -1e-3");
+    }
     sigma *= 10;
   }
   s.sigma = sigma;
@@ -285,6 +327,17 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
     s.ncv = res.ncv;
     s.restarts += res.restarts;
     s.operator_applications += res.operator_applications;
+    // Are these eigenpairs of K? ‖K e − λ e‖ bounds the distance of λ to an eigenvalue of K; a shift
+    // far from the spectrum (λ = σ + 1/θ loses ε|σ|) or a loose tol shows here.
+    {
+      const double residual = ritz_residual(K, s.lambda.tail(nev), s.modes);
+      s.ritz_residual = std::max(s.ritz_residual, residual);
+      if (opt.vectors && !(residual <= std::max(1e-9, 10 * opt.tol)))
+        throw NoResultError(
+            "spectrum: ARPACK's eigenpairs are inaccurate (relative residual ‖Kv − λv‖/‖K‖ = " + io_number(residual) +
+            " with shift σ = " + io_number(sigma) + "); try a shift (--sigma) of -1e-3" +
+            (opt.tol > 1e-10 ? " and a tighter tol" : "") + ", or the dense method");
+    }
     if (!opt.verify) break;
 
     // Are these the lowest modes? Sylvester: #{λ < μ} from the inertia of K − μ, just below the
@@ -321,7 +374,24 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
   if (method == SpectrumMethod::automatic)
     method = (nd <= options.dense_max_dof || static_cast<std::size_t>(options.modes) >= nd) ? SpectrumMethod::dense
                                                                                             : SpectrumMethod::arpack;
-  Spectrum s = method == SpectrumMethod::dense ? solve_dense(H, mass, options) : solve_arpack(H, mass, options);
+  Spectrum s;
+  if (method == SpectrumMethod::dense) {
+    s = solve_dense(H, mass, options);
+  } else {
+    try {
+      s = solve_arpack(H, mass, options);
+    } catch (const ArpackTooSmall& t) {
+      // Too few modes left after deflating the cell-local zero modes for a partial solve: the automatic
+      // choice takes the dense method; an explicit request for ARPACK is refused.
+      if (options.method != SpectrumMethod::automatic)
+        throw InputError("spectrum: the arpack method cannot solve so small a problem: it has " +
+                         std::to_string(t.dim) + " modes besides its " + std::to_string(t.n_local) +
+                         " cell-local zero modes and would need " + std::to_string(t.nev) +
+                         " of them, but ARPACK computes fewer modes than the problem has; use the dense method "
+                         "(--method dense or auto)");
+      s = solve_dense(H, mass, options);
+    }
+  }
   // A Hessian that is not finite (no packing the readers accept gives one) must not pass as a spectrum.
   if (!s.lambda.allFinite())
     throw NoResultError("spectrum: eigenvalues not finite (the Hessian is not); relax the packing first");
@@ -350,13 +420,20 @@ std::size_t count_below(const Eigen::VectorXd& lambda, double tol) {
   return static_cast<std::size_t>((lambda.array() < tol).count());
 }
 
+std::size_t count_quasi_zero(const Eigen::VectorXd& lambda, double tol) {
+  return static_cast<std::size_t>((lambda.array().abs() < tol).count());
+}
+
 BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule) {
   BandEdge b;
-  b.n_zero = count_below(s.lambda, rule.lambda_tol);
-  const std::size_t extended = s.n_dof - std::min(s.n_dof, b.n_zero);
+  b.n_zero = count_quasi_zero(s.lambda, rule.lambda_tol);
+  // The band starts after every mode below lambda_tol: the quasi-zero ones and, in a saddle, the
+  // unstable ones (in the order of Spectrum::lambda all of them come first).
+  const std::size_t below = count_below(s.lambda, rule.lambda_tol);
+  const std::size_t extended = s.n_dof - std::min(s.n_dof, below);
   b.n_band =
       std::min(extended, std::max(rule.band_min, static_cast<std::size_t>(std::ceil(rule.band_fraction * extended))));
-  b.modes_needed = b.n_zero + b.n_band;
+  b.modes_needed = below + b.n_band;
   // A partial spectrum counts its quasi-zero modes correctly only if it reaches above lambda_tol;
   // then the band modes must be among the computed ones as well.
   if (b.n_band == 0 || b.modes_needed > static_cast<std::size_t>(s.lambda.size())) {
@@ -365,7 +442,7 @@ BandEdge band_edge(const Spectrum& s, const BandEdgeRule& rule) {
     return b;
   }
   double sum = 0;
-  for (std::size_t k = b.n_zero; k < b.modes_needed; ++k) sum += s.lambda[static_cast<Eigen::Index>(k)];
+  for (std::size_t k = below; k < b.modes_needed; ++k) sum += s.lambda[static_cast<Eigen::Index>(k)];
   b.omega_star = std::sqrt(sum / static_cast<double>(b.n_band));
   b.available = true;
   return b;
@@ -425,9 +502,10 @@ SpectralSummary summarise(const Spectrum& s, const BandEdgeRule& rule) {
   m.lambda_min = s.lambda.size() ? s.lambda.minCoeff() : std::numeric_limits<double>::quiet_NaN();
   m.lambda_max_computed = s.lambda.size() ? s.lambda.maxCoeff() : std::numeric_limits<double>::quiet_NaN();
   m.lambda_tol = rule.lambda_tol;
-  m.N_zero = count_below(s.lambda, rule.lambda_tol);
+  m.N_zero = count_quasi_zero(s.lambda, rule.lambda_tol);
+  m.N_negative = count_below(s.lambda, -rule.lambda_tol);
   m.zero_count_complete = s.complete() || m.lambda_max_computed >= std::max(rule.lambda_tol, 1e-5);
-  for (double tol : {1e-5, 1e-6, 1e-7, 1e-8}) m.zero_counts.emplace_back(tol, count_below(s.lambda, tol));
+  for (double tol : {1e-5, 1e-6, 1e-7, 1e-8}) m.zero_counts.emplace_back(tol, count_quasi_zero(s.lambda, tol));
   m.band = band_edge(s, rule);
   m.translation_residual = s.translation_residual;
   return m;
@@ -464,6 +542,8 @@ PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& c
     options.modes = modes_for_band_edge(nd, net.N_u, rule) - (options.deflate_local ? static_cast<int>(net.N_u) : 0);
   PackingSpectrum out;
   out.cells = prob.cells;
+  // The saddle test of `budjam moduli` (stability.hpp) on the same Hessian.
+  out.stability = hessian_stability(prob.H);
   out.spectrum = solve_spectrum(prob.H, prob.mass, options);
   out.summary = summarise(out.spectrum, rule);
   if (options.vectors) out.participation = participation_ratios(out.spectrum);

@@ -499,11 +499,39 @@ TEST_CASE("the automatic method is dense for small problems and ARPACK for large
   CHECK(std::string(to_string(ps.spectrum.method)) == "arpack");
   CHECK(parse_spectrum_method("dense") == SpectrumMethod::dense);
   CHECK_THROWS_AS(parse_spectrum_method("lanczos", "--method"), InputError);
-  // ARPACK cannot return the whole spectrum.
+  // ARPACK cannot return the whole spectrum: asked for, it is refused as an input error naming the
+  // dense method; chosen automatically, the dense method takes over.
   const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
   opt.method = SpectrumMethod::arpack;
   opt.modes = static_cast<int>(prob.mass.size()) - 2;
-  CHECK_THROWS_AS(solve_spectrum(prob.H, prob.mass, opt), std::invalid_argument);
+  try {
+    solve_spectrum(prob.H, prob.mass, opt);
+    FAIL("no error");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("dense") != std::string::npos);
+  }
+}
+
+TEST_CASE("when the cell-local zero modes leave ARPACK too few modes, auto solves densely and agrees with dense",
+          "[spectrum][arpack]") {
+  // Few Lanczos modes are left once the cell-local zero modes are deflated: asking for all but
+  // one of the 3n − 2 modes minus those would cut nothing, so auto must fall back.
+  const auto& cp = compressed(150, 1);
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  const auto n_local = static_cast<int>(cell_local_zero_modes(prob.H, prob.mass).size());
+  REQUIRE(n_local > 0);
+  const int nd = static_cast<int>(prob.mass.size()) - 2;
+  SpectrumOptions opt;
+  opt.dense_max_dof = 0;     // auto would take ARPACK by size alone
+  opt.modes = nd - n_local;  // < nd, but ≥ the dimension left after deflation
+  const Spectrum a = solve_spectrum(prob.H, prob.mass, opt);
+  CHECK(a.method == SpectrumMethod::dense);
+  opt.method = SpectrumMethod::dense;
+  const Spectrum d = solve_spectrum(prob.H, prob.mass, opt);
+  REQUIRE(a.lambda.size() == d.lambda.size());
+  CHECK((a.lambda - d.lambda).cwiseAbs().maxCoeff() == 0);
+  opt.method = SpectrumMethod::arpack;
+  CHECK_THROWS_AS(solve_spectrum(prob.H, prob.mass, opt), InputError);
 }
 
 TEST_CASE("an unjammed packing has no spectrum and says why", "[spectrum]") {
@@ -736,12 +764,80 @@ TEST_CASE("budjam dos refuses bad options with one line naming the option", "[sp
   r = run_budjam("dos '" + pack.string() + "' --sigma 0.1");
   CHECK(r.code == 2);
   CHECK(r.err.find("--sigma") != std::string::npos);
+  // Non-finite or out-of-range floating values: exit 2, one line naming the option.
+  for (const std::string bad : {"--tol nan", "--tol 1", "--sigma -1e20", "--sigma -1e-300", "--sigma inf",
+                                "--lambda-tol inf", "--lambda-tol 0"}) {
+    INFO(bad);
+    r = run_budjam("dos '" + pack.string() + "' --method arpack " + bad);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(bad.substr(0, bad.find(' '))) != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  // An unjammed packing: the reason is that it has no non-rattlers, whatever --modes says.
+  const fs::path one = work_dir() / "one.pack";
+  std::ofstream(one) << "budjam-packing 1\nL 8\nshear 0\nN 1\nnext_id 1\ncells id parent x y theta b gamma0\n"
+                        "0 -1 4 4 0 0.5 0.002\nend\n";
+  r = run_budjam("dos '" + one.string() + "' --method arpack --modes 3");
+  CHECK(r.code == 2);
+  CHECK(r.err.find("no non-rattler") != std::string::npos);
+  CHECK(r.err.find("--modes") == std::string::npos);
 }
 
-TEST_CASE("on a saddle the zero-mode count #{lambda < tol} includes the unstable mode, as Sylvester's inertia does",
+TEST_CASE("budjam dos on a 3-cell packing: auto solves densely; --method arpack is refused naming the dense method",
+          "[spectrum][cli]") {
+  const fs::path dir = work_dir() / "small";
+  auto r = run_budjam("grow '" + scene("demo.toml").string() + "' --quiet --out '" + dir.string() +
+                      "' --set box.L=2.35 --set 'jamming.targets=[1e-3]'");
+  REQUIRE(r.code == 0);
+  const fs::path pack = dir / "packings" / "jammed.pack";
+  r = run_budjam("dos '" + pack.string() + "' --method arpack");
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("internal") == std::string::npos);
+  CHECK(r.err.find("--method dense") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  const fs::path a = work_dir() / "small-auto", d = work_dir() / "small-dense";
+  r = run_budjam("dos '" + pack.string() + "' --dense-max-dof 0 --quiet --out '" + a.string() + "'");
+  REQUIRE(r.code == 0);
+  REQUIRE(run_budjam("dos '" + pack.string() + "' --method dense --quiet --out '" + d.string() + "'").code == 0);
+  const io::Json ja = io::read_json(a.string() + ".json"), jd = io::read_json(d.string() + ".json");
+  CHECK(ja["method"] == "dense");
+  CHECK(ja["N_zero"] == jd["N_zero"]);
+  // Physics: the zero modes are the floppy ones (3 cells: no rattler inside, N_zero = floppy count).
+  CHECK(ja["N_zero"] == ja["floppy_modes"]);
+}
+
+TEST_CASE("ARPACK eigenpairs are validated: a far shift is refused naming the shift, a tiny one is not called a saddle",
+          "[spectrum][arpack]") {
+  const auto& cp = compressed(150, 1);
+  const VibrationalProblem prob = vibrational_problem(cp.packing, cp.contacts, cp.network);
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::arpack;
+  opt.modes = 20;
+  const Spectrum good = solve_spectrum(prob.H, prob.mass, opt);
+  CHECK(good.ritz_residual < 1e-9);
+  opt.sigma = -1e20;  // λ = σ + 1/θ loses ε|σ| ≈ 2e4: garbage
+  try {
+    solve_spectrum(prob.H, prob.mass, opt);
+    FAIL("no error");
+  } catch (const NoResultError& e) {
+    CHECK(std::string(e.what()).find("sigma") != std::string::npos);
+    CHECK(std::string(e.what()).find("-1e-3") != std::string::npos);
+  }
+  opt.sigma = -1e-300;  // the translations stay singular to rounding: not a negative eigenvalue
+  try {
+    solve_spectrum(prob.H, prob.mass, opt);
+    FAIL("no error");
+  } catch (const NoResultError& e) {
+    CHECK(std::string(e.what()).find("saddle") == std::string::npos);
+    CHECK(std::string(e.what()).find("-1e-3") != std::string::npos);
+  }
+}
+
+TEST_CASE("on a saddle the unstable modes are not zero modes: N_zero + N_negative is Sylvester's inertia count",
           "[spectrum]") {
   // A jamming candidate FIRE stopped on (tests/test_stability.cpp): one eigenvalue of its
-  // non-rattler problem is negative beyond rounding. Counting |lambda| < tol would leave it out.
+  // non-rattler problem is negative beyond rounding. It is an unstable mode, not a quasi-zero one.
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
   const Packing p = io::read_packing(std::filesystem::path(src) / "tests/data/saddle_jamming_L15_seed3.pack").packing;
@@ -764,6 +860,51 @@ TEST_CASE("on a saddle the zero-mode count #{lambda < tol} includes the unstable
     CHECK(count_below(s.lambda, tol) == near_zero + unstable);
     CHECK(static_cast<long>(count_below(s.lambda, tol)) == count_below_by_inertia(prob.H, prob.mass, tol));
   }
-  CHECK(count_below(s.lambda, 0.5 * -lambda_min) >
-        static_cast<std::size_t>((s.lambda.array().abs() < 0.5 * -lambda_min).count()));
+  CHECK(count_below(s.lambda, 0.5 * -lambda_min) > count_quasi_zero(s.lambda, 0.5 * -lambda_min));
+  // The summary: the negative mode counted as unstable, never as quasi-zero; the saddle test of
+  // moduli flags the packing, as a whole.
+  BandEdgeRule rule;
+  rule.lambda_tol = 0.5 * -lambda_min;
+  const SpectralSummary m = summarise(s, rule);
+  CHECK(m.N_negative == static_cast<std::size_t>((s.lambda.array() <= -rule.lambda_tol).count()));
+  CHECK(m.N_negative >= 1);
+  CHECK(m.N_zero + m.N_negative == count_below(s.lambda, rule.lambda_tol));
+  CHECK(hessian_stability(prob.H).unstable_modes == m.N_negative);
+}
+
+TEST_CASE("budjam dos on a saddle writes its spectrum, then a notice and exit 1, as moduli does", "[spectrum][cli]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const std::string pack = std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack";
+  const fs::path dir = work_dir();
+  for (const std::string method : {"dense", "arpack"}) {
+    INFO(method);
+    const fs::path base = dir / method;
+    const auto r = run_budjam("dos '" + pack + "' --method " + method + " --out '" + base.string() + "'");
+    const auto m = run_budjam("moduli '" + pack + "' --quiet");
+    CHECK(m.code == 1);
+    CHECK(r.code == m.code);
+    CHECK(r.err.find("is a saddle") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    const io::Json j = io::Json::parse(testing::slurp(base.string() + ".json"));
+    CHECK(j["energy_minimum"] == false);
+    CHECK(j["unstable_modes"].get<long>() >= 1);
+    // Its unstable mode is shallow (|λ| < lambda_tol, near jamming): the inertia test still finds it;
+    // the table marks as unstable only the modes below −lambda_tol.
+    CHECK(j["N_negative"].get<long>() <= j["unstable_modes"].get<long>());
+    // No negative λ beyond the cutoff is marked quasi-zero in the table.
+    std::istringstream csv(testing::slurp(base.string() + ".csv"));
+    std::string line;
+    std::getline(csv, line);
+    long negative_rows = 0;
+    while (std::getline(csv, line)) {
+      const auto c1 = line.find(','), c2 = line.find(',', c1 + 1);
+      const double lambda = std::stod(line.substr(c1 + 1, c2 - c1 - 1));
+      if (lambda <= -1e-6) {
+        ++negative_rows;
+        CHECK(line.substr(line.rfind(',') + 1) == "false");
+      }
+    }
+    CHECK(negative_rows == j["N_negative"].get<long>());
+  }
 }

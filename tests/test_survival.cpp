@@ -334,16 +334,16 @@ TEST_CASE(
   check_both_refuse(run, (run / "steps.csv").string() + ": no column 'divisions_since_jamming'");
 }
 
-TEST_CASE("survival refuses an epsilon that is negative or not finite, naming the option") {
+TEST_CASE("survival refuses an epsilon outside [0, 1] or not finite, naming the option") {
   const auto dir = budjam::testing::work_dir() / "bad_epsilon";
   std::filesystem::remove_all(dir);
   write_run(dir / "run");
-  for (const char* e : {"-1", "inf", "nan"}) {
+  for (const char* e : {"-1", "inf", "nan", "1.5"}) {
     const auto r =
         budjam::testing::run_budjam("survival " + budjam::testing::shell_quoted(dir / "run") + " --epsilon " + e);
     INFO(r.err);
     CHECK(r.code == 2);
-    CHECK(r.err.rfind("budjam: error: epsilon: must be a finite number >= 0", 0) == 0);
+    CHECK(r.err.rfind("budjam: error: epsilon: must be a finite number in [0, 1]", 0) == 0);
   }
 }
 

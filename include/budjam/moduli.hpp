@@ -28,6 +28,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
+#include "budjam/stability.hpp"
 
 namespace budjam {
 
@@ -137,9 +138,10 @@ ModuliSolver parse_moduli_solver(const std::string& text, const std::string& key
 CgPreconditioner parse_cg_preconditioner(const std::string& text, const std::string& key = "cg-preconditioner");
 
 struct ModuliOptions {
-  double residual_tolerance = 1e-8;  // relative; above it well_posed = false (cg: above
-                                     // max(residual_tolerance, 10·cg_tolerance))
-  double regularisation = 1e-10;     // fallback δ relative to the largest Hessian diagonal entry
+  double residual_tolerance = 1e-8;              // relative; above it well_posed = false (cg: above
+                                                 // max(residual_tolerance, 10·cg_tolerance))
+  double regularisation = kSaddleRelativeDelta;  // fallback δ relative to the largest Hessian diagonal entry;
+                                                 // also the saddle test (stability.hpp)
   int max_refinement_steps = 200;
   ModuliSolver solver = ModuliSolver::ldlt;
   int direct_refinement_steps = 3;  // ldlt, cholesky, dense: at most this many refinement steps …

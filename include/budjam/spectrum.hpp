@@ -35,6 +35,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
+#include "budjam/stability.hpp"
 
 namespace budjam {
 
@@ -114,6 +115,8 @@ struct Spectrum {
   long inertia_count = -1;      // #{λ < inertia_tol} by Sylvester inertia; −1 if not computed
   long inertia_below_top = -1;  // #{λ < max computed λ − 1e-9 max|K|} by inertia (verify); −1 if not
   int retries = 0;              // Lanczos reruns after the verification found a missed mode
+  double ritz_residual = 0;  // max ‖K v − λ v‖ / (‖K‖_∞ ‖v‖) of the Lanczos pairs (with vectors); above
+                             // max(1e-9, 10 tol) solve_spectrum throws NoResultError
   double seconds_factorise = 0, seconds_lanczos = 0;
 
   bool complete() const { return static_cast<std::size_t>(lambda.size()) == n_dof; }
@@ -135,8 +138,11 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
 std::vector<LocalMode> cell_local_zero_modes(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& mass,
                                              double tol = 1e-10);
 
-// Number of modes with λ < tol (quasi-zero modes; negative rounding noise included).
+// Number of modes with λ < tol (negative ones included).
 std::size_t count_below(const Eigen::VectorXd& lambda, double tol);
+// Number of quasi-zero modes, |λ| < tol: rounding noise of either sign, never a clearly negative λ
+// (an unstable mode of a saddle).
+std::size_t count_quasi_zero(const Eigen::VectorXd& lambda, double tol);
 
 // #{λ < tol} among the 3n − 2 modes without computing any: Sylvester's law of inertia on an
 // LDLᵀ factorisation of K − tol·I (negative pivots, minus the two translations). An independent
@@ -145,7 +151,8 @@ long count_below_by_inertia(const Eigen::SparseMatrix<double>& H, const Eigen::V
 
 // The band edge ω*: the root-mean-square frequency of the lowest n_band modes above the
 // quasi-zero modes, ω* = sqrt(mean λ over those modes), with
-//   n_band = max(band_min, ceil(band_fraction · (n_dof − N_zero))),  N_zero = #{λ < lambda_tol}.
+//   n_band = max(band_min, ceil(band_fraction · (n_dof − N_below))),  N_below = #{λ < lambda_tol}
+// (N_zero = #{|λ| < lambda_tol} plus, in a saddle, the unstable modes).
 // A fixed fraction of the extended band keeps ω* intensive (the paper's "lowest few modes" at
 // L = 15 are ≈ 1 % of ≈ 600 modes). `available` is false (ω* = NaN) when a partial spectrum
 // does not reach that far; `modes_needed` then says how many lowest modes would.
@@ -189,7 +196,8 @@ struct SpectralSummary {
   std::size_t n_cells = 0, n_dof = 0, computed = 0;
   double lambda_min = 0, lambda_max_computed = 0;
   double lambda_tol = 1e-6;
-  std::size_t N_zero = 0;           // #{λ < lambda_tol}
+  std::size_t N_zero = 0;           // #{|λ| < lambda_tol}: quasi-zero modes
+  std::size_t N_negative = 0;       // #{λ ≤ −lambda_tol}: unstable modes (a saddle) among the computed ones
   bool zero_count_complete = true;  // false if a partial spectrum does not reach max(lambda_tol,
                                     // 1e-5): the counts are then only lower bounds (compute more modes)
   std::vector<std::pair<double, std::size_t>> zero_counts;  // (tol, #{λ < tol}) for 1e-5 … 1e-8
@@ -210,6 +218,10 @@ struct PackingSpectrum {
   Spectrum spectrum;
   SpectralSummary summary;
   Eigen::VectorXd participation;  // per computed mode (empty without vectors)
+  // The saddle test of `budjam moduli` (hessian_stability) on the non-rattler Hessian: unstable_modes > 0
+  // means the packing is a saddle, not an energy minimum (its spectrum has negative λ).
+  Stability stability;
+  bool energy_minimum() const { return stability.minimum(); }
 };
 
 // Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +

@@ -486,7 +486,7 @@ NoResultError; a saddle is returned flagged, energy_minimum False and the relaxe
       "packing"_a, "method"_a = "auto", "modes"_a = 0,
       R"(Vibrational spectrum of the non-rattlers: the result of `budjam dos` (docs/spectrum.md).
 
-The dict of its JSON, key for key: method, n_dof, N_zero below lambda_tol, omega_star (None if not
+The dict of its JSON, key for key: method, n_dof, N_zero (|lambda| < lambda_tol), omega_star (None if not
 available), the counts N_u and floppy_modes, the histogram D(omega) under "dos", ...; under "table"
 the columns of its CSV, per computed mode: mode, lambda (k/m, ascending), omega =
 sign(lambda) sqrt|lambda|, participation, quasi_zero. Only here: eigenvectors as the orthonormal
@@ -494,8 +494,9 @@ columns of a (3n, k) array, the mass-weighted modes e = M^(1/2) u of the dynamic
 M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the displacement is
 u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
 translations are removed). method: auto | dense | arpack; modes: ARPACK modes (0: as many as
-omega_star needs). An unjammed packing raises InputError; an eigensolver that does not converge
-raises NoResultError saying what to try.)");
+omega_star needs). An unjammed packing raises InputError, as does method "arpack" on a problem too small
+for it; an eigensolver that does not converge raises NoResultError saying what to try. A saddle is
+returned flagged: energy_minimum False, unstable_modes > 0 (as budjam.moduli).)");
   m.def("survival", &survival_dict, "runs"_a, "epsilon"_a = py::none(),
         R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories: the
 result of `budjam survival` (each run's last jamming episode; completion is the event, division and

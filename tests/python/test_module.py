@@ -212,3 +212,14 @@ def test_survival_equals_budjam_survival(run_dir, run_budjam, tmp_path):
     for column in ("a", "S", "se", "at_risk", "events", "censored"):
         np.testing.assert_array_equal(curve[column], table[column])
     assert np.all(np.diff(curve["S"]) <= 0)  # a survival curve never rises
+
+
+def test_spectrum_of_a_saddle_is_flagged_and_its_unstable_mode_is_found_by_the_moduli_test():
+    p = budjam.read_packing(PACKING)
+    s = budjam.spectrum(p, method="dense")
+    m = budjam.moduli(p)
+    assert s["energy_minimum"] is False and m["energy_minimum"] is False
+    assert s["unstable_modes"] == m["kernel"]["unstable_modes"] >= 1
+    # No λ at or below −lambda_tol is called quasi-zero.
+    lam, qz = s["table"]["lambda"], s["table"]["quasi_zero"]
+    assert all(not z for l, z in zip(lam, qz) if l <= -s["lambda_tol"])

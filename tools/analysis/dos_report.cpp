@@ -53,6 +53,10 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
   // The three counts of the paper's Fig. F1C (docs/spectrum.md, "Three counts").
   j["lambda_tol"] = m.lambda_tol;
   j["N_zero"] = m.N_zero;
+  // The saddle test of `budjam moduli` on the same Hessian; N_negative: computed λ ≤ −lambda_tol.
+  j["energy_minimum"] = r.result.energy_minimum();
+  j["unstable_modes"] = r.result.stability.unstable_modes;
+  j["N_negative"] = m.N_negative;
   j["N_u"] = net.N_u;
   j["N_u_buds"] = net.N_u_buds;
   j["floppy_modes"] = r.has_rigidity ? Json(r.rigidity.floppy_plane) : Json(nullptr);
@@ -86,7 +90,8 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
                    {"deflated_local_zero_modes", s.local.size()},
                    {"N_zero_inertia", s.inertia_count >= 0 ? Json(s.inertia_count) : Json(nullptr)},
                    {"inertia_below_top", s.inertia_below_top >= 0 ? Json(s.inertia_below_top) : Json(nullptr)},
-                   {"retries", s.retries}};
+                   {"retries", s.retries},
+                   {"ritz_residual", s.ritz_residual}};
   } else {
     j["arpack"] = nullptr;
   }
@@ -107,7 +112,7 @@ io::CommandResult dos_result(const DosReport& r, const DosRequest& request) {
     for (Eigen::Index n = 0; n < s.lambda.size(); ++n) {
       os << n << ',' << io::format_double(s.lambda[n]) << ',' << io::format_double(signed_omega(s.lambda[n])) << ','
          << (r.result.participation.size() ? io::format_double(r.result.participation[n]) : std::string()) << ','
-         << (s.lambda[n] < r.result.summary.lambda_tol ? "true" : "false") << '\n';
+         << (std::abs(s.lambda[n]) < r.result.summary.lambda_tol ? "true" : "false") << '\n';
     }
   };
   return result;
@@ -123,11 +128,14 @@ std::string dos_line(const DosReport& r) {
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "dos: %s, %zu non-rattlers, %zu of %zu modes in %.2f s; N_zero %zu (lambda < %g), floppy %s, "
-                "N_u %zu; omega* %s",
+                "N_u %zu; omega* %s%s",
                 to_string(m.method), r.network.N_nr, m.computed, m.n_dof, r.seconds, m.N_zero, m.lambda_tol,
                 r.has_rigidity ? std::to_string(r.rigidity.floppy_plane).c_str() : "-", r.network.N_u,
                 m.band.available ? io::format_double(m.band.omega_star).c_str()
-                                 : ("n/a (needs " + std::to_string(m.band.modes_needed) + " modes)").c_str());
+                                 : ("n/a (needs " + std::to_string(m.band.modes_needed) + " modes)").c_str(),
+                r.result.energy_minimum()
+                    ? ""
+                    : ("; a saddle: " + std::to_string(r.result.stability.unstable_modes) + " unstable modes").c_str());
   return buf;
 }
 

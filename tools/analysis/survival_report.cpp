@@ -49,9 +49,10 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
   report.copies = runs.size() - report.runs;
   report.u_J = mean(uJ);
   report.N_nr_J = mean(nrJ);
-  // N_nr_J >= 1 in every jammed run (load_run checks it): 1/<N_nr,J> is finite and positive.
-  if (epsilon && !(*epsilon >= 0 && std::isfinite(*epsilon)))
-    throw InputError("epsilon: must be a finite number >= 0 (got " + io::format_double(*epsilon) + ")");
+  // The one check of ε (the command line and Python both pass it here): u_J S(a) lies in [0, 1]. The
+  // default 1/<N_nr,J> is in (0, 1]: N_nr_J >= 1 in every jammed run (load_run checks it).
+  if (epsilon && !(std::isfinite(*epsilon) && *epsilon >= 0 && *epsilon <= 1))
+    throw InputError("epsilon: must be a finite number in [0, 1] (got " + io::format_double(*epsilon) + ")");
   report.epsilon = epsilon.value_or(1.0 / report.N_nr_J);
   report.km = kaplan_meier(records);
   if (report.u_J > 0) report.a_eps = a_epsilon(report.km, report.u_J, report.epsilon);

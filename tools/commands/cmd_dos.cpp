@@ -19,6 +19,12 @@
 namespace budjam::cli::dos_command {
 namespace {
 
+// Ranges of the floating options (docs/spectrum.md, "Options"). --tol: ARPACK's relative Ritz
+// residual; above 1e-4 the eigenvalues are too rough to classify against lambda_tol. --sigma: below
+// the zero modes by more than their rounding (|σ| ≥ 1e-12 k/m), and near enough that λ = σ + 1/θ keeps
+// its digits (it loses ε|σ| ≤ 2e-12 for |σ| ≤ 1e4, four decades below the smallest zero cutoff 1e-8).
+constexpr double kMaxTol = 1e-4, kMinSigma = 1e-12, kMaxSigma = 1e4, kMaxLambdaTol = 1e-2;
+
 struct Options {
   std::string packing;
   std::string method = "auto";
@@ -38,10 +44,7 @@ void run(const Options& o) {
   tools::DosRequest req;
   req.spectrum.method = parse_spectrum_method(o.method, "--method");
   if (o.modes < 0) throw InputError("--modes: must be ≥ 0 (0 = as many as ω* needs), got " + std::to_string(o.modes));
-  if (o.tol < 0) throw InputError("--tol: must be ≥ 0 (0 = machine precision)");
   if (o.ncv < 0) throw InputError("--ncv: must be ≥ 0 (0 = automatic)");
-  if (!(o.sigma < 0)) throw InputError("--sigma: must be negative (the shift must lie below the zero modes)");
-  if (!(o.lambda_tol > 0)) throw InputError("--lambda-tol: must be positive");
   if (o.bins == 0) throw InputError("--bins: must be positive");
   req.spectrum.modes = o.modes;
   req.spectrum.tol = o.tol;
@@ -57,16 +60,21 @@ void run(const Options& o) {
   if (o.ncv > 0 && o.modes > 0 && o.ncv <= o.modes)
     throw InputError("--ncv: must exceed --modes (got " + std::to_string(o.ncv) + " ≤ " + std::to_string(o.modes) +
                      ")");
-  const std::size_t n_dof = pc.network.N_nr > 0 ? 3 * pc.network.N_nr - 2 : 0;
+  if (pc.network.N_nr == 0)
+    throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
+  const std::size_t n_dof = 3 * pc.network.N_nr - 2;
   if (req.spectrum.method == SpectrumMethod::arpack && o.modes > 0 && static_cast<std::size_t>(o.modes) >= n_dof)
     throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) + " ≥ " +
                      std::to_string(n_dof) + "); use --method dense");
-
-  if (pc.network.N_nr == 0)
-    throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
   const tools::DosReport report =
       cli::naming_input("dos", o.packing, [&] { return tools::dos_report(f.packing, pc.contacts, pc.network, req); });
   io::emit(o.output, tools::dos_result(report, req), std::cout);
+  // As `budjam moduli`: a saddle's spectrum is written, then a notice and exit 1.
+  if (!report.result.energy_minimum())
+    throw cli::Finding("dos: " + o.packing + " is a saddle, not an energy minimum (" +
+                       std::to_string(report.result.stability.unstable_modes) +
+                       " unstable modes): its spectrum has negative eigenvalues (N_negative in the JSON), which are "
+                       "not counted as zero modes (docs/spectrum.md, \"Saddles\")");
 }
 
 const bool registered = budjam::cli::register_command(
@@ -80,11 +88,16 @@ const bool registered = budjam::cli::register_command(
                       "ARPACK: K Lanczos modes besides the deflated cell-local zero modes (so at least the lowest K); "
                       "0 = as many as ω* needs (n_band + 16)")
            ->capture_default_str();
-       sub.add_option("--tol", o->tol, "ARPACK relative residual tolerance; 0 = machine precision")
-           ->capture_default_str();
+       sub.add_option("--tol", o->tol, "ARPACK relative residual tolerance, in [0, 1e-4]; 0 = machine precision")
+           ->capture_default_str()
+           ->check(budjam::cli::finite_in(0, kMaxTol));
        sub.add_option("--ncv", o->ncv, "ARPACK Lanczos vectors; 0 = max(2K+1, K+20)")->capture_default_str();
-       sub.add_option("--sigma", o->sigma, "ARPACK shift (k/m), negative")->capture_default_str();
-       sub.add_option("--lambda-tol", o->lambda_tol, "quasi-zero cutoff on λ = ω²")->capture_default_str();
+       sub.add_option("--sigma", o->sigma, "ARPACK shift (k/m), in [-1e4, -1e-12]")
+           ->capture_default_str()
+           ->check(budjam::cli::finite_in(-kMaxSigma, -kMinSigma));
+       sub.add_option("--lambda-tol", o->lambda_tol, "quasi-zero cutoff on |λ| = ω², in (0, 1e-2]")
+           ->capture_default_str()
+           ->check(budjam::cli::finite_in(0, kMaxLambdaTol, true));
        sub.add_option("--bins", o->bins, "D(ω) histogram bins")
            ->capture_default_str()
            ->check(budjam::cli::non_negative());

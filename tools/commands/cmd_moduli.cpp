@@ -44,11 +44,20 @@ struct Options {
 };
 
 // G is the paper's: the contact-virial stress slope under Lees–Edwards simple shear, named as such.
+// A saddle has no relaxed moduli (NaN in the response): the line says so instead of printing NaN.
 std::string summary_line(const ElasticResponse& e) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G_simple = %.6g%s", e.N,
-                e.N_nr, e.phi, e.P, e.B(), e.G(),
-                e.energy_minimum() ? " (G: Lees-Edwards simple shear)" : " (a saddle: relaxed moduli undefined)");
+  if (!e.energy_minimum()) {
+    std::snprintf(buf, sizeof buf,
+                  "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B, G_simple: none (a saddle, not a minimum: "
+                  "%zu unstable modes)",
+                  e.N, e.N_nr, e.phi, e.P, e.kernel.unstable_modes);
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf,
+                "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B = %.6g, G_simple = %.6g (G: Lees-Edwards simple "
+                "shear)",
+                e.N, e.N_nr, e.phi, e.P, e.B(), e.G());
   return buf;
 }
 
@@ -56,29 +65,23 @@ std::string summary_line(const ElasticResponse& e) {
 ModuliOptions moduli_options(const Options& o) {
   ModuliOptions m;
   m.solver = parse_moduli_solver(o.solver, "--solver");
-  if (!(o.cg_tol > 0 && o.cg_tol < 1))
-    throw InputError("--cg-tol: must lie in (0, 1), got " + std::to_string(o.cg_tol));
   m.cg_tolerance = o.cg_tol;
   m.cg_preconditioner = parse_cg_preconditioner(o.cg_preconditioner, "--cg-preconditioner");
   if (o.refine < 0 || o.refine > 100)
     throw InputError("--refine: must be in [0, 100], got " + std::to_string(o.refine));
   m.direct_refinement_steps = o.refine;
-  if (!(o.refine_above >= 0 && o.refine_above < 1))
-    throw InputError("--refine-above: must lie in [0, 1), got " + std::to_string(o.refine_above));
   m.refinement_threshold = o.refine_above;
   return m;
 }
 
-// The finite-strain check of the linear response strains the packing up to 32 steps.
-constexpr double kMaxStrainStep = 1e-3;
+// The finite-strain check of the linear response strains the packing up to 32 steps of --strain:
+// at most 1e-3 (linear response), at least 1e-10, where the stress change of one step still holds
+// ~ε/γ ≈ 2e-6 of relative rounding (below it the finite difference is noise; docs/moduli.md).
+constexpr double kMinStrainStep = 1e-10, kMaxStrainStep = 1e-3;
 
 void run(const Options& o) {
   io::check_output_request(o.output, false, {o.packing});
   const ModuliOptions options = moduli_options(o);
-  if (o.strain && !(*o.strain > 0 && *o.strain <= kMaxStrainStep))
-    throw InputError("--strain: must lie in (0, " + io::format_double(kMaxStrainStep) +
-                     "]: --check strains the packing up to 32 times this step (got " + io::format_double(*o.strain) +
-                     ")");
   io::PackingFile file = io::read_packing(o.packing);
   Packing& p = file.packing;
   ForceField field;
@@ -127,7 +130,9 @@ const bool registered = budjam::cli::register_command(
                     "also measure G, B (stress slopes) and G_energy, B_energy (energy curvatures) by finite "
                     "Lees-Edwards shear and isotropic rescaling with FIRE");
        sub.add_option("--strain", o->strain,
-                      "strain step of --check, at most 1e-3 (default: 1% of the smallest overlap, in [1e-10, 1e-6])");
+                      "strain step of --check, in [1e-10, 1e-3] (default: 1% of the smallest overlap, in [1e-10, "
+                      "1e-6])")
+           ->check(budjam::cli::finite_in(kMinStrainStep, kMaxStrainStep));
        sub.add_flag("--relax", o->relax, "FIRE-minimise the packing first");
        sub.add_flag(
            "--timing", o->timing,
@@ -137,14 +142,16 @@ const bool registered = budjam::cli::register_command(
                       "simplicial LDLt + refinement), dense (Eigen LDLt, small systems), cg (conjugate gradients)")
            ->capture_default_str();
        sub.add_option("--cg-tol", o->cg_tol, "cg: relative residual per strain column, in (0, 1)")
-           ->capture_default_str();
+           ->capture_default_str()
+           ->check(budjam::cli::finite_in(0, 1, true, true));
        sub.add_option("--cg-preconditioner", o->cg_preconditioner, "cg: ichol (incomplete Cholesky) or diagonal")
            ->capture_default_str();
        sub.add_option("--refine", o->refine, "cholesky, ldlt, dense: at most this many iterative-refinement steps")
            ->capture_default_str();
        sub.add_option("--refine-above", o->refine_above,
-                      "cholesky, ldlt, dense: refine only while the relative residual exceeds this")
-           ->capture_default_str();
+                      "cholesky, ldlt, dense: refine only while the relative residual exceeds this, in [0, 1)")
+           ->capture_default_str()
+           ->check(budjam::cli::finite_in(0, 1, false, true));
        budjam::cli::add_output_options(sub, o->output, "BASE.json");
        sub.callback([o] { run(*o); });
      }});

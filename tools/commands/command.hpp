@@ -20,11 +20,15 @@
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -105,6 +109,29 @@ inline CLI::Validator non_negative() {
         return {};
       },
       "NONNEGATIVE");
+}
+
+// A floating option: a finite number in the interval from lo to hi (each end open or closed), checked
+// on the text (so "nan", "inf" and out-of-range values fail alike): "must be a finite number in
+// (0, 1] (got TEXT)". Every floating option of dos, moduli and survival goes through this one check.
+inline CLI::Validator finite_in(double lo, double hi, bool lo_open = false, bool hi_open = false) {
+  auto g = [](double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", x);
+    return std::string(buf);
+  };
+  const std::string range = (lo_open ? "(" : "[") + g(lo) + ", " + g(hi) + (hi_open ? ")" : "]");
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        const auto first = text.find_first_not_of(" \t");
+        const auto last = text.find_last_not_of(" \t");
+        const auto v = first == std::string::npos
+                           ? std::nullopt
+                           : io::parse_double(std::string_view(text).substr(first, last - first + 1));
+        const bool ok = v && std::isfinite(*v) && (lo_open ? *v > lo : *v >= lo) && (hi_open ? *v < hi : *v <= hi);
+        return ok ? std::string() : "must be a finite number in " + range + " (got " + text + ")";
+      },
+      range);
 }
 
 // A seed is written into scene files as a TOML integer (signed 64 bit): 0 … 2^63 − 1.
