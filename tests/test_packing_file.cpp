@@ -1,7 +1,10 @@
 // The packing file format (io/packing_file.hpp).
+#include "budjam/contacts.hpp"
 #include "budjam/packing_rules.hpp"
 #include "io/packing_file.hpp"
+#include "io/run_data.hpp"
 #include "random_packing.hpp"
+#include "run_budjam.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -261,7 +264,8 @@ TEST_CASE("a packing that breaks a physical rule is refused naming the line", "[
       {replace(kValid, "L 8\n", "L 2.25\n"),
        "t.pack:2: box side L = 2.25 must exceed 2 (largest lobe diameter + skin) = 2.3"},
       {replace(kValid, "shear 0\n", "shear 1e308\n"),
-       "t.pack:2: box shear = 1e+308 must be finite and at most 1e+06 in size"},
+       "t.pack:2: box shear = 1e+308 must be finite and at most 16 in size"},
+      {replace(kValid, "0 -1 4 3.5", "0 -1 136.5 3.5"), "t.pack:8: cell 0: position more than 16 box sides"},
       {replace(kValid, "0 -1 4 3.5", "0 -1 1e300 3.5"), "t.pack:8: cell 0: position more than"},
       {replace(kValid, "0.25 0.5 0.002", "0.25 1e300 0.002"),
        "t.pack:8: cell 0: bud diameter b = 1e+300 outside [0, 3]"},
@@ -312,4 +316,35 @@ TEST_CASE("unwritable_problem names the quantity as Packing(...) names its argum
   CHECK(problem([](Packing& p) { p.b[0] = -0.5; }) == "b[0]: must be >= 0 (got -0.5)");
   CHECK(problem([&](Packing& p) { p.gamma0[1] = nan; }) == "gamma0[1]: not finite (got nan)");
   CHECK(problem([](Packing&) {}).empty());
+}
+
+TEST_CASE("a packing shifted by whole periods up to the bound keeps its contacts and forces; beyond it is refused",
+          "[packing_file]") {
+  // Periodicity: the physics is the same whatever image of the box a cell's coordinates name. Up to
+  // kMaxBoxesAway boxes out the coordinates lose at most 4 bits, so the contact network is the same and
+  // the pressure agrees to rounding; farther out the reader refuses instead of reading lost digits.
+  // its centroids brought into [0, L) first (whole periods, exact to rounding), so k periods out is k boxes out
+  Packing p = read_packing(budjam::testing::source_file("tests/data/negative_G_target_L8.pack")).packing;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int c = 0; c < 2; ++c) p.q[3 * i + c] -= std::floor(p.q[3 * i + c] / p.box.L) * p.box.L;
+  const auto at = [&](double k) {
+    Packing q = p;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      q.q[3 * i] += k * q.box.L;
+      q.q[3 * i + 1] -= k * q.box.L;
+    }
+    return q;
+  };
+  const tools::PackingContacts base = tools::analyse_contacts(p);
+  REQUIRE(base.contacts.size() > 0);
+  for (const double k : {1.0, 7.0, kMaxBoxesAway - 1.0}) {
+    const Packing q = at(k);
+    const PackingFile back = parse_packing(format_packing(q, {}), "shifted.pack");
+    const tools::PackingContacts shifted = tools::analyse_contacts(back.packing);
+    CHECK(shifted.contacts.size() == base.contacts.size());
+    CHECK(shifted.network.Z == base.network.Z);
+    CHECK(pressure(shifted.contacts, q.box) == Approx(pressure(base.contacts, p.box)).epsilon(1e-9));
+  }
+  CHECK_THROWS_WITH(parse_packing(format_packing(at(kMaxBoxesAway + 1.0), {}), "far.pack"),
+                    Contains("position more than 16 box sides from the origin"));
 }

@@ -24,8 +24,14 @@ namespace budjam {
 inline constexpr double kMaxBudDiameter = 3.0 * kMotherDiameter;
 // Largest bud of a grown state with newborn aspect ratio α0 (a bigger one would have divided).
 inline double max_bud_diameter(double alpha0) { return (2.0 * alpha0 - 1.0) * kMotherDiameter; }
-// Unwrapped coordinates further than this many box sides from the origin are refused.
-inline constexpr double kMaxBoxesAway = 1e6;
+// Unwrapped coordinates further than this many box sides from the origin are refused. A coordinate
+// K box sides out resolves positions only to ~2⁻⁵² K L, and a pair's separation, a difference of two
+// such coordinates, no better: near jamming contacts close and open over overlaps of 10⁻⁸ and less,
+// so a packing shifted by 10⁵ periods is another contact network. budjam keeps coordinates within
+// [−L/2, 3L/2) at the start of every relaxation (fire.cpp), so what it writes is well inside this
+// bound, which costs at most 4 bits against coordinates in the box; farther ones are refused, not
+// silently read with the digits they no longer hold.
+inline constexpr double kMaxBoxesAway = 16;
 
 // Where a contact's overlap reaches half its contact distance, r ≤ σ/2, its prestress stiffness
 // f/r = k (σ/r − 1) exceeds the contact stiffness k, and at r = 0 (stacked lobes) the contact has no
