@@ -649,6 +649,11 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
 
 void check_accuracy_out(const fs::path& dir) {
   io::check_output_directory("--out", dir, {"accuracy.csv", "accuracy.md", "accuracy.json"});
+  // An earlier output: accuracy.json with the keys write_accuracy_tables writes.
+  io::check_own_output_directory("--out", dir, "accuracy", "accuracy.json", [](const io::Json& j) {
+    return j.contains("front_rule") && j["front_rule"].is_object() && j.contains("rows") && j["rows"].is_array() &&
+           j.contains("defaults_on_front");
+  });
 }
 
 void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std::vector<SweepRow>& rows,

@@ -1228,6 +1228,10 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
 EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   if (o.out.empty()) throw InputError("--out: an output directory is required");
   io::check_output_directory("--out", o.out, kOutputFiles);  // before the work, not after it
+  // An earlier output: analysis.json with the format tag and the keys analyse writes (any version).
+  io::check_own_output_directory("--out", o.out, "analyse", "analysis.json", [](const io::Json& j) {
+    return j.value("format", io::Json()) == "budjam-analysis" && j.contains("version") && j.contains("groups");
+  });
   if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
   if (!o.tables.empty() && fs::exists(o.out) && fs::equivalent(o.tables, o.out))
     throw InputError("--out: " + o.out + " is the --tables directory; its tables would be overwritten");

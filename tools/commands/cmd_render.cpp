@@ -47,9 +47,9 @@ void convert_svg(const fs::path& svg, const io::Directory& dir, const std::strin
   // On standard output, into the temporary's descriptor: rsvg-convert given a name writes a
   // temporary of its own beside it, which a signal would leave behind. "--": a file name that
   // starts with "-" is a file, not an option.
-  const int rc = io::run_program({"rsvg-convert", "-f", format, "--", svg.string()}, "render",
-                                 "install Debian's librsvg2-bin", tmp.fd());
-  if (rc != 0) throw io::IoError("render: rsvg-convert failed with status " + std::to_string(rc));
+  const io::ProgramResult r = io::run_program({"rsvg-convert", "-f", format, "--", svg.string()}, "render",
+                                              "install Debian's librsvg2-bin", tmp.fd());
+  if (!r.ok()) throw io::IoError("render: " + io::one_line((dir / to).string()) + ": rsvg-convert " + r.failure());
   tmp.commit();
 }
 

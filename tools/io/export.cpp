@@ -420,15 +420,14 @@ void write_gsd(const Directory& dir, std::string_view name_view, const std::vect
   TempFile out(dir, name);
   const char* env = std::getenv("BUDJAM_PYTHON");
   const std::string python = env && *env ? env : BUDJAM_PYTHON_EXECUTABLE;
-  const int rc =
+  const ProgramResult r =
       run_program({python, "-c", gsd_writer(), input.path().string(), out.path().string()}, "export --format gsd",
                   "GSD is written by the Python package gsd: install Debian's python3-gsd, or set BUDJAM_PYTHON");
-  if (rc == kNoGsdPackage)
-    throw IoError(path.string() + ": " + python +
+  if (r.signal == 0 && r.status == kNoGsdPackage)
+    throw IoError(one_line(path.string()) + ": " + one_line(python) +
                   " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
-  if (rc != 0)
-    throw IoError(path.string() + ": the GSD writer (" + python + ", package gsd) failed with status " +
-                  std::to_string(rc));
+  if (!r.ok())
+    throw IoError(one_line(path.string()) + ": the GSD writer (" + one_line(python) + ", package gsd) " + r.failure());
   out.commit();
 }
 

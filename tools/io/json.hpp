@@ -5,9 +5,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace budjam::io {
 
@@ -26,5 +28,17 @@ void write_json(const Directory& dir, std::string_view name, const Json& value);
 
 // InputError "<path>: cannot read: ..." or "<path>: invalid JSON: <parser message>".
 Json read_json(const std::filesystem::path& path);
+
+}  // namespace budjam::io
+
+namespace budjam::io {
+
+// `--out DIR` of a command that replaces its own files in DIR (analyse, accuracy): DIR may be new,
+// empty, or an earlier output of the command, recognised by `marker` (a regular file, not a link,
+// in DIR) holding a JSON object for which `is_own` is true. Any other non-empty DIR is refused,
+// InputError "<option>: <DIR> is not empty and not an output of <command> (...)", so that a
+// user's own runs.csv or accuracy.md is never replaced. Changes nothing.
+void check_own_output_directory(std::string_view option, const std::filesystem::path& dir, std::string_view command,
+                                std::string_view marker, const std::function<bool(const Json&)>& is_own);
 
 }  // namespace budjam::io

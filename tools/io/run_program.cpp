@@ -1,7 +1,9 @@
 #include "io/run_program.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/text.hpp"
 
+#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -17,20 +19,79 @@ namespace budjam::io {
 namespace {
 // The program being waited for (0: none), for stop_running_program.
 volatile std::sig_atomic_t g_running = 0;
+
+// Of a program's standard error only the tail is kept: the last line is what is reported.
+constexpr std::size_t kKeptErrorBytes = 64 * 1024;
+// The longest quoted error line, in bytes (a program may write one huge line).
+constexpr std::size_t kMaxQuotedLine = 300;
+
+std::string last_nonempty_line(const std::string& text) {
+  std::size_t end = text.size();
+  while (end > 0) {
+    const std::size_t nl = text.rfind('\n', end - 1);
+    const std::size_t begin = nl == std::string::npos ? 0 : nl + 1;
+    std::string line = text.substr(begin, end - begin);
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.pop_back();
+    if (!line.empty()) return line;
+    if (nl == std::string::npos) break;
+    end = nl;
+  }
+  return {};
+}
+
+struct Fd {
+  int fd = -1;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
 }  // namespace
 
-int run_program(const std::vector<std::string>& argv, const std::string& what, const std::string& hint, int stdout_to) {
+std::string ProgramResult::failure() const {
+  if (signal != 0) {
+    const char* name = ::strsignal(signal);
+    return std::string("was killed (") + (name ? name : "signal " + std::to_string(signal)) + ")";
+  }
+  if (last_error_line.empty()) return "failed with exit status " + std::to_string(status);
+  std::string line = last_error_line;
+  if (line.size() > kMaxQuotedLine) {
+    std::size_t cut = kMaxQuotedLine;  // on a UTF-8 character boundary
+    while (cut > 0 && (static_cast<unsigned char>(line[cut]) & 0xc0) == 0x80) --cut;
+    line = line.substr(0, cut) + " [...]";
+  }
+  return "failed: " + escape_control(line);
+}
+
+ProgramResult run_program(const std::vector<std::string>& argv, const std::string& what, const std::string& hint,
+                          int stdout_to) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0)
+    throw IoError(what + ": cannot run " + argv[0] + ": pipe: " + std::strerror(errno));
+  Fd read_end{ends[0]}, write_end{ends[1]};
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   if (stdout_to >= 0) posix_spawn_file_actions_adddup2(&actions, stdout_to, STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, write_end.fd, STDERR_FILENO);
   pid_t pid = 0;
   const int rc = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw IoError(what + ": cannot run " + argv[0] + ": " + std::strerror(rc) + " (" + hint + ")");
   g_running = static_cast<std::sig_atomic_t>(pid);
+  ::close(write_end.fd);
+  write_end.fd = -1;
+  // Read until every writer has closed it (the program ends), keeping the tail.
+  std::string err;
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = ::read(read_end.fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    err.append(buf, static_cast<std::size_t>(n));
+    if (err.size() > 2 * kKeptErrorBytes) err.erase(0, err.size() - kKeptErrorBytes);
+  }
   int status = 0;
   while (waitpid(pid, &status, 0) < 0)
     if (errno != EINTR) {
@@ -38,7 +99,15 @@ int run_program(const std::vector<std::string>& argv, const std::string& what, c
       throw IoError(what + ": waitpid failed");
     }
   g_running = 0;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+  ProgramResult r;
+  if (WIFEXITED(status))
+    r.status = WEXITSTATUS(status);
+  else if (WIFSIGNALED(status))
+    r.signal = WTERMSIG(status);
+  else
+    r.status = 128;
+  r.last_error_line = last_nonempty_line(err);
+  return r;
 }
 
 void stop_running_program() noexcept {
