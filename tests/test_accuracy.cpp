@@ -66,6 +66,7 @@ TEST_CASE("budjam accuracy --packings: every solver and ARPACK setting against d
   REQUIRE(run_budjam("accuracy --packings 'small=" + set.string() + "' --min-seconds 0 --out '" + out.string() + "'")
               .code == 0);
   const io::Json acc = io::read_json(out / "accuracy.json");
+  CHECK(acc.value("format", "") == "budjam-accuracy");  // how a later --out recognises its own output
   CHECK(testing::csv_header(out / "accuracy.csv") == testing::documented_columns("`DIR/accuracy.csv`"));
 
   // Direct solvers agree with the dense reference at rounding level; CG to its tolerance (relative to

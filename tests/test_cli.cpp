@@ -200,7 +200,7 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
 
 TEST_CASE(
     "render stopped by SIGINT while its converter runs leaves neither a temporary nor the output, and "
-    "no converter behind",
+    "no converter behind; the converter starts with no signal blocked",
     "[cli]") {
   const fs::path dir = work_dir() / "render_sigint";
   fs::remove_all(dir);
@@ -208,8 +208,9 @@ TEST_CASE(
   // A converter that says it has started (with its pid), takes its time, then writes: as an orphan it
   // would write after budjam removed its temporaries.
   const fs::path converter = dir / "bin" / "rsvg-convert", mark = dir / "started";
-  std::ofstream(converter) << "#!/bin/sh\necho $$ > " << budjam::testing::shell_quoted(mark) << ".new\nmv "
-                           << budjam::testing::shell_quoted(mark) << ".new " << budjam::testing::shell_quoted(mark)
+  std::ofstream(converter) << "#!/bin/sh\ngrep SigBlk /proc/self/status > blocked\necho $$ > "
+                           << budjam::testing::shell_quoted(mark) << ".new\nmv " << budjam::testing::shell_quoted(mark)
+                           << ".new " << budjam::testing::shell_quoted(mark)
                            << "\nsleep 2\necho drawn\necho late > late\n";
   fs::permissions(converter, fs::perms::owner_all);
   std::ofstream(dir / "p.pack")
@@ -238,7 +239,10 @@ TEST_CASE(
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  CHECK(left == std::vector<std::string>{"bin", "p.pack", "started"});
+  CHECK(left == std::vector<std::string>{"bin", "blocked", "p.pack", "started"});
+  // budjam holds the fatal signals back only while it records the converter's pid: the converter
+  // itself starts with none blocked
+  CHECK(slurp(dir / "blocked") == "SigBlk:\t0000000000000000\n");
 }
 
 TEST_CASE(

@@ -127,6 +127,7 @@ TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
 #include <string>
 #include <vector>
 
+#include "input_error.hpp"
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
@@ -258,14 +259,9 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 // survival and analyse on `run`: both exit 2 with one line starting `start`, never "internal".
 void check_both_refuse(const std::filesystem::path& run, const std::string& start) {
   const std::string q = budjam::testing::shell_quoted(run);
-  for (const std::string command : {"survival " + q, "analyse " + q + " --out " + q + "_an"}) {
-    const auto r = budjam::testing::run_budjam(command);
+  for (const std::string& command : {"survival " + q, "analyse " + q + " --out " + q + "_an"}) {
     INFO(command);
-    INFO(r.err);
-    CHECK(r.code == 2);
-    CHECK(r.err.rfind("budjam: error: " + start, 0) == 0);
-    CHECK(r.err.find("internal") == std::string::npos);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    budjam::testing::check_input_error(budjam::testing::run_budjam(command), start);
   }
 }
 

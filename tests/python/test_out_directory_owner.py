@@ -1,5 +1,6 @@
 """`analyse --out DIR` and `accuracy --out DIR` replace only their own earlier output: a non-empty
-directory without their marker file (analysis.json / accuracy.json with their keys) is refused."""
+directory without their marker file (analysis.json / accuracy.json with their format tag, or an
+untagged accuracy.json with its keys) is refused."""
 import json
 
 from conftest import SOURCE_DIR
@@ -56,4 +57,24 @@ def test_accuracy_accepts_its_own_earlier_output(run_budjam, tmp_path):
     (tmp_path / "packs").mkdir(exist_ok=True)
     r = run_budjam("accuracy", "--packings", f"q={tmp_path / 'packs'}", "--out", out, check=False)
     # past the --out check: whatever follows, it is not the refusal of a foreign directory
+    assert "is not empty" not in r.stderr
+
+
+def test_accuracy_refuses_a_json_of_another_format(run_budjam, tmp_path):
+    out = tmp_path / "other"
+    out.mkdir()
+    foreign = json.dumps({"format": "my-sweep", "version": 1, "front_rule": {}, "rows": [], "defaults_on_front": True})
+    (out / "accuracy.json").write_text(foreign)
+    (tmp_path / "packs").mkdir(exist_ok=True)
+    r = run_budjam("accuracy", "--packings", f"q={tmp_path / 'packs'}", "--out", out, check=False)
+    assert r.returncode == 2 and "is not empty" in r.stderr
+    assert (out / "accuracy.json").read_text() == foreign
+
+
+def test_accuracy_accepts_its_own_tagged_output(run_budjam, tmp_path):
+    out = tmp_path / "tagged"
+    out.mkdir()
+    (out / "accuracy.json").write_text(json.dumps({"format": "budjam-accuracy", "version": 1}))
+    (tmp_path / "packs").mkdir(exist_ok=True)
+    r = run_budjam("accuracy", "--packings", f"q={tmp_path / 'packs'}", "--out", out, check=False)
     assert "is not empty" not in r.stderr

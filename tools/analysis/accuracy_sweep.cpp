@@ -649,8 +649,10 @@ std::string markdown(const std::vector<SweepRow>& rows, const SweepVerdict& v) {
 
 void check_accuracy_out(const fs::path& dir) {
   io::check_output_directory("--out", dir, {"accuracy.csv", "accuracy.md", "accuracy.json"});
-  // An earlier output: accuracy.json with the keys write_accuracy_tables writes.
+  // An earlier output: accuracy.json with the format tag, or (written before the tag) the keys
+  // write_accuracy_tables writes.
   io::check_own_output_directory("--out", dir, "accuracy", "accuracy.json", [](const io::Json& j) {
+    if (j.contains("format")) return j["format"] == "budjam-accuracy" && j.contains("version");
     return j.contains("front_rule") && j["front_rule"].is_object() && j.contains("rows") && j["rows"].is_array() &&
            j.contains("defaults_on_front");
   });
@@ -664,7 +666,9 @@ void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std
   Json jrows = Json::array();
   for (const SweepRow& r : rows) jrows.push_back(row_json(r));
   io::write_json(dir / "accuracy.json",
-                 Json{{"note",
+                 Json{{"format", "budjam-accuracy"},
+                      {"version", 1},
+                      {"note",
                        "errors: mean over seeds (growth) or packings (moduli, spectrum) of |variant - reference| "
                        "(phi_J, u_J, Z_J) or of the relative error (P, B, G, omega_star averaged over the "
                        "targets; band = the largest relative error of the n_band eigenvalues omega* averages); "

@@ -28,10 +28,6 @@ bool valid_meta_key(std::string_view key) {
   });
 }
 
-bool valid_meta_value(std::string_view value) {
-  return value.find_first_of("\r\n") == std::string_view::npos && first_invalid_utf8(value).empty();
-}
-
 std::vector<std::string_view> tokens_of(std::string_view line) {
   std::vector<std::string_view> out;
   std::size_t i = 0;
