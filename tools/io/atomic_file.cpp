@@ -22,6 +22,15 @@
 #include <utility>
 
 namespace budjam::io {
+
+SignalsHeld::SignalsHeld() {
+  sigset_t held;
+  sigemptyset(&held);
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, sig);
+  ::pthread_sigmask(SIG_BLOCK, &held, &old_);
+}
+
+SignalsHeld::~SignalsHeld() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
 namespace fs = std::filesystem;
 
 namespace {
@@ -302,26 +311,6 @@ int list_temporary(int dir_fd, const std::string& name) {
 void unlist_temporary(int slot) {
   if (slot >= 0) g_open_temporaries[static_cast<std::size_t>(slot)].dir_fd.store(-1);
 }
-
-// Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), making
-// one step of what a stop must not split: a temporary's creation and its listing for
-// remove_open_temporaries() (a signal during open(2) would find it not yet listed), and the
-// renames of files written as one.
-class SignalsHeld {
- public:
-  SignalsHeld() {
-    sigset_t held;
-    sigemptyset(&held);
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, sig);
-    ::pthread_sigmask(SIG_BLOCK, &held, &old_);
-  }
-  ~SignalsHeld() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
-  SignalsHeld(const SignalsHeld&) = delete;
-  SignalsHeld& operator=(const SignalsHeld&) = delete;
-
- private:
-  sigset_t old_{};
-};
 
 }  // namespace
 

@@ -11,6 +11,7 @@
 // is, as the user gave it. Every output file gets the mode open(2) gives with 0666 and the umask.
 #include <sys/stat.h>
 
+#include <csignal>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -131,6 +132,23 @@ class TempFile {
 // Removes every TempFile of this process that is neither committed nor destroyed: for a handler
 // of a signal that ends the process (no destructor runs then). Async-signal-safe (unlinkat only).
 void remove_open_temporaries() noexcept;
+
+// Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), making
+// one step of what a stop must not split: a temporary's creation and its listing for
+// remove_open_temporaries() (a signal during open(2) would find it not yet listed), the renames of
+// files written as one, and a helper program's start and the recording of its pid.
+class SignalsHeld {
+ public:
+  SignalsHeld();
+  ~SignalsHeld();
+  SignalsHeld(const SignalsHeld&) = delete;
+  SignalsHeld& operator=(const SignalsHeld&) = delete;
+  // The mask before: what a program started meanwhile should begin with.
+  const sigset_t& before() const { return old_; }
+
+ private:
+  sigset_t old_{};
+};
 
 // Replaces `name` in `dir` by `content` atomically (a TempFile). On any failure the temporary is
 // removed, the previous file (if any) is untouched, and IoError is thrown.

@@ -4,7 +4,6 @@
 #include "io/text.hpp"
 
 #include <fcntl.h>
-#include <pthread.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -76,23 +75,21 @@ ProgramResult run_program(const std::vector<std::string>& argv, const std::strin
   posix_spawn_file_actions_init(&actions);
   if (stdout_to >= 0) posix_spawn_file_actions_adddup2(&actions, stdout_to, STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, write_end.fd, STDERR_FILENO);
-  // A fatal signal between the spawn and g_running would leave the program running after the
-  // handler removed its output: the signals wait until the pid is recorded, the program starts
-  // with the caller's mask.
-  sigset_t fatal, caller;
-  sigemptyset(&fatal);
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&fatal, sig);
-  pthread_sigmask(SIG_BLOCK, &fatal, &caller);
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  posix_spawnattr_setsigmask(&attributes, &caller);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
   pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, args[0], &actions, &attributes, args.data(), environ);
-  posix_spawnattr_destroy(&attributes);
+  int rc = 0;
+  {
+    // A fatal signal between the spawn and g_running would leave the program running after the
+    // handler removed its output; the program starts with the caller's mask.
+    const SignalsHeld held;
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setsigmask(&attributes, &held.before());
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
+    rc = posix_spawnp(&pid, args[0], &actions, &attributes, args.data(), environ);
+    posix_spawnattr_destroy(&attributes);
+    if (rc == 0) g_running = static_cast<std::sig_atomic_t>(pid);
+  }
   posix_spawn_file_actions_destroy(&actions);
-  if (rc == 0) g_running = static_cast<std::sig_atomic_t>(pid);
-  pthread_sigmask(SIG_SETMASK, &caller, nullptr);
   if (rc != 0) throw IoError(what + ": cannot run " + argv[0] + ": " + std::strerror(rc) + " (" + hint + ")");
   ::close(write_end.fd);
   write_end.fd = -1;
