@@ -54,7 +54,16 @@ rigidity = _accepts_paths(_budjam.rigidity)
 moduli = _accepts_paths(_budjam.moduli)
 spectrum = _accepts_paths(_budjam.spectrum)
 particle_frame = _accepts_paths(_budjam.particle_frame)
-export = _accepts_paths(_budjam.export)
+
+
+@functools.wraps(_budjam.export)
+def export(packing, path, format, network="load-bearing"):
+    # A packing given by its path is never overwritten by its own export (as on the command line).
+    if isinstance(packing, (str, os.PathLike)):
+        return _budjam.export(read_packing(packing), path, format, network, source=packing)
+    return _budjam.export(packing, path, format, network)
+
+
 gsd_frame = _accepts_paths(_budjam.gsd_frame)
 
 

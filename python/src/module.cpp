@@ -17,6 +17,7 @@
 #include "io/atomic_file.hpp"
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
+#include "io/result_files.hpp"
 #include "io/run_data.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
@@ -517,13 +518,14 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
   m.def(
       "export",
       [](const io::PackingFile& f, const std::filesystem::path& path, const std::string& format,
-         const std::string& network) {
+         const std::string& network, const std::optional<std::filesystem::path>& source) {
         if (!io::find_export_format(format))
           throw InputError("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
         io::check_output_file("", path);  // the command line's output-name rules
+        if (source) io::check_not_an_input("path", path, {*source});
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
-      "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing",
+      "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing", "source"_a = py::none(),
       "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "
       "GSD (HOOMD schema) or legacy VTK.");
   m.def(

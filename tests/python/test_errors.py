@@ -229,3 +229,19 @@ def test_a_packing_whose_meta_value_is_not_utf8_raises_input_error_naming_file_a
     with pytest.raises(budjam.InputError, match=r"latin1.pack:6: meta kind: the value is not valid UTF-8") as e:
         budjam.read_packing(path)
     assert type(e.value) is budjam.InputError
+
+
+@pytest.mark.parametrize("link", [False, True])
+def test_export_refuses_to_overwrite_the_packing_it_reads(tmp_path, link):
+    """As `budjam export` does: the output may not be the input file, under any name."""
+    source = tmp_path / "p.pack"
+    source.write_bytes(PACKING.read_bytes())
+    out = source
+    if link:
+        out = tmp_path / "alias.gsd"
+        out.symlink_to(source)
+    with pytest.raises(budjam.InputError, match="is the input file"):
+        budjam.export(str(source), out, "xyz")
+    assert source.read_bytes() == PACKING.read_bytes()
+    budjam.export(str(source), tmp_path / "p.xyz", "xyz")  # another name is written
+    assert (tmp_path / "p.xyz").stat().st_size > 0
