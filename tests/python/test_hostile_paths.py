@@ -118,15 +118,17 @@ def test_an_input_file_beyond_the_size_limit_is_refused_without_reading_it(run_b
     assert_refused(r, str(huge), "larger than")
 
 
-@pytest.mark.parametrize("command", ["analyse", "accuracy"])
+@pytest.mark.parametrize("command", ["analyse", "accuracy", "grow"])
 def test_an_output_directory_that_is_a_file_or_a_dangling_link_is_refused(run_budjam, run_dir, tmp_path, command):
+    """Also a directory to be created under either: the message names the part that stops it."""
     (tmp_path / "file").write_text("the user's\n")
     (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
-    args = {"analyse": [run_dir], "accuracy": ["--packings", f"x={run_dir}"]}[command]
+    args = {"analyse": [run_dir], "accuracy": ["--packings", f"x={run_dir}"],
+            "grow": [SOURCE_DIR / "data" / "scenes" / "demo.toml"]}[command]
     before = snapshot(tmp_path)
-    for out in ["file", "dangling", "file/sub"]:
+    for out in ["file", "dangling", "file/sub", "dangling/sub"]:
         r = run_budjam(command, *args, "--out", tmp_path / out, check=False)
-        assert_refused(r, out)
+        assert_refused(r, out, *(["symbolic link to nothing"] if out.startswith("dangling") else []))
         assert snapshot(tmp_path) == before
 
 

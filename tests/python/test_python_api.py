@@ -4,6 +4,7 @@ pandas that equal what those packages read from budjam's files, and result dicts
 command line's JSON."""
 import json
 import pathlib
+import re
 import shutil
 
 import ase.io
@@ -170,3 +171,12 @@ def test_particles_dataframe_has_one_row_per_lobe_as_exported(stepped_packing, e
     np.testing.assert_array_equal(df["wrapped_x"], read.positions[:, 0])
     np.testing.assert_array_equal(df["radius"], p.lobes()["radius"])
     np.testing.assert_array_equal(df["rigid_cluster"], read.arrays["rigid_cluster"])
+
+
+def test_particle_frame_has_exactly_the_keys_python_md_lists(stepped_packing):
+    text = (SOURCE_DIR / "docs" / "python.md").read_text()
+    start = text.index("`particle_frame(p)` gives")
+    listed = set(re.findall(r"`(\w+)`", text[start:text.index("The export's", start)]))
+    frame = budjam.particle_frame(stepped_packing)
+    assert set(frame) == listed
+    assert all(len(frame[k]) == 2 * budjam.read_packing(stepped_packing).N for k in ("x", "rigid_cluster", "rattler"))

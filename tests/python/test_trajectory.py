@@ -99,3 +99,48 @@ def test_a_runs_trajectory_exports_by_default_to_the_runs_own_trajectory_gsd(ref
     r = run_budjam("export", run / "trajectory.xyz", "--format", "gsd", check=False)
     assert r.returncode == 2 and "symbolic link" in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
     assert not (tmp_path / "elsewhere.gsd").exists() and (run / "trajectory.gsd").is_symlink()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=["INT", "TERM", "KILL"])
+def test_an_export_of_a_runs_trajectory_stopped_midway_leaves_the_run_as_it_was(reference, budjam_exe, run_budjam,
+                                                                                tmp_path, sig):
+    """Stopped by SIGINT or SIGTERM while its GSD writer runs, the export removes its temporaries and
+    empties the run's list of them (a name left listed would make the next claim of the run remove a
+    file a user has created under it since); killed, it leaves them listed, and the next export
+    removes exactly those before it writes."""
+    import os
+    import shlex
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(reference, run, symlinks=True)
+    (run / "trajectory.gsd").unlink(missing_ok=True)
+    before = sorted(p.name for p in run.iterdir())
+    assert ".budjam-temporaries" in before
+    started, writer = tmp_path / "started", tmp_path / "slow-python"
+    writer.write_text(f"#!/bin/sh\necho $$ > {shlex.quote(str(started))}.new\n"
+                      f"mv {shlex.quote(str(started))}.new {shlex.quote(str(started))}\nexec sleep 60\n")
+    writer.chmod(0o755)
+    proc = subprocess.Popen([budjam_exe, "export", run / "trajectory.xyz", "--format", "gsd"],
+                            env={**os.environ, "BUDJAM_PYTHON": str(writer)})
+    deadline = time.monotonic() + 60
+    while not started.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert started.exists(), "the GSD writer never started"
+    proc.send_signal(sig)
+    assert proc.wait(timeout=30) == -sig
+    try:
+        os.kill(int(started.read_text()), signal.SIGKILL)  # an orphan of the killed export
+    except ProcessLookupError:
+        pass
+    left = sorted(p.name for p in run.iterdir() if p.name not in before)
+    listed = sorted((run / ".budjam-temporaries").read_text().split())
+    if sig == signal.SIGKILL:
+        assert len(left) == 2 and listed == left  # the frames it passes on and the GSD file
+    else:
+        assert left == [] and listed == []
+    user = run / "packings" / ".mine.tmp-abcdef"  # a user's file named like a temporary stays
+    user.write_text("the user's\n")
+    run_budjam("export", run / "trajectory.xyz", "--format", "gsd")
+    assert sorted(p.name for p in run.iterdir()) == sorted(before + ["trajectory.gsd"])
+    assert (run / ".budjam-temporaries").read_text() == "" and user.read_text() == "the user's\n"

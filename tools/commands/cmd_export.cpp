@@ -66,10 +66,11 @@ void export_run_trajectory(const Options& o, const std::filesystem::path& out) {
   if (o.format != "gsd" || o.network_given) return export_trajectory(o, out);  // refused there
   std::filesystem::path dir = std::filesystem::path(o.packing).parent_path();
   if (dir.empty()) dir = ".";
-  const io::RunDirectory run = io::RunDirectory::resume(dir, tools::run_owned_entries());
+  io::RunDirectory run = io::RunDirectory::resume(dir, tools::run_owned_entries());
   const auto input = run.root().entry(io::run_files::trajectory);
   if (!input || !S_ISREG(input->st_mode))
     throw InputError(io::escape_control(o.packing) + ": not a regular file of the run");
+  run.remove_recorded_temporaries();  // those of a writer killed in this run, as grow --resume does
   io::write_gsd(run.root(), io::run_files::trajectory_gsd, io::read_extxyz(run / io::run_files::trajectory));
 }
 

@@ -93,6 +93,21 @@ std::string read_all(int fd, const fs::path& path) {
   throw InputError(path.string() + ": is not " + expected);
 }
 
+// The deepest part of `path` that is an entry (a link to nothing included), or empty if none is.
+fs::path deepest_entry(const fs::path& path) {
+  std::error_code ec;
+  for (fs::path p = path; !p.empty(); p = p.parent_path()) {
+    if (fs::exists(fs::symlink_status(p, ec))) return p;
+    if (p == p.parent_path()) break;
+  }
+  return {};
+}
+
+// "" when `part` is `path` itself, else "PART " to start a message about `path` with.
+std::string which_part(const fs::path& path, const fs::path& part) {
+  return part == path ? "" : escape_control(part.string()) + " ";
+}
+
 // `.NAME.tmp-XXXXXX`: the only names TemporaryManifest::remove_listed removes.
 bool looks_temporary(std::string_view name) {
   const std::size_t at = name.rfind(".tmp-");
@@ -122,8 +137,9 @@ Directory Directory::open(const fs::path& path, bool create) {
     std::error_code lec;
     if (ec && !fs::is_directory(path, lec)) {
       // A file, a dangling link or too long a name on the way is the user's spelling: exit 2.
-      if (fs::is_symlink(fs::symlink_status(path, lec)))
-        throw InputError(path.string() + ": is a symbolic link to nothing; cannot create the directory");
+      if (const fs::path e = deepest_entry(path); !e.empty() && !fs::exists(fs::status(e, lec)))
+        throw InputError(path.string() + ": " + which_part(path, e) +
+                         "is a symbolic link to nothing; cannot create the directory");
       if (ec == std::errc::file_exists || ec == std::errc::not_a_directory || ec == std::errc::filename_too_long ||
           ec == std::errc::too_many_symbolic_link_levels)
         throw InputError(path.string() + ": cannot create directory: " + ec.message());
@@ -234,11 +250,43 @@ void Directory::record_temporaries_in(std::shared_ptr<TemporaryManifest> manifes
 
 // ---- TemporaryManifest ---------------------------------------------------------------------
 
+namespace {
+
+// Temporaries that found no slot in the list remove_open_temporaries() reads: while one is open, a
+// handler cannot remove them all, and so must leave the lists of temporaries that name them.
+std::atomic<int> g_unlisted{0};
+// The descriptors of the lists of temporaries that name only this process's own (-1: free): a
+// handler empties them once it has removed those temporaries. A list that finds no slot keeps its
+// names after a signal; the next claim of its tree removes the files.
+std::array<std::atomic<int>, 8> g_own_manifests{-1, -1, -1, -1, -1, -1, -1, -1};
+
+void register_own_manifest(int fd) {
+  for (std::atomic<int>& m : g_own_manifests) {
+    int free = -1;
+    if (m.load() == fd || m.compare_exchange_strong(free, fd)) return;
+  }
+}
+
+void unregister_own_manifest(int fd) {
+  for (std::atomic<int>& m : g_own_manifests) {
+    int ours = fd;
+    m.compare_exchange_strong(ours, -1);
+  }
+}
+
+}  // namespace
+
 TemporaryManifest::TemporaryManifest(Directory root, std::string_view name)
-    : root_(std::move(root)), fd_(root_.open_file(name, O_RDWR | O_CREAT | O_APPEND)) {}
+    : root_(std::move(root)), fd_(root_.open_file(name, O_RDWR | O_CREAT | O_APPEND)) {
+  // An empty list names nothing of another process; a list with names waits for remove_listed().
+  struct stat st {};
+  if (::fstat(fd_, &st) == 0 && st.st_size == 0) register_own_manifest(fd_);
+}
 
 TemporaryManifest::~TemporaryManifest() {
-  if (fd_ >= 0) ::close(fd_);
+  if (fd_ < 0) return;
+  unregister_own_manifest(fd_);
+  ::close(fd_);
 }
 
 void TemporaryManifest::add(const std::string& relative) {
@@ -279,6 +327,7 @@ void TemporaryManifest::remove_listed() {
   }
   if (::ftruncate(fd_, 0) != 0) io_fail(root_.path(), "cannot empty the temporaries list", errno);
   outstanding_ = 0;
+  register_own_manifest(fd_);
 }
 
 // ---- TempFile ------------------------------------------------------------------------------
@@ -319,6 +368,13 @@ void remove_open_temporaries() noexcept {
     const int fd = t.dir_fd.load();
     if (fd >= 0) ::unlinkat(fd, t.name, 0);
   }
+  // A list left naming removed files would make the next claim of its tree remove whatever a user
+  // has created under those names since.
+  if (g_unlisted.load() != 0) return;
+  for (const std::atomic<int>& m : g_own_manifests) {
+    const int fd = m.load();
+    if (fd >= 0) (void)::ftruncate(fd, 0);
+  }
 }
 
 TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(dir)), final_(final_name) {
@@ -335,6 +391,8 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
   }
   if (fd_ < 0) io_fail(dir_ / final_, "cannot create a temporary file beside it", EEXIST);
   slot_ = list_temporary(dir_.fd(), name_);
+  unlisted_ = slot_ < 0;
+  if (unlisted_) ++g_unlisted;
   held.reset();
   // Recorded once it exists: the list never names a file this process did not create.
   if (dir_.manifest()) {
@@ -343,7 +401,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
     } catch (...) {
       ::close(fd_);
       ::unlinkat(dir_.fd(), name_.c_str(), 0);
-      unlist_temporary(slot_);
+      forget_name();
       throw;
     }
   }
@@ -352,7 +410,7 @@ TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(
 TempFile::~TempFile() {
   if (fd_ >= 0) ::close(fd_);
   if (!committed_) ::unlinkat(dir_.fd(), name_.c_str(), 0);
-  unlist_temporary(slot_);  // after the name is gone: a signal in between finds nothing to remove
+  forget_name();  // after the name is gone: a signal in between finds nothing to remove
   if (dir_.manifest()) {
     try {
       dir_.manifest()->done();
@@ -360,6 +418,11 @@ TempFile::~TempFile() {
       // A list that could not be emptied only names files that no longer exist.
     }
   }
+}
+
+void TempFile::forget_name() {
+  unlist_temporary(std::exchange(slot_, -1));
+  if (std::exchange(unlisted_, false)) --g_unlisted;
 }
 
 // Errors name the file being written, not its temporary: the user never asked for that name.
@@ -376,7 +439,7 @@ void TempFile::commit() {
   if (!ok) io_fail(dir_ / final_, "cannot sync", err);
   dir_.rename(name_, final_);
   committed_ = true;
-  unlist_temporary(std::exchange(slot_, -1));
+  forget_name();
   dir_.sync();
 }
 
@@ -453,17 +516,12 @@ void check_output_base(std::string_view option, const fs::path& base,
 
 void check_output_directory(std::string_view option, const fs::path& dir, const std::vector<std::string_view>& names) {
   // The nearest part of the path that exists must be a directory (links followed, as spelled).
-  std::error_code ec;
-  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
-    const fs::file_status st = fs::status(p, ec);
-    const std::string which = p == dir ? "" : escape_control(p.string()) + " ";
-    if (fs::exists(st)) {
-      if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which + "is not a directory");
-      break;
-    }
-    if (fs::is_symlink(fs::symlink_status(p, ec)))
-      throw InputError(output_at(option, dir) + which + "is a symbolic link to nothing");
-    if (p == p.parent_path()) break;
+  if (const fs::path e = deepest_entry(dir); !e.empty()) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(e, ec);
+    if (!fs::exists(st))
+      throw InputError(output_at(option, dir) + which_part(dir, e) + "is a symbolic link to nothing");
+    if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which_part(dir, e) + "is not a directory");
   }
   refuse_run_directory(option, dir, dir);
   for (const std::string_view name : names) check_output_path(option, dir / name);

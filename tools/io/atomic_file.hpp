@@ -82,8 +82,9 @@ class Directory {
 
 // The temporaries a process has created in a directory tree, listed in a file of that tree, so
 // that the next claim of the tree removes exactly those a killed process left, and never a file
-// merely named like one. Entries are appended before a temporary is created; the list is emptied
-// whenever no temporary is outstanding.
+// merely named like one. An entry is appended once its temporary exists; the list is emptied
+// whenever no temporary is outstanding, and by remove_open_temporaries() when a signal stops the
+// process.
 class TemporaryManifest {
  public:
   // Opens (creating) `name` in `root`. Does not read it.
@@ -126,11 +127,15 @@ class TempFile {
   std::string final_, name_;
   int fd_ = -1;
   bool committed_ = false;
-  int slot_ = -1;  // in the list remove_open_temporaries() reads, or -1
+  int slot_ = -1;          // in the list remove_open_temporaries() reads, or -1
+  bool unlisted_ = false;  // open and in no slot of that list (it was full)
+  // The name no longer names this temporary (removed or committed): out of the handler's reach.
+  void forget_name();
 };
 
-// Removes every TempFile of this process that is neither committed nor destroyed: for a handler
-// of a signal that ends the process (no destructor runs then). Async-signal-safe (unlinkat only).
+// Removes every TempFile of this process that is neither committed nor destroyed, then empties the
+// lists of temporaries that named only those: for a handler of a signal that ends the process (no
+// destructor runs then). Async-signal-safe (unlinkat and ftruncate only).
 void remove_open_temporaries() noexcept;
 
 // Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), making

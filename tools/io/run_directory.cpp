@@ -246,7 +246,8 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite, const Own
   std::error_code ec;
   const bool exists = fs::exists(fs::symlink_status(dir, ec));
   if (exists && !fs::is_directory(dir, ec))
-    throw InputError("--out: " + dir.string() + " exists and is not a directory");
+    throw InputError("--out: " + dir.string() +
+                     (fs::exists(dir, ec) ? " exists and is not a directory" : " is a symbolic link to nothing"));
   Directory root = Directory::open(dir, true);
   const bool run = has_marker(root);
   if (!run && !empty_but_lock(root))
