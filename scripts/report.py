@@ -428,17 +428,20 @@ def main():
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {pm(pmax)} with the measured φ_J", "same",
           judged(pmax, verdicts.quoted(0.1, 0.1), n_paper=PAPER_SEEDS), "—")
     claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
-          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0), n_paper=PAPER_SEEDS), "—")
+          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY), "—")
     ident = M["dZ_identity"]
     unrep = ident.get("per_P0_unrepopulated_by_run", [])
-    vs = [judged(x, verdicts.quoted(0.0, 0.0), seeds=seeds_in(groups.get(label(x.get("P0"))))) for x in unrep]
+    vs = [judged(x, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY) for x in unrep]
     claim("ΔZ = ΔZ₀(P) + 2(u_J − u) over (P0, Δφ) (Eq. 6)", "holds within finite-size scatter",
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
           f", RMS {fmt(ident['all_targets'].get('rms'))}; the verdict's test: mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
           "repopulation), feedback runs, per P0 (± is the SE over runs and that of the no-feedback branch ΔZ₀(P), which "
           "every run shares, in quadrature): " +
           "; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)),
-          paper_cells_text(ident.get("paper_cells"), "ΔZ", "ΔZ₀(P) + 2(u_J − u)"),
+          paper_cells_text(ident.get("paper_cells"), "ΔZ", "ΔZ₀(P) + 2(u_J − u)") +
+          " (its ingredients: ΔZ₀(P) through the no-feedback targets' means, u_J the buds tagged at jamming over the "
+          "target's N_nr, u the contact-free lobes; its single-pass rattler rule and contacts with rattlers in N_c "
+          "are not in the tables)",
           all_of(vs, "P0 groups") if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
     # ---- depletion ----
     for lab in order:
@@ -457,17 +460,21 @@ def main():
           trend_of([groups[l]["dphi_2_paper"] for l in order], increasing=False), fig("fig2"))
     claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da per P0 (each P0's runs pooled, diameter²)", "—",
           "; ".join(survival_text(p0_name(l), groups[l].get("pooled_survival") or {}) for l in order),
-          "same", "—", fig("figS"))
+          "per run, never pooled: each run's curve up to S ≤ 1/(its tagged buds), as runs.csv a_eps and integral_S; "
+          "mean a_ε over the depleted runs: " + ", ".join(f"{p0_name(l)} {pm(groups[l].get('a_eps'))}" for l in order),
+          "—", fig("figS"))
     # ---- mechanics ----
     bg_name, bg_text, bg = growth_bulk(M["B_grow_over_lambda_B_log10"])
     if have_moduli and bg is not None:
         per = {l: groups[l].get("B_grow_over_lambda_B_log10", {}) for l in order}
-        pooled = judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median", seeds=main_seeds)
-        vs = [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", seeds=seeds_in(groups[l])) for l in order]
+        pooled = judged(M["B_grow_over_lambda_B_log10"], verdicts.quoted(0.0, 0.0), key="median",
+                        n_paper=verdicts.THEORY)
+        vs = [judged(per[l], verdicts.quoted(0.0, 0.0), key="median", n_paper=verdicts.THEORY) for l in order]
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)",
               f"{bg_name} = {bg_text} over the targets with λ_c B > 0, error by seed (the verdict's test); per P0: " +
               ", ".join(f"{p0_name(l)} {pm(per[l], 'median')}" for l in order),
-              paper_cells_text(M["B_grow_over_lambda_B_log10"].get("paper_cells"), "B_grow", "λ_c B_ext"),
+              paper_cells_text(M["B_grow_over_lambda_B_log10"].get("paper_cells"), "B_grow", "λ_c B_ext") +
+              " (its λ_c with u the contact-free lobes)",
               all_of(vs, "P0 groups", pooled=pooled), fig("fig3"))
     else:
         claim("B_grow = λ_c B_ext (Eq. 20)", "holds over (P0, Δφ)", "not measured (moduli stage off or unavailable)",
@@ -476,7 +483,8 @@ def main():
         x = groups[lab]
         claim(f"P_2/P_max and λ̄_c, {p0_name(lab)}", "decrease strongly with feedback, together",
               f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']), 'lambda_bar')}; every run",
-              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])}", "lambda_bar"),
+              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])} (u the contact-free lobes)",
+                    "lambda_bar_lobes"),
               "see trend row", fig("fig3"))
     v2 = trend_of([groups[l]["P_2_over_Pmax_paper"] for l in fed], increasing=False)
     vl = trend_of([groups[l]["lambda_bar_paper"] for l in fed], increasing=False)
@@ -548,7 +556,8 @@ def main():
             paper = fmt(paper_h[lab][0])
         else:
             verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
-        theirs = avail(f"{pm(x.get('h_gamma_paper'))} (mean ± SE over runs)", "h_gamma") if lab != "none" else "same"
+        theirs = (avail(f"{pm(x.get('h_gamma_paper'))} (mean ± SE over runs, every cell, rattlers included)",
+                        "h_gamma_all_cells") if lab != "none" else "same")
         claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)}", paper, ours + " (median ± bootstrap SE)", theirs, verdict,
               fig("figE1"))
     strong = [l for l in fed if float(l) <= 1e-2]
@@ -569,8 +578,8 @@ def main():
               f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
               f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}",
               avail(f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)", "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
-              f"{pm(w)} (u at Δφ = 3e-3, contact-free buds over N_nr: the tables hold no g per cell, and the paper's "
-              "weight, cells of every kind whose bud grows at g = 1 exactly, needs it); g < 1: " +
+              avail(f"{pm(w)} (per run, the fraction of all cells, rattlers included, whose bud grows at g = 1 "
+                    "exactly; mean ± SE over runs)", "g1_fraction_all_cells") + "; g < 1: " +
               avail(f"median {fmt(quart[1])}, quartiles {fmt(quart[0])} – {fmt(quart[2])}",
                     "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled") + peak_text,
               (size_mismatch(L, PAPER_L_MAIN) or judged(w, verdicts.quoted(paper_w[lab], 0.01), seeds=seeds_in(x)))
@@ -605,7 +614,7 @@ def main():
               f"N_zero − N_u = {pm(diff)} (the verdict's test)",
               f"N_zero = N_u exactly in {n_text(nz.get('N_zero_equals_N_u'))} of {n_text(nz.get('packings'))} "
               f"Δφ-target packings{slope} (the paper's panel, no test)" if nz else "not measured",
-              judged(diff, verdicts.quoted(0.0, 0.0), seeds=main_seeds), fig("figF1"))
+              judged(diff, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY), fig("figF1"))
     else:
         claim("N_zero ≃ N_u (Eq. F4)", "tracks", "not measured (dos stage off or unavailable)", "same",
               verdicts.Verdict("inconclusive", "not measured"), fig("figF1"))
@@ -702,13 +711,17 @@ def main():
         "that set in units of σ = √(s_b² + s_p²), budjam's standard error and the paper's own sampling error, estimated "
         "from budjam's spread as s_p = s_b √(n_b/n_p) for the paper's n_p samples: the paper ran "
         f"{PAPER_SEEDS} seeds per point, so n_p = {PAPER_SEEDS} for the jamming rows (one sample per seed; "
-        f"budjam's n_b = {n_text(jam_n)}) and, for every other row, {grid_np}. Confirmed when z ≤ 2, not confirmed "
+        f"budjam's n_b = {n_text(jam_n)}) and, for every other row, {grid_np}; a relation the theory predicts (ΔZ_J = 0, "
+        "the ΔZ identity, B_grow = λ_c B_ext, N_zero = N_u) is no number the paper measured, so there σ = s_b. "
+        "Confirmed when z ≤ 2, not confirmed "
         "when z > 2, inconclusive with fewer than 5 samples "
         "(no error bar is printed from fewer either). A trend is confirmed when its first-to-last change has z > 2 and "
         "no step goes against it with z > 2, not confirmed when one does, and inconclusive otherwise.",
         "",
         "Each claim is measured twice: under budjam's definition and under the rules of the paper's own analysis "
-        "(docs/analysis.md, \"Definitions\", lists both for every quantity); the verdict is for the paper's rules. "
+        "(docs/analysis.md, \"Definitions\", lists both for every quantity); the verdict is for the paper's rules, "
+        "except where the paper's analysis draws a figure without a test (the ΔZ identity, B_grow = λ_c B_ext, "
+        "N_zero = N_u): there it is budjam's test, and the paper's figure is summarised beside it. "
         "φ_2 is the first state after jamming with at most one tagged bud left under both; the paper's selection "
         "admits a run when its smallest Δφ target at or beyond φ_2 had at most 10 divisions after φ_J, its Eq. 14 "
         "takes the bud size a as diameter², its G_2 statistics keep G_2 > 0 within Tukey's 1.5·IQR fences (G_2 only), "

@@ -6,7 +6,9 @@ estimate x has its standard error s_b from n_b samples. The paper's number has a
 own that the paper does not quote; with the same protocol the spread per sample is the same, so it is
 s_p = s_b √(n_b / n_p) for the paper's n_p samples (its 20 seeds per point: n_p = n_b · 20/S for a grid
 budjam grew with S seeds per point, n_p = n_b when S = 20). The
-combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C).
+combined error is σ = √(s_b² + s_p²), and z = distance(x, C) / σ (0 inside C). A relation the theory
+predicts (ΔZ_J = 0, an identity between measured quantities, N_zero = N_u) is no number the paper
+measured: it has no sampling error of its own, n_p = THEORY and σ = s_b.
 
     inconclusive   n_b < 5: no error bar and no verdict (the n is stated); likewise with no finite
                    estimate, no error bar, an SE of 0 (no spread among n_b ≥ 5 values is no error bar
@@ -38,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 MIN_SAMPLES = 5  # no error bar and no verdict from fewer (as `budjam analyse` writes no SE then)
+THEORY = "theory"  # n_p of a relation the theory predicts: no paper sample, so s_p = 0
 Z_MAX = 2.0      # ≈ 95 % two-sided
 
 
@@ -118,18 +121,19 @@ def unusable(estimate, se, n):
 
 def compare(estimate, se, n, claim, n_paper=None):
     """The verdict on one claim from budjam's estimate ± se over n samples; n_paper = the paper's
-    number of samples (None: the same as budjam's)."""
+    number of samples (None: the same as budjam's; THEORY: a predicted relation, no paper sample)."""
     why_not = unusable(estimate, se, n)
     if why_not is not None:
         return why_not
     if n_paper is None:
         n_paper = n
-    elif not _finite(n_paper) or n_paper <= 0:
+    elif n_paper is not THEORY and (not _finite(n_paper) or n_paper <= 0):
         shown = f"{n_paper:g}" if isinstance(n_paper, (int, float)) and not isinstance(n_paper, bool) else repr(n_paper)
         return Verdict("inconclusive", f"n_p = {shown}: the paper's sample size must be a positive number")
     if se == 0:
         return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
-    return _judged(estimate, math.hypot(se, se * math.sqrt(n / n_paper)), claim)
+    s_p = 0.0 if n_paper is THEORY else se * math.sqrt(n / n_paper)
+    return _judged(estimate, math.hypot(se, s_p), claim)
 
 
 def _judged(estimate, sigma, claim):

@@ -576,8 +576,8 @@ fs::path hand_tables(const std::string& name, const std::function<void(std::ostr
 }  // namespace
 
 constexpr const char* kRunsHeader =
-    "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,dphi_2_pred_area,"
-    "dphi_2_pred_diameter_sq,G_2\n";
+    "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,lambda_bar_lobes,"
+    "dphi_2_pred_area,dphi_2_pred_diameter_sq,G_2\n";
 
 TEST_CASE(
     "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
@@ -601,8 +601,8 @@ TEST_CASE(
       const std::string run = "hand/seed" + std::to_string(k + 1);
       const double phi_J = 0.84;
       r << run << ",15,0.001," << k + 1 << ",finished," << k << "," << phi_J << ",0.2,0.76,172,170,"
-        << phi_J + dphi_2[k] << "," << dphi_2[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.75 * dphi_2[k]
-        << "," << dphi_2[k] + 0.001 * k << "," << G_2[k] << "\n";
+        << phi_J + dphi_2[k] << "," << dphi_2[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.6 + 0.01 * k
+        << "," << 0.75 * dphi_2[k] << "," << dphi_2[k] + 0.001 * k << "," << G_2[k] << "\n";
       t << run << ",15,0.001," << k + 1 << ",0.001," << phi_J + 0.001 << ",2,true\n";
       t << run << ",15,0.001," << k + 1 << ",0.03," << phi_J + 0.03 << "," << div_far[k] << ",false\n";
     }
@@ -617,7 +617,9 @@ TEST_CASE(
   CHECK(g["dphi_2_paper"]["n"] == 5);
   CHECK(g["dphi_2_paper"]["mean"].get<double>() == Approx(0.014));
   CHECK(g["P_2_over_Pmax_paper"]["mean"].get<double>() == Approx(0.12));
-  CHECK(g["lambda_bar_paper"]["mean"].get<double>() == Approx(0.52));
+  // λ̄_c: the paper's with u the contact-free lobes, over the admitted runs; budjam's with the buds, every run
+  CHECK(g["lambda_bar_paper"]["mean"].get<double>() == Approx(0.62));
+  CHECK(g["lambda_bar"]["mean"].get<double>() == Approx(0.525));
   // Eq. 14 with a as diameter², paired with the same runs: prediction − simulation = 0.001 k, k = 0…4
   CHECK(g["dphi_2_pred_paper"]["mean"].get<double>() == Approx(0.016));
   CHECK(g["dphi_2_pred_minus_sim_paper"]["mean"].get<double>() == Approx(0.002));
@@ -638,21 +640,24 @@ TEST_CASE(
     "[analyse]") {
   // No feedback: 7 runs jammed at P_J = 0, ΔZ_J = 0; at Δφ = 0.01 six give P = 0.01 and ΔZ = 0.10 …
   // 0.15, the seventh no P. The branch there is ΔZ_0 = 0.125 ± SE(0.10 … 0.15). Feedback (P0 = 0.01):
-  // 5 runs at the same P and u = u_J with ΔZ = 0.125 + 0.002 k, residuals 0.002 k (k = 0 … 4).
+  // 5 runs at the same P and u = u_J with ΔZ = 0.125 + 0.002 k, residuals 0.002 k (k = 0 … 4). Their
+  // 34 buds tagged at jamming are 0.2 of the target's 170 non-rattlers, and one free mother makes the
+  // contact-free lobes u = 0.2 + 1/170.
   const fs::path out = work_dir() / "branch_tables_out";
   const fs::path dir = hand_tables("branch_tables", [](std::ostream& r, std::ostream& t) {
-    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,P_J,dZ_J\n";
-    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,u\n";
+    r << "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,P_J,dZ_J,tagged_J\n";
+    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,u,u_lobes,N_nr\n";
     for (int k = 0; k < 7; ++k) {
       const std::string run = "branch/none/seed" + std::to_string(100 + k);
-      r << run << ",15,," << 100 + k << ",finished," << k << ",0.84,0.2,0.76,172,170,0,0\n";
+      r << run << ",15,," << 100 + k << ",finished," << k << ",0.84,0.2,0.76,172,170,0,0,34\n";
       t << run << ",15,," << 100 + k << ",0.01,0.85,0,true," << (k < 6 ? "0.01" : "") << "," << 0.10 + 0.01 * k
-        << ",0.2\n";
+        << ",0.2,0.2,170\n";
     }
     for (int k = 0; k < 5; ++k) {
       const std::string run = "branch/fed/seed" + std::to_string(200 + k);
-      r << run << ",15,0.01," << 200 + k << ",finished," << 7 + k << ",0.84,0.2,0.76,172,170,0,0\n";
-      t << run << ",15,0.01," << 200 + k << ",0.01,0.85,0,true,0.01," << 0.125 + 0.002 * k << ",0.2\n";
+      r << run << ",15,0.01," << 200 + k << ",finished," << 7 + k << ",0.84,0.2,0.76,172,170,0,0,34\n";
+      t << run << ",15,0.01," << 200 + k << ",0.01,0.85,0,true,0.01," << 0.125 + 0.002 * k << ",0.2," << 0.2 + 1.0 / 170
+        << ",170\n";
     }
   });
   const auto res = run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15");
@@ -667,12 +672,13 @@ TEST_CASE(
   CHECK(x["se_runs"].get<double>() == Approx(budjam::standard_error(runs)));
   CHECK(x["se_branch"].get<double>() == Approx(budjam::standard_error(branch)));
   CHECK(x["se"].get<double>() == Approx(std::hypot(budjam::standard_error(runs), budjam::standard_error(branch))));
-  // the paper's figure: one (P0, Δφ) cell, ⟨ΔZ⟩ = 0.129 ± 0.0014 against ⟨prediction⟩ = 0.125 ± 0: more than
-  // 2 combined SE apart
+  // the paper's figure, with the paper's ingredients (u the contact-free lobes, u_J the tagged buds over
+  // the target's N_nr): one (P0, Δφ) cell, ⟨ΔZ⟩ = 0.129 ± 0.0014 against ⟨prediction⟩ = 0.125 − 2/170 ± 0:
+  // more than 2 combined SE apart
   const auto& cells = j["main"]["dZ_identity"]["paper_cells"];
   REQUIRE(cells["cells"].size() == 1);
   CHECK(cells["cells"][0]["measured"]["mean"].get<double>() == Approx(0.129));
-  CHECK(cells["cells"][0]["predicted"]["mean"].get<double>() == Approx(0.125));
+  CHECK(cells["cells"][0]["predicted"]["mean"].get<double>() == Approx(0.125 - 2.0 / 170));
   CHECK(cells["cells_tested"] == 1);
   CHECK(cells["cells_apart_2se"] == 1);
 }
@@ -687,18 +693,19 @@ TEST_CASE(
   const fs::path out = work_dir() / "few_tables_out";
   const fs::path dir = hand_tables("few_tables", [](std::ostream& r, std::ostream& t) {
     r << kRunsHeader;
-    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,dZ_pred,lambda_c,B_grow,B\n";
+    // the paper's λ_c from u_lobes and χ_c: (0.8 · 0.25) / (0.2 + 0.8 · 0.25) = 0.5, as budjam's lambda_c
+    t << "run,L,P0,seed,dphi,phi,N_div,below_phi2,P,dZ,dZ_pred,lambda_c,B_grow,B,u_lobes,chi_c\n";
     const char* P0s[] = {"0.01", "0.001", "0.0001"};
     int k = 0;
     for (int p = 0; p < 3; ++p)
       for (int s = 1; s <= 2; ++s, ++k) {
         const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
         r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
-          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.01,0.011,1.0\n";
+          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.5,0.01,0.011,1.0\n";
         for (int d = 0; d < 2; ++d)
           t << run << ",15," << P0s[p] << "," << k + 1 << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841)
             << ",2," << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"
-            << 1.0 + 0.1 * (k + d) << ",2.0\n";
+            << 1.0 + 0.1 * (k + d) << ",2.0,0.2,0.25\n";
       }
   });
   REQUIRE(run_budjam("analyse --tables " + q(dir) + " --out " + q(out) + " --main-L 15").code == 0);

@@ -101,14 +101,20 @@ def test_missing_feedback_groups_and_no_jamming_ensemble(tmp_path):
     assert "| Claim of the paper |" in out
 
 
-def test_jamming_quantities_take_the_papers_twenty_seeds(tmp_path):
+def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_none(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
+    # n_J ≃ 0.775 is a number the paper measured on its 20 seeds: σ = s_b √(1 + n_b/20)
+    nj = next(s for s in J["sizes"] if s["L"] == 15)["n_J"]
+    row = next(line for line in out.splitlines() if line.startswith("| Nonrattler density at jamming"))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    assert math.isclose(sigma, nj["se"] * math.sqrt(1 + nj["n"] / 20), rel_tol=0.05), row
+    # ΔZ_J = 0 is what the theory predicts, no number of the paper's sample: σ = s_b
     dz = J["groups"][[g["L"] for g in J["groups"]].index(15)]["dZ_J"]
     row = next(line for line in out.splitlines() if line.startswith("| Modified Maxwell count"))
     sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
-    assert math.isclose(sigma, dz["se"] * math.sqrt(1 + dz["n"] / 20), rel_tol=0.05), row
+    assert math.isclose(sigma, dz["se"], rel_tol=0.05), row
 
 
 def tally_and_cells(out):
@@ -349,13 +355,19 @@ def test_pooled_rows_take_the_papers_twenty_seeds_when_groups_are_unequal(tmp_pa
     for k, g in enumerate(main):
         g["runs"] = 8 - k
     A["main"]["runs"] = sum(g["runs"] for g in main)
-    nz = A["main"]["dos"]["N_zero_minus_N_u"]
-    nz.update(n=8, mean=0.5, se=0.1)
+    # the fraction of packings with Z − 6 < 0, score test at 1/2: n_eff = p(1 − p)/SE² = 96
+    A["main"]["dos"]["paper"].update(fraction_Z_minus_6_negative=0.4, fraction_Z_minus_6_negative_se=0.05,
+                                     packings=200, seeds=8)
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
-    row = next(line for line in out.splitlines() if line.startswith("| N_zero ≃ N_u"))
+    row = next(line for line in out.splitlines() if line.startswith("| ω* collapses"))
     sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
-    assert math.isclose(sigma, 0.1 * math.sqrt(1 + 8 / 20), rel_tol=0.02), row
+    assert math.isclose(sigma, math.sqrt(0.25 / 96) * math.sqrt(1 + 8 / 20), rel_tol=0.02), row
+    # N_zero = N_u is a predicted relation: budjam's SE alone, whatever the groups
+    A["main"]["dos"]["N_zero_minus_N_u"].update(n=8, mean=0.5, se=0.1)
+    r, out = report(fresh(tmp_path, "relation"), A, J)
+    row = next(line for line in out.splitlines() if line.startswith("| N_zero ≃ N_u"))
+    assert "σ = 0.1)" in row, row
 
 
 def test_groups_outside_the_papers_grid_are_named(tmp_path):

@@ -31,6 +31,18 @@ def test_the_combined_error_adds_the_papers_sampling_error():
     assert v.compare(0.5 + 2 * math.sqrt(11) * s * 1.001, s, 200, c, n_paper=20).word == "not confirmed"
 
 
+def test_a_relation_the_theory_predicts_is_judged_on_budjams_error_alone():
+    # no paper sample behind a predicted relation: σ = s_b, whatever budjam's n
+    s = 0.01
+    c = v.quoted(0.0, 0.0)
+    for n in (5, 20, 200):
+        assert v.compare(2 * s * 0.999, s, n, c, n_paper=v.THEORY).word == "confirmed"
+        assert v.compare(2 * s * 1.001, s, n, c, n_paper=v.THEORY).word == "not confirmed"
+    # the same estimate is confirmed once a paper sample's error is added: the two rules differ
+    assert v.compare(2 * s * 1.001, s, 20, c).word == "confirmed"
+    assert v.compare(0.0, s, 4, c, n_paper=v.THEORY).word == "inconclusive"
+
+
 def test_a_fraction_within_noise_of_a_bound_is_consistent_with_it():
     # 48.6 % of 940 packings against "more than half": 1 SE below, not a refutation
     p, n = 0.486, 940

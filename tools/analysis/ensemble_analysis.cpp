@@ -155,8 +155,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   const std::size_t c_step = S.column("step"), c_phi = S.column("phi"), c_P = S.column("P"), c_N = S.column("N"),
                     c_Nf = S.column("N_f"), c_Nub = S.column("N_u_buds"), c_chi = S.column("chi_c"),
                     c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming"), c_Z = S.column("Z"),
-                    c_dZ = S.column("dZ");
-  std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, active, divisions;
+                    c_dZ = S.column("dZ"), c_Nu = S.column("N_u");
+  std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, lambda_lobes, active, divisions;
   for (std::size_t k = 0; k < S.size(); ++k) {
     const double s = S.number(k, c_step);
     if (s < x.step_J) continue;
@@ -169,6 +169,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     u.push_back(S.number(k, c_Nub) / (N - Nf));
     chi.push_back(S.number(k, c_chi));
     lambda.push_back(lambda_c(u.back(), chi.back()));
+    lambda_lobes.push_back(lambda_c(S.number(k, c_Nu) / (N - Nf), chi.back()));
     active.push_back(S.number(k, c_act));
     divisions.push_back(S.number(k, c_div));
   }
@@ -194,6 +195,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.u_2 = u[k2];
       x.chi_bar = growth_coordinate_average(chi, 0, k2);
       x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
+      x.lambda_bar_lobes = growth_coordinate_average(lambda_lobes, 0, k2);
     }
   }
   if (const auto k2 = depletion_state(active, 1, kNoneLeft)) {
@@ -268,13 +270,21 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     y.G_min = sm.G_min;
     x.targets.push_back(y);
 
-    // growth-rate distribution at Δφ = 3·10⁻³ (non-rattler cells; g = exp(−p/P0), 1 without feedback)
+    // growth-rate distribution at Δφ = 3·10⁻³ (g = exp(−p/P0), 1 without feedback): budjam's over
+    // the non-rattler cells, the paper's over every cell
     if (std::abs(y.dphi - kDphiGrowth) < 1e-12 && fs::exists(pack)) {
       const io::PackingFile f = io::read_packing(pack);
       const auto pc = tools::analyse_contacts(f.packing);
-      for (std::size_t i = 0; i < f.packing.size(); ++i)
-        if (!pc.network.rattler[i]) x.g.push_back(growth_factor(pc.bud_pressures[i], x.P0));
+      std::vector<double> g_all;
+      for (std::size_t i = 0; i < f.packing.size(); ++i) {
+        g_all.push_back(growth_factor(pc.bud_pressures[i], x.P0));
+        if (!pc.network.rattler[i]) x.g.push_back(g_all.back());
+      }
       x.h_gamma = growth_heterogeneity(x.g);
+      x.h_gamma_all_cells = growth_heterogeneity(g_all);
+      if (!g_all.empty())
+        x.g1_fraction_all_cells =
+            static_cast<double>(std::count(g_all.begin(), g_all.end(), 1.0)) / static_cast<double>(g_all.size());
     }
   }
   // The saved φ_2 packing serves each definition whose φ_2 it is (both where they fall on one state).
@@ -568,19 +578,22 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   return e;
 }
 
-// ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at jamming and at each Δφ target — and the
-// SE of its ΔZ means (over the points that kMinSamplesForError runs or more give; the scatter of the
-// mean P along the branch is not propagated). Runs with a missing P or ΔZ at a point are left out
-// of that point.
+// ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at each Δφ target and, in budjam's branch,
+// at jamming (the paper's analysis draws it through the targets alone, constant beyond their
+// pressures) — and the SE of its ΔZ means (over the points that kMinSamplesForError runs or more
+// give; the scatter of the mean P along the branch is not propagated). Runs with a missing P or ΔZ
+// at a point are left out of that point.
 struct NoFeedbackBranch {
   PiecewiseLinear dZ0, se;
 };
-std::map<double, NoFeedbackBranch> no_feedback_branch(const std::map<GroupKey, std::vector<const RunRow*>>& groups) {
+std::map<double, NoFeedbackBranch> no_feedback_branch(const std::map<GroupKey, std::vector<const RunRow*>>& groups,
+                                                      bool with_jamming_point) {
   std::map<double, NoFeedbackBranch> branch;
   for (const auto& [key, rs] : groups) {
     if (key.P0) continue;
-    // Tables without P_J (an earlier format) give no branch: their stored ΔZ_0(P) + 2(u_J − u) stands.
-    if (std::none_of(rs.begin(), rs.end(), [](const RunRow* r) { return std::isfinite(r->P_J); })) continue;
+    // Tables without P_J (an earlier format) give budjam no branch: their stored ΔZ_0(P) + 2(u_J − u) stands.
+    if (with_jamming_point && std::none_of(rs.begin(), rs.end(), [](const RunRow* r) { return std::isfinite(r->P_J); }))
+      continue;
     std::map<double, std::pair<std::vector<double>, std::vector<double>>> at;  // Δφ (−1: jamming) → P, ΔZ
     const auto add = [&](double dphi, double P, double dZ) {
       if (!std::isfinite(P) || !std::isfinite(dZ)) return;
@@ -588,7 +601,7 @@ std::map<double, NoFeedbackBranch> no_feedback_branch(const std::map<GroupKey, s
       at[dphi].second.push_back(dZ);
     };
     for (const auto* r : rs) {
-      add(-1.0, r->P_J, r->dZ_J);
+      if (with_jamming_point) add(-1.0, r->P_J, r->dZ_J);
       for (const auto& t : r->targets) add(t.dphi, t.P, t.dZ);
     }
     std::vector<std::pair<double, double>> mean_pts, se_pts;
@@ -660,7 +673,7 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
   g["dphi_2_pred_minus_sim_paper"] =
       selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2 - r.dphi_2; })));
   g["P_2_over_Pmax_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.P_2 / kPmax; })));
-  g["lambda_bar_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.lambda_bar; })));
+  g["lambda_bar_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.lambda_bar_lobes; })));
   g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
   g["G_2_over_P_2_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / r.P_2; }), bo));
 }
@@ -766,7 +779,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_none_left / NJ; }), bo);
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
-  g["h_gamma_paper"] = mean_se_json(collect(rs, [](auto& r) { return r.h_gamma; }));  // its figure: mean ± SE
+  // the paper's figure: mean ± SE over runs, every cell of a run
+  g["h_gamma_paper"] = mean_se_json(collect(rs, [](auto& r) { return r.h_gamma_all_cells; }));
   g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
 
   // pooled Kaplan–Meier and the pooled prediction
@@ -819,12 +833,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["dphi_2_median"] = median_json(collect(dep, [](auto& r) { return r.dphi_2; }), bo);
 
   // Fig. E1: Π(g) pooled over the group's runs, on the paper's bins; the paper's weight at g = 1 is
-  // u (buds) at Δφ = 3·10⁻³, which needs no per-cell g
-  std::vector<double> u_at;
-  for (const auto* r : rs)
-    for (const auto& x : r->targets)
-      if (std::abs(x.dphi - kDphiGrowth) < 1e-12) u_at.push_back(x.u);
-  if (!u_at.empty()) g["g_peak_weight_at_1_paper"] = mean_se_json(u_at);
+  // the mean over runs of the fraction of all cells growing at g = 1
+  g["g_peak_weight_at_1_paper"] = mean_se_json(collect(rs, [](auto& r) { return r.g1_fraction_all_cells; }));
   std::vector<double> gall;
   for (const auto* r : rs) gall.insert(gall.end(), r->g.begin(), r->g.end());
   if (!gall.empty()) {
@@ -1124,10 +1134,12 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m, bo);
   h["dZ_identity"]["paper_cells"] = paper_cells_json(
-      m, false, [](const TargetRow& t) { return t.dZ; }, [](const TargetRow& t) { return t.dZ_pred; });
+      m, false, [](const TargetRow& t) { return t.dZ; }, [](const TargetRow& t) { return t.dZ_pred_paper; });
   h["B_grow_over_lambda_B_log10"] = growth_bulk_json(m, bo);
   h["B_grow_over_lambda_B_log10"]["paper_cells"] = paper_cells_json(
-      m, true, [](const TargetRow& t) { return t.B_grow; }, [](const TargetRow& t) { return t.lambda * t.B; });
+      m, true, [](const TargetRow& t) { return t.B_grow; },
+      // the paper's λ_c counts the contact-free lobes in u, as its Eq. 13 reads u
+      [](const TargetRow& t) { return lambda_c(t.u_lobes, t.chi_c) * t.B; });
   return h;
 }
 
@@ -1247,13 +1259,15 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   const double main_L = o.main_L > 0 ? o.main_L : (lengths.count(15.0) ? 15.0 : *lengths.rbegin());
   if (!lengths.count(main_L)) throw InputError("--main-L: no runs with L = " + num(main_L));
 
-  const auto branch = no_feedback_branch(groups);
+  const auto branch = no_feedback_branch(groups, true), paper_branch = no_feedback_branch(groups, false);
   for (auto& r : e.rows) {
-    auto b = branch.find(r.L);
-    if (b == branch.end()) continue;
+    const auto b = branch.find(r.L), pb = paper_branch.find(r.L);
     for (auto& t : r.targets) {
-      t.dZ_pred = b->second.dZ0(t.P) + 2.0 * (r.u_J - t.u);
-      t.dZ_pred_se = b->second.se.empty() ? kNaN : b->second.se(t.P);
+      if (b != branch.end()) {
+        t.dZ_pred = b->second.dZ0(t.P) + 2.0 * (r.u_J - t.u);
+        t.dZ_pred_se = b->second.se.empty() ? kNaN : b->second.se(t.P);
+      }
+      if (pb != paper_branch.end()) t.dZ_pred_paper = pb->second.dZ0(t.P) + 2.0 * (r.tagged / t.N_nr - t.u_lobes);
     }
   }
 
@@ -1272,7 +1286,7 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   J["format"] = "budjam-analysis";
   // 3: B_grow = λ_c B_ext as the median ratio; 4: errors of pooled targets by seed; 5: the SEs of the
   // spectrum's slopes by seed, finite-size fits only over sizes of disjoint seeds
-  J["version"] = 5;
+  J["version"] = 6;
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},

@@ -24,6 +24,9 @@ struct TargetRow {
   double chi_c = kNaN, lambda = kNaN, B_grow = kNaN, B_grow_se = kNaN, N_div = kNaN, N_nr = kNaN;
   double dZ_pred = kNaN;     // ΔZ_0(P) + 2(u_J − u), filled once the branch is known
   double dZ_pred_se = kNaN;  // the SE of ΔZ_0(P) there (the branch's, common to every run)
+  // The same as the paper's analysis computes it: ΔZ_0(P) through the no-feedback targets alone,
+  // u_J the buds tagged at jamming over this target's N_nr, u the contact-free lobes.
+  double dZ_pred_paper = kNaN;
   double B = kNaN, G = kNaN, G_energy = kNaN, B_ext_mf = kNaN;  // from the moduli sidecar
   double G_min = kNaN;  // softest simple shear of the box (moduli sidecar "shear_stability"); < 0: unstable
   bool below_phi2 = false;
@@ -48,11 +51,12 @@ struct RunRow {
   bool depleted = false;
   double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN,
          P_J = kNaN;
-  double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (the paper's u_J ≃ 0.23)
+  double u_J_lobes = kNaN;  // contact-free lobes, mothers included, over N_nr (reported beside u_J, the buds)
   double tagged = kNaN, lc2_J = kNaN;
   double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
   // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
   double chi_bar = kNaN, lambda_bar = kNaN;
+  double lambda_bar_lobes = kNaN;  // λ̄_c with u the contact-free lobes, as the paper's analysis reads u
   // the first state with no tagged bud left: its φ, P and the divisions after φ_J up to it
   double phi_2_none_left = kNaN, dphi_2_none_left = kNaN, P_2_none_left = kNaN, N_div_2_none_left = kNaN;
   double N_div_end = kNaN;  // divisions after φ_J at the end of the run
@@ -64,6 +68,9 @@ struct RunRow {
   double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;     // at budjam's φ_2, if saved there
   double G_2_none_left = kNaN;  // at the first state with none left, where the run saved that packing
   double h_gamma = kNaN;
+  // As the paper's analysis takes Π(g): every cell, rattlers included, at Δφ = 3·10⁻³; the fraction
+  // growing at g = 1 exactly (no bud pressure) is the weight of its spike.
+  double h_gamma_all_cells = kNaN, g1_fraction_all_cells = kNaN;
   // The records the run gave the pooled survival of its group: NaN where it recorded no bud events
   // (observe.bud_events off), and so contributed no run to that pool.
   double bud_records = kNaN;
@@ -160,6 +167,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"N_div_2", &RunRow::N_div_2},
                                             {"chi_bar", &RunRow::chi_bar},
                                             {"lambda_bar", &RunRow::lambda_bar},
+                                            {"lambda_bar_lobes", &RunRow::lambda_bar_lobes},
                                             {"phi_2_none_left", &RunRow::phi_2_none_left, "phi_2_paper"},
                                             {"dphi_2_none_left", &RunRow::dphi_2_none_left, "dphi_2_paper"},
                                             {"P_2_none_left", &RunRow::P_2_none_left, "P_2_paper"},
@@ -176,6 +184,8 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"G_min_2", &RunRow::G_min_2},
                                             {"G_2_none_left", &RunRow::G_2_none_left, "G_2_paper"},
                                             {"h_gamma", &RunRow::h_gamma},
+                                            {"h_gamma_all_cells", &RunRow::h_gamma_all_cells},
+                                            {"g1_fraction_all_cells", &RunRow::g1_fraction_all_cells},
                                             {"lc2_J", &RunRow::lc2_J},
                                             {"P_J", &RunRow::P_J},
                                             {"step_J", &RunRow::step_J},

@@ -24,23 +24,27 @@ namespace fs = std::filesystem;
 
 // What a runs.csv column is computed from, for the account of a column the tables lack.
 std::string needs(const std::string& column) {
-  static const std::map<std::string, std::string> from{{"u_2", "steps.csv"},
-                                                       {"chi_bar", "steps.csv"},
-                                                       {"lambda_bar", "steps.csv"},
-                                                       {"phi_2_none_left", "steps.csv"},
-                                                       {"dphi_2_none_left", "steps.csv"},
-                                                       {"P_2_none_left", "steps.csv"},
-                                                       {"N_div_2_none_left", "steps.csv"},
-                                                       {"N_div_end", "steps.csv"},
-                                                       {"a_eps", "bud_events.csv"},
-                                                       {"integral_S", "bud_events.csv"},
-                                                       {"bud_records", "bud_events.csv"},
-                                                       {"B_2", "the moduli at φ_2"},
-                                                       {"G_2", "the moduli at φ_2"},
-                                                       {"G_2_energy", "the moduli at φ_2"},
-                                                       {"G_min_2", "the moduli at φ_2"},
-                                                       {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
-                                                       {"lc2_J", "the jammed packing"}};
+  static const std::map<std::string, std::string> from{
+      {"u_2", "steps.csv"},
+      {"chi_bar", "steps.csv"},
+      {"lambda_bar", "steps.csv"},
+      {"lambda_bar_lobes", "steps.csv"},
+      {"phi_2_none_left", "steps.csv"},
+      {"dphi_2_none_left", "steps.csv"},
+      {"P_2_none_left", "steps.csv"},
+      {"N_div_2_none_left", "steps.csv"},
+      {"N_div_end", "steps.csv"},
+      {"a_eps", "bud_events.csv"},
+      {"integral_S", "bud_events.csv"},
+      {"bud_records", "bud_events.csv"},
+      {"B_2", "the moduli at φ_2"},
+      {"G_2", "the moduli at φ_2"},
+      {"G_2_energy", "the moduli at φ_2"},
+      {"G_min_2", "the moduli at φ_2"},
+      {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
+      {"h_gamma_all_cells", "the growth factor of each cell at Δφ = 3·10⁻³"},
+      {"g1_fraction_all_cells", "the growth factor of each cell at Δφ = 3·10⁻³"},
+      {"lc2_J", "the jammed packing"}};
   const auto it = from.find(column);
   return it != from.end() ? it->second : "summary.json";
 }
@@ -339,8 +343,8 @@ void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
 // states (docs/analysis.md, "Definitions"). They are left out rather than reported under a definition
 // they do not have.
 void drop_format1_averages(Ensemble& e) {
-  for (auto& r : e.rows) r.chi_bar = r.lambda_bar = r.pred_area = r.pred_d2 = kNaN;
-  for (const char* c : {"chi_bar", "lambda_bar", "dphi_2_pred_area", "dphi_2_pred_diameter_sq"})
+  for (auto& r : e.rows) r.chi_bar = r.lambda_bar = r.lambda_bar_lobes = r.pred_area = r.pred_d2 = kNaN;
+  for (const char* c : {"chi_bar", "lambda_bar", "lambda_bar_lobes", "dphi_2_pred_area", "dphi_2_pred_diameter_sq"})
     e.unavailable[c] =
         std::string("runs.csv of format 1 holds it with χ̄ a trapezoid in φ (it needs steps.csv of each run ") +
         "for the plain mean over the accepted states)";
