@@ -19,7 +19,7 @@
 namespace budjam::cli::dos_command {
 namespace {
 
-// Ranges of the floating options (docs/spectrum.md, "Options"). --tol: ARPACK's relative Ritz
+// Ranges of the floating options (docs/spectrum.md, "Outputs"). --tol: ARPACK's relative Ritz
 // residual; above 1e-4 the eigenvalues are too rough to classify against lambda_tol. --sigma: below
 // the zero modes by more than their rounding (|σ| ≥ 1e-12 k/m), and near enough that λ = σ + 1/θ keeps
 // its digits (it loses ε|σ| ≤ 2e-12 for |σ| ≤ 1e4, four decades below the smallest zero cutoff 1e-8).

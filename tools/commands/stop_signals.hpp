@@ -1,8 +1,10 @@
 #pragma once
 // SIGTERM and SIGINT during `budjam grow`: the handler only records the signal (nothing else is
-// async-signal-safe); the run checks it between growth steps, writes a checkpoint at the next
-// accepted state and exits with 128 + the signal number (docs/files.md, "Signals"). A second
-// signal of the same kind ends the process at once, as if no handler had been installed.
+// async-signal-safe); the run checks it between growth attempts and before every FIRE iteration of
+// a relaxation, writes a checkpoint at the next growth attempt, accepted or not (or inside the
+// relaxation under way), and exits with 128 + the signal number (docs/growth.md, "Checkpoints and
+// resume"). A second signal of the same kind ends the process at once, as if no handler had been
+// installed.
 #include <csignal>
 
 namespace budjam::cli {

@@ -1,5 +1,6 @@
 // Growth-run observer "dos" (scene [observe.dos]): the vibrational spectrum at jamming, at φ_2,
-// at each target and/or every k accepted steps above jamming (docs/spectrum.md, "In a run").
+// at each target and/or every k accepted steps above jamming (docs/spectrum.md, "Outputs": "In a
+// growth run").
 //   packings/jammed.dos.{json,csv}, packings/phi2.dos.*, packings/target_<k>.dos.*  beside the
 //       packings RunLog writes (so `budjam analyse` finds them as sidecars)
 //   spectra/step_<n>.dos.{json,csv}  for `every`
