@@ -223,6 +223,14 @@ def size_mismatch(have, paper_L):
                                             f"for L = {paper_L:g}")
 
 
+def by_seed(stat):
+    """A mean over jamming states whose runs share seeds, with the seeds as its samples: SE the bootstrap
+    over seeds, n the seeds (analysis.json from version 6 on says how many; before, the stat as written)."""
+    if not stat or stat.get("seeds") is None:
+        return stat
+    return {**stat, "se": stat.get("bootstrap_se_by_seed"), "n": stat["seeds"]}
+
+
 def paper_n(n, seeds):
     """The paper's number of samples for a statistic of n samples from budjam's `seeds` seeds per point:
     the paper ran the same protocol on PAPER_SEEDS seeds, so n · PAPER_SEEDS / seeds (n when seeds = 20)."""
@@ -403,8 +411,9 @@ def main():
         jam_src = f"jamming ensemble, L = {jam_L}, independent seeds"
         dzj = jam_groups.get(jam_L, {}).get("dZ_J")
     else:
-        jam, jam_L = M, L
-        jam_src = f"this preset's runs at L = {L:g} (no jamming ensemble given)"
+        # a seed's runs share their growth up to the first jamming, so its jamming states are one sample
+        jam, jam_L = {**M, **{k: by_seed(M.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}, L
+        jam_src = f"this preset's runs at L = {L:g} (no jamming ensemble given; errors by seed)"
         dzj = groups.get("none", {}).get("dZ_J")
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
           f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",

@@ -255,6 +255,27 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   CHECK(slurp(foreign / "precious.txt") == "keep");
 }
 
+TEST_CASE("grow into a run directory is refused without --overwrite; --resume is offered only for an unfinished run",
+          "[grow_cli]") {
+  const fs::path run = work_dir() / "earlier-run";
+  fs::create_directories(run);
+  std::ofstream(run / ".budjam-run") << "budjam-run 1\n";
+  std::ofstream(run / "summary.json") << "{}\n";
+  const std::string demo = std::string(std::getenv("BUDJAM_SOURCE_DIR")) + "/data/scenes/demo.toml";
+  Result r = grow(q(demo) + " --quiet --out " + q(run));
+  CHECK(r.code == 2);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find("--overwrite") != std::string::npos);
+  CHECK(r.err.find("--resume") == std::string::npos);  // a finished run has nothing to continue
+  fs::remove(run / "summary.json");
+  std::ofstream(run / "checkpoint.txt") << "budjam-checkpoint 13\n";
+  r = grow(q(demo) + " --quiet --out " + q(run));
+  CHECK(r.code == 2);
+  CHECK(r.err.find("unfinished") != std::string::npos);
+  CHECK(r.err.find("budjam grow --resume " + run.string()) != std::string::npos);
+  CHECK(slurp(run / "checkpoint.txt") == "budjam-checkpoint 13\n");
+}
+
 TEST_CASE("a directory that merely holds a scene.toml is never emptied", "[grow_cli]") {
   const fs::path d = work_dir() / "thesis";
   fs::create_directories(d);

@@ -101,6 +101,16 @@ def test_missing_feedback_groups_and_no_jamming_ensemble(tmp_path):
     assert "| Claim of the paper |" in out
 
 
+def test_without_a_jamming_ensemble_the_jamming_rows_count_seeds_not_states(tmp_path):
+    # 49 jamming states from 20 seeds (unjammings make more than one per run): a seed is one sample
+    A, _ = quick()
+    A["main"]["u_J"] = {"mean": 0.22, "se": 0.0055, "n": 49, "runs": 120, "bootstrap_se_by_seed": 0.0088, "seeds": 20}
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0, r.stderr
+    row = next(line for line in out.splitlines() if line.startswith("| Unconstrained fraction at jamming"))
+    assert "(n=20)" in row and "0.0088" in row and "n=49" not in row, row
+
+
 def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_none(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)

@@ -636,6 +636,8 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
   j["mean"] = io::number_or_null(m.mean);
   j["se"] = error_bar ? io::number_or_null(m.se) : Json(nullptr);
   j["bootstrap_se_by_seed"] = error_bar ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
+  // the runs of one seed share their growth up to the first jamming: its states are not independent
+  j["seeds"] = std::set<std::uint64_t>(seed.begin(), seed.end()).size();
   return j;
 }
 

@@ -255,11 +255,14 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite, const Own
                      std::string(run_files::marker) + "); nothing was changed");
   RunDirectory claimed(root, take_lock(root));
   if (run) {
-    if (!overwrite)
+    if (!overwrite) {
+      // --resume continues only a run that has not finished and left a checkpoint
+      const bool resumable = !root.entry(run_files::summary) && root.entry(run_files::checkpoint);
       throw InputError("--out: " + dir.string() +
-                       " holds a budjam run; pass --overwrite to replace it, or "
-                       "continue it with budjam grow --resume " +
-                       dir.string());
+                       (resumable ? " holds an unfinished budjam run" : " holds a budjam run") +
+                       "; pass --overwrite to replace it" +
+                       (resumable ? ", or continue it with budjam grow --resume " + dir.string() : ""));
+    }
     check_run_entries(root, owned);
     claimed.open_manifest();
     claimed.remove_recorded_temporaries();
