@@ -8,6 +8,7 @@
 //  - isotropic rescaling by a factor λ: L → λL, (x_i, y_i) → λ (x_i, y_i).
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 #include "budjam/contacts.hpp"
@@ -40,14 +41,15 @@ struct StrainSweep {
   // Least-squares slopes over the samples that kept the contact set (strain 0 included):
   //   simple shear: G = dS_xy/dγ, G_energy = dτ_xy/dγ (symmetrised);
   //   isotropic:    B = −dP/dε, B_energy = −dP_energy/dε with ε = ln(A/A0) (B = −A dP/dA = φ dP/dφ).
-  double modulus = 0, modulus_energy = 0;
+  // NaN where fewer than two samples kept the contact set (fewer than three for the energy's).
+  double modulus = std::numeric_limits<double>::quiet_NaN(), modulus_energy = std::numeric_limits<double>::quiet_NaN();
   // The relaxed energy U(s) alone, per reference area A0: a parabola fit over the same samples gives
   // energy_slope = (1/A0) dU/ds and curvature = (1/A0) d²U/ds² at s = 0, and for each strain h
   // whose pair ±h kept the contacts, central_curvatures holds (h, (U(h) − 2U(0) + U(−h)) / (A0 h²)).
   //   simple shear: energy_slope = τ_xy, curvature = G_energy (= E_xyxy);
   //   isotropic (A = A0 e^ε): energy_slope = −P_energy, curvature − energy_slope = B_energy
   //                           (= energy_modulus()).
-  double energy_slope = 0, curvature = 0;
+  double energy_slope = std::numeric_limits<double>::quiet_NaN(), curvature = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::pair<double, double>> central_curvatures;
   // The modulus from the energy alone: G_energy = curvature (shear), B_energy = A d²U/dA² =
   // curvature − energy_slope (isotropic).

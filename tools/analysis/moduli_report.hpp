@@ -22,6 +22,7 @@ io::Json elastic_response_json(const ElasticResponse& e);
 // The finite-strain measurement of the moduli of one packing.
 struct FiniteStrainCheck {
   double strain_step = 0;
+  double smallest_overlap = 0;                 // of the load-bearing contacts: what the automatic step is set by
   StrainSweep shear, isotropic;                // strains ±h, ±2h: stress slopes G and B
   StrainSweep shear_energy, isotropic_energy;  // doubling strains up to 32 h: energy curvatures
 };
