@@ -954,10 +954,13 @@ TEST_CASE(
   CHECK(without.record->network.dZ < 0);
   // With the check the saddle is relaxed on. Below the window growth goes on; still in it, that state is
   // the jamming point (φ depends on the sizes alone: the same step, the same φ). Either way it is a
-  // minimum, and isostatic up to the rounding of Z − Z_iso.
+  // minimum: isostatic up to the rounding of Z − Z_iso, or one contact short with that mode held at
+  // higher order (its eigenvalue zero to rounding, not negative), as dimers can jam hypostatic. Which
+  // of the two a seed meets depends on the last bits of the BLAS.
   CHECK(d1.result().saddles_relaxed >= 1);
   CHECK(with.minimum());
-  CHECK(with.record->network.dZ >= -1e-12);
+  const double one_contact = 2.0 / static_cast<double>(with.record->network.N_nr);
+  CHECK(with.record->network.dZ >= -one_contact - 1e-12);
   CHECK(with.record->E_per_cell >= s.epsilon_U);
   CHECK(with.record->E_per_cell <= 2 * s.epsilon_U);
   CHECK(with.record->phi >= without.record->phi);
