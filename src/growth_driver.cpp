@@ -4,6 +4,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/jamming.hpp"
+#include "budjam/saddle.hpp"
 #include "budjam/stability.hpp"
 
 #include <algorithm>
@@ -158,6 +159,13 @@ TrialRelaxed trial_relaxed(const Trial& t, long attempt, double log_scale, Trial
 bool is_minimum(const Packing& p, const ForceField& field) {
   const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
   return stability(p, c, analyse_network(p.size(), c)).minimum();
+}
+
+// The lowest unstable mode of `p` (nullopt: none below the saddle test's −δ). Requires `field` to be
+// current for `p`.
+std::optional<UnstableMode> unstable_mode_of(const Packing& p, const ForceField& field) {
+  const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
+  return lowest_unstable_mode(p, c, analyse_network(p.size(), c));
 }
 
 // (φ, s, slope) of a relaxed trial above the jamming window. Requires `field` to be current for it.
@@ -569,15 +577,40 @@ struct GrowthDriver::Impl {
   }
 
   // A relaxed jamming candidate that is a saddle of U (FIRE stopped on it) is relaxed on to FIRE's
-  // force resolution; the energy usually falls to 0. false if the run failed.
+  // force resolution; the energy usually falls to 0. Where FIRE stops on a saddle again, a step
+  // along its unstable mode (saddle.hpp) starts the next relaxation, until the state is a minimum or
+  // below the window. A saddle along whose unstable mode U falls by nothing U resolves is bounded by
+  // contacts at zero force, a minimum of U that the Hessian of the overlapping contacts does not
+  // see: it is the jamming point. false if the run failed.
   bool relax_if_saddle(Trial& t) {
-    if (!scene.check_minimum || phase != Phase::unjammed || !window.candidate(t.E) || is_minimum(t.packing, field))
-      return true;
+    if (!scene.check_minimum || phase != Phase::unjammed) return true;
     FireParams deep = scene.fire;
     deep.force_tol = 0;
-    ++result.saddles_relaxed;
-    if (!relax(t.packing, deep, "relaxing a saddle, growth step " + std::to_string(attempts))) return false;
-    t.E = fresh_energy_per_cell(t.packing);
+    const std::string where = "growth step " + std::to_string(attempts);
+    for (int escapes = 0; window.candidate(t.E) && !is_minimum(t.packing, field); ++escapes) {
+      if (escapes == 0) {
+        ++result.saddles_relaxed;
+      } else {
+        if (escapes > kSaddleEscapes) {
+          fail(RunStatus::minimiser_failed, "a jamming candidate is still a saddle after " +
+                                                std::to_string(kSaddleEscapes) +
+                                                " steps along its unstable mode and relaxations (" + where + ")");
+          return false;
+        }
+        const std::optional<UnstableMode> mode = unstable_mode_of(t.packing, field);
+        if (!mode) return true;
+        const SaddleStep step = step_off_saddle(t.packing, field, *mode);
+        result.force_evaluations += step.evaluations;
+        result.force_evaluations_search += step.evaluations;
+        if (!step.lowered) {  // the mode runs into contacts at zero force: a minimum to U's resolution
+          t.E = fresh_energy_per_cell(t.packing);
+          return true;
+        }
+        ++result.saddle_escapes;
+      }
+      if (!relax(t.packing, deep, "relaxing a saddle, " + where)) return false;
+      t.E = fresh_energy_per_cell(t.packing);
+    }
     return true;
   }
 

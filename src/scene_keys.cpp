@@ -213,9 +213,11 @@ std::vector<SceneKey> make_keys() {
                       "φ_2 is the first state after jamming with at most this many tagged buds still unconstrained "
                       "(0: the paper's definition)",
                       kZeroOrPositive, BUDJAM_FIELD(phi2_tagged_left)));
-  e.push_back(flag("jamming", "check_minimum",
-                   "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further",
-                   BUDJAM_FIELD(check_minimum)));
+  e.push_back(
+      flag("jamming", "check_minimum",
+           "a jamming candidate that is a saddle (Hessian with an unstable mode) is relaxed further, and stepped "
+           "off along its unstable mode where FIRE stops on it again (docs/growth.md)",
+           BUDJAM_FIELD(check_minimum)));
   std::vector<Choice> searches;
   std::vector<std::string> search_names;
   for (const JammingSearchKind& k : jamming_searches()) {

@@ -235,7 +235,8 @@ TEST_CASE("a run resumed from a checkpoint inside a relaxation ends identical to
                              x.marginal_relaxations,
                              x.active_set_steps,
                              x.newton_factorisations,
-                             x.saddles_relaxed};
+                             x.saddles_relaxed,
+                             x.saddle_escapes};
   };
   CHECK(counts(r) == counts(u));
   REQUIRE(r.jamming);

@@ -1,5 +1,6 @@
 // Minimum or saddle (budjam/stability.hpp): the LDLᵀ inertia count of unstable modes against the
 // dense eigenvalues of the same Hessian, on a real saddle and on stable packings.
+#include "analysed_packing.hpp"
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/energy.hpp"
@@ -18,26 +19,13 @@
 #include <filesystem>
 
 using namespace budjam;
+using budjam::testing::analyse;
+using budjam::testing::Analysed;
 using budjam::testing::compress_to_pressure;
 using budjam::testing::CompressionResult;
 using budjam::testing::random_dumbbells;
 
 namespace {
-
-struct Analysed {
-  std::vector<Contact> contacts;
-  ContactNetwork net;
-};
-
-Analysed analyse(const Packing& p) {
-  ForceField field;
-  Eigen::VectorXd F;
-  field.evaluate(p, F);
-  Analysed a;
-  a.contacts = find_contacts(p, field.lobes(), field.neighbours());
-  a.net = analyse_network(p.size(), a.contacts);
-  return a;
-}
 
 // Eigenvalues of the dense Hessian of the non-rattlers below −δ: the independent count.
 std::size_t dense_count_below(const Packing& p, const Analysed& a, double delta) {

@@ -43,7 +43,7 @@ enum class RunStatus {
   finished,          // every target landed (and φ_2 found or φ_J + max_dphi reached if asked)
   step_limit,        // more than scene.max_steps growth steps (accepted + rejected)
   dt_underflow,      // a trial Δt below scene.dt_min (halved or solved for)
-  minimiser_failed,  // FIRE hit its iteration limit
+  minimiser_failed,  // FIRE hit its iteration limit, or could not leave a saddle
 };
 const char* to_string(RunStatus status);
 
@@ -114,6 +114,7 @@ struct RunResult {
   long force_evaluations = 0, fire_iterations = 0;
   long divisions = 0;        // all divisions in accepted steps
   long saddles_relaxed = 0;  // jamming candidates found to be saddles and relaxed on
+  long saddle_escapes = 0;   // steps along an unstable mode where that relaxation stopped on a saddle again
   // Where the time goes (docs/speed.md). The force evaluations split by stage (the initial
   // relaxation, the trials of the unjammed phase, the trials above jamming) add up to
   // force_evaluations.
@@ -136,6 +137,10 @@ struct RunResult {
 // A trial whose relaxation costs more force evaluations than this is a marginal relaxation: FIRE
 // creeping near the jamming point, where the cost of a run concentrates.
 inline constexpr long kMarginalEvaluations = 100000;
+// Steps along a saddle's unstable mode (each followed by a relaxation) a jamming candidate may take,
+// at most: a candidate that needs more is in a landscape of saddles FIRE cannot leave, and the run
+// fails saying so.
+inline constexpr long kSaddleEscapes = 8;
 
 // Read-only view of an accepted state. Pointers are null when not computed for this state.
 struct StateView {

@@ -72,7 +72,8 @@ struct Scene {
   // unconstrained: 1 is budjam's reading of u(φ_2) = ε ~ 1/N_nr,J, 0 the paper's "none left".
   std::size_t phi2_tagged_left = 1;
   // A jamming candidate (ε_U ≤ E/N ≤ 2ε_U) whose Hessian has an unstable mode is a saddle FIRE
-  // stopped on: relax it to FIRE's force resolution and classify it again (docs/growth.md).
+  // stopped on: relax it to FIRE's force resolution, step off along its unstable mode where FIRE stops
+  // on it again, and classify it again (docs/growth.md).
   bool check_minimum = true;
   JammingSearch search = JammingSearch::bracket;
   // Bracket search: collapse the bracket at once when the line through its two lowest overshoots,

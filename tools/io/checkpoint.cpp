@@ -236,7 +236,7 @@ std::string format_checkpoint(const Scene& scene, const GrowthState& s, const st
      << ' ' << s.step << ' ' << s.attempts << ' ' << s.next_target << ' ' << s.divisions_since_jamming << ' '
      << s.episodes << '\n';
   os << "counters " << r.accepted << ' ' << r.rejected << ' ' << r.force_evaluations << ' ' << r.fire_iterations << ' '
-     << r.divisions << ' ' << r.saddles_relaxed << '\n';
+     << r.divisions << ' ' << r.saddles_relaxed << ' ' << r.saddle_escapes << '\n';
   os << "cost " << r.search_trials << ' ' << r.marginal_relaxations << ' ' << r.newton_factorisations << ' '
      << r.newton_factor_reuses << ' ' << r.force_evaluations_initial << ' ' << r.force_evaluations_search << ' '
      << r.force_evaluations_above_jamming << ' ' << r.active_set_steps << ' ' << r.active_set_factorisations << ' '
@@ -329,6 +329,7 @@ constexpr std::pair<int, std::string_view> kRetiredVersions[] = {
     {10, "a search onto phi_J was kept between its trials (the open bracket)"},
     {11, "the checkpoint recorded the BLAS its run computed with"},
     {12, "a growth attempt's relaxation could be checkpointed while it ran"},
+    {13, "the run counted its steps off saddles"},
 };
 
 void read_version(CheckpointText& in) {
@@ -416,6 +417,7 @@ void read_counters(Parse& p, const Words& w) {
   r.fire_iterations = in.integer(w[3], "FIRE iterations", 0, kLongMax);
   r.divisions = in.integer(w[4], "divisions", s.divisions_since_jamming, static_cast<std::int64_t>(max_cells(p.scene)));
   r.saddles_relaxed = in.integer(w[5], "saddles relaxed", 0, s.attempts);
+  r.saddle_escapes = in.integer(w[6], "saddle escapes", 0, r.saddles_relaxed * kSaddleEscapes);
 }
 
 void read_cost(Parse& p, const Words& w) {
@@ -816,7 +818,7 @@ constexpr LineKind kLineKinds[] = {
     {"blas", -1, read_blas},
     {"rng", -1, read_rng},
     {"state", 9, read_state},
-    {"counters", 6, read_counters},
+    {"counters", 7, read_counters},
     {"cost", 10, read_cost},
     {"branches", 6, read_branches},
     {"search", -1, read_search},

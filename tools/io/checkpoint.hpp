@@ -25,7 +25,7 @@
 
 namespace budjam::io {
 
-inline constexpr int kCheckpointVersion = 13;
+inline constexpr int kCheckpointVersion = 14;
 
 // When `budjam grow` saves its state, asked after every growth attempt the driver's checkpoint hook
 // follows (docs/growth.md, "Checkpoints and resume"): at every `every`-th accepted step; after an

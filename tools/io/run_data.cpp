@@ -264,6 +264,7 @@ constexpr KeyRule kSummaryRules[] = {
     {"force_evaluations", Kind::count, false, false},
     {"fire_iterations", Kind::count, false, false},
     {"saddles_relaxed", Kind::count, false, false},
+    {"saddle_escapes", Kind::count, false, false},
     {"search_trials", Kind::count, false, false},
     {"marginal_relaxations", Kind::count, false, false},
     {"newton_factorisations", Kind::count, false, false},

@@ -264,6 +264,7 @@ Json summary_json(const GrowthDriver& driver) {
   j["force_evaluations"] = r.force_evaluations;
   j["fire_iterations"] = r.fire_iterations;
   j["saddles_relaxed"] = r.saddles_relaxed;
+  j["saddle_escapes"] = r.saddle_escapes;
   j["search_trials"] = r.search_trials;
   j["marginal_relaxations"] = r.marginal_relaxations;
   j["newton_factorisations"] = r.newton_factorisations;
