@@ -27,6 +27,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 from matplotlib import cm, colors  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from verdicts import MIN_SAMPLES  # noqa: E402
+
 PMAX = 0.1  # confluence pressure scale P_max (paper Eq. D25), also in analysis.json
 
 # Okabe–Ito colours (distinguishable with every common colour-vision deficiency) for the categorical
@@ -419,7 +422,10 @@ def figD1(T):
         x = [num(r["dphi"]) for r in rr]
         c = p0_colour(lab, labels)
         ax.plot(x, [num(r["median"]) for r in rr], "-", color=c, label=p0_text(lab))
-        ax.fill_between(x, [num(r["q25"]) for r in rr], [num(r["q75"]) for r in rr], color=c, alpha=0.2, lw=0)
+        # The quartile band only where it rests on MIN_SAMPLES runs or more (no spread from fewer).
+        few = [int(r["runs"]) < MIN_SAMPLES for r in rr]
+        ax.fill_between(x, [math.nan if f else num(r["q25"]) for r, f in zip(rr, few)],
+                        [math.nan if f else num(r["q75"]) for r, f in zip(rr, few)], color=c, alpha=0.2, lw=0)
         g = [g for g in gs if g["P0_label"] == lab]
         if g and g[0]["dphi_2_median"]["median"] is not None:
             ax.axvline(g[0]["dphi_2_median"]["median"], ls="--", color=c, lw=1)

@@ -250,6 +250,10 @@ def judged(stat, claim, key="mean", n_paper=None, seeds=None):
 
 
 def trend_of(stats, increasing, key="mean"):
+    """The trend over groups: paired by seed when every group has its values by seed (analysis.json from
+    version 7 on; the groups of a grid share their seeds), else each group with its SE."""
+    if stats and all(s and isinstance(s.get("by_seed"), dict) for s in stats):
+        return verdicts.paired_trend([s["by_seed"] for s in stats], increasing, statistic=key)
     return verdicts.trend([(s.get(key) if s else None, s.get("se") if s else None, s.get("n") if s else 0)
                            for s in stats], increasing)
 

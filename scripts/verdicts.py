@@ -32,7 +32,10 @@ direction, each group with its SE: not confirmed when a step between neighbourin
 the claimed direction by more than 2σ of that step, confirmed when the change from the first group to
 the last goes the claimed way by more than 2σ and no step goes against it by more than 2σ, and
 inconclusive otherwise (the data do not resolve the trend) or when a group has no error bar by the rule
-for one claim (fewer than 5 samples, none, or an SE of 0).
+for one claim (fewer than 5 samples, none, or an SE of 0). Groups grown from the same seeds (every P0
+of a grid) are compared seed by seed where the values by seed are known: a step's σ is then the paired
+SE of the per-seed differences over the seeds both groups have (a mean), or the step is a sign test on
+those differences, z = (n₊ − n₋)/√(n₊ + n₋) (a median); fewer than 5 such seeds carry no verdict.
 
 Nothing here measures: the estimates and their errors come from `budjam analyse`.
 """
@@ -216,6 +219,52 @@ def trend(points, increasing):
     if worst < -Z_MAX:
         return Verdict("not confirmed", why)
     if overall > Z_MAX:
+        return Verdict("confirmed", why)
+    return Verdict("inconclusive", why + ": not resolved")
+
+
+def _paired_step(a, b, sign, statistic):
+    """(z, n, why not) of the change from group a to group b (dicts seed → value) in the claimed
+    direction, paired by seed over the n seeds both have (the sign test: those with a difference); z is
+    None, with the reason, when they cannot carry a verdict."""
+    d = [sign * (b[s] - a[s]) for s in a if s in b and _finite(a[s]) and _finite(b[s])]
+    if statistic == "median":
+        up, down = sum(x > 0 for x in d), sum(x < 0 for x in d)
+        m = up + down
+        if m < MIN_SAMPLES:
+            return None, m, f"{m} seeds with a difference, fewer than {MIN_SAMPLES}"
+        return (up - down) / math.sqrt(m), m, None
+    n = len(d)
+    if n < MIN_SAMPLES:
+        return None, n, f"{n} seeds in both groups, fewer than {MIN_SAMPLES}"
+    mean = math.fsum(d) / n
+    se = math.sqrt(math.fsum((x - mean) ** 2 for x in d) / (n - 1) / n)
+    if se == 0:
+        return None, n, f"SE = 0 from n = {n} differences: no spread, no error bar to judge by"
+    return mean / se, n, None
+
+
+def paired_trend(groups, increasing, statistic="mean"):
+    """trend() for groups grown from the same seeds: groups = [{seed: value}, …] in order; a step is the
+    paired test of the per-seed differences over the seeds both groups have (statistic "mean": the paired
+    SE; "median": the sign test)."""
+    if len(groups) < 2:
+        return Verdict("inconclusive", f"{len(groups)} group(s)")
+    sign = 1.0 if increasing else -1.0
+    steps = [_paired_step(a, b, sign, statistic) for a, b in zip(groups, groups[1:])]
+    overall = _paired_step(groups[0], groups[-1], sign, statistic)
+    for z, _, why_not in steps + [overall]:
+        if z is None:
+            return Verdict("inconclusive", "paired by seed: " + why_not)
+    worst = min(z for z, _, _ in steps)
+    counts = [n for _, n, _ in steps]
+    test = "sign test" if statistic == "median" else "paired SE"
+    seeds = f"{min(counts)}" if min(counts) == max(counts) else f"{min(counts)}–{max(counts)}"
+    why = (f"paired by seed, {test}: first to last z = {_fmt_z(overall[0])}, worst step z = {_fmt_z(worst)}, "
+           f"{seeds} seeds per step")
+    if worst < -Z_MAX:
+        return Verdict("not confirmed", why)
+    if overall[0] > Z_MAX:
         return Verdict("confirmed", why)
     return Verdict("inconclusive", why + ": not resolved")
 

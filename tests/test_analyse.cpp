@@ -632,6 +632,15 @@ TEST_CASE(
   // fewer than five values: no error bar
   CHECK(g["G_2_over_Pmax_paper"]["se"].is_null());
   CHECK(g["G_2_over_P_2_paper"]["n"] == 4);
+  // the values the trends pair by seed: the admitted runs' (seeds 1–5), the kept runs' for G_2/P_2
+  const auto& by_seed = g["dphi_2_paper"]["by_seed"];
+  REQUIRE(by_seed.size() == 5);
+  for (int k = 0; k < 5; ++k) CHECK(by_seed[std::to_string(k + 1)].get<double>() == Approx(dphi_2[k]));
+  CHECK_FALSE(by_seed.contains("6"));
+  const auto& ratio = g["G_2_over_P_2_paper"]["by_seed"];
+  CHECK(ratio.size() == 4);
+  CHECK_FALSE(ratio.contains("5"));
+  CHECK(ratio["2"].get<double>() == Approx(G_2[1] / P_2[1]));
 }
 
 TEST_CASE(

@@ -190,14 +190,23 @@ def test_the_phi2_trend_tests_every_group_it_lists(tmp_path):
     A, J = quick()
     groups = main_L_groups(A)
     # a clean decrease over the feedback groups, but no feedback (listed first) far below all of them
+    def values(mean, k):  # 20 seeds around `mean`, as analysis.json lists them by seed
+        return {str(s): mean + 1e-4 * ((s * (k + 3)) % 7 - 3) for s in range(1, 21)}
+
     for k, g in enumerate(g for g in groups if g["P0_label"] != "none"):
-        g["dphi_2_paper"].update(mean=0.05 - 0.005 * k, se=1e-4, n=20)
+        g["dphi_2_paper"].update(mean=0.05 - 0.005 * k, se=1e-4, n=20, by_seed=values(0.05 - 0.005 * k, k))
     none = next(g for g in groups if g["P0_label"] == "none")
-    none["dphi_2_paper"].update(mean=0.001, se=1e-4, n=20)
+    none["dphi_2_paper"].update(mean=0.001, se=1e-4, n=20, by_seed=values(0.001, -1))
     r, out = report(tmp_path, A, J)
     row = row_of(out, "Stronger feedback moves φ_2")
     assert "no feedback" in row.split(" | ")[3]
-    assert row.split(" | ")[4].startswith("not confirmed"), row
+    assert row.split(" | ")[4].startswith("not confirmed (paired by seed, paired SE"), row
+    # without the values by seed (an analysis.json before version 7) each group is judged by its SE
+    for g in groups:
+        g["dphi_2_paper"].pop("by_seed")
+    r, out = report(fresh(tmp_path, "unpaired"), A, J)
+    row = row_of(out, "Stronger feedback moves φ_2")
+    assert row.split(" | ")[4].startswith("not confirmed (first to last"), row
 
 
 def test_h_gamma_without_feedback_is_exact_and_not_counted(tmp_path):

@@ -1,6 +1,7 @@
 """The verdict rule of the reproduction reports (scripts/verdicts.py): each branch on its edge."""
 import math
 import os
+import statistics
 import sys
 
 sys.path.insert(0, os.path.join(os.environ.get("BUDJAM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", "..")),
@@ -273,3 +274,25 @@ def test_the_adaptive_step_table_judges_agreement_by_the_one_rule(tmp_path):
     # fewer than 5 paired seeds: no verdict and no ± (the old table said "yes" from 2 seeds)
     row = adaptive_row(tmp_path, range(1, 3), shift=1.0)
     assert "inconclusive" in row and "(n = 2 < 5)" in row and "±" not in row, row
+
+
+def test_a_trend_over_groups_of_the_same_seeds_is_paired_by_seed():
+    # Each seed's value falls by 0.001 from group to group, while the seeds spread by 0.01: groups
+    # of the same seeds resolve the fall that independent groups' SEs (0.01/√20 each) cannot.
+    base = {str(s): 0.05 + 0.01 * math.sin(s) for s in range(1, 21)}
+    groups = [{s: x - 0.001 * k + 1e-5 * math.cos(7 * int(s) + k) for s, x in base.items()} for k in range(3)]
+    unpaired = [(statistics.mean(g.values()), statistics.stdev(g.values()) / math.sqrt(20), 20) for g in groups]
+    assert v.trend(unpaired, increasing=False).word == "inconclusive"
+    paired = v.paired_trend(groups, increasing=False)
+    assert paired.word == "confirmed" and "paired by seed" in paired.why
+    assert v.paired_trend(groups, increasing=True).word == "not confirmed"
+    # the sign test: 20 of 20 seeds fall at every step, z = 20/√20
+    median = v.paired_trend(groups, increasing=False, statistic="median")
+    assert median.word == "confirmed" and "sign test" in median.why and "4.47" in median.why
+    # only the seeds both groups have are paired: four of them carry no verdict
+    few = [{s: x for s, x in g.items() if int(s) <= 4} for g in groups]
+    assert v.paired_trend(few, increasing=False).word == "inconclusive"
+    assert "4 seeds in both groups" in v.paired_trend(few, increasing=False).why
+    # the same values in every group: no spread, no verdict
+    same = [dict(base), dict(base)]
+    assert v.paired_trend(same, increasing=False).word == "inconclusive"

@@ -437,6 +437,20 @@ std::vector<double> collect(const std::vector<const RunRow*>& rs, F f) {
   return v;
 }
 
+// `stat` with the values it was computed from, by seed ("by_seed": seed → the mean of that seed's
+// finite values): groups grown from the same seeds are compared seed by seed (a trend over P0 is a
+// paired test, docs/analysis.md "Verdicts").
+template <class F>
+Json with_values_by_seed(Json stat, const std::vector<const RunRow*>& rs, F f) {
+  std::map<std::uint64_t, std::vector<double>> by_seed;
+  for (const auto* r : rs)
+    if (const double x = f(*r); std::isfinite(x)) by_seed[r->seed].push_back(x);
+  Json values = Json::object();
+  for (const auto& [seed, v] : by_seed) values[std::to_string(seed)] = mean(v);
+  stat["by_seed"] = std::move(values);
+  return stat;
+}
+
 std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   std::set<fs::path> runs;
   for (const auto& in : inputs) {
@@ -669,15 +683,21 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
     j["admitted"] = admitted.size();
     return j;
   };
-  g["dphi_2_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.dphi_2; })));
+  const auto dphi_2 = [](auto& r) { return r.dphi_2; };
+  g["dphi_2_paper"] = selected(with_values_by_seed(mean_se_json(collect(admitted, dphi_2)), admitted, dphi_2));
   g["dphi_2_pred_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2; })));
   // Eq. 14 against the simulation run by run (the same runs on both sides: a paired difference)
   g["dphi_2_pred_minus_sim_paper"] =
       selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2 - r.dphi_2; })));
-  g["P_2_over_Pmax_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.P_2 / kPmax; })));
-  g["lambda_bar_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.lambda_bar_lobes; })));
+  const auto P_2 = [](auto& r) { return r.P_2 / kPmax; };
+  g["P_2_over_Pmax_paper"] = selected(with_values_by_seed(mean_se_json(collect(admitted, P_2)), admitted, P_2));
+  const auto lambda_bar = [](auto& r) { return r.lambda_bar_lobes; };
+  g["lambda_bar_paper"] =
+      selected(with_values_by_seed(mean_se_json(collect(admitted, lambda_bar)), admitted, lambda_bar));
   g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
-  g["G_2_over_P_2_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / r.P_2; }), bo));
+  const auto G_2_over_P_2 = [](auto& r) { return r.G_2 / r.P_2; };
+  g["G_2_over_P_2_paper"] =
+      selected(with_values_by_seed(median_json(collect(kept, G_2_over_P_2), bo), kept, G_2_over_P_2));
 }
 
 // The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio, its error a
@@ -782,7 +802,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   // the paper's figure: mean ± SE over runs, every cell of a run
-  g["h_gamma_paper"] = mean_se_json(collect(rs, [](auto& r) { return r.h_gamma_all_cells; }));
+  const auto h_gamma = [](auto& r) { return r.h_gamma_all_cells; };
+  g["h_gamma_paper"] = with_values_by_seed(mean_se_json(collect(rs, h_gamma)), rs, h_gamma);
   g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
 
   // pooled Kaplan–Meier and the pooled prediction
@@ -1288,7 +1309,7 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   J["format"] = "budjam-analysis";
   // 3: B_grow = λ_c B_ext as the median ratio; 4: errors of pooled targets by seed; 5: the SEs of the
   // spectrum's slopes by seed, finite-size fits only over sizes of disjoint seeds
-  J["version"] = 6;
+  J["version"] = 7;
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
