@@ -451,6 +451,18 @@ Json with_values_by_seed(Json stat, const std::vector<const RunRow*>& rs, F f) {
   return stat;
 }
 
+// mean ± SE of f over the runs, with its values by seed
+template <class F>
+Json mean_se_by_seed(const std::vector<const RunRow*>& rs, F f) {
+  return with_values_by_seed(mean_se_json(collect(rs, f)), rs, f);
+}
+
+// median of f over the runs (bootstrap error), with its values by seed
+template <class F>
+Json median_by_seed(const std::vector<const RunRow*>& rs, F f, const BootstrapOptions& bo) {
+  return with_values_by_seed(median_json(collect(rs, f), bo), rs, f);
+}
+
 std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   std::set<fs::path> runs;
   for (const auto& in : inputs) {
@@ -684,20 +696,18 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
     return j;
   };
   const auto dphi_2 = [](auto& r) { return r.dphi_2; };
-  g["dphi_2_paper"] = selected(with_values_by_seed(mean_se_json(collect(admitted, dphi_2)), admitted, dphi_2));
+  g["dphi_2_paper"] = selected(mean_se_by_seed(admitted, dphi_2));
   g["dphi_2_pred_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2; })));
   // Eq. 14 against the simulation run by run (the same runs on both sides: a paired difference)
   g["dphi_2_pred_minus_sim_paper"] =
       selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2 - r.dphi_2; })));
   const auto P_2 = [](auto& r) { return r.P_2 / kPmax; };
-  g["P_2_over_Pmax_paper"] = selected(with_values_by_seed(mean_se_json(collect(admitted, P_2)), admitted, P_2));
+  g["P_2_over_Pmax_paper"] = selected(mean_se_by_seed(admitted, P_2));
   const auto lambda_bar = [](auto& r) { return r.lambda_bar_lobes; };
-  g["lambda_bar_paper"] =
-      selected(with_values_by_seed(mean_se_json(collect(admitted, lambda_bar)), admitted, lambda_bar));
+  g["lambda_bar_paper"] = selected(mean_se_by_seed(admitted, lambda_bar));
   g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
   const auto G_2_over_P_2 = [](auto& r) { return r.G_2 / r.P_2; };
-  g["G_2_over_P_2_paper"] =
-      selected(with_values_by_seed(median_json(collect(kept, G_2_over_P_2), bo), kept, G_2_over_P_2));
+  g["G_2_over_P_2_paper"] = selected(median_by_seed(kept, G_2_over_P_2, bo));
 }
 
 // The test of B_grow = λ_c B_ext over the targets of the runs: log₁₀ of the median ratio, its error a
@@ -803,7 +813,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   // the paper's figure: mean ± SE over runs, every cell of a run
   const auto h_gamma = [](auto& r) { return r.h_gamma_all_cells; };
-  g["h_gamma_paper"] = with_values_by_seed(mean_se_json(collect(rs, h_gamma)), rs, h_gamma);
+  g["h_gamma_paper"] = mean_se_by_seed(rs, h_gamma);
   g["B_grow_over_lambda_B_log10"] = growth_bulk_json(rs, bo);
 
   // pooled Kaplan–Meier and the pooled prediction
