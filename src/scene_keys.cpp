@@ -289,7 +289,7 @@ std::vector<SceneKey> make_keys() {
                    BUDJAM_FIELD(skin)));
   e.push_back(integer("minimiser", "threads",
                       "threads of a force evaluation (N ≥ 512 cells), 0 = one per core; results do not depend on it",
-                      kZeroOrPositive, BUDJAM_FIELD(threads)));
+                      between(0, kMaxThreads, "[]"), BUDJAM_FIELD(threads)));
 
   e.push_back(flag("observe", "bud_events", "track unconstrained buds from jamming on (bud_events.csv)",
                    BUDJAM_FIELD(bud_events)));

@@ -533,7 +533,8 @@ int modes_for_band_edge(std::size_t n_dof, std::size_t expected_zero, const Band
 
 PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  SpectrumOptions options, const BandEdgeRule& rule) {
-  if (net.N_nr == 0) throw InputError("packing: no non-rattler cells (unjammed): no vibrational spectrum");
+  if (net.N_nr == 0)  // a valid packing with no answer, as its moduli (moduli.cpp)
+    throw NoResultError("packing: no non-rattler cells (unjammed): no vibrational spectrum");
   const VibrationalProblem prob = vibrational_problem(p, contacts, net);
   const std::size_t nd = static_cast<std::size_t>(prob.mass.size()) - 2;
   // Enough modes for ω*: the quasi-zero modes (≈ N_u; with deflation the cell-local ones come for

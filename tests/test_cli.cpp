@@ -35,6 +35,14 @@ fs::path write(const std::string& name, const std::string& text) {
   return p;
 }
 
+// An empty scratch directory `name` with a bin/ for stand-in programs (put first on PATH).
+fs::path directory_with_bin(const std::string& name) {
+  const fs::path dir = work_dir() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir / "bin");
+  return dir;
+}
+
 std::size_t lines_in(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
 
 // Exactly one line "budjam: error: ...\n".
@@ -184,7 +192,25 @@ TEST_CASE("a number outside its option's range exits 2 with one line naming the 
            {"render " + p + " -o " + quoted(outputs / "big.png") + " --scale 1e6", "--scale"},
            {"render " + p + " -o " + quoted(outputs / "big.svg") + " --png --scale 1e6", "--scale"},
            // a scale whose pixel count no integer holds
-           {"render " + p + " -o " + quoted(outputs / "huge.png") + " --scale 1e300", "--scale"}}) {
+           {"render " + p + " -o " + quoted(outputs / "huge.png") + " --scale 1e300", "--scale"},
+           // an SVG no viewer opens, one of no pixel, a scale that is no number
+           {"render " + p + " -o " + quoted(outputs / "huge.svg") + " --scale 1e308", "--scale"},
+           {"render " + p + " -o " + quoted(outputs / "tiny.svg") + " --scale 1e-300", "--scale"},
+           {"render " + p + " -o " + quoted(outputs / "tiny.png") + " --scale 1e-300", "--scale"},
+           {"render " + p + " -o " + quoted(outputs / "inf.svg") + " --scale inf", "--scale"},
+           // more threads than a thread library creates would end the process where it cannot say why
+           {"grow " + demo + " --out " + o + " --threads 100000", "--threads"},
+           {"grow " + demo + " --out " + o + " --set minimiser.threads=100000", "minimiser.threads"},
+           // a histogram no memory holds, and a count no integer holds
+           {"dos " + p + " --out " + o + " --bins 99999999999", "--bins"},
+           {"dos " + p + " --out " + o + " --bins 18446744073709551616", "--bins"},
+           {"analyse " + p + " --out " + o + " --seed 18446744073709551616", "--seed"},
+           {"analyse " + p + " --out " + o + " --main-L 0", "--main-L"},
+           // refused before any packing is measured
+           {"accuracy --packings A=" + p + " --out " + o + " --min-seconds nan", "--min-seconds"},
+           {"accuracy --packings A=" + p + " --out " + o + " --min-seconds -1", "--min-seconds"},
+           {"accuracy --packings A=" + p + " --out " + o + " --error-floor inf", "--error-floor"},
+           {"accuracy --packings A=" + p + " A=" + p + " --out " + o, "--packings"}}) {
     fs::remove_all(outputs);
     fs::create_directory(outputs);
     const Result r = run_budjam(args);
@@ -202,9 +228,7 @@ TEST_CASE(
     "render stopped by SIGINT while its converter runs leaves neither a temporary nor the output, and "
     "no converter behind; the converter starts with no signal blocked",
     "[cli]") {
-  const fs::path dir = work_dir() / "render_sigint";
-  fs::remove_all(dir);
-  fs::create_directories(dir / "bin");
+  const fs::path dir = directory_with_bin("render_sigint");
   // A converter that says it has started (with its pid), takes its time, then writes: as an orphan it
   // would write after budjam removed its temporaries.
   const fs::path converter = dir / "bin" / "rsvg-convert", mark = dir / "started";
@@ -291,6 +315,39 @@ TEST_CASE(
   std::sort(left.begin(), left.end());
   std::sort(expected.begin(), expected.end());
   CHECK(left == expected);
+}
+
+TEST_CASE(
+    "a converter or GSD writer that fails, or ends well having written nothing, replaces none of the earlier "
+    "outputs",
+    "[cli]") {
+  const fs::path dir = directory_with_bin("failed_writers");
+  std::ofstream(dir / "bin" / "rsvg-convert") << "#!/bin/sh\necho 'cannot draw' >&2\nexit 1\n";
+  fs::permissions(dir / "bin" / "rsvg-convert", fs::perms::owner_all);
+  std::ofstream(dir / "p.pack")
+      << "budjam-packing 1\nL 8\nshear 0\nN 2\nnext_id 2\nmeta kind jammed\n"
+         "cells id parent x y theta b gamma0\n0 -1 2 2 0 0.5 0.002\n1 -1 5 5 1 0.7 0.002\nend\n";
+  const std::vector<std::string> earlier{"z.svg", "z.png", "g.gsd"};
+  for (const auto& name : earlier) std::ofstream(dir / name) << "the earlier " << name << "\n";
+  // The environment the child inherits: the failing converter first on PATH, a "Python" that writes nothing.
+  const std::string path = std::getenv("PATH");
+  ::setenv("PATH", ((dir / "bin").string() + ":" + path).c_str(), 1);
+  const Result render = budjam::testing::run_budjam_in(dir, "render p.pack -o z.svg --png");
+  ::setenv("PATH", path.c_str(), 1);
+  ::setenv("BUDJAM_PYTHON", "/bin/true", 1);
+  const Result gsd = budjam::testing::run_budjam_in(dir, "export p.pack --format gsd --out g");
+  ::unsetenv("BUDJAM_PYTHON");
+  for (const auto& [r, says] : {std::pair{render, "rsvg-convert"}, std::pair{gsd, "without writing a GSD file"}}) {
+    INFO(r.err);
+    CHECK(r.code == 3);
+    require_one_error_line(r);
+    CHECK_THAT(r.err, Contains(says));
+  }
+  for (const auto& name : earlier) CHECK(slurp(dir / name) == "the earlier " + name + "\n");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  CHECK(left == std::vector<std::string>{"bin", "g.gsd", "p.pack", "z.png", "z.svg"});
 }
 
 TEST_CASE("an output that fills its disk is exit 3 with one line naming that output, never its temporary", "[cli]") {

@@ -93,13 +93,32 @@ TEST_CASE("a JSON value of the wrong type in an input is exit 2, not internal", 
   check_input_error(run_budjam("analyse json-run --out json-out"), "json-run/summary.json: P0");
 }
 
-TEST_CASE("the spectrum of an unjammed packing is refused naming the packing", "[taxonomy]") {
+TEST_CASE("the spectrum of an unjammed packing (N_nr = 0) is a notice and exit 1, as its moduli, and writes nothing",
+          "[taxonomy]") {
   write(work_dir() / "loose.pack", kPacking);  // two cells far apart: every cell is a rattler
-  const auto r = run_budjam("dos loose.pack");
+  const auto r = run_budjam("dos loose.pack --out loose");
   INFO(r.err);
-  CHECK(r.code == 2);
-  CHECK(r.err.find("loose.pack: no non-rattler cells") != std::string::npos);
+  CHECK(r.code == 1);
+  CHECK(r.err.rfind("budjam: dos: loose.pack: no non-rattler cells", 0) == 0);  // a notice, not an error
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.out.empty());
+  CHECK_FALSE(fs::exists(work_dir() / "loose.json"));
+  CHECK_FALSE(fs::exists(work_dir() / "loose.csv"));
+}
+
+TEST_CASE("a result that cannot be written to standard output is exit 3 with one line, not success", "[taxonomy]") {
+  write(work_dir() / "full.pack", kPacking);
+  const fs::path err = work_dir() / "full.err";
+  using budjam::testing::shell_quoted;
+  for (const std::string& args : {"validate " + shell_quoted(budjam::testing::source_file("data/scenes/demo.toml")),
+                                  "rigidity " + shell_quoted(work_dir() / "full.pack") + " --json"}) {
+    INFO(args);
+    CHECK(budjam::testing::run_budjam_redirected(args, "/dev/full", err) == 3);
+    const std::string e = slurp(err);
+    INFO(e);
+    CHECK(e.rfind("budjam: error: standard output: cannot write: ", 0) == 0);
+    CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+  }
 }
 
 namespace {
@@ -139,6 +158,19 @@ TEST_CASE("a run whose packings is a plain file is an input error (exit 2) namin
   write(run / "packings", "not a directory\n");
   check_input_error(run_budjam("analyse plain-run --out plain-out"), "plain-run/packings: not a directory");
   check_input_error(run_budjam("survival plain-run"), "plain-run/packings: not a directory");
+}
+
+TEST_CASE(
+    "a finished run without its packings directory is an input error (exit 2) naming it, and nothing is "
+    "written",
+    "[taxonomy]") {
+  const auto grown =
+      run_budjam("grow " + budjam::testing::shell_quoted(budjam::testing::source_file("data/scenes/demo.toml")) +
+                 " --quiet --out bare-run");
+  REQUIRE(grown.code == 0);
+  fs::remove_all(work_dir() / "bare-run" / "packings");
+  check_input_error(run_budjam("analyse bare-run --out bare-out"), "bare-run/packings: no such directory");
+  CHECK_FALSE(fs::exists(work_dir() / "bare-out"));
 }
 
 TEST_CASE("moduli of an unjammed packing (N_nr = 0) is a notice and exit 1, and writes nothing", "[taxonomy]") {

@@ -31,6 +31,10 @@ struct Schedule {
   bool any() const { return at_jamming || at_phi2 || at_targets || every > 0; }
 };
 
+// The most threads a force evaluation may ask for: beyond the cores of any node, and below what a
+// thread library fails to create (which ends the process where no error can be reported).
+inline constexpr int kMaxThreads = 1024;
+
 struct Scene {
   std::string name = "unnamed";
   std::uint64_t seed = 1;

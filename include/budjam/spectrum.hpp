@@ -226,8 +226,8 @@ struct PackingSpectrum {
 
 // Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +
 // summarise). With options.modes ≤ 0 the ARPACK path computes as many modes as ω* needs:
-// modes_for_band_edge(n_dof, N_u), less the N_u cell-local zero modes when they are deflated. Throws InputError if the
-// packing has no non-rattler cell (unjammed: no spectrum).
+// modes_for_band_edge(n_dof, N_u), less the N_u cell-local zero modes when they are deflated. Throws NoResultError
+// if the packing has no non-rattler cell (unjammed: no spectrum).
 PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  SpectrumOptions options = {}, const BandEdgeRule& rule = {});
 

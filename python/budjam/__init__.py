@@ -25,6 +25,7 @@ the same names: the result of moduli(), rigidity(), spectrum() and survival() is
 CSV table (if it writes one) under "table".
 """
 import functools
+import numbers
 import os
 import pathlib
 
@@ -166,6 +167,17 @@ def _overrides(set):
     return list(set)
 
 
+def _seed(seed):
+    """`seed` checked as `budjam grow --seed` checks it: a one-line error, never a conversion's."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed: must be an integer, got {type(seed).__name__}")
+    if not 0 <= seed < 2**63:
+        raise InputError(f"run.seed: must be ≥ 0 and below 2^63 (got {int(seed)})")
+    return int(seed)
+
+
 def grow(scene, seed=None, set=(), callback=None):
     """Grow the scene (a .toml path) with the same driver as `budjam grow`, without writing files.
 
@@ -175,7 +187,9 @@ def grow(scene, seed=None, set=(), callback=None):
     Without callback, returns the Growth iterator of events (see Growth); with one, calls
     callback(event) for every event and returns the final status ('finished', or an expected early
     stop such as 'step_limit')."""
-    growth = Growth(str(scene), seed, _overrides(set))
+    if not isinstance(scene, (str, os.PathLike)):
+        raise TypeError(f"scene: must be the path of a scene file (str or os.PathLike), got {type(scene).__name__}")
+    growth = Growth(os.fspath(scene), _seed(seed), _overrides(set))
     if callback is None:
         return growth
     for event in growth:

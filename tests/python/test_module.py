@@ -182,9 +182,22 @@ def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
 
 
 def test_grow_refuses_a_seed_a_scene_file_cannot_hold_as_budjam_grow_does():
-    with pytest.raises(budjam.InputError, match="run.seed: must be below 2\\^63"):
-        budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", seed=2**63)
-    budjam.grow(SOURCE_DIR / "data" / "scenes" / "demo.toml", seed=2**63 - 1)  # the largest is fine
+    scene = SOURCE_DIR / "data" / "scenes" / "demo.toml"
+    for seed in (2**63, 2**64, -1):
+        with pytest.raises(budjam.InputError, match="run.seed: must be ≥ 0 and below 2\\^63") as refused:
+            budjam.grow(scene, seed=seed)
+        assert "\n" not in str(refused.value)
+    budjam.grow(scene, seed=2**63 - 1)  # the largest is fine
+    budjam.grow(scene, seed=np.int64(3))  # an integer of numpy's is an integer
+
+
+def test_grow_refuses_what_is_not_a_scene_path_or_a_seed_in_one_line():
+    for scene, seed, field in ((None, None, "scene"), (3, None, "scene"),
+                               (SOURCE_DIR / "data" / "scenes" / "demo.toml", 1.5, "seed"),
+                               (SOURCE_DIR / "data" / "scenes" / "demo.toml", True, "seed")):
+        with pytest.raises(TypeError, match=f"^{field}: ") as refused:
+            budjam.grow(scene, seed=seed)
+        assert "\n" not in str(refused.value)
 
 
 def test_spectrum_refuses_a_negative_mode_count_as_budjam_dos_does():

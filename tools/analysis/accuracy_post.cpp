@@ -169,13 +169,10 @@ double max_of(const std::vector<double>& v) { return v.empty() ? kNaN : *std::ma
 }  // namespace
 
 std::vector<fs::path> find_packings(const fs::path& dir) {
-  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a directory");
   std::vector<fs::path> out;
-  for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file() && e.path().extension() == ".pack" &&
-        e.path().parent_path().filename() == io::run_files::packings)
-      out.push_back(e.path());
-  std::sort(out.begin(), out.end());
+  for (const auto& e : input_directory(dir, true))
+    if (e.regular_file && e.path.extension() == ".pack" && e.path.parent_path().filename() == io::run_files::packings)
+      out.push_back(e.path);
   if (out.empty()) throw InputError(dir.string() + ": holds no packings/*.pack");
   return out;
 }

@@ -5,6 +5,7 @@
 #include "io/run_directory.hpp"
 
 #include "budjam/errors.hpp"
+#include "budjam/number_text.hpp"
 #include "budjam/pareto.hpp"
 #include "budjam/statistics.hpp"
 #include "io/atomic_file.hpp"
@@ -95,9 +96,8 @@ double resolution_of(const SweepRow& r, const std::string& q) {
 // seed<k> subdirectories with a summary.json, by name.
 std::map<std::string, fs::path> seeds_of(const fs::path& dir) {
   std::map<std::string, fs::path> m;
-  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a directory");
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.is_directory() && fs::exists(e.path() / io::run_files::summary)) m[e.path().filename().string()] = e.path();
+  for (const auto& e : input_directory(dir, false))
+    if (e.directory && input_exists(e.path / io::run_files::summary)) m[e.path.filename().string()] = e.path;
   if (m.empty()) throw InputError(dir.string() + ": holds no run directory (seed*/summary.json)");
   return m;
 }
@@ -117,12 +117,12 @@ struct Measured {
 Measured measure(const fs::path& run) {
   const tools::RunData r = tools::load_run(run);
   Measured m;
-  if (fs::exists(run / io::run_files::timing)) {
+  if (input_exists(run / io::run_files::timing)) {
     const Json t = io::read_json(run / io::run_files::timing);
     m.wall = t.value("wall_seconds", kNaN);
     m.evaluations = t.value("force_evaluations", kNaN);
   }
-  if (fs::exists(run / "cpu_time.json")) {
+  if (input_exists(run / "cpu_time.json")) {
     const Json t = io::read_json(run / "cpu_time.json");
     m.cpu = t.value("user_seconds", kNaN) + t.value("system_seconds", kNaN);
   }
@@ -263,18 +263,28 @@ std::vector<SweepRow> growth_rows(const SweepOptions& o) {
 
 // ---- post-processing knobs ------------------------------------------------------------------
 
+namespace {
+
+// NAME and DIR of a `--packings NAME=DIR`.
+std::pair<std::string, std::string> packing_set(const std::string& spec) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+    throw InputError("--packings: expected NAME=DIR, got '" + spec + "'");
+  std::string name = spec.substr(0, eq);
+  if (name.find_first_of(",\"\n") != std::string::npos)
+    throw InputError("--packings: NAME must not contain , \" or a newline");
+  return {std::move(name), spec.substr(eq + 1)};
+}
+
+}  // namespace
+
 std::vector<SweepRow> post_rows(const SweepOptions& o) {
   std::vector<SweepRow> rows;
   tools::PostOptions po;
   po.min_seconds = o.min_seconds;
   for (const std::string& spec : o.packings) {
-    const auto eq = spec.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
-      throw InputError("--packings: expected NAME=DIR, got '" + spec + "'");
-    const std::string name = spec.substr(0, eq);
-    if (name.find_first_of(",\"\n") != std::string::npos)
-      throw InputError("--packings: NAME must not contain , \" or a newline");
-    const auto packs = tools::find_packings(spec.substr(eq + 1));
+    const auto [name, dir] = packing_set(spec);
+    const auto packs = tools::find_packings(dir);
     std::cerr << "accuracy: " << io::escape_control(name) << ": " << packs.size() << " packings\n";
     for (const tools::PostRow& p : tools::measure_postprocessing(name, packs, po)) {
       SweepRow r;
@@ -431,8 +441,19 @@ void check_sweep_options(const SweepOptions& o) {
         std::string(o.reference.empty() ? "variants without --reference" : "--reference without variants") + ")");
   if (o.reference.empty() && o.packings.empty())
     throw InputError("accuracy: nothing to measure (give --reference DIR VARIANT_DIR... and/or --packings NAME=DIR)");
-  if (!(o.time_noise >= 0) || !(o.error_ratio >= 1) || !(o.error_floor >= 0))
-    throw InputError("--time-noise ≥ 0, --error-ratio ≥ 1, --error-floor ≥ 0 required");
+  const auto require = [](const char* option, double value, double lo) {
+    if (!(std::isfinite(value) && value >= lo))
+      throw InputError(std::string(option) + ": must be a finite number ≥ " + budjam::shortest_text(lo) + " (got " +
+                       budjam::shortest_text(value) + ")");
+  };
+  require("--time-noise", o.time_noise, 0);
+  require("--error-ratio", o.error_ratio, 1);
+  require("--error-floor", o.error_floor, 0);
+  require("--min-seconds", o.min_seconds, 0);
+  std::set<std::string> names;
+  for (const std::string& spec : o.packings)
+    if (const std::string name = packing_set(spec).first; !names.insert(name).second)
+      throw InputError("--packings: the name " + io::escape_control(name) + " is given twice (each set needs its own)");
   if (o.growth_set.empty() || o.growth_set.find_first_of(",\"\n") != std::string::npos)
     throw InputError("--growth-set: must be non-empty without , \" or a newline (a CSV field)");
 }

@@ -37,7 +37,7 @@ struct DosReport {
   double seconds = 0;     // wall time of the spectrum (not written to the files)
 };
 
-// Spectrum, observables and the independent counts of one relaxed packing. Throws InputError if
+// Spectrum, observables and the independent counts of one relaxed packing. Throws NoResultError if
 // the packing has no non-rattler cell.
 DosReport dos_report(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                      const DosRequest& request);

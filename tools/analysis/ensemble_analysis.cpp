@@ -467,16 +467,15 @@ std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   std::set<fs::path> runs;
   for (const auto& in : inputs) {
     const fs::path p(in);
-    if (!fs::exists(p)) throw InputError(in + ": no such run directory");
-    if (fs::exists(p / io::run_files::summary)) {
+    if (!input_exists(p)) throw InputError(in + ": no such run directory");
+    if (input_exists(p / io::run_files::summary)) {
       runs.insert(p);
       continue;
     }
-    if (!fs::is_directory(p)) throw InputError(in + ": not a directory");
     bool any = false;
-    for (const auto& e : fs::recursive_directory_iterator(p))
-      if (e.is_regular_file() && e.path().filename() == io::run_files::summary) {
-        runs.insert(e.path().parent_path());
+    for (const auto& e : input_directory(p, true))
+      if (e.regular_file && e.path.filename() == io::run_files::summary) {
+        runs.insert(e.path.parent_path());
         any = true;
       }
     if (!any) throw InputError(in + ": holds no finished run (no summary.json below it)");
@@ -484,16 +483,15 @@ std::vector<fs::path> find_runs(const std::vector<std::string>& inputs) {
   return {runs.begin(), runs.end()};
 }
 
-void write_csv(const fs::path& path, const std::vector<std::string>& header,
-               const std::vector<std::vector<std::string>>& rows) {
-  io::write_atomically(path, [&](std::ostream& os) {
-    for (std::size_t k = 0; k < header.size(); ++k) os << (k ? "," : "") << header[k];
+std::string csv_text(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  std::ostringstream os;
+  for (std::size_t k = 0; k < header.size(); ++k) os << (k ? "," : "") << header[k];
+  os << '\n';
+  for (const auto& r : rows) {
+    for (std::size_t k = 0; k < r.size(); ++k) os << (k ? "," : "") << r[k];
     os << '\n';
-    for (const auto& r : rows) {
-      for (std::size_t k = 0; k < r.size(); ++k) os << (k ? "," : "") << r[k];
-      os << '\n';
-    }
-  });
+  }
+  return std::move(os).str();
 }
 
 std::string cell(double v) { return std::isfinite(v) ? num(v) : std::string(); }
@@ -578,11 +576,10 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   for (std::size_t k = 0; k < e.rows.size(); ++k) e.rows[k].state = states[k];
 
   for (const auto& run : e.rows) {
-    std::vector<fs::path> packs;  // in name order: the tables do not depend on the directory order
-    for (const auto& f : fs::directory_iterator(run.dir / io::run_files::packings))
-      if (f.path().extension() == ".pack") packs.push_back(f.path());
-    std::sort(packs.begin(), packs.end());
-    for (const auto& pack : packs) {
+    // in name order: the tables do not depend on the directory order
+    for (const auto& f : input_directory(run.dir / io::run_files::packings, false)) {
+      const fs::path& pack = f.path;
+      if (pack.extension() != ".pack") continue;
       const auto j = sidecar(pack, "dos");
       if (!j) {
         if (o.require_dos) throw InputError(pack.string() + ": no spectrum (run `make -f Makefile.analysis dos`)");
@@ -1218,14 +1215,14 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
   return h;
 }
 
-// The files analyse writes in --out: analysis.json, then the tables.
+// The files analyse writes in --out, all replaced at once (analysis.json marks them as analyse's).
 const std::vector<std::string_view> kOutputFiles{"analysis.json",    "runs.csv",       "targets.csv",
                                                  "survival.csv",     "remaining.csv",  "division_curve.csv",
                                                  "growth_rates.csv", "trajectory.csv", "dos.csv"};
 
-// A table the inputs could not give (Ensemble::unavailable names it) is not written: an empty file
-// would read as "measured, nothing there".
-void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
+// The tables as (file name, content). A table the inputs could not give (Ensemble::unavailable names
+// it) is left out: an empty file would read as "measured, nothing there".
+std::vector<std::pair<std::string, std::string>> table_files(const Ensemble& e, const Tables& t) {
   std::vector<std::string> run_header{"run", "L", "P0", "seed", "status", "jamming_state", "protocol", "cells"};
   std::vector<std::string> tgt_header{"run", "L", "P0", "seed", "dphi"};
   for (const auto& c : kRunColumns) run_header.push_back(c.name);
@@ -1249,11 +1246,12 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
     dos_out.push_back({q.run, q.packing, num(q.L), P0_csv(q.P0_label), std::to_string(q.state), cell(q.dphi),
                        cell(q.omega_star), cell(q.dZ), cell(q.Z - 6.0), std::to_string(q.N_c), std::to_string(q.N_nr),
                        cell(q.N_zero), cell(q.N_u), cell(q.N_u_buds)});
+  std::vector<std::pair<std::string, std::string>> files;
   auto write = [&](const char* name, const std::vector<std::string>& header,
                    const std::vector<std::vector<std::string>>& rows) {
     if (std::find(kOutputFiles.begin(), kOutputFiles.end(), name) == kOutputFiles.end())
       throw std::logic_error(std::string("analyse: ") + name + " is not in kOutputFiles");
-    if (!e.unavailable.count(name)) write_csv(out / name, header, rows);
+    if (!e.unavailable.count(name)) files.emplace_back(name, csv_text(header, rows));
   };
   write("runs.csv", run_header, run_rows);
   write("targets.csv", tgt_header, tgt_rows);
@@ -1266,6 +1264,7 @@ void write_tables(const fs::path& out, const Ensemble& e, const Tables& t) {
         {"run", "packing", "L", "P0", "jamming_state", "dphi", "omega_star", "dZ", "Z_minus_6", "N_c", "N_nr", "N_zero",
          "N_u", "N_u_buds"},
         dos_out);
+  return files;
 }
 
 }  // namespace
@@ -1305,7 +1304,6 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   }
 
   const fs::path out(o.out);
-  io::Directory::open(out, true);
   Tables tables;
   Json jgroups = Json::array();
   for (const auto& [key, rs] : groups) {
@@ -1379,8 +1377,14 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
     }
     J["dZ0_branch"] = br;
   }
-  io::write_json(out / "analysis.json", J);
-  write_tables(out, e, tables);
+  // Every file is complete before any replaces its predecessor (a full disk leaves the earlier
+  // output whole), and a table this ensemble cannot give does not survive from an earlier one.
+  auto files = table_files(e, tables);
+  files.emplace_back("analysis.json", io::json_text(J));
+  const io::Directory dir = io::Directory::open(out, true);
+  io::write_atomically(dir, files);
+  for (const std::string_view name : kOutputFiles)
+    if (e.unavailable.count(std::string(name))) dir.remove(name);
 
   std::ostringstream msg;
   msg << e.rows.size() << " runs used (" << e.failed.size() << " not finished";

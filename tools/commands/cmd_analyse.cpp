@@ -42,10 +42,10 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--tables", e.tables,
                       "instead of runs: the runs.csv, targets.csv, dos.csv, survival.csv of an earlier analysis");
        sub.add_option("--out", e.out, "output directory")->required()->check(budjam::cli::names_a_path());
-       sub.add_option("--main-L", e.main_L,
-                      "system size of the main figures (default 15 if present, else the largest)");
+       sub.add_option("--main-L", e.main_L, "system size of the main figures (default 15 if present, else the largest)")
+           ->check(budjam::cli::finite_in(0, 1e9, true));
        sub.add_option("--resamples", e.bootstrap.resamples, "bootstrap resamples (default 2000)");
-       sub.add_option("--seed", e.bootstrap.seed, "bootstrap seed (default 1)")->check(budjam::cli::non_negative());
+       sub.add_option("--seed", e.bootstrap.seed, "bootstrap seed (default 1)")->check(budjam::cli::seed_range());
        sub.add_option("--require", o->require, "fail if these per-packing results are missing: moduli, dos")
            ->delimiter(',');
        sub.callback([o] { run(*o); });

@@ -24,6 +24,8 @@ namespace {
 // the zero modes by more than their rounding (|σ| ≥ 1e-12 k/m), and near enough that λ = σ + 1/θ keeps
 // its digits (it loses ε|σ| ≤ 2e-12 for |σ| ≤ 1e4, four decades below the smallest zero cutoff 1e-8).
 constexpr double kMaxTol = 1e-4, kMinSigma = 1e-12, kMaxSigma = 1e4, kMaxLambdaTol = 1e-2;
+// More bins than a 10⁵-cell packing has modes resolve nothing; the bound keeps the JSON finite.
+constexpr std::size_t kMaxBins = 100000;
 
 struct Options {
   std::string packing;
@@ -45,7 +47,6 @@ void run(const Options& o) {
   req.spectrum.method = parse_spectrum_method(o.method, "--method");
   if (o.modes < 0) throw InputError("--modes: must be ≥ 0 (0 = as many as ω* needs), got " + std::to_string(o.modes));
   if (o.ncv < 0) throw InputError("--ncv: must be ≥ 0 (0 = automatic)");
-  if (o.bins == 0) throw InputError("--bins: must be positive");
   req.spectrum.modes = o.modes;
   req.spectrum.tol = o.tol;
   req.spectrum.ncv = o.ncv;
@@ -60,8 +61,9 @@ void run(const Options& o) {
   if (o.ncv > 0 && o.modes > 0 && o.ncv <= o.modes)
     throw InputError("--ncv: must exceed --modes (got " + std::to_string(o.ncv) + " ≤ " + std::to_string(o.modes) +
                      ")");
-  if (pc.network.N_nr == 0)
-    throw InputError(o.packing + ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
+  if (pc.network.N_nr == 0)  // no answer, as `moduli` of the same packing: a notice and exit 1
+    throw cli::Finding("dos: " + o.packing +
+                       ": no non-rattler cells (an unjammed packing has no vibrational spectrum)");
   const std::size_t n_dof = 3 * pc.network.N_nr - 2;
   if (req.spectrum.method == SpectrumMethod::arpack && o.modes > 0 && static_cast<std::size_t>(o.modes) >= n_dof)
     throw InputError("--modes: ARPACK computes fewer modes than the packing has (" + std::to_string(o.modes) + " ≥ " +
@@ -98,9 +100,9 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--lambda-tol", o->lambda_tol, "quasi-zero cutoff on |λ| = ω², in (0, 1e-2]")
            ->capture_default_str()
            ->check(budjam::cli::finite_in(0, kMaxLambdaTol, true));
-       sub.add_option("--bins", o->bins, "D(ω) histogram bins")
+       sub.add_option("--bins", o->bins, "D(ω) histogram bins, in [1, 1e5]")
            ->capture_default_str()
-           ->check(budjam::cli::non_negative());
+           ->check(CLI::Range(std::size_t{1}, kMaxBins));
        sub.add_option("--dense-max-dof", o->dense_max_dof, "auto: largest problem solved densely")
            ->capture_default_str()
            ->check(budjam::cli::non_negative());

@@ -11,6 +11,7 @@
 #include "io/export.hpp"
 #include "io/packing_file.hpp"
 #include "io/result_files.hpp"
+#include "io/run_data.hpp"
 #include "io/run_directory.hpp"
 #include "io/text.hpp"
 #include "observers/run_outputs.hpp"
@@ -76,6 +77,9 @@ void export_run_trajectory(const Options& o, const std::filesystem::path& out) {
 
 void run(const Options& o) {
   const RigidityNetwork which = parse_rigidity_network(o.network);
+  // The input first: where it is missing, that is what is wrong, whatever its output would be named.
+  if (!tools::input_exists(o.packing))
+    throw InputError(io::escape_control(o.packing) + ": cannot read: No such file or directory");
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
@@ -100,7 +104,7 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--format", o->format, io::export_formats_text())
            ->required()
            ->check(CLI::IsMember(format_names()));
-       sub.add_option("--out", o->out, "write BASE.<format> (default: the packing's path without .pack)")
+       sub.add_option("--out", o->out, "write BASE.<format> (default: the input's path without its extension)")
            ->type_name("BASE")
            ->check(budjam::cli::names_a_path());
        const CLI::Option* network = sub.add_option(

@@ -159,7 +159,7 @@ void run(const Options& o) {
     const std::string why = " (a Newton factor kept in memory is not saved, so that state would not resume exactly)";
     if (last_checkpoint)
       throw cli::Interrupted(signal, stopped + "; the checkpoint of " + text(*last_checkpoint) + " is kept" + why +
-                                         "; resume from it with: budjam grow --resume " + dir.string());
+                                         "; resume with: budjam grow --resume " + dir.string());
     throw cli::Interrupted(signal, stopped + "; no checkpoint yet" + why + "; start the run again with --overwrite");
   });
   // Inside a relaxation, every observe.checkpoint_evaluations force evaluations of it and at a
@@ -201,8 +201,8 @@ const bool registered = budjam::cli::register_command(
        sub.add_option("--seed", o->seed, "random seed (overrides the scene's run.seed)")
            ->check(budjam::cli::seed_range());
        sub.add_option("--threads", o->threads,
-                      "threads of a force evaluation, 0 = one per core (overrides minimiser.threads)")
-           ->check(budjam::cli::non_negative());
+                      "threads of a force evaluation, in [0, 1024], 0 = one per core (overrides minimiser.threads)")
+           ->check(CLI::Range(0, budjam::kMaxThreads));
        sub.add_option("--out", o->out, "run directory (default runs/<name>-seed<seed>)")
            ->check(budjam::cli::names_a_path());
        sub.add_option("--resume", o->resume, "continue the interrupted run in DIR from its checkpoint")

@@ -38,23 +38,24 @@ struct Options {
   bool no_contacts = false;
 };
 
-// The largest side of a PNG or PDF that rsvg-convert (cairo) draws.
-constexpr long kMaxConvertedPixels = 32767;
+// The largest side of a PNG or PDF that rsvg-convert (cairo) draws, and of an SVG (a picture no
+// viewer opens is no output).
+constexpr long kMaxConvertedPixels = 32767, kMaxSvgPixels = 1000000;
 
-// rsvg-convert SVG -> PNG/PDF, through a temporary file: `to` in `dir` is complete or untouched.
-void convert_svg(const fs::path& svg, const io::Directory& dir, const std::string& to, const std::string& format) {
-  io::TempFile tmp(dir, to);
+// rsvg-convert SVG -> PNG/PDF into `tmp`, which the caller commits: the output is complete or untouched.
+void convert_svg(const fs::path& svg, const io::TempFile& tmp, const std::string& format) {
   // On standard output, into the temporary's descriptor: rsvg-convert given a name writes a
   // temporary of its own beside it, which a signal would leave behind. "--": a file name that
   // starts with "-" is a file, not an option.
   const io::ProgramResult r = io::run_program({"rsvg-convert", "-f", format, "--", svg.string()}, "render",
                                               "install Debian's librsvg2-bin", tmp.fd());
-  if (!r.ok()) throw io::IoError("render: " + io::one_line((dir / to).string()) + ": rsvg-convert " + r.failure());
-  tmp.commit();
+  if (!r.ok())
+    throw io::IoError("render: " + io::one_line(tmp.final_path().string()) + ": rsvg-convert " + r.failure());
 }
 
 void run(const Options& o) {
-  if (!(o.scale > 0)) throw InputError("--scale: must be positive (got " + std::to_string(o.scale) + ")");
+  if (!(std::isfinite(o.scale) && o.scale > 0))
+    throw InputError("--scale: must be a positive number (got " + std::to_string(o.scale) + ")");
   const fs::path out = o.out;
   io::check_output_name("-o", out);
   const std::string ext = out.extension().string();
@@ -80,7 +81,7 @@ void run(const Options& o) {
                 m.get("kind").value_or(fs::path(o.packing).stem().string()).c_str(), f.packing.size(), f.packing.box.L,
                 f.packing.packing_fraction(), pc.P, pc.network.Z, pc.network.N_f, pc.network.N_u_buds);
   ro.caption = buf;
-  if (ext != ".svg" || o.png) {
+  {
     const RenderSize size = render_size(f.packing.box.L, ro);
     // Pixel counts as text without converting to an integer type (a huge --scale overflows any).
     const auto pixels = [](double v) {
@@ -88,24 +89,37 @@ void run(const Options& o) {
       std::snprintf(text, sizeof text, "%.0f", std::round(v));
       return std::string(text);
     };
-    const double largest = std::max(size.width, size.height);
-    if (!(largest <= kMaxConvertedPixels))
-      throw InputError("--scale: the picture would be " +
-                       (largest < 1e15 ? pixels(size.width) + " × " + pixels(size.height)
-                                       : std::string("more than 10^15 a side in")) +
-                       " pixels, and rsvg-convert draws at most " + std::to_string(kMaxConvertedPixels) +
-                       " a side: lower --scale, or write an SVG");
+    const double largest = std::max(size.width, size.height), smallest = std::min(size.width, size.height);
+    const std::string picture_size =
+        "--scale: the picture would be " +
+        (largest < 1e15 ? pixels(size.width) + " × " + pixels(size.height) : std::string("more than 10^15 a side in")) +
+        " pixels";
+    const bool converted = ext != ".svg" || o.png;
+    if (!(largest <= (converted ? kMaxConvertedPixels : kMaxSvgPixels)))
+      throw InputError(picture_size + ", and " +
+                       (converted
+                            ? "rsvg-convert draws at most " + std::to_string(kMaxConvertedPixels) +
+                                  " a side: lower --scale, or write an SVG"
+                            : "an SVG is drawn at most " + std::to_string(kMaxSvgPixels) + " a side: lower --scale"));
+    if (!(smallest >= 1)) throw InputError(picture_size + ", less than one a side: raise --scale");
   }
   const io::Directory dir = io::Directory::open(out.parent_path(), true);
   const std::string picture = render_svg(f.packing, pc.contacts, pc.network, ro);
-  if (ext != ".svg") {
-    io::TempFile svg(dir, name);  // only the converted file is an output: never committed
-    svg.write(picture);
-    convert_svg(svg.path(), dir, name, ext.substr(1));
+  io::TempFile svg(dir, name);
+  svg.write(picture);
+  if (ext != ".svg") {  // only the converted file is an output: the SVG is never committed
+    io::TempFile converted(dir, name);
+    convert_svg(svg.path(), converted, ext.substr(1));
+    converted.commit();
     return;
   }
-  io::write_atomically(dir, name, picture);
-  if (o.png) convert_svg(out, dir, fs::path(name).replace_extension(".png").string(), "png");
+  if (!o.png) return svg.commit();
+  // Both files or neither: the PNG is made before either replaces its predecessor.
+  io::TempFile png(dir, fs::path(name).replace_extension(".png").string());
+  convert_svg(svg.path(), png, "png");
+  const io::SignalsHeld held;  // no stop between the two renames
+  svg.commit();
+  png.commit();
 }
 
 const bool registered = budjam::cli::register_command(

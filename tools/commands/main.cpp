@@ -9,6 +9,9 @@
 #include "io/text.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -38,6 +41,16 @@ int notice(const std::string& message, int code) {
 std::string help_hint(const CLI::App& app) {
   const auto chosen = app.get_subcommands();
   return chosen.empty() ? "budjam --help" : "budjam " + chosen.front()->get_name() + " --help";
+}
+
+// A result printed on standard output is an output like a file: where it could not be written (a
+// full disk, `> /dev/full`), the command has not done its job.
+int with_stdout_written(int code) {
+  errno = 0;
+  std::cout.flush();
+  if (std::cout && std::fflush(stdout) == 0 && !std::ferror(stdout)) return code;
+  return error(std::string("standard output: cannot write: ") + (errno ? std::strerror(errno) : "write error"),
+               budjam::cli::kExitInternal);
 }
 
 }  // namespace
@@ -71,7 +84,7 @@ int main(int argc, char** argv) {
   remove_temporaries_on_fatal_signals();  // `grow` replaces them with its own while it runs
   try {
     app.parse(argc, argv);  // runs the chosen subcommand's callback
-    return kExitOk;
+    return with_stdout_written(kExitOk);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
     return error(std::string(e.what()) + " (see " + help_hint(app) + ")", kExitBadInput);
@@ -80,7 +93,7 @@ int main(int argc, char** argv) {
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
   } catch (const budjam::NoResultError& e) {  // cli::Finding included
-    return notice(e.what(), kExitRunFailed);
+    return with_stdout_written(notice(e.what(), kExitRunFailed));
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {
@@ -90,7 +103,8 @@ int main(int argc, char** argv) {
     return error(std::string("input JSON: ") + e.what(), kExitBadInput);
   } catch (const std::filesystem::filesystem_error& e) {
     // Reading is checked where it happens (InputError); what is left is making outputs.
-    return error(e.path1().string() + ": " + e.code().message(), kExitInternal);
+    return error((e.path1().empty() ? std::string("output") : e.path1().string()) + ": " + e.code().message(),
+                 kExitInternal);
   } catch (const std::exception& e) {
     return error(std::string("internal: ") + e.what(), kExitInternal);
   }

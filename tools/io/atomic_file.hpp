@@ -116,6 +116,7 @@ class TempFile {
 
   // For a program that writes the file by its name, or on its standard output (the descriptor).
   std::filesystem::path path() const { return dir_ / name_; }
+  std::filesystem::path final_path() const { return dir_ / final_; }
   int fd() const { return fd_; }
   void write(std::string_view data);
   // Makes the content durable with the output mode (also when a program wrote or replaced the

@@ -13,7 +13,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -408,6 +410,9 @@ void write_gsd(const std::filesystem::path& path, const std::vector<ParticleFram
   write_gsd(Directory::open(path.parent_path(), true), path.filename().string(), frames);
 }
 
+// The first eight bytes of every GSD file (gsd.h, GSD_MAGIC_ID), little-endian as written.
+constexpr std::uint64_t kGsdMagic = 0x65DF65DF65DF65DFULL;
+
 void write_gsd(const Directory& dir, std::string_view name_view, const std::vector<ParticleFrame>& frames) {
   const std::filesystem::path path = dir / name_view;
   const std::string name(name_view);
@@ -428,6 +433,13 @@ void write_gsd(const Directory& dir, std::string_view name_view, const std::vect
                   " has no gsd package (install Debian's python3-gsd, or set BUDJAM_PYTHON)");
   if (!r.ok())
     throw IoError(one_line(path.string()) + ": the GSD writer (" + one_line(python) + ", package gsd) " + r.failure());
+  // A writer that ends well having written no GSD file (an interpreter that is not Python) must not
+  // replace the user's file with nothing: the file has to begin with GSD's magic number.
+  std::uint64_t magic = 0;
+  std::ifstream written(out.path(), std::ios::binary);
+  if (!written.read(reinterpret_cast<char*>(&magic), sizeof magic) || magic != kGsdMagic)
+    throw IoError(one_line(path.string()) + ": the GSD writer (" + one_line(python) +
+                  ") ended without writing a GSD file (set BUDJAM_PYTHON to a Python with the gsd package)");
   out.commit();
 }
 

@@ -147,6 +147,39 @@ std::vector<std::string> parse_record(const std::string& text, std::size_t& pos,
 
 }  // namespace
 
+bool input_exists(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
+    throw InputError(path.string() + ": cannot examine: " + ec.message());
+  return fs::exists(st);
+}
+
+namespace {
+
+void list_directory(const fs::path& dir, bool recursive, std::vector<InputEntry>& out) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code kind;
+    const fs::file_status st = fs::status(it->path(), kind);
+    InputEntry e{it->path(), fs::is_directory(st), fs::is_regular_file(st)};
+    out.push_back(e);
+    if (recursive && e.directory && !fs::is_symlink(it->symlink_status(kind))) list_directory(e.path, true, out);
+  }
+  if (ec) throw InputError(dir.string() + ": cannot read the directory: " + ec.message());
+}
+
+}  // namespace
+
+std::vector<InputEntry> input_directory(const fs::path& dir, bool recursive) {
+  if (!input_exists(dir)) throw InputError(dir.string() + ": no such directory");
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a directory");
+  std::vector<InputEntry> out;
+  list_directory(dir, recursive, out);
+  std::sort(out.begin(), out.end(), [](const InputEntry& a, const InputEntry& b) { return a.path < b.path; });
+  return out;
+}
+
 CsvTable read_csv(const fs::path& path) { return parse_csv(io::read_text_file(path), path.string()); }
 
 CsvTable parse_csv(const std::string& text, const std::string& source) {
@@ -527,15 +560,15 @@ RunData load_run(const fs::path& dir) {
   RunData r;
   r.dir = dir;
   const fs::path s = dir / run_files::summary;
-  if (!fs::exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
+  if (!input_exists(s)) throw InputError(dir.string() + ": not a finished run directory (no summary.json)");
   r.summary = io::read_json(s);
   if (!r.summary.is_object()) throw InputError(s.string() + ": not a budjam run summary (not a JSON object)");
-  if (const fs::path packings = dir / io::run_files::packings; fs::exists(packings) && !fs::is_directory(packings))
+  if (const fs::path packings = dir / io::run_files::packings; input_exists(packings) && !fs::is_directory(packings))
     throw InputError(packings.string() + ": not a directory (a run keeps its packings in one)");
   check_summary(r.summary, s);
   r.steps = read_csv(dir / run_files::steps);
   r.divisions = read_csv(dir / run_files::divisions);
-  if (fs::exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);
+  if (input_exists(dir / run_files::bud_events)) r.bud_events = read_csv(dir / run_files::bud_events);
   check_run_tables(r);
   return r;
 }
@@ -545,7 +578,7 @@ std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run) {
   std::vector<std::pair<std::string, CsvTable>> tables{{"steps", run.steps}, {"divisions", run.divisions}};
   if (run.bud_events) tables.emplace_back("bud_events", *run.bud_events);
   for (const std::string_view name : {run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
-    if (const fs::path path = run.dir / name; fs::exists(path))
+    if (const fs::path path = run.dir / name; input_exists(path))
       tables.emplace_back(path.stem().string(), read_csv(path));
   return tables;
 }
@@ -613,7 +646,7 @@ namespace {
 // again into its directory (--overwrite) or a packing replaced by hand would otherwise lend it the
 // numbers of another packing. What the sidecar records of its packing (N, L, φ) must match it.
 void check_sidecar_matches(const fs::path& pack, const fs::path& file, const io::Json& j) {
-  if (!fs::exists(pack)) return;
+  if (!input_exists(pack)) return;
   const io::PackingFile p = io::read_packing(pack);
   const auto check = [&](const char* key, double of_packing) {
     if (!j.contains(key) || !j[key].is_number()) return;
@@ -633,7 +666,7 @@ void check_sidecar_matches(const fs::path& pack, const fs::path& file, const io:
 std::optional<io::Json> sidecar(const fs::path& pack, const std::string& kind) {
   fs::path f = pack;
   f.replace_extension("." + kind + ".json");
-  if (!fs::exists(f)) return std::nullopt;
+  if (!input_exists(f)) return std::nullopt;
   io::Json j = io::read_json(f);
   check_sidecar_matches(pack, f, j);
   return j;

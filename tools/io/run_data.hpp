@@ -47,6 +47,20 @@ struct CsvTable {
 // included.
 std::optional<double> csv_number(const std::string& field);
 
+// Whether `path` exists (links followed). A path budjam cannot examine (a directory on the way it
+// may not search) is an InputError naming it, never a filesystem error from deep inside.
+bool input_exists(const std::filesystem::path& path);
+
+// An entry of an input directory, links followed.
+struct InputEntry {
+  std::filesystem::path path;
+  bool directory = false, regular_file = false;
+};
+// The entries of the directory `dir`, and with `recursive` of every directory below it (a link to a
+// directory is listed, not entered), in path order. `dir` that is not a directory, or any directory
+// that cannot be read on the way, is an InputError naming it.
+std::vector<InputEntry> input_directory(const std::filesystem::path& dir, bool recursive);
+
 // InputError "<path>:<line>: ..." for a malformed file (wrong field count, unterminated quote,
 // text that is not UTF-8).
 CsvTable read_csv(const std::filesystem::path& path);

@@ -6,6 +6,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -264,13 +265,28 @@ Scene parse_scene(std::string_view toml_text, const std::string& source, const s
     validate(scene);
   } catch (const InputError& err) {
     // A rule broken by a value that --set gave (the last --set of that key) is the command line's,
-    // not the file's: the message names the key first ("growth.P0: must be positive").
+    // not the file's: the message names the key first ("growth.P0: must be positive"), or, for a
+    // rule between two keys, names it further on ("growth.dt_min: must be smaller than growth.dt").
     const std::string what = err.what();
-    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o) {
-      std::string key = o->substr(0, o->find('='));
+    const auto key_of = [](const std::string& o) {
+      std::string key = o.substr(0, o.find('='));
       key.erase(std::remove_if(key.begin(), key.end(), [](char c) { return c == ' ' || c == '\t'; }), key.end());
-      if (!key.empty() && what.rfind(key + ":", 0) == 0) throw InputError("--set " + *o + ": " + what);
-    }
+      return key;
+    };
+    const auto names = [&what](const std::string& key) {  // the key as a whole word, not a prefix of one
+      for (auto at = what.find(key); !key.empty() && at != std::string::npos; at = what.find(key, at + 1)) {
+        const auto end = at + key.size();
+        const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; };
+        if ((at == 0 || !word(what[at - 1])) && (end == what.size() || !word(what[end]) || what[end] == '.'))
+          return true;
+      }
+      return false;
+    };
+    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o)
+      if (const std::string key = key_of(*o); !key.empty() && what.rfind(key + ":", 0) == 0)
+        throw InputError("--set " + *o + ": " + what);
+    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o)
+      if (names(key_of(*o))) throw InputError("--set " + *o + ": " + what);
     throw InputError(source + ": " + what);
   }
   return scene;
