@@ -160,6 +160,27 @@ TEST_CASE("a run whose packings is a plain file is an input error (exit 2) namin
   check_input_error(run_budjam("survival plain-run"), "plain-run/packings: not a directory");
 }
 
+TEST_CASE("a new output directory at the top level of a run is refused, for grow as for analyse; packings/ is not",
+          "[taxonomy]") {
+  const std::string demo = budjam::testing::shell_quoted(budjam::testing::source_file("data/scenes/demo.toml"));
+  REQUIRE(run_budjam("grow " + demo + " --quiet --out host-run").code == 0);
+  for (const std::string& args :
+       {"grow " + demo + " --quiet --out host-run/inner", std::string("analyse host-run --out host-run/inner/"),
+        std::string("analyse host-run --out host-run/./inner")}) {
+    INFO(args);
+    const auto r = run_budjam(args);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is inside the budjam run directory host-run, whose top level holds only the run's own files") !=
+          std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_FALSE(fs::exists(work_dir() / "host-run" / "inner"));
+  }
+  const auto beside = run_budjam("rigidity host-run/packings/jammed.pack --out host-run/packings/jammed.rigidity");
+  INFO(beside.err);
+  CHECK(beside.code == 0);
+}
+
 TEST_CASE(
     "a finished run without its packings directory is an input error (exit 2) naming it, and nothing is "
     "written",

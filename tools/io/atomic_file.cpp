@@ -514,6 +514,16 @@ void check_output_base(std::string_view option, const fs::path& base,
   }
 }
 
+void refuse_directory_in_run(std::string_view option, const fs::path& dir) {
+  fs::path d = dir.lexically_normal();
+  if (!d.has_filename()) d = d.parent_path();  // "run/sub/"
+  if (d.empty() || d == "." || d == ".." || d.filename() == "..") return;
+  const fs::path parent = d.parent_path().empty() ? fs::path(".") : d.parent_path();
+  if (d.filename() == run_files::packings || d.filename() == run_files::spectra || !is_run_directory(parent)) return;
+  throw InputError(output_at(option, dir) + "is inside the budjam run directory " + escape_control(parent.string()) +
+                   ", whose top level holds only the run's own files (write elsewhere)");
+}
+
 void check_output_directory(std::string_view option, const fs::path& dir, const std::vector<std::string_view>& names) {
   // The nearest part of the path that exists must be a directory (links followed, as spelled).
   if (const fs::path e = deepest_entry(dir); !e.empty()) {
@@ -524,6 +534,7 @@ void check_output_directory(std::string_view option, const fs::path& dir, const 
     if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which_part(dir, e) + "is not a directory");
   }
   refuse_run_directory(option, dir, dir);
+  refuse_directory_in_run(option, dir);
   for (const std::string_view name : names) check_output_path(option, dir / name);
 }
 

@@ -191,6 +191,9 @@ void check_output_base(std::string_view option, const std::filesystem::path& bas
 // `--out DIR` of a command writing the files `names` in DIR: the part of DIR that exists is a
 // directory (a file or a dangling link on the way is refused) and each DIR/name passes
 // check_output_path. Changes nothing.
+// An output directory at the top level of a budjam run directory (other than its packings/, spectra/) is an
+// entry that run does not own: InputError. For `grow --out`, `analyse --out`, `accuracy --out`.
+void refuse_directory_in_run(std::string_view option, const std::filesystem::path& dir);
 void check_output_directory(std::string_view option, const std::filesystem::path& dir,
                             const std::vector<std::string_view>& names);
 

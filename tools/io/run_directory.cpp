@@ -248,6 +248,7 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite, const Own
   if (exists && !fs::is_directory(dir, ec))
     throw InputError("--out: " + dir.string() +
                      (fs::exists(dir, ec) ? " exists and is not a directory" : " is a symbolic link to nothing"));
+  refuse_directory_in_run("--out", dir);
   Directory root = Directory::open(dir, true);
   const bool run = has_marker(root);
   if (!run && !empty_but_lock(root))
