@@ -994,6 +994,21 @@ TEST_CASE("--overwrite after a run with every observer on leaves no file of the 
   CHECK(names_after == names_expected);
 }
 
+TEST_CASE("a run killed while it finished, its logs renamed and no summary.json yet, resumes to the uninterrupted run",
+          "[grow_cli][.slow]") {
+  const fs::path scene = small_scene("finish", "[observe]\ncheckpoint_every = 0\ntrials = true\n");
+  const fs::path ref = work_dir() / "finish_ref", dir = work_dir() / "finish_run";
+  REQUIRE(grow(q(scene) + " --quiet --set box.L=12 --out " + q(ref)).code == 0);
+  signal_with_checkpoint(scene, dir, SIGTERM, {0.3, 0.1, 0.0});
+  REQUIRE_FALSE(fs::exists(dir / "summary.json"));
+  // The finish renames each log, then writes summary.json: a kill between leaves some logs renamed.
+  fs::rename(dir / "steps.csv.partial", dir / "steps.csv");
+  fs::rename(dir / "divisions.csv.partial", dir / "divisions.csv");
+  resumes_to(dir, ref);
+  CHECK_FALSE(fs::exists(dir / "steps.csv.partial"));
+  CHECK_FALSE(fs::exists(dir / "checkpoint.txt"));
+}
+
 TEST_CASE("--overwrite keeps a user's files and directories in packings/ and removes the run's derived files",
           "[grow_cli]") {
   const fs::path scene = small_scene("overwrite_packings");
@@ -1010,6 +1025,9 @@ TEST_CASE("--overwrite keeps a user's files and directories in packings/ and rem
   fs::copy_file(dir / "packings/jammed.pack", dir / "packings/jammed.pack.bak");
   std::ofstream(dir / "packings/target_7.mine") << "n\n";
   std::ofstream(dir / "packings/target_0.pack~") << "n\n";
+  // Named like the run's, but with a number the run never writes (a leading zero, beyond 64 bits).
+  std::ofstream(dir / "packings/target_01.pack") << "n\n";
+  std::ofstream(dir / "packings/target_99999999999999999999.pack") << "n\n";
   fs::create_directories(dir / "packings/phi2.d");
   std::ofstream(dir / "packings/phi2.d/notes") << "mine\n";
   const std::string backup = slurp(dir / "packings/jammed.pack.bak");
@@ -1019,6 +1037,8 @@ TEST_CASE("--overwrite keeps a user's files and directories in packings/ and rem
   CHECK(slurp(dir / "packings/jammed.pack.bak") == backup);
   CHECK(slurp(dir / "packings/target_7.mine") == "n\n");
   CHECK(slurp(dir / "packings/target_0.pack~") == "n\n");
+  CHECK(slurp(dir / "packings/target_01.pack") == "n\n");
+  CHECK(slurp(dir / "packings/target_99999999999999999999.pack") == "n\n");
   CHECK(slurp(dir / "packings/phi2.d/notes") == "mine\n");
   CHECK_FALSE(fs::exists(dir / "packings/target_1.moduli.json"));
 }

@@ -297,6 +297,13 @@ TEST_CASE("run packing names and owned-entry patterns", "[run_directory]") {
   CHECK(matches_pattern("target_#.*", "target_12.dos.json"));
   CHECK_FALSE(matches_pattern("target_#.*", "target_x.pack"));
   CHECK_FALSE(matches_pattern("target_#.*", "target_.pack"));
+  // only numbers as budjam writes them: no leading zero, within 64 bits
+  CHECK(matches_pattern("target_#.pack", "target_0.pack"));
+  CHECK(matches_pattern("step_#.dos.json", "step_1000000000000000000.dos.json"));
+  CHECK_FALSE(matches_pattern("target_#.pack", "target_01.pack"));
+  CHECK_FALSE(matches_pattern("target_#.pack", "target_00.pack"));
+  CHECK_FALSE(matches_pattern("step_#.dos.json", "step_007.dos.json"));
+  CHECK_FALSE(matches_pattern("target_#.pack", "target_99999999999999999999.pack"));
   CHECK(matches_pattern("step_#.dos.*", "step_40.dos.csv"));
   CHECK_FALSE(matches_pattern("steps.csv", "steps.csv.bak"));
 }

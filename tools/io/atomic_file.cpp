@@ -645,9 +645,20 @@ CsvLog::CsvLog(Directory dir, std::string name, std::vector<std::string> columns
   write_line(header_line(columns_));
 }
 
+std::string interrupted_log_file(const Directory& dir, const std::string& name) {
+  const std::string partial = name + ".partial";
+  if (dir.entry(partial)) return partial;
+  const auto finished = dir.entry(name);
+  return finished && S_ISREG(finished->st_mode) ? name : partial;
+}
+
+void reopen_interrupted_log(const Directory& dir, const std::string& name) {
+  if (interrupted_log_file(dir, name) == name) dir.rename(name, name + ".partial");
+}
+
 CsvLog::Cut CsvLog::check_resumable(const Directory& dir, const std::string& name,
                                     const std::vector<std::string>& columns, std::uint64_t bytes) {
-  const std::string partial = name + ".partial";
+  const std::string partial = interrupted_log_file(dir, name);
   const fs::path where = dir / partial;
   std::string text;
   try {
@@ -679,6 +690,7 @@ CsvLog::Cut CsvLog::check_resumable(const Directory& dir, const std::string& nam
 
 CsvLog CsvLog::resume(Directory dir, std::string name, std::vector<std::string> columns, std::uint64_t bytes) {
   check_resumable(dir, name, columns, bytes);
+  reopen_interrupted_log(dir, name);
   CsvLog log;
   log.dir_ = std::move(dir);
   log.name_ = std::move(name);

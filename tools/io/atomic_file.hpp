@@ -231,6 +231,14 @@ struct CsvField {
   static CsvField missing() { return CsvField(std::optional<double>{}); }
 };
 
+// The file holding the growing log `name` of an interrupted run: `<name>.partial`, or `<name>` itself
+// where the run was killed while it finished, after renaming that log and before its summary.json
+// made the run finished (the finish renames the logs first). Changes nothing.
+std::string interrupted_log_file(const Directory& dir, const std::string& name);
+// Gives the log `name` its growing name `<name>.partial` again (for a resume that has passed every
+// check), where the interrupted finish had already renamed it.
+void reopen_interrupted_log(const Directory& dir, const std::string& name);
+
 // An append-only CSV log that is never mistaken for a complete one: rows go to `<name>.partial`
 // (each row one write(2) of a whole line, so a killed run leaves only whole lines), and finish()
 // renames it to `<name>`. For checkpoints, bytes() is the size of what has been written; resume()
@@ -246,7 +254,7 @@ class CsvLog {
 
   // Starts a new log (an existing .partial file is replaced) and writes the header line.
   CsvLog(Directory dir, std::string name, std::vector<std::string> columns);
-  // Checks, without changing anything, that `<name>.partial` of an interrupted run can be cut
+  // Checks, without changing anything, that interrupted_log_file() of an interrupted run can be cut
   // at `bytes` (a value of bytes() recorded in a checkpoint): a regular file with this header,
   // at least `bytes` long, `bytes` a line end. InputError naming the file otherwise.
   static Cut check_resumable(const Directory& dir, const std::string& name, const std::vector<std::string>& columns,

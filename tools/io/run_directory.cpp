@@ -57,8 +57,12 @@ bool matches_pattern(std::string_view pattern, std::string_view name) {
     return false;
   }
   if (p == '#') {
+    // A number as budjam writes one (std::to_string of a step or an index): no leading zero, and
+    // within 64 bits, so that "target_01" or a 20-digit name is a user's file, never the run's.
+    constexpr std::size_t kMaxDigits = 19;
     std::size_t k = 0;
     while (k < name.size() && name[k] >= '0' && name[k] <= '9') ++k;
+    k = std::min(k, k > 0 && name.front() == '0' ? std::size_t{1} : kMaxDigits);
     for (; k > 0; --k)
       if (matches_pattern(pattern.substr(1), name.substr(k))) return true;
     return false;

@@ -62,8 +62,9 @@ std::string target_stem(std::size_t k);
 bool is_run_packing_stem(std::string_view stem);
 }  // namespace run_files
 
-// Whether `name` matches `pattern`: '*' stands for any run of characters, '#' for one or more
-// digits, everything else for itself.
+// Whether `name` matches `pattern`: '*' stands for any run of characters, '#' for a number as
+// budjam writes one (decimal digits without a leading zero, "0" itself, at most 19 of them),
+// everything else for itself.
 bool matches_pattern(std::string_view pattern, std::string_view name);
 
 // The entries of a run directory its writers declare, as patterns of relative paths

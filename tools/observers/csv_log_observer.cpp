@@ -57,7 +57,8 @@ const io::CsvLog::Cut& CsvLogObserver::resumed_cut(std::size_t k) const {
 }
 
 std::vector<std::string> CsvLogObserver::resumed_rows(std::size_t k) const {
-  const std::string text = io::read_text_file(dir_, specs_.at(k).name + ".partial").substr(0, resumed_cut(k).bytes);
+  const std::string text =
+      io::read_text_file(dir_, io::interrupted_log_file(dir_, specs_.at(k).name)).substr(0, resumed_cut(k).bytes);
   std::vector<std::string> rows;
   std::size_t at = text.find('\n') + 1;  // after the header
   for (std::size_t end; (end = text.find('\n', at)) != std::string::npos; at = end + 1)
@@ -66,7 +67,8 @@ std::vector<std::string> CsvLogObserver::resumed_rows(std::size_t k) const {
 }
 
 void CsvLogObserver::refuse_resumed(std::size_t k, const std::string& what) const {
-  throw InputError(io::escape_control((dir_ / (specs_.at(k).name + ".partial")).string() + ": " + what));
+  throw InputError(
+      io::escape_control((dir_ / io::interrupted_log_file(dir_, specs_.at(k).name)).string() + ": " + what));
 }
 
 bool due_every(const Schedule& schedule, const StateView& s) {

@@ -55,17 +55,19 @@ class TrajectoryLog : public Observer {
   void load_state(std::istream& is) override {
     if (!(is >> bytes_ >> last_step_)) throw InputError("checkpoint: trajectory: expected <bytes> <last step>");
     // A frame ends with a newline: the recorded length must be the end of one.
-    const int fd = dir_.open_file(partial_name(), O_RDONLY);
+    const std::string file = io::interrupted_log_file(dir_, std::string(io::run_files::trajectory));
+    const int fd = dir_.open_file(file, O_RDONLY);
     struct ::stat st {};
     char last = 0;
     const bool ok = ::fstat(fd, &st) == 0 && static_cast<std::uint64_t>(st.st_size) >= bytes_ &&
                     (bytes_ == 0 || (::pread(fd, &last, 1, static_cast<off_t>(bytes_ - 1)) == 1 && last == '\n'));
     ::close(fd);
     if (!ok)
-      throw InputError((dir_ / partial_name()).string() + ": does not hold whole frames up to the " +
-                       std::to_string(bytes_) + " bytes the checkpoint records");
+      throw InputError((dir_ / file).string() + ": does not hold whole frames up to the " + std::to_string(bytes_) +
+                       " bytes the checkpoint records");
   }
   void on_resumed() override {
+    io::reopen_interrupted_log(dir_, std::string(io::run_files::trajectory));
     fd_ = dir_.open_file(partial_name(), O_WRONLY | O_APPEND);
     if (::ftruncate(fd_, static_cast<off_t>(bytes_)) != 0)
       throw io::IoError((dir_ / partial_name()).string() + ": cannot truncate: " + std::strerror(errno));
