@@ -233,6 +233,20 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
   Result r = grow(q(small_scene("bad", "")) + " --quiet --set growth.P0=-1 --out " + q(dir));
   CHECK(r.code == 2);
   CHECK(r.err.find("growth.P0") != std::string::npos);
+  // a rule between two keys broken by a --set names that --set, not the file, whichever key it names
+  // first (growth.dt is a prefix of growth.dt_min, which is not the key set)
+  for (const std::string set : {"growth.dt=1e-300", "growth.dt_min=10"}) {
+    r = grow(q(small_scene("bad", "")) + " --quiet --set " + set + " --out " + q(dir));
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.rfind("budjam: error: --set " + set + ": growth.dt_min: must be smaller than growth.dt", 0) == 0);
+  }
+  std::ofstream(work_dir() / "bad_dt.toml") << "[growth]\ndt_min = 10\n";  // the file's own broken rule
+  r = grow(q(work_dir() / "bad_dt.toml") + " --quiet --set growth.P0=1e-3 --out " + q(dir));
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("bad_dt.toml: growth.dt_min: must be smaller than growth.dt") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir));
   r = grow("--resume " + q(work_dir() / "no-such-run") + " --quiet");
   CHECK(r.code == 2);
   CHECK(r.err.find("no-such-run") != std::string::npos);
