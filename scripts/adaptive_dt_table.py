@@ -6,8 +6,8 @@ protocol = nominal or adaptive, and prints a Markdown table: for every P0 and ta
 ± standard error over seeds of P, Z, u, G (budjam moduli, target_<k>.moduli.json) and the divisions
 since jamming, for both protocols, the number of runs that reached the target, and the verdict on "the
 two protocols agree" by the one rule of the reports (scripts/verdicts.py, `paired`): for each quantity
-the per-seed differences, z = |mean| / paired SE, confirmed when z ≤ 2 for every quantity, not confirmed
-when one has z > 2, inconclusive with fewer than 5 paired seeds (no ± is printed from fewer either).
+the per-seed differences, z = |mean| / paired SE, confirmed when z ≤ z_c (Student t, never below 2) for every quantity, not confirmed
+when one has z > z_c, inconclusive with fewer than 5 paired seeds (no ± is printed from fewer either).
 Only seeds that reached the target with both protocols are compared; the status of every run and the
 steps past jamming are summarised below the table.
 
@@ -72,13 +72,14 @@ def agreement(judged):
 
 
 def family_line(family):
-    """Many quantities at many targets are many tests: with no difference at all, each has z > 2 with
-    probability p = 2(1 − Φ(2)) ≈ 0.0455, so a few rows "not confirmed" are expected by chance. The line
-    gives their count against that expectation and the binomial chance of as many or more."""
+    """Many quantities at many targets are many tests: with no difference at all, each has z > z_c (the
+    97.5 % quantile of Student's t, or 2 where that is less) with probability at most p = 0.05, so a few
+    rows "not confirmed" are expected by chance. The line gives their count against that expectation and
+    the binomial chance of as many or more."""
     n, k = len(family), sum(v.word == "not confirmed" for v in family)
-    p = math.erfc(verdicts.Z_MAX / math.sqrt(2))
+    p = 0.05
     tail = math.fsum(math.comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(k, n + 1))
-    return (f"Of the {n} paired tests that differ from identity, {k} have z > {verdicts.Z_MAX:g}; with no difference "
+    return (f"Of the {n} paired tests that differ from identity, {k} have z > z_c; with no difference "
             f"{n * p:.1f} are expected by chance (p = {p:.4f} each), and {k} or more with probability {tail:.2f}.")
 
 

@@ -193,14 +193,14 @@ def paper_cells_text(cells, measured, predicted):
             f"with ≥ {verdicts.MIN_SAMPLES} runs (about 1 in 20 by chance where the identity holds)")
 
 
-def effective_n(p, se, n):
+def effective_n(p, se, n, seeds):
     """The packings a fraction p of n packings is worth when they come in seeds: Kish's effective sample size
-    p(1 − p)/se² from the SE by seed (at most n; n where the seeds' SE is 0 and p is 0 or 1, which no spread can
-    make less certain). None without an SE by seed."""
-    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (p, se, n)):
+    p(1 − p)/se² from the SE by seed (at most n). Where p is 0 or 1 the SE by seed is 0 whatever the
+    sample, so it says nothing: then the seeds are the independent samples. None without an SE by seed."""
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (p, se, n, seeds)):
         return None
     if se <= 0:
-        return n if p in (0, 1) else None
+        return min(n, seeds) if p in (0, 1) else None
     return min(n, p * (1 - p) / (se * se))
 
 
@@ -412,7 +412,12 @@ def main():
     jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
     jam_groups = {g_["L"]: g_ for g_ in (AJ or {}).get("groups", [])}
     if jam is not None:
-        jam_src = f"jamming ensemble, L = {jam_L}, independent seeds"
+        # a jamming-only ensemble has one state per seed; states that share seeds are judged by seed
+        shared = any((jam.get(k) or {}).get("seeds") not in (None, (jam.get(k) or {}).get("n"))
+                     for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J"))
+        if shared:
+            jam = {**jam, **{k: by_seed(jam.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}
+        jam_src = f"jamming ensemble, L = {jam_L}, " + ("errors by seed" if shared else "independent seeds")
         dzj = jam_groups.get(jam_L, {}).get("dZ_J")
     else:
         # a seed's runs share their growth up to the first jamming, so its jamming states are one sample
@@ -636,7 +641,7 @@ def main():
         n = Dp["packings"]
         p = Dp["fraction_Z_minus_6_negative"]
         half = verdicts.at_least(0.5)
-        n_eff = effective_n(p, Dp.get("fraction_Z_minus_6_negative_se"), n)
+        n_eff = effective_n(p, Dp.get("fraction_Z_minus_6_negative_se"), n, Dp.get("seeds"))
         if isinstance(p, (int, float)) and math.isfinite(p) and 0 <= p <= 1 and enough_samples(n_eff):
             lo, hi = verdicts.wilson(p, n_eff)
             frac_text = (f"{fmt(p)} [95% Wilson CI {fmt(lo)}, {fmt(hi)}] (n={n_text(n)} packings of "
@@ -726,10 +731,11 @@ def main():
         f"{PAPER_SEEDS} seeds per point, so n_p = {PAPER_SEEDS} for the jamming rows (one sample per seed; "
         f"budjam's n_b = {n_text(jam_n)}) and, for every other row, {grid_np}; a relation the theory predicts (ΔZ_J = 0, "
         "the ΔZ identity, B_grow = λ_c B_ext, N_zero = N_u) is no number the paper measured, so there σ = s_b. "
-        "Confirmed when z ≤ 2, not confirmed "
-        "when z > 2, inconclusive with fewer than 5 samples "
-        "(no error bar is printed from fewer either). A trend is confirmed when its first-to-last change has z > 2 and "
-        "no step goes against it with z > 2, not confirmed when one does, and inconclusive otherwise.",
+        "Confirmed when z ≤ z_c, not confirmed when z > z_c, with z_c the 97.5 % quantile of Student's t over the "
+        "n_b − 1 degrees of freedom σ is estimated with, never below 2 (2.09 at n_b = 20; printed where above 2), "
+        "inconclusive with fewer than 5 samples (no error bar is printed from fewer either). A trend is confirmed "
+        "when its first-to-last change has z > z_c and no step goes against it with z > z_c, not confirmed when one "
+        "does, and inconclusive otherwise.",
         "",
         "Each claim is measured twice: under budjam's definition and under the rules of the paper's own analysis "
         "(docs/analysis.md, \"Definitions\", lists both for every quantity); the verdict is for the paper's rules, "

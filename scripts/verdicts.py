@@ -14,11 +14,15 @@ measured: it has no sampling error of its own, n_p = THEORY and σ = s_b.
                    estimate, no error bar, an SE of 0 (no spread among n_b ≥ 5 values is no error bar
                    either: z would be 0 or ∞ by the tie alone), or a paper's n_p that is not a positive
                    number (the reason is stated);
-    confirmed      z ≤ 2: x lies within 2σ of C, consistent with the claim at about 95 %;
-    not confirmed  z > 2.
+    confirmed      z ≤ z_c: x lies within z_c σ of C, consistent with the claim at 95 %;
+    not confirmed  z > z_c.
 
-z is printed to 3 significant digits, more where rounding would carry a z above 2 onto 2, so that the
-printed z is on the same side of 2 as its verdict.
+z_c is the 97.5 % quantile of Student's t with n_b − 1 degrees of freedom (σ is estimated from the
+n_b samples: 2.78 at n_b = 5, 2.09 at 20), and never below 2 (the normal 1.96, rounded up). Tests whose
+σ is not estimated from the sample (the score test of a proportion, the sign test) use z_c = 2.
+
+z is printed to 3 significant digits, more where rounding would carry a z above z_c onto it, so that
+the printed z is on the same side of z_c as its verdict.
 
 A proportion p̂ = k/n (a fraction of packings) is judged by the score test: its SE is that of the claim's
 boundary p0 nearest to p̂, √(p0(1 − p0)/n), not the Wald √(p̂(1 − p̂)/n), which is 0 at p̂ = 0 or 1 and would make
@@ -29,8 +33,9 @@ A fit rejected by its χ² (above the 95 % quantile of χ² with its degrees of 
 
 A trend over the feedback groups ("decreases with feedback") is budjam's own data tested for
 direction, each group with its SE: not confirmed when a step between neighbouring groups goes against
-the claimed direction by more than 2σ of that step, confirmed when the change from the first group to
-the last goes the claimed way by more than 2σ and no step goes against it by more than 2σ, and
+the claimed direction by more than z_c σ of that step, confirmed when the change from the first group
+to the last goes the claimed way by more than z_c σ and no step goes against it by more than z_c σ
+(z_c of the smaller group's n, or of the seeds a paired step has), and
 inconclusive otherwise (the data do not resolve the trend) or when a group has no error bar by the rule
 for one claim (fewer than 5 samples, none, or an SE of 0). Groups grown from the same seeds (every P0
 of a grid) are compared seed by seed where the values by seed are known: a step's σ is then the paired
@@ -44,7 +49,25 @@ from dataclasses import dataclass
 
 MIN_SAMPLES = 5  # no error bar and no verdict from fewer (as `budjam analyse` writes no SE then)
 THEORY = "theory"  # n_p of a relation the theory predicts: no paper sample, so s_p = 0
-Z_MAX = 2.0      # ≈ 95 % two-sided
+Z_MAX = 2.0      # ≈ 95 % two-sided, for a normal z; the least z_c of every test
+
+
+def t_quantile(dof):
+    """The 97.5 % quantile of Student's t with dof degrees of freedom, by the Cornish–Fisher expansion
+    about the normal quantile in powers of 1/dof (Abramowitz & Stegun 26.7.5, four terms): within 10⁻³ of
+    the exact value for dof ≥ 4, which is every dof a verdict has (n ≥ 5); exact as dof → ∞."""
+    x = 1.959963984540054  # the normal 97.5 % quantile
+    g = ((x ** 3 + x) / 4,
+         (5 * x ** 5 + 16 * x ** 3 + 3 * x) / 96,
+         (3 * x ** 7 + 19 * x ** 5 + 17 * x ** 3 - 15 * x) / 384,
+         (79 * x ** 9 + 776 * x ** 7 + 1482 * x ** 5 - 1920 * x ** 3 - 945 * x) / 92160)
+    return x + sum(gk / dof ** (k + 1) for k, gk in enumerate(g))
+
+
+def z_critical(n):
+    """z_c of a test whose σ is estimated from n samples: Student's t with n − 1 degrees of freedom at
+    97.5 %, and never below Z_MAX."""
+    return max(Z_MAX, t_quantile(n - 1))
 
 
 @dataclass(frozen=True)
@@ -90,14 +113,13 @@ def _fmt(v, digits=2):
     return f"{v:.{digits}g}" if 1e-3 <= a < 1e4 else f"{v:.{digits - 1}e}"
 
 
-def _fmt_z(z):
-    """z to 3 significant digits, or as many more as it takes to keep |z| > Z_MAX printed above Z_MAX:
-    rounding 2.004 to "2" would print a not-confirmed verdict with the z of a confirmed one. (A |z| ≤ Z_MAX
-    never rounds above it, Z_MAX being a round number.)"""
+def _fmt_z(z, z_c=Z_MAX):
+    """z to 3 significant digits, or as many more as it takes to keep z on its side of z_c: rounding
+    2.004 to "2" would print a not-confirmed verdict with the z of a confirmed one."""
     digits = 3
     while True:
         s = _fmt(z, digits)
-        if not (abs(z) > Z_MAX >= abs(float(s))) or digits >= 17:
+        if (abs(z) > z_c) == (abs(float(s)) > z_c) or digits >= 17:
             return s
         digits += 1
 
@@ -122,9 +144,10 @@ def unusable(estimate, se, n):
     return None
 
 
-def compare(estimate, se, n, claim, n_paper=None):
+def compare(estimate, se, n, claim, n_paper=None, z_c=None):
     """The verdict on one claim from budjam's estimate ± se over n samples; n_paper = the paper's
-    number of samples (None: the same as budjam's; THEORY: a predicted relation, no paper sample)."""
+    number of samples (None: the same as budjam's; THEORY: a predicted relation, no paper sample);
+    z_c the critical z (None: z_critical(n), se being estimated from the n samples)."""
     why_not = unusable(estimate, se, n)
     if why_not is not None:
         return why_not
@@ -135,14 +158,16 @@ def compare(estimate, se, n, claim, n_paper=None):
         return Verdict("inconclusive", f"n_p = {shown}: the paper's sample size must be a positive number")
     if se == 0:
         return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
+    z_c = z_critical(n) if z_c is None else z_c
     s_p = 0.0 if n_paper is THEORY else se * math.sqrt(n / n_paper)
-    return _judged(estimate, math.hypot(se, s_p), claim)
+    return _judged(estimate, math.hypot(se, s_p), claim, z_c)
 
 
-def _judged(estimate, sigma, claim):
+def _judged(estimate, sigma, claim, z_c):
     z = claim.distance(estimate) / sigma
-    word = "confirmed" if z <= Z_MAX else "not confirmed"
-    return Verdict(word, f"z = {_fmt_z(z)}, σ = {_fmt(sigma)}")
+    word = "confirmed" if z <= z_c else "not confirmed"
+    limit = "" if z_c == Z_MAX else f", z_c = {z_c:.3g}"
+    return Verdict(word, f"z = {_fmt_z(z, z_c)}, σ = {_fmt(sigma)}{limit}")
 
 
 def paired(differences):
@@ -163,7 +188,7 @@ def paired(differences):
         return why_not
     if se == 0:
         return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
-    return _judged(mean, se, Claim(0.0, 0.0))
+    return _judged(mean, se, Claim(0.0, 0.0), z_critical(n))
 
 
 def _clamp01(x):
@@ -186,7 +211,7 @@ def proportion(p, n, claim, n_paper=None):
     if se0 == 0:
         lo, hi = wilson(p, n)
         se0 = (hi - lo) / (2 * 1.96)
-    return compare(p, se0, n, claim, n_paper)
+    return compare(p, se0, n, claim, n_paper, z_c=Z_MAX)  # se0 is the null's, not estimated
 
 
 def wilson(p, n, z=1.96):
@@ -209,22 +234,25 @@ def trend(points, increasing):
             return Verdict("inconclusive", f"SE = 0 from n = {n:g} samples: no spread, no error bar to judge by")
     sign = 1.0 if increasing else -1.0
 
-    def z(a, b):
-        return sign * (b[0] - a[0]) / math.hypot(a[1], b[1])
+    def z(a, b):  # in units of the step's critical z
+        return sign * (b[0] - a[0]) / math.hypot(a[1], b[1]) / z_critical(min(a[2], b[2]))
 
     steps = [z(a, b) for a, b in zip(points, points[1:])]
-    worst = min(steps)
+    worst = min(range(len(steps)), key=lambda k: steps[k])
     overall = z(points[0], points[-1])
-    why = f"first to last z = {_fmt_z(overall)}, worst step z = {_fmt_z(worst)}"
-    if worst < -Z_MAX:
+    c_worst = z_critical(min(points[worst][2], points[worst + 1][2]))
+    c_overall = z_critical(min(points[0][2], points[-1][2]))
+    why = (f"first to last z = {_fmt_z(overall * c_overall, c_overall)}, "
+           f"worst step z = {_fmt_z(steps[worst] * c_worst, c_worst)}")
+    if steps[worst] < -1:
         return Verdict("not confirmed", why)
-    if overall > Z_MAX:
+    if overall > 1:
         return Verdict("confirmed", why)
     return Verdict("inconclusive", why + ": not resolved")
 
 
 def _paired_step(a, b, sign, statistic):
-    """(z, n, why not) of the change from group a to group b (dicts seed → value) in the claimed
+    """(z, n, why not, z_c) of the change from group a to group b (dicts seed → value) in the claimed
     direction, paired by seed over the n seeds both have (the sign test: those with a difference); z is
     None, with the reason, when they cannot carry a verdict."""
     d = [sign * (b[s] - a[s]) for s in a if s in b and _finite(a[s]) and _finite(b[s])]
@@ -232,16 +260,16 @@ def _paired_step(a, b, sign, statistic):
         up, down = sum(x > 0 for x in d), sum(x < 0 for x in d)
         m = up + down
         if m < MIN_SAMPLES:
-            return None, m, f"{m} seeds with a difference, fewer than {MIN_SAMPLES}"
-        return (up - down) / math.sqrt(m), m, None
+            return None, m, f"{m} seeds with a difference, fewer than {MIN_SAMPLES}", Z_MAX
+        return (up - down) / math.sqrt(m), m, None, Z_MAX
     n = len(d)
     if n < MIN_SAMPLES:
-        return None, n, f"{n} seeds in both groups, fewer than {MIN_SAMPLES}"
+        return None, n, f"{n} seeds in both groups, fewer than {MIN_SAMPLES}", Z_MAX
     mean = math.fsum(d) / n
     se = math.sqrt(math.fsum((x - mean) ** 2 for x in d) / (n - 1) / n)
     if se == 0:
-        return None, n, f"SE = 0 from n = {n} differences: no spread, no error bar to judge by"
-    return mean / se, n, None
+        return None, n, f"SE = 0 from n = {n} differences: no spread, no error bar to judge by", Z_MAX
+    return mean / se, n, None, z_critical(n)
 
 
 def paired_trend(groups, increasing, statistic="mean"):
@@ -253,18 +281,18 @@ def paired_trend(groups, increasing, statistic="mean"):
     sign = 1.0 if increasing else -1.0
     steps = [_paired_step(a, b, sign, statistic) for a, b in zip(groups, groups[1:])]
     overall = _paired_step(groups[0], groups[-1], sign, statistic)
-    for z, _, why_not in steps + [overall]:
+    for z, _, why_not, _ in steps + [overall]:
         if z is None:
             return Verdict("inconclusive", "paired by seed: " + why_not)
-    worst = min(z for z, _, _ in steps)
-    counts = [n for _, n, _ in steps]
+    worst = min(steps, key=lambda s: s[0] / s[3])  # the step furthest against the claim, in its z_c
+    counts = [n for _, n, _, _ in steps]
     test = "sign test" if statistic == "median" else "paired SE"
     seeds = f"{min(counts)}" if min(counts) == max(counts) else f"{min(counts)}–{max(counts)}"
-    why = (f"paired by seed, {test}: first to last z = {_fmt_z(overall[0])}, worst step z = {_fmt_z(worst)}, "
-           f"{seeds} seeds per step")
-    if worst < -Z_MAX:
+    why = (f"paired by seed, {test}: first to last z = {_fmt_z(overall[0], overall[3])}, worst step z = "
+           f"{_fmt_z(worst[0], worst[3])}, {seeds} seeds per step")
+    if worst[0] < -worst[3]:
         return Verdict("not confirmed", why)
-    if overall[0] > Z_MAX:
+    if overall[0] > overall[3]:
         return Verdict("confirmed", why)
     return Verdict("inconclusive", why + ": not resolved")
 

@@ -324,19 +324,30 @@ TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the
       Approx(budjam::io::read_json(runs()[2] / "packings" / "phi2.moduli.json").at("G").get<double>()).epsilon(1e-12));
 }
 
-TEST_CASE("analyse reports copies of one run as duplicates and uses it once", "[analyse]") {
+TEST_CASE(
+    "analyse reports copies of one run, and a seed grown again under another name, as duplicates and uses it "
+    "once",
+    "[analyse]") {
   const fs::path pool = work_dir() / "with_copies";
   fs::create_directories(pool);
   fs::copy(runs()[1], pool / "copy_a", fs::copy_options::recursive);
   fs::copy(runs()[1], pool / "copy_b", fs::copy_options::recursive);
+  // the same protocol and seed under another run.name, its summary.json not byte-identical: one sample
+  fs::copy(runs()[1], pool / "renamed", fs::copy_options::recursive);
+  std::string scene = slurp(pool / "renamed" / "scene.toml");
+  const auto name = scene.find("name = \"small\"");
+  REQUIRE(name != std::string::npos);
+  std::ofstream(pool / "renamed" / "scene.toml") << scene.replace(name, 14, "name = \"again\"");
+  const std::string summary = budjam::io::read_json(pool / "renamed" / "summary.json").dump(1);
+  std::ofstream(pool / "renamed" / "summary.json") << summary;
   const fs::path out = work_dir() / "t_copies", err = work_dir() / "copies.err";
   REQUIRE(run_budjam_redirected("analyse " + all_runs() + q(pool) + " --out " + q(out) + " --main-L 6", "/dev/null",
                                 err) == 0);
   const auto A = budjam::io::read_json(out / "analysis.json");
-  CHECK(A.at("inputs").at("runs").get<long>() == 5);
+  CHECK(A.at("inputs").at("runs").get<long>() == 6);
   CHECK(A.at("inputs").at("used").get<long>() == 3);
   REQUIRE(A.at("inputs").at("duplicates").size() == 1);
-  CHECK(A.at("inputs").at("duplicates").at(0).size() == 3);
+  CHECK(A.at("inputs").at("duplicates").at(0).size() == 4);
   CHECK(read_csv(out / "runs.csv").size() == 3);
   CHECK(slurp(err).find("duplicate") != std::string::npos);
   // the P0 = 1e-3 group still holds its two seeds, not four copies
@@ -502,6 +513,26 @@ TEST_CASE("analyse --tables reads a column under the name an earlier version gav
   REQUIRE(before.size() == after.size());
   for (std::size_t k = 0; k < before.size(); ++k)
     CHECK(after[k].at("dphi_2_none_left") == before[k].at("dphi_2_paper"));
+}
+
+TEST_CASE("analyse --tables refuses a seed listed twice in one group: exit 2, one line naming file and line",
+          "[analyse]") {
+  runs();
+  const fs::path a = work_dir() / "twice_runs", err = work_dir() / "twice.err";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  std::string t = slurp(a / "runs.csv");
+  const auto last = t.rfind('\n', t.size() - 2) + 1;  // the last run, listed again under another name
+  const std::string row = t.substr(last);
+  t += "elsewhere/again" + row.substr(row.find(','));
+  std::ofstream(a / "runs.csv") << t;
+  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "twice_out") + " --main-L 6",
+                              "/dev/null", err) == 2);
+  const std::string msg = slurp(err);
+  INFO(msg);
+  CHECK(msg.find((a / "runs.csv").string() + ":5: run elsewhere/again repeats seed ") != std::string::npos);
+  CHECK(msg.find("(one seed is one sample)") != std::string::npos);
+  CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
+  CHECK(!fs::exists(work_dir() / "twice_out" / "analysis.json"));
 }
 
 TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: exit 2, one line naming file and line",

@@ -183,9 +183,30 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   const std::string csv = slurp(dir / "km.csv");
   CHECK(csv.find("\n3,") != std::string::npos);
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
-  // a band while at least five buds are at risk (six at a = 3), none in the tail (three at a = 5)
-  CHECK(csv.find(",0.5833333333333334,,,,6,") == std::string::npos);
+  // one run: no band anywhere, though six buds are at risk at a = 3 (a run, not a bud, is the sample)
+  CHECK(csv.find(",0.5833333333333334,,,,6,") != std::string::npos);
   CHECK(csv.find("\n5,3.9269908169872414,0.38888888888888895,,,,3,1,0\n") != std::string::npos);
+}
+
+TEST_CASE("the survival band needs five runs, and five buds at risk") {
+  namespace fs = std::filesystem;
+  const auto dir = budjam::testing::work_dir() / "five_runs";
+  fs::remove_all(dir);
+  std::string runs;
+  for (int seed = 1; seed <= 5; ++seed) {
+    const fs::path run = dir / ("seed" + std::to_string(seed));
+    write_run(run, "[run]\nseed = " + std::to_string(seed) + "\n[growth]\nP0 = 1e-3\n", seed);
+    runs += " " + budjam::testing::shell_quoted(run);
+    const auto r = budjam::testing::run_budjam("survival" + runs + " -o " +
+                                               budjam::testing::shell_quoted(dir / ("km" + std::to_string(seed))));
+    REQUIRE(r.code == 0);
+    const std::string csv = slurp(dir / ("km" + std::to_string(seed) + ".csv"));
+    INFO(seed << " runs\n" << csv);
+    // Ŝ(3) = 7/12 in every pool of copies; 6 buds of each run at risk there, 3 at a = 5
+    const std::string at_3 = ",0.5833333333333334,", banded = at_3 + "0.";
+    CHECK((csv.find(banded) != std::string::npos) == (seed >= 5));
+    CHECK((csv.find(at_3 + ",,," + std::to_string(6 * seed) + ",") != std::string::npos) == (seed < 5));
+  }
 }
 
 TEST_CASE("budjam survival counts a run once when it is given twice or copied, as budjam analyse does") {

@@ -118,12 +118,12 @@ def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_n
     # n_J ≃ 0.775 is a number the paper measured on its 20 seeds: σ = s_b √(1 + n_b/20)
     nj = next(s for s in J["sizes"] if s["L"] == 15)["n_J"]
     row = next(line for line in out.splitlines() if line.startswith("| Nonrattler density at jamming"))
-    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, nj["se"] * math.sqrt(1 + nj["n"] / 20), rel_tol=0.05), row
     # ΔZ_J = 0 is what the theory predicts, no number of the paper's sample: σ = s_b
     dz = J["groups"][[g["L"] for g in J["groups"]].index(15)]["dZ_J"]
     row = next(line for line in out.splitlines() if line.startswith("| Modified Maxwell count"))
-    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, dz["se"], rel_tol=0.05), row
 
 
@@ -235,6 +235,8 @@ def test_a_fraction_of_zero_or_one_is_judged_by_a_finite_error(tmp_path):
         assert "inf" not in cell and "σ = 0)" not in cell and "± 0 " not in row, row
         if word:
             assert re.match(word + r" \(z", cell), cell
+            # the same in every seed: the seeds, not the packings, are the independent samples
+            assert f"effective n = {paper['seeds']}" in row, row
         assert "Wilson" in row
 
 
@@ -257,7 +259,7 @@ def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_pa
     r, out = report(fresh(tmp_path, "at15"), A, J)
     x = next(g for g in main_L_groups(A) if g["P0_label"] == "0.1")["h_gamma_paper"]
     row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
-    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, x["se"] * math.sqrt(1 + s / 20), rel_tol=0.05), row
     # with 20 seeds per point the paper's sample is budjam's
     for g in A["groups"]:
@@ -265,7 +267,7 @@ def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_pa
     A["main"]["runs"] = 20 * len(main_L_groups(A))
     r, out = report(fresh(tmp_path, "twenty"), A, J)
     row = row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
-    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, x["se"] * math.sqrt(2), rel_tol=0.05), row
 
 
@@ -380,13 +382,13 @@ def test_pooled_rows_take_the_papers_twenty_seeds_when_groups_are_unequal(tmp_pa
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
     row = next(line for line in out.splitlines() if line.startswith("| ω* collapses"))
-    sigma = float(re.search(r"σ = ([0-9.e+-]+)\)", row).group(1))
+    sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, math.sqrt(0.25 / 96) * math.sqrt(1 + 8 / 20), rel_tol=0.02), row
     # N_zero = N_u is a predicted relation: budjam's SE alone, whatever the groups
     A["main"]["dos"]["N_zero_minus_N_u"].update(n=8, mean=0.5, se=0.1)
     r, out = report(fresh(tmp_path, "relation"), A, J)
     row = next(line for line in out.splitlines() if line.startswith("| N_zero ≃ N_u"))
-    assert "σ = 0.1)" in row, row
+    assert "σ = 0.1, z_c = 2.36)" in row, row  # t with 7 degrees of freedom
 
 
 def test_groups_outside_the_papers_grid_are_named(tmp_path):
@@ -429,3 +431,78 @@ def test_no_committed_survival_table_has_a_band_where_fewer_than_five_buds_are_a
         assert rows, name
         banded = [r for r in rows if float(r["at_risk"]) < 5 and any(r[c] for c in ("se", "lo", "hi"))]
         assert not banded, (name, banded[:3])
+
+
+def test_jamming_states_that_share_seeds_take_their_error_by_seed(budjam_exe, tmp_path):
+    # the quick grid's groups grow seeds 1 … 8 alike up to jamming: 20 states of 8 seeds at L = 8
+    tables = os.path.join(REF, "quick", "tables")
+    r = subprocess.run([budjam_exe, "analyse", "--tables", tables, "--out", str(tmp_path / "re")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    A = load(tmp_path / "re" / "analysis.json")
+    shared = [k for k in ("u_J", "phi_J", "n_J", "N_J") if A["main"][k]["seeds"] < A["main"][k]["n"]]
+    assert shared, "the quick grid no longer has states that share seeds: this test checks nothing"
+    for k in shared:
+        stat = A["main"][k]
+        assert stat["se"] == stat["bootstrap_se_by_seed"] is not None, (k, stat)
+
+
+def test_every_point_of_the_no_feedback_branch_carries_its_own_error(budjam_exe, tmp_path):
+    # the no-feedback targets at Δφ = 1e-2 kept for only 3 runs: that point leaves the branch, rather
+    # than taking the SE of its neighbours
+    import csv
+    tables = tmp_path / "tables"
+    src = os.path.join(REF, "quick", "tables")
+    os.mkdir(tables)
+    for name in os.listdir(src):
+        with open(os.path.join(src, name)) as f:
+            (tables / name).write_text(f.read())
+    with open(tables / "targets.csv") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    P0, dphi, run = header.index("P0"), header.index("dphi"), header.index("run")
+    kept = sorted({r[run] for r in body if r[P0] in ("", "none") and float(r[dphi]) == 1e-2})[:3]
+    body = [r for r in body if not (r[P0] in ("", "none") and float(r[dphi]) == 1e-2 and r[run] not in kept)]
+    with open(tables / "targets.csv", "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows([header] + body)
+    out = {}
+    for name, t in (("all", src), ("thinned", tables)):
+        r = subprocess.run([budjam_exe, "analyse", "--tables", str(t), "--out", str(tmp_path / name)],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        out[name] = load(tmp_path / name / "analysis.json")["dZ0_branch"]
+    for branches in out.values():
+        for b in branches:
+            assert len(b["points_P_dZ"]) == len(b["points_P_se"]), b
+    assert len(out["thinned"][0]["points_P_dZ"]) == len(out["all"][0]["points_P_dZ"]) - 1
+
+
+def test_p_dagger_takes_its_error_from_the_seeds_not_from_the_scatter_of_groups_about_a_line(budjam_exe, tmp_path):
+    # Six feedback groups of one seed list (no feedback and P0 = 0.1 relabelled 3e-3 and 3e-4), every run
+    # depleted with P_2 = f(P0) c_seed: each draw of seeds shifts every ln⟨P_2⟩ by one constant, so the
+    # slope, and P†, do not move (SE 0), though ln f is no line in 1/P0 (the groups scatter about it).
+    import csv
+    src, tables = os.path.join(REF, "quick", "tables"), tmp_path / "tables"
+    os.mkdir(tables)
+    relabel = {"": "0.003", "none": "0.003", "0.1": "0.0003"}
+    for name in ("runs.csv", "targets.csv", "dos.csv"):
+        with open(os.path.join(src, name)) as f:
+            rows = list(csv.reader(f))
+        c = rows[0].index("P0")
+        for r in rows[1:]:
+            r[c] = relabel.get(r[c], r[c])
+        if name == "runs.csv":
+            h = rows[0]
+            for r in rows[1:]:
+                inv = 1.0 / float(r[c])
+                r[h.index("P_2")] = repr(math.exp(-0.3 * math.sqrt(inv)) * (1.0 + 0.1 * int(r[h.index("seed")])))
+                if not r[h.index("phi_2")]:
+                    r[h.index("phi_2")] = r[h.index("phi_J")]
+        with open(tables / name, "w", newline="") as f:
+            csv.writer(f, lineterminator="\n").writerows(rows)
+    r = subprocess.run([budjam_exe, "analyse", "--tables", str(tables), "--out", str(tmp_path / "out")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    M = load(tmp_path / "out" / "analysis.json")["main"]
+    assert M["P_dagger_points"] == 6 and M["P_dagger_seeds"] >= 5, M
+    assert M["P_dagger_se"] is not None and M["P_dagger_se"] <= 1e-9 * abs(M["P_dagger"]), M

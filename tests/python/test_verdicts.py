@@ -22,11 +22,11 @@ def test_a_quoted_number_allows_what_rounds_to_it():
 
 
 def test_the_combined_error_adds_the_papers_sampling_error():
-    # same number of samples: σ = √2 s_b; z just below and above 2
+    # same number of samples: σ = √2 s_b; z just below and above 2 (z_c = 2 from 62 samples on)
     s = 0.01
     c = v.quoted(0.5, 0.0)
-    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 0.999, s, 20, c).word == "confirmed"
-    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 1.001, s, 20, c).word == "not confirmed"
+    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 0.999, s, 100, c).word == "confirmed"
+    assert v.compare(0.5 + 2 * math.sqrt(2) * s * 1.001, s, 100, c).word == "not confirmed"
     # the paper's 20 samples against budjam's 200: σ = s_b √(1 + 10)
     assert v.compare(0.5 + 2 * math.sqrt(11) * s * 0.999, s, 200, c, n_paper=20).word == "confirmed"
     assert v.compare(0.5 + 2 * math.sqrt(11) * s * 1.001, s, 200, c, n_paper=20).word == "not confirmed"
@@ -37,10 +37,11 @@ def test_a_relation_the_theory_predicts_is_judged_on_budjams_error_alone():
     s = 0.01
     c = v.quoted(0.0, 0.0)
     for n in (5, 20, 200):
-        assert v.compare(2 * s * 0.999, s, n, c, n_paper=v.THEORY).word == "confirmed"
-        assert v.compare(2 * s * 1.001, s, n, c, n_paper=v.THEORY).word == "not confirmed"
+        z_c = v.z_critical(n)
+        assert v.compare(z_c * s * 0.999, s, n, c, n_paper=v.THEORY).word == "confirmed"
+        assert v.compare(z_c * s * 1.001, s, n, c, n_paper=v.THEORY).word == "not confirmed"
     # the same estimate is confirmed once a paper sample's error is added: the two rules differ
-    assert v.compare(2 * s * 1.001, s, 20, c).word == "confirmed"
+    assert v.compare(2 * s * 1.001, s, 200, c).word == "confirmed"
     assert v.compare(0.0, s, 4, c, n_paper=v.THEORY).word == "inconclusive"
 
 
@@ -151,23 +152,38 @@ def z_of(r):
     return float(r.why.split("z = ")[1].split(",")[0])
 
 
-def test_a_printed_z_is_on_the_same_side_of_two_as_its_verdict():
+def test_a_printed_z_is_on_the_same_side_of_its_critical_value_as_its_verdict():
     s = 0.01
     sigma = math.sqrt(2) * s  # same n as the paper
     c = v.quoted(0.5, 0.0)
-    for z in (0.5, 1.99, 1.999, 1.9999, 2.0, 2.00001, 2.0001, 2.001, 2.004, 2.04, 2.05, 2.4, 86.0):
-        r = v.compare(0.5 + z * sigma, s, 20, c)
-        if r.word == "confirmed":
-            assert z_of(r) <= 2, r
-        else:
-            assert r.word == "not confirmed" and z_of(r) > 2, r
-    r = v.compare(0.5 + 2.04 * sigma, s, 20, c)
-    assert str(r) == "not confirmed (z = 2.04, σ = 0.014)"
-    # a trend: its first-to-last z decides "confirmed" (> 2), its worst step "not confirmed" (< −2)
-    up = v.trend([(0.0, 0.01, 20), (2.004 * math.sqrt(2) * 0.01, 0.01, 20)], increasing=True)
+    for n in (100, 20, 5):
+        z_c = v.z_critical(n)
+        for dz in (-1.5, -0.01, -0.001, -0.0001, 0.0, 0.00001, 0.0001, 0.001, 0.004, 0.04, 0.05, 0.4, 84.0):
+            r = v.compare(0.5 + (z_c + dz) * sigma, s, n, c)
+            if r.word == "confirmed":
+                assert z_of(r) <= z_c, r
+            else:
+                assert r.word == "not confirmed" and z_of(r) > z_c, r
+    assert str(v.compare(0.5 + 2.04 * sigma, s, 100, c)) == "not confirmed (z = 2.04, σ = 0.014)"
+    assert str(v.compare(0.5 + 2.04 * sigma, s, 20, c)) == "confirmed (z = 2.04, σ = 0.014, z_c = 2.09)"
+    # a trend: its first-to-last z decides "confirmed" (> z_c), its worst step "not confirmed" (< −z_c)
+    up = v.trend([(0.0, 0.01, 100), (2.004 * math.sqrt(2) * 0.01, 0.01, 100)], increasing=True)
     assert up.word == "confirmed" and float(up.why.split("first to last z = ")[1].split(",")[0]) > 2, up
-    down = v.trend([(0.0, 0.01, 20), (2.004 * math.sqrt(2) * 0.01, 0.01, 20)], increasing=False)
+    down = v.trend([(0.0, 0.01, 100), (2.004 * math.sqrt(2) * 0.01, 0.01, 100)], increasing=False)
     assert down.word == "not confirmed" and float(down.why.split("worst step z = ")[1]) < -2, down
+    # from 20 samples per group the same step resolves nothing (z_c = 2.09)
+    assert v.trend([(0.0, 0.01, 20), (2.004 * math.sqrt(2) * 0.01, 0.01, 20)], increasing=True).word == "inconclusive"
+
+
+def test_the_critical_z_is_students_t_at_97_5_percent_never_below_two():
+    for dof, t in ((4, 2.7764), (9, 2.2622), (19, 2.0930), (29, 2.0452), (120, 1.9799)):
+        assert abs(v.t_quantile(dof) - t) < 1e-3, dof
+    assert abs(v.t_quantile(1e12) - 1.959964) < 1e-6
+    assert abs(v.z_critical(5) - 2.7764) < 1e-3 and v.z_critical(200) == 2.0
+    # five paired differences at z = 2.05 are consistent with none (two-sided p ≈ 0.11)
+    assert v.paired([0.9, 1.1, 0.2, 1.3, -0.35]).word == "confirmed"
+    ups = [{s: 0.0 for s in range(5)}, {0: 0.9, 1: 1.1, 2: 0.2, 3: 1.3, 4: -0.35}]
+    assert v.paired_trend(ups, increasing=True).word == "inconclusive"
 
 
 def test_a_zero_standard_error_from_five_or_more_samples_gives_no_verdict():

@@ -50,6 +50,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <span>
@@ -603,9 +604,9 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
 
 // ΔZ_0(P): the no-feedback branch per L — mean (P, ΔZ) at each Δφ target and, in budjam's branch,
 // at jamming (the paper's analysis draws it through the targets alone, constant beyond their
-// pressures) — and the SE of its ΔZ means (over the points that kMinSamplesForError runs or more
-// give; the scatter of the mean P along the branch is not propagated). Runs with a missing P or ΔZ
-// at a point are left out of that point.
+// pressures) — and the SE of its ΔZ means (the scatter of the mean P along the branch is not
+// propagated). A point is a mean of kMinSamplesForError runs or more, so that every value read off
+// the branch has an error of its own; runs with a missing P or ΔZ at a point are left out of it.
 struct NoFeedbackBranch {
   PiecewiseLinear dZ0, se;
 };
@@ -628,10 +629,11 @@ std::map<double, NoFeedbackBranch> no_feedback_branch(const std::map<GroupKey, s
       for (const auto& t : r->targets) add(t.dphi, t.P, t.dZ);
     }
     std::vector<std::pair<double, double>> mean_pts, se_pts;
-    for (const auto& [d, v] : at) {
-      mean_pts.emplace_back(mean(v.first), mean(v.second));
-      if (v.second.size() >= kMinSamplesForError) se_pts.emplace_back(mean(v.first), standard_error(v.second));
-    }
+    for (const auto& [d, v] : at)
+      if (v.second.size() >= kMinSamplesForError) {
+        mean_pts.emplace_back(mean(v.first), mean(v.second));
+        se_pts.emplace_back(mean(v.first), standard_error(v.second));
+      }
     if (!mean_pts.empty()) branch.emplace(key.L, NoFeedbackBranch{PiecewiseLinear(mean_pts), PiecewiseLinear(se_pts)});
   }
   return branch;
@@ -652,15 +654,18 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
     seed.push_back(r->seed);
   }
   const MeanSE m = mean_over_states(v, st);
-  const bool error_bar = m.n >= kMinSamplesForError;
+  // the runs of one seed share their growth up to the first jamming: its states are not independent,
+  // so the seeds are the samples, and "se" is over states only where each state has a seed of its own
+  const std::size_t seeds = std::set<std::uint64_t>(seed.begin(), seed.end()).size();
+  const bool error_bar = seeds >= kMinSamplesForError && m.n >= kMinSamplesForError;
+  const Json by_seed = error_bar ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
   Json j;
   j["runs"] = rs.size();
   j["n"] = m.n;  // distinct jamming states
+  j["seeds"] = seeds;
   j["mean"] = io::number_or_null(m.mean);
-  j["se"] = error_bar ? io::number_or_null(m.se) : Json(nullptr);
-  j["bootstrap_se_by_seed"] = error_bar ? Json(cluster_bootstrap_mean(v, st, seed, bo).se) : Json(nullptr);
-  // the runs of one seed share their growth up to the first jamming: its states are not independent
-  j["seeds"] = std::set<std::uint64_t>(seed.begin(), seed.end()).size();
+  j["se"] = !error_bar ? Json(nullptr) : seeds == m.n ? io::number_or_null(m.se) : by_seed;
+  j["bootstrap_se_by_seed"] = by_seed;
   return j;
 }
 
@@ -838,7 +843,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["pooled_survival"] = pooled;
   const std::string runs_cell = pooled_runs ? std::to_string(*pooled_runs) : std::string();
   const auto survival_row = [&](const KaplanMeierStep& st) {
-    const auto [se, lo, hi] = band_cells(st);
+    const auto [se, lo, hi] = band_cells(st, pooled_runs);
     t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, std::to_string(st.at_risk), runs_cell});
   };
   survival_row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
@@ -1103,31 +1108,59 @@ Json spectrum_json(const std::vector<const DosRow*>& rows, const BootstrapOption
   return j;
 }
 
+// P† of ln ⟨P_2⟩ against 1/P0 over the groups of `runs` (their depleted runs; `items` picks which,
+// with repeats): −slope of the line, and the number of groups it runs through.
+std::pair<double, std::size_t> p_dagger_fit(const std::vector<const RunRow*>& runs,
+                                            const std::vector<std::size_t>& items) {
+  std::map<double, std::vector<double>> p2;  // 1/P0 → P_2
+  for (const std::size_t k : items)
+    if (std::isfinite(runs[k]->P_2)) p2[1.0 / *runs[k]->P0].push_back(runs[k]->P_2);
+  std::vector<double> x, y;
+  for (const auto& [inv_P0, v] : p2)
+    if (mean(v) > 0) {
+      x.push_back(inv_P0);
+      y.push_back(std::log(mean(v)));
+    }
+  if (x.size() < 2) throw std::invalid_argument("P†: fewer than two groups");
+  return {-linear_fit(x, y).slope, x.size()};
+}
+
 // P_2 ∝ exp(−P†/P0) (Eq. D19): slope of ln P_2 against 1/P0 over the feedback groups with
 // P0 ≤ 10⁻², and the crossover P* (Eq. E12) over the a_c of those groups: budjam's mean completion
-// size, the paper's median (both as true areas).
+// size, the paper's median (both as true areas). The groups are grown from the same seeds, so P†'s
+// error is a bootstrap over seeds, each draw refitted, not the scatter about one line of groups
+// taken as independent.
 void feedback_scales(Json& h, const std::map<GroupKey, std::vector<const RunRow*>>& groups,
-                     const std::map<GroupKey, KaplanMeierCurve>& survival, double main_L, double nJ, double uJ) {
-  std::vector<double> x, y, ac_mean, ac_median;
+                     const std::map<GroupKey, KaplanMeierCurve>& survival, double main_L, double nJ, double uJ,
+                     const BootstrapOptions& bo) {
+  std::vector<double> ac_mean, ac_median;
+  std::vector<const RunRow*> depleted;
+  std::vector<std::uint64_t> seeds;
   for (const auto& [key, rs] : groups) {
     if (key.L != main_L || !key.P0 || *key.P0 > 1e-2 + 1e-15) continue;
-    std::vector<double> p2;
     for (const auto* r : rs)
-      if (r->depleted) p2.push_back(r->P_2);
-    p2 = finite(p2);
-    if (!p2.empty() && mean(p2) > 0) {
-      x.push_back(1.0 / *key.P0);
-      y.push_back(std::log(mean(p2)));
-    }
+      if (r->depleted && std::isfinite(r->P_2)) {
+        depleted.push_back(r);
+        seeds.push_back(r->seed);
+      }
     const auto& km = survival.at(key);
     if (km.events() > 0) ac_mean.push_back(kDiameterSquaredToArea * mean_completion_size(km));
     if (const auto a = median_completion_size(km)) ac_median.push_back(kDiameterSquaredToArea * *a);
   }
-  if (x.size() >= 2) {
-    const auto f = linear_fit(x, y);
-    h["P_dagger"] = -f.slope;
-    h["P_dagger_se"] = x.size() >= kMinSamplesForError ? io::number_or_null(f.slope_se) : Json(nullptr);
-    h["P_dagger_points"] = x.size();
+  std::vector<std::size_t> all(depleted.size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  try {
+    const auto [p_dagger, points] = p_dagger_fit(depleted, all);
+    h["P_dagger"] = p_dagger;
+    h["P_dagger_points"] = points;
+    h["P_dagger_seeds"] = std::set<std::uint64_t>(seeds.begin(), seeds.end()).size();
+    h["P_dagger_se"] =
+        points >= kMinSamplesForError
+            ? se_by_cluster(
+                  seeds, [&](const std::vector<std::size_t>& items) { return p_dagger_fit(depleted, items).first; }, bo)
+            : Json(nullptr);
+  } catch (const std::invalid_argument&) {
+    // fewer than two groups: no line
   }
   auto range = [&](const std::vector<double>& ac, const char* a_key, const char* p_key) {
     if (ac.empty()) return;
@@ -1207,7 +1240,7 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
     h["G2_plateau_over_Pmax"] = io::number_or_null(nJ * lc2 * kM4 * uJ / kPmax);
     h["lc2_J"] = io::number_or_null(lc2);
   }
-  feedback_scales(h, groups, e.survival, main_L, h["n_J"]["mean"].get<double>(), h["u_J"]["mean"].get<double>());
+  feedback_scales(h, groups, e.survival, main_L, h["n_J"]["mean"].get<double>(), h["u_J"]["mean"].get<double>(), bo);
   std::vector<const DosRow*> dm;
   for (const auto& q : e.dos_rows)
     if (q.L == main_L) dm.push_back(&q);

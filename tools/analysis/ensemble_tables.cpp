@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -116,6 +117,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
       e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + needs(c.name) + " of each run)";
   const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
                     c_status = R.column("status");
+  std::set<std::tuple<double, std::string, std::uint64_t>> samples;  // (L, P0, seed)
   for (std::size_t k = 0; k < R.size(); ++k) {
     RunRow x;
     x.dir = R.text(k, c_run);
@@ -131,6 +133,10 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     x.depleted = std::isfinite(x.phi_2);
     if (!index.emplace(x.dir.string(), e.rows.size()).second)
       throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " listed twice");
+    // analyse writes one run per seed of a group: a seed listed twice would count one sample twice
+    if (!samples.emplace(x.L, x.P0_label, x.seed).second)
+      throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " repeats seed " +
+                       std::to_string(x.seed) + " of " + group_text(x.L, x.P0_label) + " (one seed is one sample)");
     if (x.status != "finished") e.failed.push_back(x.dir.string() + " (" + x.status + ")");
     e.rows.push_back(std::move(x));
   }

@@ -46,7 +46,10 @@ double number(const Json& j, const char* key) {
 // The value, its SE and n of a quantity of one size's entry ({} where an older analysis.json lacks it).
 Json cell(const Json& entry, const Quantity& q) {
   const Json v = entry.contains(q.name) ? entry[q.name] : Json::object();
-  return Json{{"value", v.value(q.value_field, Json())}, {"se", v.value("se", Json())}, {"n", v.value("n", 0)}};
+  // n: the independent samples, the seeds where states share them (states_json)
+  return Json{{"value", v.value(q.value_field, Json())},
+              {"se", v.value("se", Json())},
+              {"n", std::min(v.value("n", 0), v.value("seeds", v.value("n", 0)))}};
 }
 
 // How many seeds were grown at more than one of these sizes.

@@ -1,5 +1,9 @@
 #include "analysis/jamming_states.hpp"
 
+#include "analysis/run_protocol.hpp"
+#include "io/run_directory.hpp"
+#include "io/scene_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -85,9 +89,11 @@ std::vector<std::vector<std::size_t>> duplicate_runs(std::span<const std::string
 DistinctRuns load_distinct_runs(std::span<const std::filesystem::path> dirs) {
   DistinctRuns d;
   std::vector<std::string> fingerprints;
+  const auto sets_the_states = [](const SceneKey& k) { return !may_differ_between_samples(k); };
   for (const auto& dir : dirs) {
     d.runs.push_back(load_run(dir));
-    fingerprints.push_back(d.runs.back().summary.dump());
+    const Scene scene = io::load_scene(dir / io::run_files::scene);
+    fingerprints.push_back(protocol_hash(scene, sets_the_states) + " seed " + std::to_string(scene.seed));
   }
   d.later_copy.assign(dirs.size(), false);
   for (const auto& group : duplicate_runs(fingerprints)) {

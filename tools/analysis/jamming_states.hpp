@@ -37,12 +37,14 @@ MeanSE mean_over_states(std::span<const double> values, std::span<const std::siz
 BootstrapResult cluster_bootstrap_mean(std::span<const double> values, std::span<const std::size_t> state,
                                        std::span<const std::uint64_t> cluster, const BootstrapOptions& options = {});
 
-// Groups of two or more runs with identical fingerprints (the text of their summary.json, which
-// is deterministic: same scene and seed give the same bytes): one run copied into several
-// directories. Indices ascending within a group; groups in order of their first index.
+// Groups of two or more runs with identical fingerprints: runs of one protocol grown from one seed
+// (a run copied into several directories, or grown again under another name or step limit), which
+// are one sample. Indices ascending within a group; groups in order of their first index.
 std::vector<std::vector<std::size_t>> duplicate_runs(std::span<const std::string> fingerprints);
 
-// Run directories read in order, each copy of a run after its first marked: one sample, not two.
+// Run directories read in order, each later run of a protocol and seed marked: one sample, not two.
+// The fingerprint is the seed with the hash of every scene key that sets which states a run reaches
+// (all but those may_differ_between_samples allows to differ: run.*, observe.*, the step limit, ...).
 struct DistinctRuns {
   std::vector<RunData> runs;
   std::vector<bool> later_copy;                       // runs[k] repeats an earlier run

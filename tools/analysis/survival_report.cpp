@@ -82,7 +82,8 @@ Json survival_json(const SurvivalReport& r) {
   return j;
 }
 
-std::array<std::string, 3> band_cells(const KaplanMeierStep& step) {
+std::array<std::string, 3> band_cells(const KaplanMeierStep& step, std::optional<std::size_t> runs) {
+  if (!runs || *runs < kMinSamplesForError) return {};
   const auto band = greenwood_band(step);
   if (!band) return {};
   return {io::format_double(band->se), io::format_double(band->lo), io::format_double(band->hi)};
@@ -104,10 +105,10 @@ std::string summary_line(const SurvivalReport& r) {
 
 io::CommandResult survival_result(const SurvivalReport& r) {
   io::CommandResult result{survival_json(r), {}, summary_line(r)};
-  result.csv = [&km = r.km](std::ostream& os) {
+  result.csv = [&km = r.km, runs = r.runs](std::ostream& os) {
     os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
     auto row = [&](const KaplanMeierStep& st) {
-      const auto [se, lo, hi] = band_cells(st);
+      const auto [se, lo, hi] = band_cells(st, runs);
       os << io::format_double(st.a) << ',' << io::format_double(kDiameterSquaredToArea * st.a) << ','
          << io::format_double(st.S) << ',' << se << ',' << lo << ',' << hi << ',' << st.at_risk << ',' << st.events
          << ',' << st.censored << '\n';
