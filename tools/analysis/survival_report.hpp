@@ -28,9 +28,10 @@ struct SurvivalReport {
   std::optional<double> a_eps;
 };
 
-// Reads the runs (a run given twice, or copied into another directory, is one sample: its first
-// copy is used). epsilon: the cutoff of u_J S(a_ε) = ε, by default 1/⟨N_nr,J⟩. InputError naming
-// the run that never jammed or has no bud_events.csv, or for a negative epsilon.
+// Reads the runs (a run given twice, copied into another directory, or its seed grown again under
+// the same protocol, is one sample: its first copy is used). epsilon: the cutoff of
+// u_J S(a_ε) = ε, by default 1/⟨N_nr,J⟩. InputError naming the run that never jammed or has no
+// bud_events.csv, or for a negative epsilon.
 SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std::optional<double> epsilon);
 
 io::Json survival_json(const SurvivalReport& report);
