@@ -90,6 +90,25 @@ std::string all_runs() {
   return s;
 }
 
+// The tables of an analysis of the runs, in `name`, for a test to edit.
+fs::path analysed(const std::string& name) {
+  const fs::path a = work_dir() / name;
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  return a;
+}
+
+// `analyse --tables a` refused as bad input: exit 2, one line on stderr, no analysis written; the line.
+std::string refused_tables(const fs::path& a, const std::string& out_name) {
+  const fs::path err = work_dir() / (out_name + ".err");
+  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / out_name) + " --main-L 6",
+                              "/dev/null", err) == 2);
+  const std::string msg = slurp(err);
+  INFO(msg);
+  CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
+  CHECK(!fs::exists(work_dir() / out_name / "analysis.json"));
+  return msg;
+}
+
 double number(const std::string& s) { return s.empty() ? NAN : std::stod(s); }
 
 }  // namespace
@@ -517,39 +536,26 @@ TEST_CASE("analyse --tables reads a column under the name an earlier version gav
 
 TEST_CASE("analyse --tables refuses a seed listed twice in one group: exit 2, one line naming file and line",
           "[analyse]") {
-  runs();
-  const fs::path a = work_dir() / "twice_runs", err = work_dir() / "twice.err";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  const fs::path a = analysed("twice_runs");
   std::string t = slurp(a / "runs.csv");
   const auto last = t.rfind('\n', t.size() - 2) + 1;  // the last run, listed again under another name
   const std::string row = t.substr(last);
   t += "elsewhere/again" + row.substr(row.find(','));
   std::ofstream(a / "runs.csv") << t;
-  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "twice_out") + " --main-L 6",
-                              "/dev/null", err) == 2);
-  const std::string msg = slurp(err);
-  INFO(msg);
+  const std::string msg = refused_tables(a, "twice_out");
   CHECK(msg.find((a / "runs.csv").string() + ":5: run elsewhere/again repeats seed ") != std::string::npos);
   CHECK(msg.find("(one seed is one sample)") != std::string::npos);
-  CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
-  CHECK(!fs::exists(work_dir() / "twice_out" / "analysis.json"));
 }
 
 TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: exit 2, one line naming file and line",
           "[analyse]") {
-  runs();
-  const fs::path a = work_dir() / "orphan_runs", err = work_dir() / "orphan.err";
-  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(a) + " --main-L 6").code == 0);
+  const fs::path a = analysed("orphan_runs");
   std::string t = slurp(a / "targets.csv");
   const auto row = t.find('\n') + 1;  // the first target's run
   t.replace(row, t.find(',', row) - row, "elsewhere/seed9");
   std::ofstream(a / "targets.csv") << t;
-  CHECK(run_budjam_redirected("analyse --tables " + q(a) + " --out " + q(work_dir() / "orphan_out") + " --main-L 6",
-                              "/dev/null", err) == 2);
-  const std::string msg = slurp(err);
+  const std::string msg = refused_tables(a, "orphan_out");
   CHECK(msg.find((a / "targets.csv").string() + ":2: run elsewhere/seed9 is not in runs.csv") != std::string::npos);
-  CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
-  CHECK(!fs::exists(work_dir() / "orphan_out" / "analysis.json"));
 }
 
 TEST_CASE(
