@@ -616,6 +616,7 @@ ElasticResponse elastic_response(const ResponseProblem& pr, const Relaxation& re
   ElasticResponse out;
   static_cast<PackingState&>(out) = pr.state;
   out.kernel = relaxation.kernel;
+  out.stationary = out.kernel.unstable_modes > 0 ? StationaryPoint::saddle : StationaryPoint::minimum;
   if (pr.terms.empty()) return out;
   const double A = out.area;
   // Energy expansion: E = (Born − Ξᵀ du/de)/A along the relaxed path.
@@ -644,7 +645,7 @@ void require_relaxed_moduli(const ElasticResponse& e, const std::string& what) {
     throw NoResultError(what + " is not jammed: all " + std::to_string(e.N) +
                         " cells are rattlers (N_nr = 0), so it has no rigid backbone and no elastic moduli; "
                         "moduli need a jammed, relaxed packing such as a run's packings/jammed.pack");
-  if (!e.energy_minimum()) return;
+  if (!e.linear_response()) return;
   const bool finite = std::isfinite(e.B()) && std::isfinite(e.G()) && std::isfinite(e.B_energy()) &&
                       std::isfinite(e.G_energy()) && e.R.allFinite() && e.E.allFinite();
   if (!finite || !e.kernel.well_posed)
@@ -657,7 +658,9 @@ void require_relaxed_moduli(const ElasticResponse& e, const std::string& what) {
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  const ModuliOptions& options) {
   const ResponseProblem problem = response_problem(p, contacts, net);
-  return elastic_response(problem, relax(problem, options));
+  ElasticResponse e = elastic_response(problem, relax(problem, options));
+  e.stationary = stationary_point(p, contacts, net, e.kernel.unstable_modes);
+  return e;
 }
 
 }  // namespace budjam

@@ -129,4 +129,33 @@ SaddleStep step_off_saddle(Packing& p, ForceField& field, const UnstableMode& mo
   return step;
 }
 
+const char* to_string(StationaryPoint s) {
+  switch (s) {
+    case StationaryPoint::minimum: return "minimum";
+    case StationaryPoint::saddle: return "saddle";
+    case StationaryPoint::contact_bounded_minimum: return "contact-bounded minimum";
+  }
+  return "?";
+}
+
+StationaryPoint stationary_point(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 std::size_t unstable_modes) {
+  if (unstable_modes == 0) return StationaryPoint::minimum;
+  if (unstable_modes > 1) return StationaryPoint::saddle;
+  const std::optional<UnstableMode> mode = lowest_unstable_mode(p, contacts, net);
+  if (!mode) return StationaryPoint::saddle;  // the two tests' δ differ by rounding: no mode to probe, no claim
+  Packing probe = p;
+  ForceField field;
+  const SaddleStep step = step_off_saddle(probe, field, *mode);
+  if (step.lowered) return StationaryPoint::saddle;
+  // The mode alone is not the landscape: a state FIRE left short of its force resolution can still
+  // go down another way. Relaxed on to that resolution, a minimum loses nothing U resolves.
+  FireParams deep;
+  deep.force_tol = 0;
+  deep.newton_force = 0;
+  const FireResult relaxed = minimise(probe, field, deep);
+  const bool held = relaxed.converged && field.energy(probe) >= step.U_before - step.U_resolution;
+  return held ? StationaryPoint::contact_bounded_minimum : StationaryPoint::saddle;
+}
+
 }  // namespace budjam

@@ -545,6 +545,7 @@ PackingSpectrum packing_spectrum(const Packing& p, const std::vector<Contact>& c
   out.cells = prob.cells;
   // The saddle test of `budjam moduli` (stability.hpp) on the same Hessian.
   out.stability = hessian_stability(prob.H);
+  out.stationary = stationary_point(p, contacts, net, out.stability.unstable_modes);
   out.spectrum = solve_spectrum(prob.H, prob.mass, options);
   out.summary = summarise(out.spectrum, rule);
   if (options.vectors) out.participation = participation_ratios(out.spectrum);

@@ -660,8 +660,32 @@ TEST_CASE(
   CHECK(std::count(err.begin(), err.end(), '\n') == 1);
   const io::Json j = io::Json::parse(out);
   CHECK(j["energy_minimum"] == false);
+  CHECK(j["stationary_point"] == "saddle");
   CHECK(j["G"].is_null());
   CHECK(j["B"].is_null());
+  CHECK(j["kernel"]["method"] == "unstable");
+  CHECK(j["kernel"]["unstable_modes"] == 1);
+  CHECK(j["moduli_affine"]["B"].get<double>() > 0);
+}
+
+TEST_CASE(
+    "budjam moduli on a minimum held by a pair at zero force names it as such, not a saddle: energy_minimum true, null "
+    "relaxed moduli, a one-line notice, exit 1",
+    "[fast]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const auto [code, out, err] =
+      run_budjam("moduli '" + std::string(src) + "/tests/data/contact_bounded_jamming_L20_seed3.pack' --json");
+  CHECK(code == 1);
+  CHECK(err.rfind("budjam: moduli: ", 0) == 0);
+  CHECK(err.find("is a minimum of U held by a pair at zero force") != std::string::npos);
+  CHECK(err.find("saddle") == std::string::npos);
+  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+  const io::Json j = io::Json::parse(out);
+  CHECK(j["energy_minimum"] == true);
+  CHECK(j["stationary_point"] == "contact-bounded minimum");
+  CHECK(j["B"].is_null());
+  CHECK(j["G"].is_null());
   CHECK(j["kernel"]["method"] == "unstable");
   CHECK(j["kernel"]["unstable_modes"] == 1);
   CHECK(j["moduli_affine"]["B"].get<double>() > 0);

@@ -162,3 +162,65 @@ TEST_CASE("A saddle whose unstable mode runs into contacts about to close is a m
     CHECK(field.energy(p) - step.U_before > 0.5 * std::abs(mode->lambda) * s * s);  // the contact, not the mode
   }
 }
+
+TEST_CASE(
+    "A jamming point whose one unstable mode closes a pair at zero force is a minimum of U: along the mode a contact "
+    "forms and U rises, and relaxing on lowers nothing U resolves",
+    "[saddle]") {
+  // The L = 20 jamming point of the paper grid (no feedback, seed 3): the driver relaxed on, stepped
+  // once, and the mode was blocked. One contact short of isostatic.
+  Packing p = test_packing("contact_bounded_jamming_L20_seed3.pack");
+  const Analysed a = analyse(p);
+  const Stability st = stability(p, a.contacts, a.net);
+  REQUIRE(st.unstable_modes == 1);
+  CHECK(a.net.dZ == Approx(-2.0 / static_cast<double>(a.net.N_nr)));
+  const std::optional<UnstableMode> mode = lowest_unstable_mode(p, a.contacts, a.net);
+  REQUIRE(mode);
+  ForceField field;
+  const double U0 = field.energy(p);
+  const Eigen::VectorXd q0 = p.q;
+  // Pairs without overlap close at |s| ≈ 10⁻⁵ on one side and 2·10⁻⁵ on the other.
+  for (const double s : {-1e-4, 1e-4}) {
+    INFO("s = " << s);
+    p.q = q0 + s * mode->v;
+    CHECK(field.energy(p) - U0 > 100 * 0.5 * std::abs(mode->lambda) * s * s);  // the contacts, not the mode
+    // the pairs the mode runs into: more pressed contacts than at the jamming point
+    CHECK(find_contacts(p, field.lobes(), field.neighbours()).size() > a.contacts.size());
+  }
+  p.q = q0;
+  FireParams deep;
+  deep.force_tol = 0;
+  deep.newton_force = 0;
+  REQUIRE(minimise(p, field, deep).converged);
+  CHECK(field.energy(p) == Approx(U0).epsilon(1e-6));
+  p.q = q0;
+  CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::contact_bounded_minimum);
+}
+
+TEST_CASE(
+    "A state whose unstable mode is blocked but whose force FIRE left unresolved is a saddle: relaxing on unjams it",
+    "[saddle]") {
+  // The committed L = 15 state: no step along its mode lowers U (the test above), yet FIRE at its
+  // force resolution finds a way down to U = 0. Only the two tests together make a minimum.
+  Packing p = test_packing("saddle_jamming_L15_seed3.pack");
+  const Analysed a = analyse(p);
+  const Stability st = stability(p, a.contacts, a.net);
+  REQUIRE(st.unstable_modes == 1);
+  CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::saddle);
+  ForceField field;
+  FireParams deep;
+  deep.force_tol = 0;
+  deep.newton_force = 0;
+  REQUIRE(minimise(p, field, deep).converged);
+  CHECK(field.energy(p) / static_cast<double>(p.size()) < 1e-25);
+  // One probed mode cannot make a minimum of a Hessian with two unstable modes.
+  CHECK(stationary_point(p, a.contacts, a.net, 2) == StationaryPoint::saddle);
+}
+
+TEST_CASE("A saddle along whose unstable mode U falls is a saddle", "[saddle]") {
+  const Packing p = test_packing("saddle_after_relaxing_L20_P0_1e-5_seed6.pack");
+  const Analysed a = analyse(p);
+  const Stability st = stability(p, a.contacts, a.net);
+  REQUIRE(st.unstable_modes == 1);
+  CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::saddle);
+}

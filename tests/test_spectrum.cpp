@@ -899,6 +899,7 @@ TEST_CASE("budjam dos on a saddle writes its spectrum, then a notice and exit 1,
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     const io::Json j = io::Json::parse(testing::slurp(base.string() + ".json"));
     CHECK(j["energy_minimum"] == false);
+    CHECK(j["stationary_point"] == "saddle");
     CHECK(j["unstable_modes"].get<long>() >= 1);
     // Its unstable mode is shallow (|λ| < lambda_tol, near jamming): the inertia test still finds it;
     // the table marks as unstable only the modes below −lambda_tol.
@@ -918,4 +919,23 @@ TEST_CASE("budjam dos on a saddle writes its spectrum, then a notice and exit 1,
     }
     CHECK(negative_rows == j["N_negative"].get<long>());
   }
+}
+
+TEST_CASE(
+    "budjam dos on a minimum held by a pair at zero force writes its spectrum and names it, as moduli does: "
+    "energy_minimum true, a notice, exit 1",
+    "[spectrum][cli]") {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const std::string pack = std::string(src) + "/tests/data/contact_bounded_jamming_L20_seed3.pack";
+  const fs::path base = work_dir() / "bounded";
+  const auto r = run_budjam("dos '" + pack + "' --method dense --out '" + base.string() + "'");
+  CHECK(r.code == 1);
+  CHECK(r.code == run_budjam("moduli '" + pack + "' --quiet").code);
+  CHECK(r.err.find("is a minimum of U held by a pair at zero force") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  const io::Json j = io::Json::parse(testing::slurp(base.string() + ".json"));
+  CHECK(j["energy_minimum"] == true);
+  CHECK(j["stationary_point"] == "contact-bounded minimum");
+  CHECK(j["unstable_modes"].get<long>() == 1);
 }

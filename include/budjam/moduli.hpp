@@ -28,6 +28,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
+#include "budjam/saddle.hpp"
 #include "budjam/stability.hpp"
 
 namespace budjam {
@@ -231,7 +232,11 @@ struct ElasticResponse : PackingState {
                                 // `stable` is no energy criterion)
 
   KernelTreatment kernel;
-  bool energy_minimum() const { return kernel.unstable_modes == 0; }  // false: a saddle (see kernel)
+  // With unstable modes (method unstable): a saddle, or a minimum held by a pair at zero force
+  // (saddle.hpp); only elastic_response of a packing can tell, the problem alone says saddle.
+  StationaryPoint stationary = StationaryPoint::minimum;
+  bool energy_minimum() const { return stationary != StationaryPoint::saddle; }
+  bool linear_response() const { return kernel.unstable_modes == 0; }  // false: relaxed response NaN
 
   // The headline moduli in the two conventions (docs/moduli.md, "Two conventions").
   double G() const { return moduli.G_simple; }         // dS_xy/dγ, Lees–Edwards: the paper's G
@@ -253,13 +258,14 @@ ElasticResponse elastic_response(const ResponseProblem& problem, const Relaxatio
 // Throws NoResultError (one line beginning with `what`, the packing's name, and saying what to try)
 // when a response that is not a saddle has no relaxed moduli to report: an unjammed packing (no
 // load-bearing network: N_nr = 0, every cell a rattler, so no rigid backbone), or a relaxation that
-// did not converge (not well_posed, or a modulus not finite). A saddle (energy_minimum() false) is
-// left to the caller, which reports its affine response.
+// did not converge (not well_posed, or a modulus not finite). A response with unstable modes (a saddle or
+// a contact-bounded minimum: linear_response() false) is left to the caller, which reports its affine response.
 void require_relaxed_moduli(const ElasticResponse& e, const std::string& what);
 
 // The response of a relaxed packing: the three steps above. A packing whose Hessian has negative
-// eigenvalues (a saddle, not a minimum) is a result, not an error: kernel.method unstable,
-// kernel.unstable_modes > 0, the relaxed response NaN, the affine one finite.
+// eigenvalues is a result, not an error: kernel.method unstable, kernel.unstable_modes > 0, the
+// relaxed response NaN, the affine one finite, and `stationary` says whether it is a saddle or a
+// contact-bounded minimum.
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
                                  const ModuliOptions& options = {});
 

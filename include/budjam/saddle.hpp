@@ -59,4 +59,24 @@ struct SaddleStep {
 // contacts with an overlap does not hold.
 SaddleStep step_off_saddle(Packing& p, ForceField& field, const UnstableMode& mode);
 
+// What a relaxed packing is, given the number of unstable modes of its pressed contacts' Hessian
+// (the saddle test, stability.hpp). U is piecewise quadratic: a pair without overlap adds nothing to
+// H, yet closes at once along a mode that presses it. So a Hessian with one unstable mode can belong
+// to a minimum of U: the mode runs into such a pair, U rises along both of its signs (step_off_saddle
+// lowers nothing U resolves), FIRE relaxing on to its force resolution lowers nothing either, and
+// the state is a minimum that no linear response describes (the response is one-sided along the
+// mode). The growth driver takes such a state as the jamming point, after the same two tests;
+// `budjam moduli` and `budjam dos` name it the same way (docs/moduli.md, "Saddles").
+enum class StationaryPoint {
+  minimum,                 // no unstable mode
+  saddle,                  // U falls along the lowest unstable mode, or more than one unstable mode
+  contact_bounded_minimum  // one unstable mode, along which a pair at zero force holds U's minimum
+};
+// "minimum", "saddle", "contact-bounded minimum".
+const char* to_string(StationaryPoint s);
+// Probes the lowest unstable mode, then relaxes, on a copy of `p` when unstable_modes is 1 (with more,
+// one probed mode cannot make a minimum). `contacts`, `net`: those of p, as for the saddle test.
+StationaryPoint stationary_point(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,
+                                 std::size_t unstable_modes);
+
 }  // namespace budjam

@@ -35,6 +35,7 @@
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
 #include "budjam/packing.hpp"
+#include "budjam/saddle.hpp"
 #include "budjam/stability.hpp"
 
 namespace budjam {
@@ -221,7 +222,8 @@ struct PackingSpectrum {
   // The saddle test of `budjam moduli` (hessian_stability) on the non-rattler Hessian: unstable_modes > 0
   // means the packing is a saddle, not an energy minimum (its spectrum has negative λ).
   Stability stability;
-  bool energy_minimum() const { return stability.minimum(); }
+  StationaryPoint stationary = StationaryPoint::minimum;  // a saddle, or a contact-bounded minimum (saddle.hpp)
+  bool energy_minimum() const { return stationary != StationaryPoint::saddle; }
 };
 
 // Spectrum of the non-rattlers of a relaxed packing (vibrational_problem + solve_spectrum +

@@ -189,7 +189,7 @@ py::object moduli_dict(const Packing& p, const std::string& solver) {
   ModuliOptions options;
   options.solver = parse_moduli_solver(solver);
   const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
-  require_relaxed_moduli(e, "moduli");  // a saddle is returned, flagged by energy_minimum
+  require_relaxed_moduli(e, "moduli");  // unstable modes: returned, flagged by stationary_point
   return python_of(tools::elastic_response_json(e));
 }
 
@@ -478,7 +478,9 @@ moduli_energy, moduli_energy_affine hold B, G_simple, G_pure, G_mean of each con
 elastic_tensor is the Voigt stiffness C; response holds the 4x4 matrices dS_de, E, ... (order xx,
 xy, yx, yy); shear_stability the softest and stiffest simple-shear directions (degrees).
 An unjammed packing (N_nr = 0: no rigid backbone) or a relaxation that did not converge raises
-NoResultError; a saddle is returned flagged, energy_minimum False and the relaxed moduli NaN.)");
+NoResultError. A packing whose Hessian has unstable modes is returned flagged, the relaxed moduli
+None: stationary_point "saddle" (energy_minimum False) or "contact-bounded minimum" (a minimum held
+by a pair at zero force, energy_minimum True; docs/moduli.md, "Saddles").)");
   m.def(
       "spectrum",
       [](const io::PackingFile& f, const std::string& method, int modes) {
@@ -495,9 +497,11 @@ columns of a (3n, k) array, the mass-weighted modes e = M^(1/2) u of the dynamic
 M^(-1/2) H M^(-1/2) over the (x, y, theta) of the kept cells `cells` (the displacement is
 u = e / sqrt(mass[...]) with mass the (m, m, I) diagonal of every cell; the two uniform
 translations are removed). method: auto | dense | arpack; modes: ARPACK modes (0: as many as
-omega_star needs). An unjammed packing raises InputError, as does method "arpack" on a problem too small
-for it; an eigensolver that does not converge raises NoResultError saying what to try. A saddle is
-returned flagged: energy_minimum False, unstable_modes > 0 (as budjam.moduli).)");
+omega_star needs). An unjammed packing raises NoResultError (as budjam.moduli); method "arpack" on a
+problem too small for it raises InputError; an eigensolver that does not converge raises NoResultError saying what to try. A saddle is
+returned flagged: energy_minimum False, unstable_modes > 0, stationary_point "saddle" (as budjam.moduli;
+"contact-bounded minimum" with energy_minimum True when its one unstable mode runs into a pair at zero
+force).)");
   m.def("survival", &survival_dict, "runs"_a, "epsilon"_a = py::none(),
         R"(Kaplan-Meier survival of the buds free at jamming, pooled over finished run directories: the
 result of `budjam survival` (each run's last jamming episode; completion is the event, division and

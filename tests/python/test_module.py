@@ -232,7 +232,16 @@ def test_spectrum_of_a_saddle_is_flagged_and_its_unstable_mode_is_found_by_the_m
     s = budjam.spectrum(p, method="dense")
     m = budjam.moduli(p)
     assert s["energy_minimum"] is False and m["energy_minimum"] is False
+    assert s["stationary_point"] == m["stationary_point"] == "saddle"
     assert s["unstable_modes"] == m["kernel"]["unstable_modes"] >= 1
     # No λ at or below −lambda_tol is called quasi-zero.
     lam, qz = s["table"]["lambda"], s["table"]["quasi_zero"]
     assert all(not z for l, z in zip(lam, qz) if l <= -s["lambda_tol"])
+
+
+def test_a_minimum_held_by_a_pair_at_zero_force_is_flagged_as_such_by_moduli_and_spectrum():
+    p = budjam.read_packing(PACKING.parent / "contact_bounded_jamming_L20_seed3.pack")
+    m, s = budjam.moduli(p), budjam.spectrum(p, method="dense")
+    assert m["energy_minimum"] is True and s["energy_minimum"] is True
+    assert m["stationary_point"] == s["stationary_point"] == "contact-bounded minimum"
+    assert m["B"] is None and m["moduli_affine"]["B"] > 0  # no relaxed response

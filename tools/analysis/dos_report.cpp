@@ -55,6 +55,7 @@ Json dos_json(const DosReport& r, const DosRequest& request) {
   j["N_zero"] = m.N_zero;
   // The saddle test of `budjam moduli` on the same Hessian; N_negative: computed λ ≤ −lambda_tol.
   j["energy_minimum"] = r.result.energy_minimum();
+  j["stationary_point"] = to_string(r.result.stationary);
   j["unstable_modes"] = r.result.stability.unstable_modes;
   j["N_negative"] = m.N_negative;
   j["N_u"] = net.N_u;
@@ -133,9 +134,10 @@ std::string dos_line(const DosReport& r) {
                 r.has_rigidity ? std::to_string(r.rigidity.floppy_plane).c_str() : "-", r.network.N_u,
                 m.band.available ? io::format_double(m.band.omega_star).c_str()
                                  : ("n/a (needs " + std::to_string(m.band.modes_needed) + " modes)").c_str(),
-                r.result.energy_minimum()
-                    ? ""
-                    : ("; a saddle: " + std::to_string(r.result.stability.unstable_modes) + " unstable modes").c_str());
+                r.result.stability.minimum() ? ""
+                                             : ("; a " + std::string(to_string(r.result.stationary)) + ": " +
+                                                std::to_string(r.result.stability.unstable_modes) + " unstable modes")
+                                                   .c_str());
   return buf;
 }
 

@@ -139,8 +139,10 @@ Json elastic_response_json(const ElasticResponse& e) {
   j["u"] = e.u;
   j["u_buds"] = e.u_buds;
   j["n"] = e.n;
-  // false: the Hessian has kernel.unstable_modes negative eigenvalues, the relaxed moduli are null.
+  // false: a saddle. The relaxed moduli are null whenever kernel.unstable_modes > 0, also for a
+  // contact-bounded minimum (stationary_point says which).
   j["energy_minimum"] = e.energy_minimum();
+  j["stationary_point"] = to_string(e.stationary);
   j["P"] = e.P;
   j["P_energy"] = e.P_energy;
   j["stress"] = stress_json(e.stress);

@@ -71,7 +71,12 @@ void run(const Options& o) {
   const tools::DosReport report =
       cli::naming_input("dos", o.packing, [&] { return tools::dos_report(f.packing, pc.contacts, pc.network, req); });
   io::emit(o.output, tools::dos_result(report, req), std::cout);
-  // As `budjam moduli`: a saddle's spectrum is written, then a notice and exit 1.
+  // As `budjam moduli`: the spectrum of a Hessian with unstable modes is written, then a notice and exit 1.
+  if (report.result.stationary == StationaryPoint::contact_bounded_minimum)
+    throw cli::Finding("dos: " + o.packing +
+                       " is a minimum of U held by a pair at zero force: its Hessian (pressed contacts only) has one "
+                       "negative eigenvalue, along whose mode a pair without overlap closes, so no harmonic spectrum "
+                       "describes it (docs/spectrum.md, \"Saddles\")");
   if (!report.result.energy_minimum())
     throw cli::Finding("dos: " + o.packing + " is a saddle, not an energy minimum (" +
                        std::to_string(report.result.stability.unstable_modes) +

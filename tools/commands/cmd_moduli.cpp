@@ -43,15 +43,24 @@ struct Options {
   io::OutputRequest output;
 };
 
+// Why a packing whose Hessian has unstable modes has no relaxed moduli (NaN in the response).
+std::string no_linear_response(const ElasticResponse& e) {
+  if (e.stationary == StationaryPoint::contact_bounded_minimum)
+    return "is a minimum of U held by a pair at zero force: U rises along both signs of the one unstable mode of "
+           "its Hessian (pressed contacts only), where a pair without overlap closes; the response is one-sided, so "
+           "no relaxed moduli; its JSON has the affine moduli";
+  return "is a saddle, not an energy minimum (" + std::to_string(e.kernel.unstable_modes) +
+         " unstable modes): no relaxed response; its JSON has the affine moduli";
+}
+
 // G is the paper's: the contact-virial stress slope under Lees–Edwards simple shear, named as such.
-// A saddle has no relaxed moduli (NaN in the response): the line says so instead of printing NaN.
+// Without relaxed moduli the line says why instead of printing NaN.
 std::string summary_line(const ElasticResponse& e) {
   char buf[256];
-  if (!e.energy_minimum()) {
+  if (!e.linear_response()) {
     std::snprintf(buf, sizeof buf,
-                  "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B, G_simple: none (a saddle, not a minimum: "
-                  "%zu unstable modes)",
-                  e.N, e.N_nr, e.phi, e.P, e.kernel.unstable_modes);
+                  "moduli: N = %zu, N_nr = %zu, phi = %.6f, P = %.4g, B, G_simple: none (%s: %zu unstable modes)", e.N,
+                  e.N_nr, e.phi, e.P, to_string(e.stationary), e.kernel.unstable_modes);
     return buf;
   }
   std::snprintf(buf, sizeof buf,
@@ -97,8 +106,9 @@ void run(const Options& o) {
   const auto t1 = Clock::now();
   const Relaxation relaxation = cli::naming_input("moduli", o.packing, [&] { return relax(problem, options); });
   const auto t2 = Clock::now();
-  const ElasticResponse e = elastic_response(problem, relaxation);
+  ElasticResponse e = elastic_response(problem, relaxation);
   const auto t3 = Clock::now();
+  e.stationary = stationary_point(p, contacts, net, e.kernel.unstable_modes);
   require_relaxed_moduli(e, "moduli: " + o.packing);
   Json j;
   j["file"] = o.packing;
@@ -112,10 +122,7 @@ void run(const Options& o) {
     j["solve_seconds"] = std::chrono::duration<double>(t2 - t1).count();
   }
   io::emit(o.output, {j, {}, summary_line(e)}, std::cout);
-  if (!e.energy_minimum())
-    throw cli::Finding("moduli: " + o.packing + " is a saddle, not an energy minimum (" +
-                       std::to_string(e.kernel.unstable_modes) +
-                       " unstable modes): no relaxed response; its JSON has the affine moduli");
+  if (!e.linear_response()) throw cli::Finding("moduli: " + o.packing + " " + no_linear_response(e));
   if (e.G() < 0)
     cli::notice("moduli: " + o.packing + ": G_simple = " + io::format_double(e.G()) +
                 " is negative: the contact-virial shear stress falls under Lees-Edwards simple shear (small packings "
