@@ -389,8 +389,10 @@ def main():
             # admitted runs without a value: for G_2, each had G_2 ≤ 0 or none (the paper keeps G_2 > 0 only)
             return f"not measured: {admitted} of {runs} runs admitted, none with a value kept (G_2 > 0 for G_2)"
         se, n = stat.get("se"), stat.get("n")
+        # the φ_2 summary keeps the admitted runs with an Eq. 14 prediction
+        predicted = f", {stat['predicted']} with a prediction" if stat.get("predicted") not in (None, stat.get("admitted")) else ""
         return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "") +
-                f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted)")
+                f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted{predicted})")
 
     order = [l for l in ("none", *PAPER_P0_LABELS.values()) if l in groups]
     # Groups of feedback strengths the paper did not run have no number of the paper to test: they are
@@ -469,7 +471,7 @@ def main():
               f"prediction − simulation run by run {avail(pm(x.get('dphi_2_pred_minus_sim_area')), 'dphi_2_pred_area')}; "
               "every run",
               avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure); "
-                    f"prediction − simulation {sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_diameter_sq"),
+                    f"prediction − simulation {sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_paper"),
               judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0), seeds=seeds_in(x)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),

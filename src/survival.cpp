@@ -81,11 +81,9 @@ double KaplanMeierCurve::integral(double a) const {
   return area + s * (a - prev_a);
 }
 
-std::optional<double> KaplanMeierCurve::quantile_point(double level) const {
+std::optional<double> KaplanMeierCurve::quantile_point(double level, double relative_slack) const {
   if (level >= 1.0) return 0.0;
-  // Ŝ is a product of rationals computed in floating point: 4/5·3/4·2/3·1/2 comes out a few ulps above
-  // 1/5. A relative slack of 1e-12 makes "Ŝ ≤ level" mean what it says for such exact levels.
-  const double slack = 1e-12 * std::max(level, 1e-300);
+  const double slack = relative_slack * std::max(level, 1e-300);
   for (const auto& st : steps_)
     if (st.events > 0 && st.S <= level + slack) return st.a;
   return std::nullopt;

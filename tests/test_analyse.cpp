@@ -249,33 +249,42 @@ TEST_CASE(
   CHECK_FALSE(fs::exists(work_dir() / "t_replaced"));
 }
 
-TEST_CASE("analyse leaves a saddle's moduli file (energy_minimum false) out of the moduli and counts it", "[analyse]") {
+TEST_CASE(
+    "analyse leaves the moduli file of a packing without linear response out of the moduli and counts it: a saddle, "
+    "or a minimum held by a pair at zero force",
+    "[analyse]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const fs::path copy = work_dir() / "with_saddle";
-  fs::copy(runs().front(), copy, fs::copy_options::recursive);
-  // a real saddle's JSON (budjam moduli exits 1 on it) in place of target_0's
-  REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data/saddle_jamming_L15_seed3.pack") + " --quiet --out " +
-                     q(copy / "packings" / "target_0.moduli"))
-              .code == 1);
-  // given the N, L and φ of target_0's packing, which analyse checks a sidecar against
-  const auto own = budjam::io::read_json(runs().front() / "packings" / "target_0.moduli.json");
-  auto saddle = budjam::io::read_json(copy / "packings" / "target_0.moduli.json");
-  for (const char* key : {"N", "L", "phi"}) saddle[key] = own.at(key);
-  budjam::io::write_json(copy / "packings" / "target_0.moduli.json", saddle);
-  const fs::path out = work_dir() / "t_saddle";
-  REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli").code == 0);
-  CHECK(budjam::io::read_json(out / "analysis.json").at("inputs").at("moduli_saddles").get<long>() == 1);
-  const auto s = budjam::io::read_json(copy / "summary.json");
-  const double dphi0 = s.at("targets").at(0).at("dphi").get<double>();
-  std::size_t seen = 0;
-  for (const auto& row : read_csv(out / "targets.csv")) {
-    if (std::abs(number(row.at("dphi")) - dphi0) > 1e-12) continue;
-    ++seen;
-    CHECK(std::isnan(number(row.at("G"))));
-    CHECK(std::isnan(number(row.at("B"))));
+  for (const auto& [pack, counter] : {std::pair{"saddle_jamming_L15_seed3.pack", "moduli_saddles"},
+                                      std::pair{"contact_bounded_jamming_L20_seed3.pack", "moduli_contact_bounded"}}) {
+    INFO(pack);
+    const fs::path copy = work_dir() / (std::string("with_") + counter);
+    fs::copy(runs().front(), copy, fs::copy_options::recursive);
+    // the real JSON of such a packing (budjam moduli exits 1 on it) in place of target_0's
+    REQUIRE(run_budjam("moduli " + q(fs::path(src) / "tests/data" / pack) + " --quiet --out " +
+                       q(copy / "packings" / "target_0.moduli"))
+                .code == 1);
+    // given the N, L and φ of target_0's packing, which analyse checks a sidecar against
+    const auto own = budjam::io::read_json(runs().front() / "packings" / "target_0.moduli.json");
+    auto unstable = budjam::io::read_json(copy / "packings" / "target_0.moduli.json");
+    for (const char* key : {"N", "L", "phi"}) unstable[key] = own.at(key);
+    budjam::io::write_json(copy / "packings" / "target_0.moduli.json", unstable);
+    const fs::path out = work_dir() / (std::string("t_") + counter);
+    REQUIRE(run_budjam("analyse " + q(copy) + " --out " + q(out) + " --main-L 6 --require moduli").code == 0);
+    const auto inputs = budjam::io::read_json(out / "analysis.json").at("inputs");
+    CHECK(inputs.at(counter).get<long>() == 1);
+    CHECK(inputs.at("moduli_saddles").get<long>() + inputs.at("moduli_contact_bounded").get<long>() == 1);
+    const auto s = budjam::io::read_json(copy / "summary.json");
+    const double dphi0 = s.at("targets").at(0).at("dphi").get<double>();
+    std::size_t seen = 0;
+    for (const auto& row : read_csv(out / "targets.csv")) {
+      if (std::abs(number(row.at("dphi")) - dphi0) > 1e-12) continue;
+      ++seen;
+      CHECK(std::isnan(number(row.at("G"))));
+      CHECK(std::isnan(number(row.at("B"))));
+    }
+    CHECK(seen == 1);
   }
-  CHECK(seen == 1);
 }
 
 TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] and the first state with no tagged bud left",
@@ -534,6 +543,36 @@ TEST_CASE("analyse --tables reads a column under the name an earlier version gav
     CHECK(after[k].at("dphi_2_none_left") == before[k].at("dphi_2_paper"));
 }
 
+TEST_CASE("analyse takes the paper's u_J as its own analysis does: contact-free buds over N_nr, not lobes",
+          "[analyse]") {
+  const fs::path a = analysed("uJ_runs"), b = work_dir() / "uJ_out";
+  // Lobes and buds told apart: every run's lobe fraction doubled in the tables.
+  std::istringstream in(slurp(a / "runs.csv"));
+  std::string line, edited;
+  std::getline(in, line);
+  edited = line + "\n";
+  std::vector<std::string> header;
+  for (std::stringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+  const auto lobes = static_cast<std::size_t>(std::find(header.begin(), header.end(), "u_J_lobes") - header.begin());
+  REQUIRE(lobes < header.size());
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    for (std::stringstream r(line); std::getline(r, line, ',');) f.push_back(line);
+    if (lobes < f.size() && !f[lobes].empty()) f[lobes] = std::to_string(2 * std::stod(f[lobes]) + 0.01);
+    for (std::size_t k = 0; k < f.size(); ++k) edited += (k ? "," : "") + f[k];
+    edited += "\n";
+  }
+  std::ofstream(a / "runs.csv") << edited;
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6").code == 0);
+  const auto main = budjam::io::read_json(b / "analysis.json").at("main");
+  REQUIRE(main.at("paper_P0").get<double>() == 1e-3);
+  std::vector<double> buds;
+  for (const auto& row : read_csv(b / "runs.csv"))
+    if (row.at("P0") == "1e-3" || row.at("P0") == "0.001") buds.push_back(number(row.at("u_J")));
+  REQUIRE(buds.size() == 2);
+  CHECK(main.at("u_J_paper").at("mean").get<double>() == Approx((buds[0] + buds[1]) / 2).epsilon(1e-12));
+}
+
 TEST_CASE("analyse --tables refuses a seed listed twice in one group: exit 2, one line naming file and line",
           "[analyse]") {
   const fs::path a = analysed("twice_runs");
@@ -614,16 +653,17 @@ fs::path hand_tables(const std::string& name, const std::function<void(std::ostr
 
 constexpr const char* kRunsHeader =
     "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,lambda_bar_lobes,"
-    "dphi_2_pred_area,dphi_2_pred_diameter_sq,G_2\n";
+    "dphi_2_pred_area,dphi_2_pred_diameter_sq,dphi_2_pred_paper,G_2\n";
 
 TEST_CASE(
     "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
-    "fences on G_2 alone",
+    "its φ_2 summary over the runs with a prediction, fences on G_2 alone",
     "[analyse]") {
   // Six runs of one group. Targets at Δφ = 10⁻³ (before every φ_2) and 3·10⁻² (beyond it), with the
   // divisions after φ_J counted there. Run 6 has 2 divisions at the first target but 12 at the one
   // that decides (the smallest at or beyond φ_2): not admitted. Run 5's G_2 is an outlier of the
-  // admitted G_2 (fences [0.8, 1.6] from 1.0, 1.1, 1.2, 1.3, 50): out of the G_2 statistics only.
+  // admitted G_2 (fences [0.8, 1.6] from 1.0, 1.1, 1.2, 1.3, 50): out of the G_2 statistics only. Run 5
+  // has no prediction under the paper's rule (its Ŝ never fell to 1/tagged): out of the φ_2 summary.
   const fs::path dir = work_dir() / "hand_tables", out = work_dir() / "hand_tables_out";
   fs::create_directories(dir);
   const std::vector<double> dphi_2{0.010, 0.012, 0.014, 0.016, 0.018, 0.020};
@@ -639,7 +679,8 @@ TEST_CASE(
       const double phi_J = 0.84;
       r << run << ",15,0.001," << k + 1 << ",finished," << k << "," << phi_J << ",0.2,0.76,172,170,"
         << phi_J + dphi_2[k] << "," << dphi_2[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.6 + 0.01 * k
-        << "," << 0.75 * dphi_2[k] << "," << dphi_2[k] + 0.001 * k << "," << G_2[k] << "\n";
+        << "," << 0.75 * dphi_2[k] << "," << dphi_2[k] + 0.002 * k << ","
+        << (k == 4 ? std::string() : std::to_string(dphi_2[k] + 0.001 * k)) << "," << G_2[k] << "\n";
       t << run << ",15,0.001," << k + 1 << ",0.001," << phi_J + 0.001 << ",2,true\n";
       t << run << ",15,0.001," << k + 1 << ",0.03," << phi_J + 0.03 << "," << div_far[k] << ",false\n";
     }
@@ -648,18 +689,19 @@ TEST_CASE(
   const auto j = budjam::io::read_json(out / "analysis.json");
   REQUIRE(j["groups"].size() == 1);
   const auto& g = j["groups"][0];
-  // admitted: runs 1–5
+  // admitted: runs 1–5; with a prediction: runs 1–4
   CHECK(g["dphi_2_paper"]["admitted"] == 5);
+  CHECK(g["dphi_2_paper"]["predicted"] == 4);
   CHECK(g["dphi_2_paper"]["runs"] == 6);
-  CHECK(g["dphi_2_paper"]["n"] == 5);
-  CHECK(g["dphi_2_paper"]["mean"].get<double>() == Approx(0.014));
-  CHECK(g["P_2_over_Pmax_paper"]["mean"].get<double>() == Approx(0.12));
+  CHECK(g["dphi_2_paper"]["n"] == 4);
+  CHECK(g["dphi_2_paper"]["mean"].get<double>() == Approx(0.013));
+  CHECK(g["P_2_over_Pmax_paper"]["mean"].get<double>() == Approx(0.115));
   // λ̄_c: the paper's with u the contact-free lobes, over the admitted runs; budjam's with the buds, every run
   CHECK(g["lambda_bar_paper"]["mean"].get<double>() == Approx(0.62));
   CHECK(g["lambda_bar"]["mean"].get<double>() == Approx(0.525));
-  // Eq. 14 with a as diameter², paired with the same runs: prediction − simulation = 0.001 k, k = 0…4
-  CHECK(g["dphi_2_pred_paper"]["mean"].get<double>() == Approx(0.016));
-  CHECK(g["dphi_2_pred_minus_sim_paper"]["mean"].get<double>() == Approx(0.002));
+  // Eq. 14 under the paper's a_ε, paired with the same runs: prediction − simulation = 0.001 k, k = 0…3
+  CHECK(g["dphi_2_pred_paper"]["mean"].get<double>() == Approx(0.0145));
+  CHECK(g["dphi_2_pred_minus_sim_paper"]["mean"].get<double>() == Approx(0.0015));
   // budjam's column: every run, a as true area
   CHECK(g["dphi_2"]["n"] == 6);
   CHECK(g["dphi_2_pred_minus_sim_area"]["mean"].get<double>() == Approx(-0.25 * 0.015));
@@ -669,10 +711,11 @@ TEST_CASE(
   // fewer than five values: no error bar
   CHECK(g["G_2_over_Pmax_paper"]["se"].is_null());
   CHECK(g["G_2_over_P_2_paper"]["n"] == 4);
-  // the values the trends pair by seed: the admitted runs' (seeds 1–5), the kept runs' for G_2/P_2
+  // the values the trends pair by seed: the predicted runs' (seeds 1–4), the kept runs' for G_2/P_2
   const auto& by_seed = g["dphi_2_paper"]["by_seed"];
-  REQUIRE(by_seed.size() == 5);
-  for (int k = 0; k < 5; ++k) CHECK(by_seed[std::to_string(k + 1)].get<double>() == Approx(dphi_2[k]));
+  REQUIRE(by_seed.size() == 4);
+  for (int k = 0; k < 4; ++k) CHECK(by_seed[std::to_string(k + 1)].get<double>() == Approx(dphi_2[k]));
+  CHECK_FALSE(by_seed.contains("5"));
   CHECK_FALSE(by_seed.contains("6"));
   const auto& ratio = g["G_2_over_P_2_paper"]["by_seed"];
   CHECK(ratio.size() == 4);
@@ -747,7 +790,7 @@ TEST_CASE(
       for (int s = 1; s <= 2; ++s, ++k) {
         const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
         r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
-          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.5,0.01,0.011,1.0\n";
+          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.5,0.01,0.011,0.011,1.0\n";
         for (int d = 0; d < 2; ++d)
           t << run << ",15," << P0s[p] << "," << k + 1 << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841)
             << ",2," << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"

@@ -40,8 +40,11 @@ class KaplanMeierCurve {
   // ∫_0^a Ŝ(a') da' (exact for the step function).
   double integral(double a) const;
   // The smallest a at which Ŝ(a) ≤ level (for u_J S(a_ε) = ε: level = ε/u_J). 0 if level ≥ 1;
-  // nullopt if Ŝ never falls that low (too much censoring).
-  std::optional<double> quantile_point(double level) const;
+  // nullopt if Ŝ never falls that low (too much censoring). Ŝ is a product of rationals computed in
+  // floating point: 4/5·3/4·2/3·1/2 comes out a few ulps above 1/5, so "≤ level" allows a relative
+  // slack (kQuantileSlack) that meets such exact levels; 0 compares as the floating point has it.
+  static constexpr double kQuantileSlack = 1e-12;
+  std::optional<double> quantile_point(double level, double relative_slack = kQuantileSlack) const;
   // The largest a observed (event or censoring); Ŝ is undefined beyond it if it did not reach 0.
   double last_observation() const { return steps_.empty() ? 0.0 : steps_.back().a; }
 

@@ -121,6 +121,13 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& file
     ++files.saddles;
     return m;
   }
+  const auto sp = j->find("stationary_point");
+  if (sp != j->end() && !sp->is_string())
+    throw InputError(fs::path(pack).replace_extension(".moduli.json").string() + ": \"stationary_point\" is not text");
+  if (sp != j->end() && sp->get<std::string>() == to_string(StationaryPoint::contact_bounded_minimum)) {
+    ++files.contact_bounded;
+    return m;
+  }
   m.B = json_number(*j, {"B", "bulk_modulus"});
   m.G = json_number(*j, {"G", "shear_modulus"});
   m.G_energy = json_number(*j, {"G_energy"});
@@ -222,6 +229,9 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
           x.pred_d2 = p.dphi2_diameter_sq;
         }
       }
+      const auto ae_paper = km.quantile_point(1.0 / x.tagged, 0.0);
+      if (ae_paper && std::isfinite(x.chi_bar))
+        x.pred_paper = predict_phi2(x.n_J, x.u_J, x.chi_bar, *ae_paper, km.integral(*ae_paper)).dphi2_diameter_sq;
     }
   }
 
@@ -697,14 +707,23 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
     j["admitted"] = admitted.size();
     return j;
   };
+  // Its φ_2 summary (Δφ_2 and P_2, beside Eq. 14) keeps only the admitted runs with a prediction.
+  std::vector<const RunRow*> predicted;
+  for (const auto* r : admitted)
+    if (std::isfinite(r->pred_paper)) predicted.push_back(r);
+  const auto with_predicted = [&](Json j) {
+    j = selected(std::move(j));
+    j["predicted"] = predicted.size();
+    return j;
+  };
   const auto dphi_2 = [](auto& r) { return r.dphi_2; };
-  g["dphi_2_paper"] = selected(mean_se_by_seed(admitted, dphi_2));
-  g["dphi_2_pred_paper"] = selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2; })));
+  g["dphi_2_paper"] = with_predicted(mean_se_by_seed(predicted, dphi_2));
+  g["dphi_2_pred_paper"] = with_predicted(mean_se_json(collect(predicted, [](auto& r) { return r.pred_paper; })));
   // Eq. 14 against the simulation run by run (the same runs on both sides: a paired difference)
   g["dphi_2_pred_minus_sim_paper"] =
-      selected(mean_se_json(collect(admitted, [](auto& r) { return r.pred_d2 - r.dphi_2; })));
+      with_predicted(mean_se_json(collect(predicted, [](auto& r) { return r.pred_paper - r.dphi_2; })));
   const auto P_2 = [](auto& r) { return r.P_2 / kPmax; };
-  g["P_2_over_Pmax_paper"] = selected(mean_se_by_seed(admitted, P_2));
+  g["P_2_over_Pmax_paper"] = with_predicted(mean_se_by_seed(predicted, P_2));
   const auto lambda_bar = [](auto& r) { return r.lambda_bar_lobes; };
   g["lambda_bar_paper"] = selected(mean_se_by_seed(admitted, lambda_bar));
   g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
@@ -1212,8 +1231,8 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
   for (const auto& r : e.rows)
     if (r.L == main_L) m.push_back(&r);
   // Quantities fixed at jamming over every run of the main L (feedback acts only above jamming), one
-  // sample per distinct jamming state; the paper's u_J counts contact-free lobes on the
-  // strongest-feedback packings.
+  // sample per distinct jamming state; the paper's u_J, on the strongest-feedback packings, is its
+  // own analysis' tagged (contact-free) buds over N_nr, budjam's u_J.
   Json h = size_json(m, bo);
   std::optional<double> strongest;
   for (const auto& [key, rs] : groups)
@@ -1222,7 +1241,7 @@ Json headline_json(double main_L, const Ensemble& e, const std::map<GroupKey, st
     const auto& rs = groups.at({main_L, strongest});
     h["paper_P0"] = *strongest;
     h["u_J_paper"] = states_json(
-        rs, [](auto& r) { return r.u_J_lobes; }, bo);
+        rs, [](auto& r) { return r.u_J; }, bo);
     h["n_J_paper"] = states_json(
         rs, [](auto& r) { return r.n_J; }, bo);
   }
@@ -1357,6 +1376,7 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
                      {"duplicates", e.duplicates},
                      {"moduli_files", e.moduli.found},
                      {"moduli_saddles", e.moduli.saddles},
+                     {"moduli_contact_bounded", e.moduli.contact_bounded},
                      {"dos_files", e.dos_found}};
   if (!o.tables.empty()) J["inputs"]["tables"] = o.tables;
   J["inputs"]["unchecked"] = e.unchecked;
@@ -1427,7 +1447,8 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
       for (std::size_t k = 1; k < d.size(); ++k) msg << " " << d[k] << " (= " << d[0] << ")";
   }
   msg << ") in " << groups.size() << " groups; moduli files " << e.moduli.found << " (" << e.moduli.saddles
-      << " saddles), spectra " << e.dos_found << " -> " << out.string();
+      << " saddles, " << e.moduli.contact_bounded << " contact-bounded minima), spectra " << e.dos_found << " -> "
+      << out.string();
   return {msg.str(), e.unchecked};
 }
 

@@ -65,7 +65,10 @@ struct RunRow {
   // definition's φ_2 comes from steps.csv, without a packing.
   double phi2_tagged_left = kBudjamTaggedLeft;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
-  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;     // at budjam's φ_2, if saved there
+  // Eq. 14 as the paper's analysis computes it: a as diameter², a_ε the first completion with Ŝ ≤
+  // 1/tagged in floating point, no slack (so an exact level such as 1/5 can step one completion on)
+  double pred_paper = kNaN;
+  double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;  // at budjam's φ_2, if saved there
   double G_2_none_left = kNaN;  // at the first state with none left, where the run saved that packing
   double h_gamma = kNaN;
   // As the paper's analysis takes Π(g): every cell, rattlers included, at Δφ = 3·10⁻³; the fraction
@@ -112,6 +115,7 @@ struct GroupKey {
 struct ModuliFiles {
   std::size_t found = 0;
   std::size_t saddles = 0;  // "energy_minimum": false — no relaxed B, G (NaN here, left out of every statistic)
+  std::size_t contact_bounded = 0;  // minima held by a pair at zero force: no relaxed B, G either (saddle.hpp)
 };
 
 struct Ensemble {
@@ -178,6 +182,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"integral_S", &RunRow::int_S},
                                             {"dphi_2_pred_area", &RunRow::pred_area},
                                             {"dphi_2_pred_diameter_sq", &RunRow::pred_d2},
+                                            {"dphi_2_pred_paper", &RunRow::pred_paper},
                                             {"B_2", &RunRow::B_2},
                                             {"G_2", &RunRow::G_2},
                                             {"G_2_energy", &RunRow::G_2_energy},

@@ -37,6 +37,7 @@ std::string needs(const std::string& column) {
       {"N_div_end", "steps.csv"},
       {"a_eps", "bud_events.csv"},
       {"integral_S", "bud_events.csv"},
+      {"dphi_2_pred_paper", "bud_events.csv"},
       {"bud_records", "bud_events.csv"},
       {"B_2", "the moduli at φ_2"},
       {"G_2", "the moduli at φ_2"},
@@ -383,6 +384,7 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
   e.unavailable["growth_rates.csv"] = cells;
   e.unavailable["g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"] = cells;
   e.unavailable["moduli_saddles"] = "the tables do not say which packings were saddles";
+  e.unavailable["moduli_contact_bounded"] = "the tables do not say which packings were contact-bounded minima";
   e.unavailable["duplicates"] = "the tables do not hold summary.json to compare copies by";
   for (const auto& r : e.rows) {
     e.moduli.found += std::isfinite(r.G_2);
