@@ -4,9 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <vector>
-#ifdef BUDJAM_ACTIVE_SET_TRACE
-#include <cstdio>
-#endif
 
 #include "budjam/cholmod_solver.hpp"
 #include "budjam/contacts.hpp"
@@ -292,10 +289,6 @@ ActiveSetResult active_set_minimise(Packing& p, ForceField& field, const ActiveS
     trial.q += u;
     const double Ut = field.evaluate(trial, Ft);
     ++res.evaluations;
-#ifdef BUDJAM_ACTIVE_SET_TRACE
-    std::fprintf(stderr, "step %ld mu %.2e inner %ld moved %.2e U %.6e -> %.6e pred %.6e fmax %.3e\n", res.steps, mu,
-                 res.inner, moved, U, Ut, U - predicted, fmax);
-#endif
     if (Ut < U) {
       const double rho = (U - Ut) / predicted;
       p.q = trial.q;  // into p's own buffer: a caller (FIRE) may hold pointers into it

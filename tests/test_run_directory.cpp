@@ -1,6 +1,7 @@
 // The run directory: what budjam claims, what it refuses, what it deletes, and one writer at a time.
 #include "budjam/scene.hpp"
 #include "io/atomic_file.hpp"
+#include "io/export.hpp"
 #include "io/run_directory.hpp"
 
 #include <catch2/catch.hpp>
@@ -134,6 +135,21 @@ TEST_CASE("in packings/ only the run's stems with budjam's own suffixes are the 
   const RunDirectory again = RunDirectory::create(d, true, kOwned);
   for (const auto& f : mine) CHECK(slurp(d / f) == "mine");
   for (const auto& f : owned) {
+    INFO(f);
+    CHECK_FALSE(fs::exists(d / f));
+  }
+}
+
+TEST_CASE("every export format's file beside a run packing is the run's: --overwrite removes it", "[run_directory]") {
+  const fs::path d = fresh("exports_owned");
+  { RunDirectory::create(d, false, kOwned); }
+  std::vector<std::string> exported;
+  for (const budjam::io::ExportFormat& f : budjam::io::export_formats())
+    exported.push_back("packings/jammed." + std::string(f.name));
+  REQUIRE(exported.size() >= 3);
+  for (const auto& f : exported) put(d / f, "old");
+  { RunDirectory::create(d, true, kOwned); }
+  for (const auto& f : exported) {
     INFO(f);
     CHECK_FALSE(fs::exists(d / f));
   }

@@ -1,6 +1,7 @@
 #include "io/run_directory.hpp"
 
 #include "budjam/scene.hpp"  // InputError
+#include "io/export.hpp"
 #include "io/text.hpp"
 
 #include <fcntl.h>
@@ -27,9 +28,18 @@ bool is_run_packing_stem(std::string_view stem) {
 }
 
 const std::vector<std::string_view>& packing_suffixes() {
-  static const std::vector<std::string_view> suffixes{".pack",          ".moduli.json",  ".dos.json", ".dos.csv",
-                                                      ".rigidity.json", ".rigidity.csv", ".svg",      ".png",
-                                                      ".pdf",           ".xyz",          ".gsd",      ".vtk"};
+  // export writes STEM.<format> for every format of its registry: a new format is the run's too.
+  static const std::vector<std::string> exported = [] {
+    std::vector<std::string> s;
+    for (const ExportFormat& f : export_formats()) s.push_back("." + std::string(f.name));
+    return s;
+  }();
+  static const std::vector<std::string_view> suffixes = [] {
+    std::vector<std::string_view> s{".pack",         ".moduli.json", ".dos.json", ".dos.csv", ".rigidity.json",
+                                    ".rigidity.csv", ".svg",         ".png",      ".pdf"};
+    s.insert(s.end(), exported.begin(), exported.end());
+    return s;
+  }();
   return suffixes;
 }
 

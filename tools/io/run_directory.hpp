@@ -82,7 +82,8 @@ namespace run_files {
 //   .dos.json .dos.csv                      dos --out STEM.dos, the dos observer (Makefile.analysis)
 //   .rigidity.json .rigidity.csv            rigidity --out STEM.rigidity
 //   .svg .png .pdf                          render -o STEM.svg (--png, or -o STEM.png/.pdf)
-//   .xyz .gsd .vtk                          export STEM.pack (its default BASE is STEM)
+//   .xyz .gsd .vtk                          export STEM.pack (its default BASE is STEM): every
+//                                           format of export_formats()
 // Anything else there (another suffix, a backup such as STEM.pack~ or STEM.pack.bak, a
 // directory) is not the run's: --overwrite leaves it, and it does not make a claim refuse.
 const std::vector<std::string_view>& packing_suffixes();

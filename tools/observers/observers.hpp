@@ -14,7 +14,7 @@
 // second argument names the scene keys that switch it on (`observe.moduli.*`: every key of that
 // section); `budjam grow --help` and the table of docs/growth.md (`budjam validate
 // --observers-markdown`) list the registry.
-// The second argument declares every entry the observer may write in a run directory, as
+// The third argument declares every entry the observer may write in a run directory, as
 // io::OwnedEntries patterns, whether or not a given scene enables it: `--overwrite` removes
 // exactly the declared entries of an earlier run (run_owned_entries), so an observer writes
 // nothing it has not declared. Observers write their files relative to ctx.run_dir, atomically
