@@ -181,6 +181,39 @@ TEST_CASE("a new output directory at the top level of a run is refused, for grow
   CHECK(beside.code == 0);
 }
 
+TEST_CASE("no output makes a directory at the top level of a run, however deep and through a link", "[taxonomy]") {
+  const std::string demo = budjam::testing::shell_quoted(budjam::testing::source_file("data/scenes/demo.toml"));
+  REQUIRE(run_budjam("grow " + demo + " --quiet --out deep-run").code == 0);
+  fs::remove(work_dir() / "plink");
+  fs::create_directory_symlink(work_dir() / "deep-run" / "packings", work_dir() / "plink");
+  const auto top = [] {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(work_dir() / "deep-run")) names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const auto before = top();
+  const std::string pack = "deep-run/packings/jammed.pack";
+  for (const std::string& args :
+       {"moduli " + pack + " --out deep-run/sub7/deeper/m", "render " + pack + " -o deep-run/sub2/r.svg",
+        "export " + pack + " --format xyz --out deep-run/sub3/e", "grow " + demo + " --quiet --out deep-run/sub9/run",
+        std::string("analyse deep-run --out deep-run/sub5/deeper"), std::string("analyse deep-run --out plink/../newA"),
+        "dos " + pack + " --out plink/../newB/d"}) {
+    INFO(args);
+    const auto r = run_budjam(args);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is inside the budjam run directory") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(top() == before);
+  }
+  // Below packings/ (and spectra/), the run's own directories, an output may make one.
+  const auto below = run_budjam("rigidity " + pack + " --out plink/mine/j");
+  INFO(below.err);
+  CHECK(below.code == 0);
+  CHECK(fs::is_regular_file(work_dir() / "deep-run" / "packings" / "mine" / "j.json"));
+}
+
 TEST_CASE(
     "a finished run without its packings directory is an input error (exit 2) naming it, and nothing is "
     "written",

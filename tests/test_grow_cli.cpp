@@ -759,6 +759,14 @@ TEST_CASE("a refused resume leaves the run directory byte-identical, whichever f
   fs::remove(copy / ".budjam-run");
   refused_unchanged(copy, "not a budjam run directory");
 
+  // Nor does a refused resume create the list of temporaries where there was none.
+  fresh_copy();
+  fs::remove(copy / ".budjam-temporaries");
+  std::ofstream(copy / "scene.toml", std::ios::app) << "[box]\nL = 13.0\n";
+  refused_unchanged(copy, "scene.toml");
+  fs::remove(copy / "checkpoint.txt");
+  refused_unchanged(copy, "no checkpoint.txt");
+
   // A temporary a killed writer recorded is removed only by a resume that goes ahead.
   fresh_copy();
   const Result r = grow("--resume " + q(copy) + " --quiet");

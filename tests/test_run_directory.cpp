@@ -176,6 +176,37 @@ TEST_CASE("one writer at a time: a second claim names the holder", "[run_directo
   CHECK(is_run_directory(d));  // the refused claims removed nothing
 }
 
+TEST_CASE("a claim is checked again once the lock is held: a run finished meanwhile needs overwrite",
+          "[run_directory]") {
+  // create() asks check_claim before it takes the lock and again after: what another process put
+  // in place in between is what the second answer sees.
+  const fs::path d = fresh("raced");
+  fs::create_directories(d);
+  const Directory dir = Directory::open(d, false);
+  CHECK_FALSE(check_claim(dir, false));  // empty: the first answer
+  {
+    const RunDirectory other = RunDirectory::create(d, false, kOwned);
+    write_atomically(other.root(), run_files::summary, "{}\n");
+  }
+  CHECK_THROWS_WITH(check_claim(dir, false), Contains("holds a budjam run") && Contains("pass --overwrite"));
+  CHECK(check_claim(dir, true));
+  put(d / "thesis.tex", "precious");
+  fs::remove(d / run_files::marker);
+  CHECK_THROWS_WITH(check_claim(dir, true), Contains("not a budjam run directory"));
+}
+
+TEST_CASE("a claim to resume creates no list of temporaries; the first temporary does", "[run_directory]") {
+  const fs::path d = fresh("no-list");
+  { const RunDirectory first = RunDirectory::create(d, false, kOwned); }
+  CHECK_FALSE(fs::exists(d / run_files::temporaries));
+  RunDirectory run = RunDirectory::resume(d, kOwned);
+  run.remove_recorded_temporaries();
+  CHECK_FALSE(fs::exists(d / run_files::temporaries));
+  write_atomically(run.root(), run_files::summary, "{}\n");
+  CHECK(fs::is_regular_file(d / run_files::temporaries));
+  CHECK(slurp(d / run_files::temporaries).empty());
+}
+
 TEST_CASE("the lock is released when the writer goes", "[run_directory]") {
   const fs::path d = fresh("released");
   { const RunDirectory first = RunDirectory::create(d, false, kOwned); }

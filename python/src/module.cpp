@@ -526,7 +526,8 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
         if (!io::find_export_format(format))
           throw InputError("format: must be one of " + io::export_formats_text() + " (got '" + format + "')");
         io::check_output_file("", path);  // the command line's output-name rules
-        if (source) io::check_not_an_input("path", path, {*source});
+        // Never over the file the packing was read from, given by path or as a Packing read from it.
+        if (source || !f.source.empty()) io::check_not_an_input("path", path, {source.value_or(f.source)});
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing", "source"_a = py::none(),
@@ -571,7 +572,7 @@ divisions.csv); bud_*: cell_id, episode, a (as bud_events.csv).)")
       .def_property_readonly(
           "packing",
           [](const Growth& g) {
-            return io::PackingFile{g.driver().packing(), {}};
+            return io::PackingFile{g.driver().packing(), {}, {}};
           },
           "the current (last accepted) packing")
       .def_property_readonly(

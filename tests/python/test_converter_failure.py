@@ -93,3 +93,32 @@ def test_failing_gsd_writer_gives_one_line(budjam_exe, tmp_path):
     assert len(lines) == 1, r.stderr
     assert str(out) in lines[0] and "gsd: OSError: disk full" in lines[0]
     assert list(outputs.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["render", "export"])
+def test_a_failed_conversion_leaves_no_directory_it_made(budjam_exe, tmp_path, command):
+    """Nothing written: the directories budjam made for the output are removed again, deepest first, and
+    one that already existed stays."""
+    import subprocess
+
+    fake = tmp_path / "python"
+    fake.write_text("#!/bin/sh\nexit 4\n")
+    fake.chmod(0o755)
+    env = {**stand_in(tmp_path, "exit 1\n"), "BUDJAM_PYTHON": str(fake)}
+    (tmp_path / "there").mkdir()
+    args = {"render": ["render", PACKING, "-o", tmp_path / "there" / "nd3" / "nd4" / "x.png"],
+            "export": ["export", PACKING, "--format", "gsd", "--out", tmp_path / "there" / "nd5" / "nd6" / "g"]}
+    r = subprocess.run([budjam_exe, *map(str, args[command])], capture_output=True, text=True, env=env)
+    assert r.returncode == 3 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert list((tmp_path / "there").iterdir()) == []
+
+
+def test_a_converter_starts_with_the_default_dispositions_of_sigpipe_and_sigxfsz(budjam_exe, tmp_path):
+    """budjam ignores SIGPIPE and SIGXFSZ (a failed write is an output error); ignored signals stay ignored
+    across exec, so the converter is given the defaults back."""
+    env = stand_in(tmp_path, "echo ignored $(awk '/SigIgn/ {print $2}' /proc/$$/status) >&2\nexit 1\n")
+    r = render(budjam_exe, tmp_path / "r.png", env)
+    assert r.returncode == 3
+    ignored = int(r.stderr.split("ignored ")[1].split()[0], 16)
+    for sig in (13, 25):  # SIGPIPE, SIGXFSZ
+        assert not ignored & (1 << (sig - 1)), r.stderr

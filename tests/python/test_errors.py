@@ -131,7 +131,8 @@ def test_reading_a_fifo_or_a_device_raises_input_error_at_once(tmp_path, kind):
 
 
 @pytest.mark.parametrize("name", ["summary.json", "scene.toml", "notes.xyz", "packings/target_0.pack",
-                                  "packings/jammed.pack", "packings/../steps.csv"])
+                                  "packings/jammed.pack", "packings/../steps.csv", "newsub/x.pack",
+                                  "newsub/deeper/x.xyz", "packings/../newsub/x.pack"])
 @pytest.mark.parametrize("write", [lambda p, path: p.write(path),
                                    lambda p, path: budjam.export(p, path, "xyz")], ids=["write", "xyz"])
 def test_the_python_writers_refuse_a_runs_own_files_as_the_command_line_does(tmp_path, write, name):
@@ -142,11 +143,14 @@ def test_the_python_writers_refuse_a_runs_own_files_as_the_command_line_does(tmp
     (run / "scene.toml").write_text("[run]\n")
     (run / "packings" / "target_0.pack").write_bytes(PACKING.read_bytes())
     (run / "packings" / "jammed.pack").write_bytes(PACKING.read_bytes())
-    before = {p: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    def entries():
+        return {p: p.read_bytes() if p.is_file() else None for p in run.rglob("*")}
+
+    before = entries()
     with pytest.raises(budjam.InputError, match="budjam run") as e:
         write(budjam.read_packing(PACKING), str(run / name))
     assert "\n" not in str(e.value)
-    assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+    assert entries() == before  # no new directory either
     # Beside the packings, under a name of its own, the same writers write.
     write(budjam.read_packing(PACKING), str(run / "packings" / "mine.out"))
     assert (run / "packings" / "mine.out").is_file()
@@ -242,6 +246,25 @@ def test_export_refuses_to_overwrite_the_packing_it_reads(tmp_path, link):
         out.symlink_to(source)
     with pytest.raises(budjam.InputError, match="is the input file"):
         budjam.export(str(source), out, "xyz")
+    # A Packing read from the file knows it: the same refusal.
+    with pytest.raises(budjam.InputError, match="is the input file"):
+        budjam.export(budjam.read_packing(source), out, "xyz")
     assert source.read_bytes() == PACKING.read_bytes()
     budjam.export(str(source), tmp_path / "p.xyz", "xyz")  # another name is written
     assert (tmp_path / "p.xyz").stat().st_size > 0
+
+
+def test_a_write_past_the_file_size_limit_raises_output_error_and_leaves_no_temporary(tmp_path):
+    """As the command line (which ignores SIGXFSZ), the module's writers meet the limit as a failed write:
+    CPython ignores SIGXFSZ too."""
+    import subprocess
+    import sys
+
+    script = ("import resource, budjam\nresource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
+              f"p = budjam.read_packing({str(PACKING)!r})\n"
+              "try:\n    p.write('big.pack')\nexcept budjam.OutputError as e:\n    print('OutputError', e)\n")
+    r = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("OutputError") and "File too large" in r.stdout
+    assert os.listdir(tmp_path) == []

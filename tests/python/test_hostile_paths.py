@@ -3,6 +3,7 @@ directory where a file is expected, names too long for a temporary beside them, 
 regular files. Each is one line `budjam: error: ...` naming the path, exit 2, nothing written and
 every file that was there byte-identical (docs/files.md, "Crash safety")."""
 import os
+import shutil
 import stat
 import subprocess
 
@@ -168,3 +169,85 @@ def test_an_output_that_is_the_commands_input_file_is_refused_and_the_input_kept
     assert_refused(r, "is the input file")
     assert snapshot(tmp_path) == before
     assert input_path.read_bytes() == data
+
+
+@pytest.mark.parametrize("name", ["summary", "bud_events", "steps", "divisions"])
+def test_survival_refuses_an_output_that_is_one_of_the_runs_files(run_budjam, run_dir, tmp_path, name):
+    """Also in a run without its marker (where the top-level rule does not apply): the output would replace
+    the file survival reads."""
+    run = tmp_path / "run"
+    shutil.copytree(run_dir, run)
+    (run / ".budjam-run").unlink()
+    before = snapshot(tmp_path)
+    r = run_budjam("survival", run, "-o", run / name, check=False)
+    assert_refused(r, "is the input file")
+    assert snapshot(tmp_path) == before
+
+
+def test_analyse_refuses_an_output_that_is_one_of_the_runs_files(run_budjam, run_dir, tmp_path):
+    """analyse's dos.csv has the name of a run's own log: --out in a run without its marker (holding an earlier
+    analysis, so that the directory is analyse's to write) may not replace it."""
+    run = tmp_path / "run"
+    shutil.copytree(run_dir, run)
+    (run / ".budjam-run").unlink()
+    (run / "dos.csv").write_text("step,phi\n")
+    (run / "analysis.json").write_text('{"format": "budjam-analysis", "version": 1, "groups": []}')
+    before = snapshot(tmp_path)
+    r = run_budjam("analyse", run, "--out", run, "--resamples", "10", check=False)
+    assert_refused(r, "is the input file", "dos.csv")
+    assert snapshot(tmp_path) == before
+
+
+def limited_to_4_kib():
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+
+def test_a_file_size_limit_is_an_output_failure_not_a_signal(budjam_exe, tmp_path):
+    """SIGXFSZ is ignored: the write fails with EFBIG and takes the path of every failed output (one line,
+    exit 3, no temporary left)."""
+    r = subprocess.run([budjam_exe, "export", str(PACKING), "--format", "xyz", "--out", "big"], cwd=tmp_path,
+                       capture_output=True, text=True, preexec_fn=limited_to_4_kib)
+    assert r.returncode == 3, r.stderr
+    assert r.stderr.splitlines() == [r.stderr.strip()] and "File too large" in r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_run_past_the_file_size_limit_exits_3_and_leaves_whole_rows(budjam_exe, tmp_path):
+    r = subprocess.run([budjam_exe, "grow", str(SOURCE_DIR / "data" / "scenes" / "demo.toml"), "--quiet", "--out",
+                        "run"], cwd=tmp_path, capture_output=True, text=True, preexec_fn=limited_to_4_kib)
+    assert r.returncode == 3, r.stderr
+    assert len(r.stderr.splitlines()) == 1 and "File too large" in r.stderr
+    steps = (tmp_path / "run" / "steps.csv.partial").read_bytes()
+    assert steps.endswith(b"\n")
+    assert not [p for p in (tmp_path / "run").rglob("*") if ".tmp-" in p.name]
+
+
+def closed_pipe():
+    """The write end of a pipe whose reader is gone."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    return write_end
+
+
+def test_a_result_on_a_closed_pipe_is_exit_3_not_sigpipe(budjam_exe):
+    out = closed_pipe()
+    try:
+        r = subprocess.run([budjam_exe, "rigidity", str(PACKING), "--json"], stdout=out, stderr=subprocess.PIPE,
+                           text=True)
+    finally:
+        os.close(out)
+    assert r.returncode == 3, r.stderr
+    assert r.stderr.splitlines()[-1].startswith("budjam: error: standard output: cannot write")
+
+
+def test_a_run_whose_progress_reader_went_away_goes_on(budjam_exe, tmp_path):
+    err = closed_pipe()
+    try:
+        r = subprocess.run([budjam_exe, "grow", str(SOURCE_DIR / "data" / "scenes" / "demo.toml"), "--out",
+                            tmp_path / "run"], stdout=subprocess.PIPE, stderr=err)
+    finally:
+        os.close(err)
+    assert r.returncode == 0
+    assert (tmp_path / "run" / "summary.json").is_file()

@@ -681,7 +681,6 @@ void check_accuracy_out(const fs::path& dir) {
 
 void write_accuracy_tables(const fs::path& dir, const SweepOptions& o, const std::vector<SweepRow>& rows,
                            const SweepVerdict& v) {
-  io::Directory::open(dir, true);
   write_csv(dir / "accuracy.csv", rows);
   io::write_atomically(dir / "accuracy.md", markdown(rows, v));
   Json jrows = Json::array();

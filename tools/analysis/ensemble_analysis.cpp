@@ -39,6 +39,7 @@
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/packing_file.hpp"
+#include "io/result_files.hpp"
 #include "io/scene_file.hpp"
 #include "io/text.hpp"
 
@@ -1331,6 +1332,13 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   if (o.tables.empty() == o.inputs.empty()) throw InputError("analyse: give either run directories or --tables DIR");
   if (!o.tables.empty() && fs::exists(o.out) && fs::equivalent(o.tables, o.out))
     throw InputError("--out: " + o.out + " is the --tables directory; its tables would be overwritten");
+  // A table may share a run file's name (dos.csv): --out in a run directory must not replace it.
+  if (o.tables.empty()) {
+    std::vector<fs::path> inputs;
+    for (const fs::path& dir : find_runs(o.inputs))
+      for (auto& file : run_input_files(dir)) inputs.push_back(std::move(file));
+    for (const std::string_view name : kOutputFiles) io::check_not_an_input("--out", fs::path(o.out) / name, inputs);
+  }
   if (!(o.main_L >= 0)) throw InputError("--main-L: must be a box side > 0 (got " + num(o.main_L) + ")");
   Ensemble e = o.tables.empty() ? read_ensemble(o) : read_ensemble_tables(o.tables);
 

@@ -6,6 +6,7 @@
 // u_J S(a_ε) = ε (ε = 1/⟨N_nr,J⟩ unless given) and ∫_0^{a_ε} S da, in both units (paper Eq. 14).
 #include "analysis/survival_report.hpp"
 #include "commands/command.hpp"
+#include "io/run_data.hpp"
 
 #include <filesystem>
 #include <iostream>
@@ -24,8 +25,11 @@ struct Options {
 };
 
 void run(const Options& o) {
-  io::check_output_request(o.output, true);
   const std::vector<std::filesystem::path> dirs(o.runs.begin(), o.runs.end());
+  std::vector<std::filesystem::path> inputs;
+  for (const auto& dir : dirs)
+    for (auto& file : tools::run_input_files(dir)) inputs.push_back(std::move(file));
+  io::check_output_request(o.output, true, inputs);
   const tools::SurvivalReport report = tools::survival_report(dirs, o.epsilon);
   io::emit(o.output, tools::survival_result(report), std::cout);
 }

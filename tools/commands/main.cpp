@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -57,6 +58,12 @@ int with_stdout_written(int code) {
 
 int main(int argc, char** argv) {
   budjam::io::keep_freed_memory();  // large factors reuse freed pages (io/process_memory.hpp)
+  // A write past the file-size limit or into a pipe nobody reads fails (EFBIG, EPIPE) instead of
+  // killing the process: it takes the path of every failed output (one line, exit 3, temporaries
+  // removed, a half row taken back), and a run whose progress reader went away goes on. Helper
+  // programs get the default dispositions back (io::run_program).
+  std::signal(SIGXFSZ, SIG_IGN);
+  std::signal(SIGPIPE, SIG_IGN);
   using namespace budjam::cli;
   CLI::App app{"budjam: growing packings of budding cells (yeast) in 2D, to jamming and beyond", "budjam"};
   app.set_version_flag("--version", std::string("budjam ") + BUDJAM_VERSION);

@@ -118,11 +118,34 @@ bool looks_temporary(std::string_view name) {
 
 // ---- Directory -----------------------------------------------------------------------------
 
+namespace {
+
+// The parts of `path` that do not exist, outermost first ("." and ".." name no new directory).
+std::vector<fs::path> missing_directories(const fs::path& path) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  for (fs::path p = path; !p.empty() && !fs::exists(fs::symlink_status(p, ec)); p = p.parent_path()) {
+    if (p.has_filename() && p.filename() != "." && p.filename() != "..") out.insert(out.begin(), p);
+    if (p == p.parent_path()) break;
+  }
+  return out;
+}
+
+// Removes the directories this process created, deepest first, each only if still empty (rmdir).
+void remove_created(const std::vector<fs::path>& created) noexcept {
+  for (auto it = created.rbegin(); it != created.rend(); ++it) ::rmdir(it->c_str());
+}
+
+}  // namespace
+
 struct Directory::Handle {
   int fd = -1;
+  std::vector<fs::path> created;  // by open(), outermost first
+  bool keep = false;
   explicit Handle(int f) : fd(f) {}
   ~Handle() {
     if (fd >= 0) ::close(fd);
+    if (!keep) remove_created(created);  // "nothing written": not even the directories
   }
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
@@ -130,11 +153,19 @@ struct Directory::Handle {
 
 int Directory::fd() const { return handle_ ? handle_->fd : -1; }
 
+void Directory::keep_created() const {
+  if (handle_) handle_->keep = true;
+}
+
 Directory Directory::open(const fs::path& path, bool create) {
+  std::vector<fs::path> created;
   if (create && !path.empty()) {
+    refuse_directory_in_run("", path, false);
+    created = missing_directories(path);
     std::error_code ec;
     fs::create_directories(path, ec);
     std::error_code lec;
+    if (ec) remove_created(created);  // the ones made before the failure
     if (ec && !fs::is_directory(path, lec)) {
       // A file, a dangling link or too long a name on the way is the user's spelling: exit 2.
       if (const fs::path e = deepest_entry(path); !e.empty() && !fs::exists(fs::status(e, lec)))
@@ -148,6 +179,9 @@ Directory Directory::open(const fs::path& path, bool create) {
   }
   const int fd = ::open(path.empty() ? "." : path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) {
+    const int err = errno;
+    remove_created(created);
+    errno = err;
     if (errno == ENOTDIR) throw InputError(path.string() + ": is not a directory");
     if (errno == ENAMETOOLONG || errno == ELOOP)
       throw InputError(path.string() + ": cannot open directory: " + reason(errno));
@@ -155,6 +189,7 @@ Directory Directory::open(const fs::path& path, bool create) {
   }
   Directory d;
   d.handle_ = std::make_shared<Handle>(fd);
+  d.handle_->created = std::move(created);
   d.path_ = path;
   return d;
 }
@@ -276,8 +311,11 @@ void unregister_own_manifest(int fd) {
 
 }  // namespace
 
-TemporaryManifest::TemporaryManifest(Directory root, std::string_view name)
-    : root_(std::move(root)), fd_(root_.open_file(name, O_RDWR | O_CREAT | O_APPEND)) {
+TemporaryManifest::TemporaryManifest(Directory root, std::string_view name) : root_(std::move(root)), name_(name) {}
+
+void TemporaryManifest::open(bool create) {
+  if (fd_ >= 0) return;
+  fd_ = root_.open_file(name_, O_RDWR | O_APPEND | (create ? O_CREAT : 0));
   // An empty list names nothing of another process; a list with names waits for remove_listed().
   struct stat st {};
   if (::fstat(fd_, &st) == 0 && st.st_size == 0) register_own_manifest(fd_);
@@ -290,16 +328,19 @@ TemporaryManifest::~TemporaryManifest() {
 }
 
 void TemporaryManifest::add(const std::string& relative) {
+  open(true);
   ++outstanding_;
   write_all(fd_, relative + "\n", root_.path());
 }
 
 void TemporaryManifest::done() {
-  if (--outstanding_ == 0 && ::ftruncate(fd_, 0) != 0)
+  if (--outstanding_ == 0 && fd_ >= 0 && ::ftruncate(fd_, 0) != 0)
     io_fail(root_.path(), "cannot empty the temporaries list", errno);
 }
 
 void TemporaryManifest::remove_listed() {
+  if (fd_ < 0 && !root_.entry(name_)) return;  // no list: nothing was left
+  open(false);
   ::lseek(fd_, 0, SEEK_SET);
   const std::string text = read_all(fd_, root_.path());
   std::size_t start = 0;
@@ -439,6 +480,7 @@ void TempFile::commit() {
   if (!ok) io_fail(dir_ / final_, "cannot sync", err);
   dir_.rename(name_, final_);
   committed_ = true;
+  dir_.keep_created();
   forget_name();
   dir_.sync();
 }
@@ -482,11 +524,77 @@ void refuse_run_packing(std::string_view option, const fs::path& path) {
                    escape_control(canonical.parent_path().string()) + ", which only budjam grow writes");
 }
 
+// A directory a run owns at its top level: the only ones an output may make there.
+bool run_subdirectory(const fs::path& name) { return name == run_files::packings || name == run_files::spectra; }
+
+// A path for messages: the user's spelling of `real` where it names that directory, else `real`.
+fs::path shown_as(const fs::path& spelled, const fs::path& real) {
+  fs::path s = spelled.lexically_normal();
+  if (!s.empty() && !s.has_filename()) s = s.parent_path();
+  std::error_code ec;
+  return !s.empty() && fs::equivalent(s, real, ec) ? s : real;
+}
+
+// The nearest part of `dir` that exists must be a directory (links followed, as spelled).
+void check_existing_part(std::string_view option, const fs::path& dir) {
+  if (const fs::path e = deepest_entry(dir); !e.empty()) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(e, ec);
+    if (!fs::exists(st))
+      throw InputError(output_at(option, dir) + which_part(dir, e) + "is a symbolic link to nothing");
+    if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which_part(dir, e) + "is not a directory");
+  }
+}
+
+// refuse_directory_in_run, naming the output `shown` (a file in `dir`, or `dir`).
+void refuse_new_directory(std::string_view option, const fs::path& shown, const fs::path& dir, bool itself) {
+  // The deepest part that exists, resolved by the kernel (links, then ".."), and the components
+  // below it, which creating `dir` makes one by one.
+  std::vector<fs::path> missing;
+  fs::path at = dir.empty() ? fs::path(".") : dir;
+  std::error_code ec;
+  while (!fs::exists(at, ec)) {
+    missing.push_back(at.filename());
+    const fs::path up = at.parent_path();
+    if (up == at) return;
+    at = up.empty() ? fs::path(".") : up;
+  }
+  fs::path real = fs::canonical(at, ec), spelled = at;
+  if (ec) return;  // what cannot be resolved cannot be created either: the writer reports it
+  const auto refuse = [&](const fs::path& run, const fs::path& made) {
+    throw InputError(output_at(option, shown) + "is inside the budjam run directory " +
+                     escape_control(shown_as(spelled, run).string()) +
+                     ", whose top level holds only the run's own files (write elsewhere" +
+                     (made.empty() ? std::string() : "; it would make the directory " + escape_control(made.string())) +
+                     ")");
+  };
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    if (it->empty() || *it == ".") continue;
+    if (*it == "..") {
+      real = real.parent_path();
+      spelled /= "..";
+      continue;
+    }
+    if (!run_subdirectory(*it) && is_run_directory(real)) refuse(real, *it);
+    real /= *it;
+    spelled /= *it;
+  }
+  if (itself && !run_subdirectory(real.filename()) && is_run_directory(real.parent_path())) {
+    spelled /= "..";
+    refuse(real.parent_path(), {});
+  }
+}
+
 }  // namespace
+
+void refuse_directory_in_run(std::string_view option, const fs::path& dir, bool itself) {
+  refuse_new_directory(option, dir, dir, itself);
+}
 
 void check_output_file(std::string_view option, const fs::path& path) {
   check_output_path(option, path);
   refuse_run_directory(option, path, path.parent_path());
+  refuse_new_directory(option, path, path.parent_path(), false);
   refuse_run_packing(option, path);
 }
 
@@ -505,8 +613,9 @@ void check_output_name(std::string_view option, const fs::path& path) {
 void check_output_base(std::string_view option, const fs::path& base,
                        std::initializer_list<std::string_view> extensions) {
   check_output_spelling(option, base);
-  check_output_directory(option, base.parent_path(), {});
+  check_existing_part(option, base.parent_path());
   refuse_run_directory(option, base, base.parent_path());
+  refuse_new_directory(option, base, base.parent_path(), false);
   for (const std::string_view ext : extensions) {
     fs::path file = base;
     file += ext;
@@ -514,25 +623,8 @@ void check_output_base(std::string_view option, const fs::path& base,
   }
 }
 
-void refuse_directory_in_run(std::string_view option, const fs::path& dir) {
-  fs::path d = dir.lexically_normal();
-  if (!d.has_filename()) d = d.parent_path();  // "run/sub/"
-  if (d.empty() || d == "." || d == ".." || d.filename() == "..") return;
-  const fs::path parent = d.parent_path().empty() ? fs::path(".") : d.parent_path();
-  if (d.filename() == run_files::packings || d.filename() == run_files::spectra || !is_run_directory(parent)) return;
-  throw InputError(output_at(option, dir) + "is inside the budjam run directory " + escape_control(parent.string()) +
-                   ", whose top level holds only the run's own files (write elsewhere)");
-}
-
 void check_output_directory(std::string_view option, const fs::path& dir, const std::vector<std::string_view>& names) {
-  // The nearest part of the path that exists must be a directory (links followed, as spelled).
-  if (const fs::path e = deepest_entry(dir); !e.empty()) {
-    std::error_code ec;
-    const fs::file_status st = fs::status(e, ec);
-    if (!fs::exists(st))
-      throw InputError(output_at(option, dir) + which_part(dir, e) + "is a symbolic link to nothing");
-    if (!fs::is_directory(st)) throw InputError(output_at(option, dir) + which_part(dir, e) + "is not a directory");
-  }
+  check_existing_part(option, dir);
   refuse_run_directory(option, dir, dir);
   refuse_directory_in_run(option, dir);
   for (const std::string_view name : names) check_output_path(option, dir / name);

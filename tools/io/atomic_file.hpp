@@ -41,8 +41,13 @@ class Directory {
  public:
   // Opens `path` (created with its parents if `create`; empty: the working directory, and
   // members are then named by their names alone). IoError if it cannot be opened; InputError if
-  // it exists and is not a directory.
+  // it exists and is not a directory, or if creating it would make a new directory at the top level
+  // of a run (refuse_directory_in_run). The directories it creates are removed again (deepest
+  // first, each only if still empty) when the last copy goes unless a file was committed in it
+  // (keep_created): a failed output leaves no directory behind.
   static Directory open(const std::filesystem::path& path, bool create);
+  // The directories open() created stay: an output was written in them.
+  void keep_created() const;
 
   // The entry `name` as a directory (created if `create` and absent). InputError naming it if it
   // is a symbolic link or not a directory: a link is never followed.
@@ -87,7 +92,8 @@ class Directory {
 // process.
 class TemporaryManifest {
  public:
-  // Opens (creating) `name` in `root`. Does not read it.
+  // The list `name` in `root`, opened (created) only when a temporary is first recorded, or
+  // by remove_listed() if it exists: claiming a directory that writes nothing creates no list.
   TemporaryManifest(Directory root, std::string_view name);
   ~TemporaryManifest();
   TemporaryManifest(const TemporaryManifest&) = delete;
@@ -101,8 +107,10 @@ class TemporaryManifest {
 
  private:
   Directory root_;
+  std::string name_;
   int fd_ = -1;
   int outstanding_ = 0;
+  void open(bool create);
 };
 
 // A temporary file beside `final_name` in `dir`, named `.FINAL.tmp-XXXXXX` (created with O_EXCL,
@@ -176,7 +184,8 @@ inline constexpr std::size_t kMaxOutputName = 255 - 12;
 // kMaxOutputName bytes, and it is not an existing directory.
 void check_output_path(std::string_view option, const std::filesystem::path& path);
 // check_output_path, and `path` is none of a budjam run's own files: not at the top level of a run
-// directory (the run's files live there) and not a run's packing packings/<stem>.pack, which only
+// directory (the run's files live there), its directory makes none at a run's top level
+// (refuse_directory_in_run), and not a run's packing packings/<stem>.pack, which only
 // grow writes. The output-name rules of every writer of a named file (the commands' outputs and
 // the Python module's Packing.write and export): InputError.
 void check_output_file(std::string_view option, const std::filesystem::path& path);
@@ -184,16 +193,20 @@ void check_output_file(std::string_view option, const std::filesystem::path& pat
 // as part of an option). This and the two below refuse the top level of a budjam run directory (its
 // run's own files live there): InputError.
 void check_output_name(std::string_view option, const std::filesystem::path& path);
-// `--out BASE` of a command writing BASE<ext> for each extension: BASE names a file (as above) and
-// each BASE<ext> passes check_output_path. Before any work, so nothing is computed to be lost.
+// `--out BASE` of a command writing BASE<ext> for each extension: BASE names a file (as above), its
+// directory makes none at a run's top level, and each BASE<ext> passes check_output_path. Before any work, so nothing
+// is computed to be lost.
 void check_output_base(std::string_view option, const std::filesystem::path& base,
                        std::initializer_list<std::string_view> extensions);
+// The one rule for where outputs may make directories: resolved through links from the deepest part
+// of `dir` that exists ("link/.." is the directory above the link's target), no directory that
+// would be created for `dir` lies directly in a budjam run directory (one holding its marker) other
+// than its packings/ and spectra/, which the run owns; with `itself`, nor does `dir` itself, existing
+// or not (an output directory: `grow --out`, `analyse --out`, `accuracy --out`). InputError.
+void refuse_directory_in_run(std::string_view option, const std::filesystem::path& dir, bool itself = true);
 // `--out DIR` of a command writing the files `names` in DIR: the part of DIR that exists is a
-// directory (a file or a dangling link on the way is refused) and each DIR/name passes
-// check_output_path. Changes nothing.
-// An output directory at the top level of a budjam run directory (other than its packings/, spectra/) is an
-// entry that run does not own: InputError. For `grow --out`, `analyse --out`, `accuracy --out`.
-void refuse_directory_in_run(std::string_view option, const std::filesystem::path& dir);
+// directory (a file or a dangling link on the way is refused), DIR passes refuse_directory_in_run
+// and each DIR/name passes check_output_path. Changes nothing.
 void check_output_directory(std::string_view option, const std::filesystem::path& dir,
                             const std::vector<std::string_view>& names);
 

@@ -371,7 +371,9 @@ void write_packing(const Directory& dir, std::string_view name, const Packing& p
 }
 
 PackingFile read_packing(const std::filesystem::path& path) {
-  return parse_packing(read_text_file(path), path.string());
+  PackingFile file = parse_packing(read_text_file(path), path.string());
+  file.source = path;
+  return file;
 }
 
 bool looks_like_packing(std::string_view text) {

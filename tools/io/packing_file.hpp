@@ -50,6 +50,7 @@ struct PackingMeta {
 struct PackingFile {
   Packing packing;
   PackingMeta meta;
+  std::filesystem::path source;  // the file read_packing read it from; empty for one made otherwise
 };
 
 // Why the packing and its metadata cannot be written as a packing file, naming the quantity as a

@@ -573,6 +573,16 @@ RunData load_run(const fs::path& dir) {
   return r;
 }
 
+std::vector<fs::path> run_input_files(const fs::path& dir) {
+  namespace run_files = io::run_files;
+  std::vector<fs::path> files;
+  for (const std::string_view name :
+       {run_files::summary, run_files::scene, run_files::steps, run_files::divisions, run_files::bud_events,
+        run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
+    files.push_back(dir / name);
+  return files;
+}
+
 std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run) {
   namespace run_files = io::run_files;
   std::vector<std::pair<std::string, CsvTable>> tables{{"steps", run.steps}, {"divisions", run.divisions}};

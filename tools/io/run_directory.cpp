@@ -251,6 +251,22 @@ std::vector<std::string> remove_run_outputs(const Directory& dir, const OwnedEnt
   return kept;
 }
 
+bool check_claim(const Directory& dir, bool overwrite) {
+  const bool run = has_marker(dir);
+  if (!run && !empty_but_lock(dir))
+    throw InputError("--out: " + dir.path().string() + " is not empty and is not a budjam run directory (no " +
+                     std::string(run_files::marker) + "); nothing was changed");
+  if (run && !overwrite) {
+    // --resume continues only a run that has not finished and left a checkpoint
+    const bool resumable = !dir.entry(run_files::summary) && dir.entry(run_files::checkpoint);
+    throw InputError("--out: " + dir.path().string() +
+                     (resumable ? " holds an unfinished budjam run" : " holds a budjam run") +
+                     "; pass --overwrite to replace it" +
+                     (resumable ? ", or continue it with budjam grow --resume " + dir.path().string() : ""));
+  }
+  return run;
+}
+
 void RunDirectory::open_manifest() {
   manifest_ = std::make_shared<TemporaryManifest>(root_, run_files::temporaries);
   root_.record_temporaries_in(manifest_);
@@ -264,20 +280,12 @@ RunDirectory RunDirectory::create(const fs::path& dir, bool overwrite, const Own
                      (fs::exists(dir, ec) ? " exists and is not a directory" : " is a symbolic link to nothing"));
   refuse_directory_in_run("--out", dir);
   Directory root = Directory::open(dir, true);
-  const bool run = has_marker(root);
-  if (!run && !empty_but_lock(root))
-    throw InputError("--out: " + dir.string() + " is not empty and is not a budjam run directory (no " +
-                     std::string(run_files::marker) + "); nothing was changed");
+  // Before the lock, so that a user's directory never gets a lock file; and again once it is held,
+  // so that a run another process finished in between is not replaced without --overwrite.
+  check_claim(root, overwrite);
   RunDirectory claimed(root, take_lock(root));
+  const bool run = check_claim(root, overwrite);
   if (run) {
-    if (!overwrite) {
-      // --resume continues only a run that has not finished and left a checkpoint
-      const bool resumable = !root.entry(run_files::summary) && root.entry(run_files::checkpoint);
-      throw InputError("--out: " + dir.string() +
-                       (resumable ? " holds an unfinished budjam run" : " holds a budjam run") +
-                       "; pass --overwrite to replace it" +
-                       (resumable ? ", or continue it with budjam grow --resume " + dir.string() : ""));
-    }
     check_run_entries(root, owned);
     claimed.open_manifest();
     claimed.remove_recorded_temporaries();

@@ -103,8 +103,8 @@ class RunDirectory {
   // and the `owned` entries of the earlier run are removed.
   static RunDirectory create(const std::filesystem::path& dir, bool overwrite, const OwnedEntries& owned);
   // Claims the run in `dir` to continue it (or to add its trajectory.gsd): marker, lock and entries
-  // checked as above. Changes nothing but the lock file; remove_recorded_temporaries() once the
-  // resume has been validated.
+  // checked as above. Changes nothing but the lock file (the list of temporaries is created only
+  // when one is first recorded); remove_recorded_temporaries() once the resume has been validated.
   static RunDirectory resume(const std::filesystem::path& dir, const OwnedEntries& owned);
 
   RunDirectory(RunDirectory&& other) noexcept;
@@ -132,6 +132,11 @@ class RunDirectory {
 
 // True if `dir` holds the marker of a budjam run.
 bool is_run_directory(const std::filesystem::path& dir);
+
+// Whether RunDirectory::create may claim `dir` for a new run: InputError unless it is empty but for
+// the lock, or holds a run and `overwrite` is given. Returns whether it holds a run. create() asks
+// before taking the lock and again once it holds it (a run finished meanwhile is not replaced).
+bool check_claim(const Directory& dir, bool overwrite);
 
 // True if `input` is a run's own trajectory.xyz (the entry of a run directory's top level, not a
 // link) and `output` that run's trajectory.gsd: the one output of another command at a run's top
