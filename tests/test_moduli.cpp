@@ -645,50 +645,38 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "budjam moduli on a saddle prints its JSON with energy_minimum false and null relaxed moduli, a one-line notice, "
-    "and exits 1",
+    "budjam moduli on a packing with an unstable mode prints its JSON with null relaxed moduli, a one-line notice "
+    "naming what it is (a saddle, or a minimum held by a pair at zero force), and exits 1",
     "[fast]") {
   const char* src = std::getenv("BUDJAM_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const auto [code, out, err] =
-      run_budjam("moduli '" + std::string(src) + "/tests/data/saddle_jamming_L15_seed3.pack' --json");
-  CHECK(code == 1);
-  // a finding, reported as such in one line, not as an error
-  CHECK(err.rfind("budjam: moduli: ", 0) == 0);
-  CHECK(err.find("is a saddle") != std::string::npos);
-  CHECK(err.find("error") == std::string::npos);
-  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
-  const io::Json j = io::Json::parse(out);
-  CHECK(j["energy_minimum"] == false);
-  CHECK(j["stationary_point"] == "saddle");
-  CHECK(j["G"].is_null());
-  CHECK(j["B"].is_null());
-  CHECK(j["kernel"]["method"] == "unstable");
-  CHECK(j["kernel"]["unstable_modes"] == 1);
-  CHECK(j["moduli_affine"]["B"].get<double>() > 0);
-}
-
-TEST_CASE(
-    "budjam moduli on a minimum held by a pair at zero force names it as such, not a saddle: energy_minimum true, null "
-    "relaxed moduli, a one-line notice, exit 1",
-    "[fast]") {
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
-  const auto [code, out, err] =
-      run_budjam("moduli '" + std::string(src) + "/tests/data/contact_bounded_jamming_L20_seed3.pack' --json");
-  CHECK(code == 1);
-  CHECK(err.rfind("budjam: moduli: ", 0) == 0);
-  CHECK(err.find("is a minimum of U held by a pair at zero force") != std::string::npos);
-  CHECK(err.find("saddle") == std::string::npos);
-  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
-  const io::Json j = io::Json::parse(out);
-  CHECK(j["energy_minimum"] == true);
-  CHECK(j["stationary_point"] == "contact-bounded minimum");
-  CHECK(j["B"].is_null());
-  CHECK(j["G"].is_null());
-  CHECK(j["kernel"]["method"] == "unstable");
-  CHECK(j["kernel"]["unstable_modes"] == 1);
-  CHECK(j["moduli_affine"]["B"].get<double>() > 0);
+  struct Case {
+    const char* packing;
+    bool minimum;
+    const char* stationary;
+    const char* notice;
+  };
+  for (const Case& c : {Case{"saddle_jamming_L15_seed3", false, "saddle", "is a saddle"},
+                        Case{"contact_bounded_jamming_L20_seed3", true, "contact-bounded minimum",
+                             "is a minimum of U held by a pair at zero force"}}) {
+    INFO(c.packing);
+    const auto [code, out, err] =
+        run_budjam("moduli '" + std::string(src) + "/tests/data/" + c.packing + ".pack' --json");
+    CHECK(code == 1);
+    // a finding, reported as such in one line, not as an error
+    CHECK(err.rfind("budjam: moduli: ", 0) == 0);
+    CHECK(err.find(c.notice) != std::string::npos);
+    CHECK(err.find("error") == std::string::npos);
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    const io::Json j = io::Json::parse(out);
+    CHECK(j["energy_minimum"] == c.minimum);
+    CHECK(j["stationary_point"] == c.stationary);
+    CHECK(j["G"].is_null());
+    CHECK(j["B"].is_null());
+    CHECK(j["kernel"]["method"] == "unstable");
+    CHECK(j["kernel"]["unstable_modes"] == 1);
+    CHECK(j["moduli_affine"]["B"].get<double>() > 0);
+  }
 }
 
 // ---- linear solver of the pinned system (accuracy against cost) -----------------------------

@@ -51,6 +51,29 @@ SparseMatrix periodic_chain(int n, double shift) {
   return H;
 }
 
+// A committed packing whose Hessian (pressed contacts) has one unstable mode, analysed.
+struct OneUnstableMode {
+  Packing p;
+  Analysed a;
+  Stability st;
+};
+OneUnstableMode one_unstable_mode(const char* name) {
+  OneUnstableMode x{test_packing(name), {}, {}};
+  x.a = analyse(x.p);
+  x.st = stability(x.p, x.a.contacts, x.a.net);
+  REQUIRE(x.st.unstable_modes == 1);
+  return x;
+}
+
+// U after FIRE relaxes `p` on to its force resolution (no Newton finish).
+double relaxed_on(Packing& p, ForceField& field) {
+  FireParams deep;
+  deep.force_tol = 0;
+  deep.newton_force = 0;
+  REQUIRE(minimise(p, field, deep).converged);
+  return field.energy(p);
+}
+
 }  // namespace
 
 TEST_CASE("The unstable mode of a shifted periodic chain is its uniform mode at minus the shift", "[saddle]") {
@@ -169,10 +192,7 @@ TEST_CASE(
     "[saddle]") {
   // The L = 20 jamming point of the paper grid (no feedback, seed 3): the driver relaxed on, stepped
   // once, and the mode was blocked. One contact short of isostatic.
-  Packing p = test_packing("contact_bounded_jamming_L20_seed3.pack");
-  const Analysed a = analyse(p);
-  const Stability st = stability(p, a.contacts, a.net);
-  REQUIRE(st.unstable_modes == 1);
+  auto [p, a, st] = one_unstable_mode("contact_bounded_jamming_L20_seed3.pack");
   CHECK(a.net.dZ == Approx(-2.0 / static_cast<double>(a.net.N_nr)));
   const std::optional<UnstableMode> mode = lowest_unstable_mode(p, a.contacts, a.net);
   REQUIRE(mode);
@@ -188,11 +208,7 @@ TEST_CASE(
     CHECK(find_contacts(p, field.lobes(), field.neighbours()).size() > a.contacts.size());
   }
   p.q = q0;
-  FireParams deep;
-  deep.force_tol = 0;
-  deep.newton_force = 0;
-  REQUIRE(minimise(p, field, deep).converged);
-  CHECK(field.energy(p) == Approx(U0).epsilon(1e-6));
+  CHECK(relaxed_on(p, field) == Approx(U0).epsilon(1e-6));
   p.q = q0;
   CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::contact_bounded_minimum);
 }
@@ -202,25 +218,15 @@ TEST_CASE(
     "[saddle]") {
   // The committed L = 15 state: no step along its mode lowers U (the test above), yet FIRE at its
   // force resolution finds a way down to U = 0. Only the two tests together make a minimum.
-  Packing p = test_packing("saddle_jamming_L15_seed3.pack");
-  const Analysed a = analyse(p);
-  const Stability st = stability(p, a.contacts, a.net);
-  REQUIRE(st.unstable_modes == 1);
+  auto [p, a, st] = one_unstable_mode("saddle_jamming_L15_seed3.pack");
   CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::saddle);
   ForceField field;
-  FireParams deep;
-  deep.force_tol = 0;
-  deep.newton_force = 0;
-  REQUIRE(minimise(p, field, deep).converged);
-  CHECK(field.energy(p) / static_cast<double>(p.size()) < 1e-25);
+  CHECK(relaxed_on(p, field) / static_cast<double>(p.size()) < 1e-25);
   // One probed mode cannot make a minimum of a Hessian with two unstable modes.
   CHECK(stationary_point(p, a.contacts, a.net, 2) == StationaryPoint::saddle);
 }
 
 TEST_CASE("A saddle along whose unstable mode U falls is a saddle", "[saddle]") {
-  const Packing p = test_packing("saddle_after_relaxing_L20_P0_1e-5_seed6.pack");
-  const Analysed a = analyse(p);
-  const Stability st = stability(p, a.contacts, a.net);
-  REQUIRE(st.unstable_modes == 1);
+  const auto [p, a, st] = one_unstable_mode("saddle_after_relaxing_L20_P0_1e-5_seed6.pack");
   CHECK(stationary_point(p, a.contacts, a.net, st.unstable_modes) == StationaryPoint::saddle);
 }
