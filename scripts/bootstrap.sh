@@ -53,10 +53,8 @@ case "${1:-}" in
     install_missing "${demo_packages[@]}"
     build build "${demo_options[@]}"
     install_build
-    rm -rf runs/demo
-    ./build/budjam grow data/scenes/demo.toml --out runs/demo
-    ./build/budjam render runs/demo/packings/jammed.pack -o runs/demo/jammed.svg --png
-    echo "bootstrap: demo run in runs/demo (summary.json, logs, packings, jammed.svg/.png)"
+    bash scripts/demo_run.sh ./build/budjam runs/demo
+    echo "bootstrap: demo run in runs/demo (summary.json, logs, packings, packings/jammed.svg/.png)"
     ;;
   test)
     install_missing "${demo_packages[@]}" "${test_packages[@]}"
