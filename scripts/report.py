@@ -386,6 +386,8 @@ def main():
             admitted, runs = stat.get("admitted", 0), stat.get("runs", "?")
             if not admitted:
                 return f"not measured ({admitted} of {runs} runs admitted)"
+            if stat.get("predicted") == 0:  # the paper's φ_2 summary keeps the runs with an Eq. 14 prediction
+                return f"not measured: {admitted} of {runs} runs admitted, none with an Eq. 14 prediction"
             # admitted runs without a value: for G_2, each had G_2 ≤ 0 or none (the paper keeps G_2 > 0 only)
             return f"not measured: {admitted} of {runs} runs admitted, none with a value kept (G_2 > 0 for G_2)"
         se, n = stat.get("se"), stat.get("n")
@@ -475,8 +477,9 @@ def main():
               judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0), seeds=seeds_in(x)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
-          ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order) +
-          f" (the trend is tested on these {len(order)} groups, in this order: no feedback is the weakest)",
+          avail(", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order) +
+                f" (the trend is tested on these {len(order)} groups, in this order: no feedback is the weakest)",
+                "dphi_2_pred_paper"),
           trend_of([groups[l]["dphi_2_paper"] for l in order], increasing=False), fig("fig2"))
     claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da per P0 (each P0's runs pooled, diameter²)", "—",
           "; ".join(survival_text(p0_name(l), groups[l].get("pooled_survival") or {}) for l in order),
@@ -503,8 +506,8 @@ def main():
         x = groups[lab]
         claim(f"P_2/P_max and λ̄_c, {p0_name(lab)}", "decrease strongly with feedback, together",
               f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']), 'lambda_bar')}; every run",
-              avail(f"{sel(x['P_2_over_Pmax_paper'])}; λ̄_c = {sel(x['lambda_bar_paper'])} (u the contact-free lobes)",
-                    "lambda_bar_lobes"),
+              f"{avail(sel(x['P_2_over_Pmax_paper']), 'dphi_2_pred_paper')}; "
+              f"λ̄_c = {avail(sel(x['lambda_bar_paper']), 'lambda_bar_lobes')} (u the contact-free lobes)",
               "see trend row", fig("fig3"))
     v2 = trend_of([groups[l]["P_2_over_Pmax_paper"] for l in fed], increasing=False)
     vl = trend_of([groups[l]["lambda_bar_paper"] for l in fed], increasing=False)

@@ -100,6 +100,15 @@ Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
   return Uf;
 }
 
+// A saddle's response: none (NaN), method unstable. Pinning kernel dofs leaves the count of
+// eigenvalues below −δ unchanged, so they are the unstable modes of H.
+Eigen::MatrixXd no_response(const Stability& st, const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
+                            KernelTreatment& k) {
+  k.method = SolveMethod::unstable;
+  k.unstable_modes = st.unstable_modes;
+  return Eigen::MatrixXd::Constant(Hf.rows(), Xf.cols(), std::numeric_limits<double>::quiet_NaN());
+}
+
 // Fallback when the pinned system is singular (a mechanism beyond the pinned modes): LDLᵀ of
 // H_ff + δ1 and the iteration u ← u + (H + δ)⁻¹(Ξ − H u) from u = 0, which converges to the solution
 // without kernel component when Ξ ⊥ kernel. When H_ff has eigenvalues below −δ the packing is a
@@ -115,13 +124,7 @@ Eigen::MatrixXd regularised_refinement(const SparseMatrix& Hf, const Eigen::Matr
                         std::to_string(st.failed_column) + "); try the dense or cg solver, or relax the packing first");
   k.regularisation = st.delta;
   k.rcond = ldl.rcond();
-  // Pinning kernel dofs leaves the count of eigenvalues below −δ unchanged, so they are the unstable
-  // modes of H.
-  if (!st.minimum()) {
-    k.method = SolveMethod::unstable;
-    k.unstable_modes = st.unstable_modes;
-    return Eigen::MatrixXd::Constant(Hf.rows(), Xf.cols(), std::numeric_limits<double>::quiet_NaN());
-  }
+  if (!st.minimum()) return no_response(st, Hf, Xf, k);
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(Hf.rows(), Xf.cols());
   double res = 1.0, best = 1.0;
   int stall = 0;
@@ -474,6 +477,10 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
       if (!(options.cg_tolerance > 0 && options.cg_tolerance < 1))
         throw std::invalid_argument("elastic_response: cg_tolerance must lie in (0, 1)");
       k.solver_tolerance = options.cg_tolerance;
+      // CG can converge on an indefinite H, which the direct solvers' factors refuse: the saddle
+      // test they fall back to runs here first, so every solver tells a saddle alike.
+      if (const Stability st = hessian_stability(Hf, options.regularisation); !st.minimum())
+        return no_response(st, Hf, Xf, k);
       if (options.cg_preconditioner == CgPreconditioner::incomplete_cholesky) {
         k.method = SolveMethod::cg_ichol;
         return cg_solve<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(Hf, Xf, options, k);

@@ -454,6 +454,13 @@ TEST_CASE("analyse --tables recomputes from an analysis' own tables exactly what
         std::string::npos);
   CHECK(ja["unavailable"].empty());
   CHECK(jb["inputs"]["tables"] == a.string());
+  // counts the tables cannot give are unknown, not 0
+  for (const char* count : {"moduli_saddles", "moduli_contact_bounded"}) {
+    INFO(count);
+    CHECK(ja["inputs"][count] == 0);
+    CHECK(jb["inputs"][count].is_null());
+    CHECK(jb["unavailable"].contains(count));
+  }
 
   // the paper's N_zero panel from dos.csv: Δφ-target packings with N_zero = N_u exactly, and the slope
   // of N_zero on N_u through the origin, Σ N_zero N_u / Σ N_u²

@@ -198,6 +198,23 @@ def test_analyse_refuses_an_output_that_is_one_of_the_runs_files(run_budjam, run
     assert snapshot(tmp_path) == before
 
 
+def test_analyse_refuses_an_output_that_is_a_packing_sidecar_it_reads(run_budjam, run_dir, tmp_path):
+    """A table that is (a hard link to) a packing's moduli file of a run it reads: replacing it would
+    change that run's input."""
+    run = tmp_path / "run"
+    shutil.copytree(run_dir, run)
+    sidecar = next((run / "packings").glob("*.pack")).with_suffix(".moduli.json")
+    sidecar.write_text('{"B": 1, "G": 1, "N": 1, "L": 1, "phi": 1}')
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "analysis.json").write_text('{"format": "budjam-analysis", "version": 1, "groups": []}')
+    os.link(sidecar, out / "runs.csv")
+    before = snapshot(tmp_path)
+    r = run_budjam("analyse", run, "--out", out, "--resamples", "10", check=False)
+    assert_refused(r, "is the input file")
+    assert snapshot(tmp_path) == before
+
+
 def limited_to_4_kib():
     import resource
 

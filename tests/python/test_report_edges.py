@@ -506,3 +506,18 @@ def test_p_dagger_takes_its_error_from_the_seeds_not_from_the_scatter_of_groups_
     M = load(tmp_path / "out" / "analysis.json")["main"]
     assert M["P_dagger_points"] == 6 and M["P_dagger_seeds"] >= 5, M
     assert M["P_dagger_se"] is not None and M["P_dagger_se"] <= 1e-9 * abs(M["P_dagger"]), M
+
+
+def test_admitted_runs_without_an_eq14_prediction_are_named_as_such(tmp_path):
+    """The paper's φ_2 summary keeps the admitted runs with a prediction: where none has one, the
+    report says so, not that G_2 ≤ 0 left nothing."""
+    A, J = quick()
+    g = main_L_groups(A)[0]
+    for key in ("dphi_2_paper", "P_2_over_Pmax_paper"):
+        g[key].update(mean=None, se=None, n=0, admitted=7, runs=9, predicted=0)
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0, r.stderr
+    lines = [line for line in out.splitlines() if "7 of 9 runs admitted" in line]
+    assert len(lines) == 2  # the Eq. 14 row and the P_2/P_max row of that group
+    for line in lines:
+        assert "none with an Eq. 14 prediction" in line and "G_2 > 0" not in line, line

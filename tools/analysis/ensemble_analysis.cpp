@@ -1386,7 +1386,11 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
                      {"moduli_saddles", e.moduli.saddles},
                      {"moduli_contact_bounded", e.moduli.contact_bounded},
                      {"dos_files", e.dos_found}};
-  if (!o.tables.empty()) J["inputs"]["tables"] = o.tables;
+  if (!o.tables.empty()) {
+    J["inputs"]["tables"] = o.tables;
+    // which packings had no linear response the tables do not say (e.unavailable): unknown, not 0
+    J["inputs"]["moduli_saddles"] = J["inputs"]["moduli_contact_bounded"] = nullptr;
+  }
   J["inputs"]["unchecked"] = e.unchecked;
   J["unavailable"] = e.unavailable;
   J["main_L"] = main_L;
@@ -1454,9 +1458,10 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
     for (const auto& d : e.duplicates)
       for (std::size_t k = 1; k < d.size(); ++k) msg << " " << d[k] << " (= " << d[0] << ")";
   }
-  msg << ") in " << groups.size() << " groups; moduli files " << e.moduli.found << " (" << e.moduli.saddles
-      << " saddles, " << e.moduli.contact_bounded << " contact-bounded minima), spectra " << e.dos_found << " -> "
-      << out.string();
+  msg << ") in " << groups.size() << " groups; moduli files " << e.moduli.found;
+  if (o.tables.empty())
+    msg << " (" << e.moduli.saddles << " saddles, " << e.moduli.contact_bounded << " contact-bounded minima)";
+  msg << ", spectra " << e.dos_found << " -> " << out.string();
   return {msg.str(), e.unchecked};
 }
 

@@ -59,8 +59,12 @@ struct Finding : NoResultError {
 };
 
 // A notice on stderr, `budjam: <text>`, one line (io::one_line): something the user should know about
-// a result that is nevertheless given (exit 0), such as a negative shear modulus.
-inline void notice(const std::string& text) { std::cerr << "budjam: " << io::one_line(text) << std::endl; }
+// a result that is nevertheless given (exit 0), such as a negative shear modulus. The result goes out
+// first: where standard output failed there is no result to speak of, and the failure is the one
+// line (main: exit 3).
+inline void notice(const std::string& text) {
+  if (std::cout.flush()) std::cerr << "budjam: " << io::one_line(text) << std::endl;
+}
 
 // f(); a NoResultError from the library ("spectrum: …") is re-thrown as a Finding that names the
 // command and its input first ("dos: p.pack: spectrum: …").

@@ -45,13 +45,19 @@ std::string help_hint(const CLI::App& app) {
 }
 
 // A result printed on standard output is an output like a file: where it could not be written (a
-// full disk, `> /dev/full`), the command has not done its job.
-int with_stdout_written(int code) {
+// full disk, `> /dev/full`, a closed pipe), the command has not done its job. 0 if it was written,
+// else the one error line's exit code.
+int stdout_failure() {
   errno = 0;
   std::cout.flush();
-  if (std::cout && std::fflush(stdout) == 0 && !std::ferror(stdout)) return code;
+  if (std::cout && std::fflush(stdout) == 0 && !std::ferror(stdout)) return 0;
   return error(std::string("standard output: cannot write: ") + (errno ? std::strerror(errno) : "write error"),
                budjam::cli::kExitInternal);
+}
+
+int with_stdout_written(int code) {
+  const int failed = stdout_failure();
+  return failed ? failed : code;
 }
 
 }  // namespace
@@ -93,14 +99,16 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);  // runs the chosen subcommand's callback
     return with_stdout_written(kExitOk);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --version
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))  // --help, --version
+      return with_stdout_written(app.exit(e));
     return error(std::string(e.what()) + " (see " + help_hint(app) + ")", kExitBadInput);
   } catch (const Interrupted& e) {
     return notice(e.what(), 128 + e.signal);
   } catch (const RunFailure& e) {
     return error(e.what(), kExitRunFailed);
-  } catch (const budjam::NoResultError& e) {  // cli::Finding included
-    return with_stdout_written(notice(e.what(), kExitRunFailed));
+  } catch (const budjam::NoResultError& e) {  // cli::Finding included: the result, then the notice
+    if (const int failed = stdout_failure()) return failed;
+    return notice(e.what(), kExitRunFailed);
   } catch (const budjam::InputError& e) {
     return error(e.what(), kExitBadInput);
   } catch (const budjam::io::IoError& e) {

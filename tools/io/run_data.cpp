@@ -580,6 +580,12 @@ std::vector<fs::path> run_input_files(const fs::path& dir) {
        {run_files::summary, run_files::scene, run_files::steps, run_files::divisions, run_files::bud_events,
         run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
     files.push_back(dir / name);
+  // the packings and the sidecars beside them (moduli, spectra), which analyse reads too
+  for (const std::string_view sub : {run_files::packings, run_files::spectra}) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir / sub, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) files.push_back(it->path());
+  }
   return files;
 }
 

@@ -105,8 +105,8 @@ double json_double(const io::Json& j, const std::string& key, const std::filesys
 // key, or file, line and column, otherwise.
 RunData load_run(const std::filesystem::path& dir);
 
-// The files of the run in `dir` that its readers read (load_run, run_tables, analyse's scene.toml),
-// for the outputs that must not replace them (io::check_not_an_input).
+// The files of the run in `dir` that its readers read (load_run, run_tables, analyse's scene.toml,
+// the packings and their sidecars), for the outputs that must not replace them (io::check_not_an_input).
 std::vector<std::filesystem::path> run_input_files(const std::filesystem::path& dir);
 
 // The checks of load_run on summary.json, read from `file`.
