@@ -17,12 +17,14 @@ for t in $per_run; do targets+=("$dir/$t"); done
 requeue() {
   echo "run_task: time limit near: stopping $dir and requeueing" >&2
   kill -TERM "$child" 2>/dev/null || true
-  local waited=0
-  while kill -0 "$child" 2>/dev/null && ((waited < ${SLURM_GRACE:-120} / 2)); do
-    sleep 1
-    waited=$((waited + 1))
+  # polled every tenth of a second: a run that stops at once is requeued at once
+  local tenths=0
+  while kill -0 "$child" 2>/dev/null && ((tenths < ${SLURM_GRACE:-120} * 5)); do
+    sleep 0.1
+    tenths=$((tenths + 1))
   done
-  kill -0 "$child" 2>/dev/null && echo "run_task: $dir did not stop within ${waited} s; requeued from its last checkpoint" >&2
+  kill -0 "$child" 2>/dev/null &&
+    echo "run_task: $dir did not stop within $((tenths / 10)) s; requeued from its last checkpoint" >&2
   scontrol requeue "${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}"
   exit 0
 }
