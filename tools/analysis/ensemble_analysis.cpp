@@ -32,6 +32,7 @@
 
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"
+#include "budjam/saddle.hpp"  // StationaryPoint of a moduli sidecar
 #include "budjam/scene.hpp"
 #include "budjam/scene_keys.hpp"
 #include "budjam/statistics.hpp"
