@@ -472,8 +472,9 @@ def main():
               f"{pm(x['dphi_2'])} vs {avail(pm(x['dphi_2_pred_area']), 'dphi_2_pred_area')} (a as true area); "
               f"prediction − simulation run by run {avail(pm(x.get('dphi_2_pred_minus_sim_area')), 'dphi_2_pred_area')}; "
               "every run",
-              avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure); "
-                    f"prediction − simulation {sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_paper"),
+              avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure; "
+                    f"φ_J and φ_2 from the first jamming); prediction − simulation "
+                    f"{sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_paper", "dphi_2_first"),
               judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0), seeds=seeds_in(x)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
@@ -506,7 +507,7 @@ def main():
         x = groups[lab]
         claim(f"P_2/P_max and λ̄_c, {p0_name(lab)}", "decrease strongly with feedback, together",
               f"{pm(x['P_2_over_Pmax'])}; λ̄_c = {avail(pm(x['lambda_bar']), 'lambda_bar')}; every run",
-              f"{avail(sel(x['P_2_over_Pmax_paper']), 'dphi_2_pred_paper')}; "
+              f"{avail(sel(x['P_2_over_Pmax_paper']), 'dphi_2_pred_paper', 'P_2_first')}; "
               f"λ̄_c = {avail(sel(x['lambda_bar_paper']), 'lambda_bar_lobes')} (u the contact-free lobes)",
               "see trend row", fig("fig3"))
     v2 = trend_of([groups[l]["P_2_over_Pmax_paper"] for l in fed], increasing=False)
@@ -526,7 +527,8 @@ def main():
         s_ = x["G_2_over_Pmax_paper"]
         claim(f"G_2/P_max, {p0_name(lab)} (median ± bootstrap SE)", "≈ 0.2 – 1",
               pm(x["G_2_over_Pmax"], "median") + ", every run" if have_moduli else "not measured (moduli stage off)",
-              sel(s_, "median") + " (G_2 > 0, Tukey fences on G_2)" if have_moduli else "not measured",
+              avail(sel(s_, "median") + " (G_2 > 0 at φ_2 from the first jamming, Tukey fences on G_2)", "G_2_first")
+              if have_moduli else "not measured",
               judged(s_, verdicts.interval(0.2, 1.0), key="median", seeds=seeds_in(x)) if have_moduli else
               verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
@@ -553,8 +555,8 @@ def main():
             x = g20[lab]
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}, L = 20", paper,
                   ci(x["N_div_2_over_N_J"]) + "; up to φ_2 (≤ 1 tagged bud left)",
-                  avail(ci(x["N_div_2_over_N_J_paper"]) + "; every division after φ_J up to no tagged bud left",
-                        "N_div_2_none_left"), judged(x["N_div_2_over_N_J_paper"], cl, key="median", seeds=seeds_in(x)),
+                  avail(ci(x["N_div_2_over_N_J_paper"]) + "; every division from the first jamming up to no tagged bud left",
+                        "N_div_2_none_left", "N_J_first"), judged(x["N_div_2_over_N_J_paper"], cl, key="median", seeds=seeds_in(x)),
                   fig("figD1"))
         else:
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",

@@ -351,10 +351,13 @@ struct GrowthDriver::Impl {
     P = pressure(contacts, packing.box);
     const bool jammed = phase == Phase::jammed;
     const bool observe_here = jammed || needs.before_jamming;
-    have_net = jammed || (observe_here && needs.network);
+    // From the first jamming on, every state's network, χ_c and tags are logged, also while an
+    // unjamming is searched through (the paper's analysis anchors at the first jamming).
+    const bool followed = jammed || episodes > 0;
+    have_net = followed || (observe_here && needs.network);
     if (have_net) net = analyse_network(packing.size(), contacts);
     const bool feedback = jammed && scene.P0.has_value();
-    have_pressures = feedback || (observe_here && needs.bud_pressures);
+    have_pressures = feedback || followed || (observe_here && needs.bud_pressures);
     if (have_pressures) pressures = bud_pressures(packing, contacts);
     compressed = compressed_buds(packing.size(), contacts);
     chi_c = have_pressures && scene.P0 ? mean_compressed_factor(pressures, scene.P0) : CompressedFactor{};
@@ -379,6 +382,7 @@ struct GrowthDriver::Impl {
     v.bud_pressures = have_pressures ? &pressures : nullptr;
     v.jamming = (phase == Phase::jammed && result.jamming) ? &*result.jamming : nullptr;
     v.buds = &buds;
+    v.after_jamming = phase == Phase::jammed || episodes > 0;
     v.divisions_since_jamming = phase == Phase::jammed ? divisions_since_jamming : 0;
     v.compressed_buds = compressed;
     v.chi_c = chi_c.chi;
@@ -441,7 +445,7 @@ struct GrowthDriver::Impl {
     if (final_emitted) return;
     final_emitted = true;
     const StateView v = view();
-    if (phase == Phase::jammed) emit_bud_events(v, buds.close(BudEventKind::censored_end, step, phi, packing));
+    emit_bud_events(v, buds.close(BudEventKind::censored_end, step, phi, packing));
     notify([&](Observer& o) {
       if (result.status == RunStatus::finished)
         o.on_finished(Finished{v, result});
@@ -684,16 +688,18 @@ struct GrowthDriver::Impl {
     return change;
   }
 
-  // The jamming episode ends: φ_J, the targets and φ_2 belong to the next one.
-  std::vector<BudEvent> record_unjamming() {
+  // The jamming episode ends: φ_J, the targets and φ_2 belong to the next one. Its tagged buds are
+  // followed on until the next jamming tags others, as the paper's code follows them.
+  void record_unjamming() {
     result.unjammings.push_back(
         UnjamRecord{result.jamming->episode, step, phi, result.jamming->phi, result.targets.size()});
-    std::vector<BudEvent> events = buds.close(BudEventKind::censored_unjam, step, phi, packing);
     start_episode(std::nullopt);
-    return events;
   }
 
-  std::vector<BudEvent> record_jamming() {
+  // The tags still active from an episode that unjammed end here, censored; then the new tags.
+  std::vector<BudEvent> record_jamming(std::vector<BudEvent>& ended) {
+    const std::vector<BudEvent> closed = buds.close(BudEventKind::censored_unjam, step, phi, packing);
+    ended.insert(ended.end(), closed.begin(), closed.end());
     JammingRecord j = jamming_record(view(), episodes++);
     std::vector<BudEvent> events = buds.tag(j.episode, step, phi, packing, net);
     j.tagged = events.size();
@@ -786,21 +792,20 @@ struct GrowthDriver::Impl {
     const Change change = accept(std::move(trial));
 
     // Records first, so that every event of this state sees the same, final view.
-    std::vector<BudEvent> bud_events;
-    if (phase == Phase::jammed && change == Change::none)
-      bud_events = buds.update(step, phi, packing, contacts, net, divisions);
-    if (change == Change::unjammed) bud_events = record_unjamming();
-    if (change == Change::jammed) bud_events = record_jamming();
+    // The tags of this state's episode (or of the episode an unjamming ended) see the state first.
+    std::vector<BudEvent> bud_events = buds.update(step, phi, packing, contacts, net, divisions), tagged;
+    if (change == Change::unjammed) record_unjamming();
+    if (change == Change::jammed) tagged = record_jamming(bud_events);
 
     const StateView v = view();
     for (const Division& d : divisions) notify([&](Observer& o) { o.on_divided(Divided{v, d}); });
     // Events in physical order: the buds tagged at a jamming follow the jamming they belong to.
-    if (change != Change::jammed) emit_bud_events(v, bud_events);
+    emit_bud_events(v, bud_events);
     notify([&](Observer& o) { o.on_step_accepted(StepAccepted{v}); });
     if (change == Change::unjammed) notify([&](Observer& o) { o.on_unjammed(Unjammed{v, result.unjammings.back()}); });
     if (change == Change::jammed) {
       notify([&](Observer& o) { o.on_jammed(Jammed{v, *result.jamming}); });
-      emit_bud_events(v, bud_events);
+      emit_bud_events(v, tagged);
     }
     if (phase == Phase::jammed && change == Change::none) land_targets_and_depletion(v);
 

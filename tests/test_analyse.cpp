@@ -298,23 +298,74 @@ TEST_CASE("analyse takes χ̄ as the plain mean over the states of [φ_J, φ_2] 
         *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
     const double step_J = s.at("step_J").get<double>();
     const double step_2 = s.at("step_2").is_number() ? s.at("step_2").get<double>() : INFINITY;
-    double chi_sum = 0, n = 0, phi_2_none_left = NAN;
+    double chi_sum = 0, n = 0, phi_2_none_left = NAN, step_J_first = NAN;
     for (const auto& row : read_csv(dir / "steps.csv")) {
       const double step = number(row.at("step"));
+      // the none-left state is the paper's, scanned from the run's first jamming
+      if (std::isnan(step_J_first) && row.at("phase") == "jammed") step_J_first = step;
+      if (step >= step_J_first && std::isnan(phi_2_none_left) && number(row.at("tagged_active")) == 0)
+        phi_2_none_left = number(row.at("phi"));
       if (step < step_J) continue;
       if (step <= step_2) chi_sum += number(row.at("chi_c")), ++n;
-      if (step > step_J && std::isnan(phi_2_none_left) && number(row.at("tagged_active")) == 0)
-        phi_2_none_left = number(row.at("phi"));
     }
     INFO(dir.string());
     if (std::isfinite(step_2)) CHECK(number(r.at("chi_bar")) == Approx(chi_sum / n).epsilon(1e-12));
     if (std::isfinite(phi_2_none_left)) {
       CHECK(number(r.at("phi_2_none_left")) == Approx(phi_2_none_left).epsilon(1e-14));
-      CHECK(number(r.at("phi_2_none_left")) >= number(r.at("phi_2")));  // none left comes no earlier than one left
+      // none left comes no earlier than one left
+      CHECK(number(r.at("phi_2_none_left")) >= number(r.at("phi_2_first")));
     } else {
       CHECK(r.at("dphi_2_none_left").empty());
     }
   }
+}
+
+TEST_CASE(
+    "analyse anchors the paper's columns at a run's first jamming and scans for their φ_2 through the unjammed "
+    "states after an unjamming",
+    "[analyse]") {
+  const fs::path out = work_dir() / "t_first_jamming";
+  REQUIRE(run_budjam("analyse " + all_runs() + "--out " + q(out) + " --main-L 6").code == 0);
+  const auto run_rows = read_csv(out / "runs.csv");
+  int unjammed = 0;
+  for (const auto& dir : runs()) {
+    INFO(dir.string());
+    const auto& r =
+        *std::find_if(run_rows.begin(), run_rows.end(), [&](const auto& x) { return x.at("run") == dir.string(); });
+    double step_J_first = NAN, phi_J_first = NAN, N_nr = NAN, tagged = NAN, phi_2_first = NAN, P_2_first = NAN;
+    for (const auto& row : read_csv(dir / "steps.csv")) {
+      if (std::isnan(step_J_first)) {
+        if (row.at("phase") != "jammed") continue;
+        step_J_first = number(row.at("step"));
+        phi_J_first = number(row.at("phi"));
+        N_nr = number(row.at("N")) - number(row.at("N_f"));
+        tagged = number(row.at("tagged_active"));
+      }
+      // the scan includes the jamming state itself
+      if (std::isnan(phi_2_first) && number(row.at("tagged_active")) <= 1) {
+        phi_2_first = number(row.at("phi"));
+        P_2_first = number(row.at("P"));
+      }
+    }
+    REQUIRE(std::isfinite(step_J_first));
+    CHECK(number(r.at("step_J_first")) == step_J_first);
+    CHECK(number(r.at("phi_J_first")) == Approx(phi_J_first).epsilon(1e-14));
+    CHECK(number(r.at("N_nr_J_first")) == N_nr);
+    CHECK(number(r.at("tagged_J_first")) == tagged);
+    REQUIRE(std::isfinite(phi_2_first));
+    CHECK(number(r.at("phi_2_first")) == Approx(phi_2_first).epsilon(1e-14));
+    CHECK(number(r.at("dphi_2_first")) == Approx(phi_2_first - phi_J_first).epsilon(1e-12));
+    CHECK(number(r.at("P_2_first")) == Approx(P_2_first).epsilon(1e-14));
+    if (step_J_first < number(r.at("step_J"))) {
+      ++unjammed;
+      CHECK(number(r.at("phi_J_first")) < number(r.at("phi_J")));
+    } else {  // never unjammed: the paper's anchor is budjam's jamming point and φ_2
+      CHECK(r.at("phi_J_first") == r.at("phi_J"));
+      CHECK(r.at("phi_2_first") == r.at("phi_2"));
+      CHECK(r.at("G_2_first") == r.at("G_2"));
+    }
+  }
+  CHECK(unjammed >= 1);  // one of the three runs unjams after its first jamming
 }
 
 TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the log, G of the none-left packing",
@@ -660,20 +711,24 @@ fs::path hand_tables(const std::string& name, const std::function<void(std::ostr
 
 constexpr const char* kRunsHeader =
     "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,lambda_bar_lobes,"
-    "dphi_2_pred_area,dphi_2_pred_diameter_sq,dphi_2_pred_paper,G_2\n";
+    "dphi_2_pred_area,dphi_2_pred_diameter_sq,dphi_2_pred_paper,G_2,phi_J_first,phi_2_first,dphi_2_first,P_2_first,"
+    "G_2_first\n";
 
 TEST_CASE(
     "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
-    "its φ_2 summary over the runs with a prediction, fences on G_2 alone",
+    "its φ_2 summary over the runs with a prediction, fences on G_2 alone, φ_J and φ_2 from the first jamming",
     "[analyse]") {
   // Six runs of one group. Targets at Δφ = 10⁻³ (before every φ_2) and 3·10⁻² (beyond it), with the
   // divisions after φ_J counted there. Run 6 has 2 divisions at the first target but 12 at the one
   // that decides (the smallest at or beyond φ_2): not admitted. Run 5's G_2 is an outlier of the
   // admitted G_2 (fences [0.8, 1.6] from 1.0, 1.1, 1.2, 1.3, 50): out of the G_2 statistics only. Run 5
   // has no prediction under the paper's rule (its Ŝ never fell to 1/tagged): out of the φ_2 summary.
+  // Run 3 unjammed after a first jamming 0.004 below budjam's φ_J (its last): the paper's columns
+  // (*_first) measure from there, budjam's from its own φ_J, with another G_2 (as if another state).
   const fs::path dir = work_dir() / "hand_tables", out = work_dir() / "hand_tables_out";
   fs::create_directories(dir);
   const std::vector<double> dphi_2{0.010, 0.012, 0.014, 0.016, 0.018, 0.020};
+  const std::vector<double> dphi_2_budjam{0.010, 0.012, 0.010, 0.016, 0.018, 0.020};
   const std::vector<double> G_2{1.0, 1.1, 1.2, 1.3, 50, 1.15}, P_2{0.01, 0.011, 0.012, 0.013, 0.014, 0.015};
   const std::vector<double> div_far{3, 4, 5, 6, 10, 12};
   {
@@ -683,11 +738,12 @@ TEST_CASE(
     t << "run,L,P0,seed,dphi,phi,N_div,below_phi2\n";
     for (int k = 0; k < 6; ++k) {
       const std::string run = "hand/seed" + std::to_string(k + 1);
-      const double phi_J = 0.84;
-      r << run << ",15,0.001," << k + 1 << ",finished," << k << "," << phi_J << ",0.2,0.76,172,170,"
-        << phi_J + dphi_2[k] << "," << dphi_2[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.6 + 0.01 * k
-        << "," << 0.75 * dphi_2[k] << "," << dphi_2[k] + 0.002 * k << ","
-        << (k == 4 ? std::string() : std::to_string(dphi_2[k] + 0.001 * k)) << "," << G_2[k] << "\n";
+      const double phi_J = 0.84, phi_J_first = k == 2 ? 0.836 : phi_J, phi_2 = phi_J_first + dphi_2[k];
+      r << run << ",15,0.001," << k + 1 << ",finished," << k << "," << phi_J << ",0.2,0.76,172,170," << phi_2 << ","
+        << dphi_2_budjam[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.6 + 0.01 * k << ","
+        << 0.75 * dphi_2_budjam[k] << "," << dphi_2[k] + 0.002 * k << ","
+        << (k == 4 ? std::string() : std::to_string(dphi_2[k] + 0.001 * k)) << "," << (k == 2 ? 2.0 : G_2[k]) << ","
+        << phi_J_first << "," << phi_2 << "," << dphi_2[k] << "," << P_2[k] << "," << G_2[k] << "\n";
       t << run << ",15,0.001," << k + 1 << ",0.001," << phi_J + 0.001 << ",2,true\n";
       t << run << ",15,0.001," << k + 1 << ",0.03," << phi_J + 0.03 << "," << div_far[k] << ",false\n";
     }
@@ -711,7 +767,9 @@ TEST_CASE(
   CHECK(g["dphi_2_pred_minus_sim_paper"]["mean"].get<double>() == Approx(0.0015));
   // budjam's column: every run, a as true area
   CHECK(g["dphi_2"]["n"] == 6);
-  CHECK(g["dphi_2_pred_minus_sim_area"]["mean"].get<double>() == Approx(-0.25 * 0.015));
+  CHECK(g["dphi_2"]["mean"].get<double>() == Approx(0.086 / 6));
+  CHECK(g["dphi_2_pred_minus_sim_area"]["mean"].get<double>() == Approx(-0.25 * 0.086 / 6));
+  CHECK(g["G_2"]["median"].get<double>() == Approx(1.225));  // budjam's G_2: 1.0, 1.1, 1.15, 1.3, 2.0, 50
   // G_2: the outlier is fenced out; four values left, median of 1.0, 1.1, 1.2, 1.3 over P_max = 0.1
   CHECK(g["G_2_over_Pmax_paper"]["n"] == 4);
   CHECK(g["G_2_over_Pmax_paper"]["median"].get<double>() == Approx(11.5));
@@ -796,8 +854,9 @@ TEST_CASE(
     for (int p = 0; p < 3; ++p)
       for (int s = 1; s <= 2; ++s, ++k) {
         const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
-        r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01,"
-          << 0.01 / (p + 1) + 0.001 * s << ",0.5,0.5,0.01,0.011,0.011,1.0\n";
+        const double P_2 = 0.01 / (p + 1) + 0.001 * s;
+        r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01," << P_2
+          << ",0.5,0.5,0.01,0.011,0.011,1.0,0.84,0.85,0.01," << P_2 << ",1.0\n";
         for (int d = 0; d < 2; ++d)
           t << run << ",15," << P0s[p] << "," << k + 1 << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841)
             << ",2," << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"

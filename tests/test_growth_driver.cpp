@@ -267,7 +267,7 @@ TEST_CASE("buds grow with the rates frozen from the previous accepted state's bu
 TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with at most one left", "[driver]") {
   const Reference& r = reference();
   REQUIRE(r.rec.jammed);
-  // Tags of the final jamming episode (an unjamming censors the earlier tags and re-tags later).
+  // Tags of the final jamming episode (the next jamming after an unjamming tags afresh).
   std::size_t tagged = 0, tagged_all = 0;
   for (const BudEvent& e : r.rec.bud_events)
     if (e.kind == BudEventKind::tagged) {
@@ -302,6 +302,49 @@ TEST_CASE("jamming tags the unconstrained buds and phi_2 is the first state with
   REQUIRE(it != o.end());
   CHECK(*(it - 1) == "step");
   CHECK(o.back() == "finished");
+}
+
+TEST_CASE(
+    "the buds tagged at a jamming that unjams are followed through the unjammed states, and those still "
+    "unconstrained end censored_unjam at the next jamming",
+    "[driver]") {
+  const Reference& r = reference();
+  REQUIRE(r.rec.first_jammed);
+  REQUIRE(r.rec.unjammed > 0);
+  const long first = r.rec.first_jammed->step;
+  long next = -1;  // the step of the second jamming: its tags are episode 1
+  for (const BudEvent& e : r.rec.bud_events)
+    if (e.kind == BudEventKind::tagged && e.episode == 1) next = e.step;
+  REQUIRE(next > first);
+  std::size_t ended_at_next = 0, events_while_unjammed = 0;
+  for (const BudEvent& e : r.rec.bud_events) {
+    if (e.episode != 0 || e.kind == BudEventKind::tagged) continue;
+    CHECK(e.step <= next);
+    if (e.kind == BudEventKind::censored_unjam) {
+      CHECK(e.step == next);
+      ++ended_at_next;
+    }
+    const auto s =
+        std::find_if(r.rec.steps.begin(), r.rec.steps.end(), [&](const auto& x) { return x.step == e.step; });
+    REQUIRE(s != r.rec.steps.end());
+    if (s->phase == Phase::unjammed) ++events_while_unjammed;
+  }
+  // Between the two jamming points every state has its network, and the count of episode 0's tags
+  // still active is what its events say.
+  for (const auto& st : r.rec.steps) {
+    if (st.step < first || st.step >= next) continue;
+    CHECK(st.had_network);
+    std::size_t active = 0;
+    for (const BudEvent& e : r.rec.bud_events)
+      if (e.episode == 0 && e.kind == BudEventKind::tagged) ++active;
+    for (const BudEvent& e : r.rec.bud_events)
+      if (e.episode == 0 && e.kind != BudEventKind::tagged && e.kind != BudEventKind::first_contact &&
+          e.step <= st.step)
+        --active;
+    CHECK(st.active == active);
+  }
+  // the unjammed states do change the tags (else the following would test nothing)
+  CHECK(events_while_unjammed + ended_at_next > 0);
 }
 
 // A run to φ_2 under the definition "at most `left` tagged buds still unconstrained", without

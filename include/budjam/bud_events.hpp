@@ -3,7 +3,8 @@
 // At jamming every unconstrained bud is tagged (by cell id); from then on, for each accepted state,
 // a tagged bud can: touch something for the first time (first_contact), stop being unconstrained
 // (completed: the event of the Kaplan–Meier estimate), divide before completion (censored), or
-// still be unconstrained when the run or the jamming episode ends (censored).
+// still be unconstrained when the run ends or the next jamming tags others (censored). After an
+// unjamming the tags are followed on until that next jamming, as the paper's code follows them.
 // a = b² − b_J² is the added bud size in diameter squared (true area π a / 4).
 #include <cstddef>
 #include <cstdint>
@@ -22,7 +23,7 @@ enum class BudEventKind {
   completed,       // no longer unconstrained (event)
   divided,         // the cell divided before completion (censored)
   censored_end,    // still unconstrained when the run ended (censored)
-  censored_unjam,  // still unconstrained when the packing unjammed (censored; re-tagged at the next jamming)
+  censored_unjam,  // its episode unjammed, and still unconstrained when the packing jammed again (censored)
 };
 const char* to_string(BudEventKind kind);
 

@@ -9,8 +9,9 @@
 //
 // Order of events for one accepted step (all see the same StateView, with the records of this
 // state already in place), after the TrialRelaxed of the attempt that produced it:
-//   Divided (one per division in the step) → BudEvent* (updates; `tagged` at a jamming state,
-//   `censored_unjam` at an unjamming) → StepAccepted → Unjammed | Jammed → TargetReached* →
+//   Divided (one per division in the step) → BudEvent* (updates of the tagged buds, also of an
+//   episode that unjammed, whose buds still unconstrained end `censored_unjam` at the next jamming)
+//   → StepAccepted → Unjammed | Jammed → BudEvent* (`tagged`, at a jamming) → TargetReached* →
 //   Depleted → then, at the end of the run, BudEvent* (censored_end) → Finished | Failed.
 // The initial relaxed state is announced as StepAccepted with step 0.
 // A rejected step emits only its TrialRelaxed (it is undone exactly, RNG included).
@@ -156,7 +157,8 @@ struct StateView {
   const ContactNetwork* network = nullptr;
   const std::vector<double>* bud_pressures = nullptr;
   const JammingRecord* jamming = nullptr;  // null in the unjammed phase
-  const BudTracker* buds = nullptr;        // tags of the current jamming episode
+  const BudTracker* buds = nullptr;        // tags of the latest jamming episode (followed after an unjamming)
+  bool after_jamming = false;              // jammed, or unjammed after a jamming: network, χ_c and tags known
   long divisions_since_jamming = 0;        // 0 in the unjammed phase
   std::size_t compressed_buds = 0;         // buds with ≥ 1 contact (valid when contacts != null)
   double chi_c = 1;                        // ⟨exp(−p/P0)⟩ over compressed buds (when pressures known) ...

@@ -139,6 +139,63 @@ SidecarModuli read_moduli(const fs::path& pack, bool required, ModuliFiles& file
   return m;
 }
 
+// The steps of the first-jamming φ_2 and none-left states (NaN where not reached).
+struct FirstJammingStates {
+  double phi_2 = kNaN, none_left = kNaN;
+};
+
+// The paper's anchor (RunRow::phi_J_first …): its first post-jamming row is the run's first jammed
+// state, and every accepted state after it is a row of its φ_2 scan, with the tags its code follows.
+FirstJammingStates anchor_at_first_jamming(const tools::RunData& r, RunRow& x) {
+  const auto& S = r.steps;
+  const std::size_t c_step = S.column("step"), c_phase = S.column("phase"), c_phi = S.column("phi"),
+                    c_P = S.column("P"), c_N = S.column("N"), c_Nf = S.column("N_f"), c_Nu = S.column("N_u"),
+                    c_chi = S.column("chi_c"), c_act = S.column("tagged_active");
+  std::size_t first = 0;
+  while (first < S.size() && S.text(first, c_phase) != "jammed") ++first;
+  std::vector<double> st, phi, P, active, chi, lambda_lobes;
+  for (std::size_t k = first; k < S.size(); ++k) {
+    st.push_back(S.number(k, c_step));
+    phi.push_back(S.number(k, c_phi));
+    P.push_back(S.number(k, c_P));
+    active.push_back(S.number(k, c_act));
+    chi.push_back(S.number(k, c_chi));
+    const double N = S.number(k, c_N), Nf = S.number(k, c_Nf);
+    // a state with no non-rattler has no λ_c (its paper's code, with one-pass rattlers, divides by N_nr)
+    lambda_lobes.push_back(N > Nf ? lambda_c(S.number(k, c_Nu) / (N - Nf), chi.back()) : kNaN);
+  }
+  // Logs from before the tags were followed through an unjamming leave those rows empty.
+  if (st.empty() || std::any_of(active.begin(), active.end(), [](double a) { return std::isnan(a); })) return {};
+  x.step_J_first = st[0];
+  x.phi_J_first = phi[0];
+  x.N_J_first = S.number(first, c_N);
+  x.N_nr_J_first = x.N_J_first - S.number(first, c_Nf);
+  x.tagged_J_first = active[0];
+  // Its scan includes the jamming state itself (with at most one bud tagged there, φ_2 = φ_J).
+  FirstJammingStates at;
+  if (const auto k = depletion_state(active, 0, kBudjamTaggedLeft)) {
+    at.phi_2 = st[*k];
+    x.phi_2_first = phi[*k];
+    x.dphi_2_first = phi[*k] - x.phi_J_first;
+    x.P_2_first = P[*k];
+    x.chi_bar_first = growth_coordinate_average(chi, 0, *k);
+    x.lambda_bar_lobes = growth_coordinate_average(lambda_lobes, 0, *k);
+  }
+  if (const auto k = depletion_state(active, 0, kNoneLeft)) {
+    at.none_left = st[*k];
+    x.phi_2_none_left = phi[*k];
+    x.dphi_2_none_left = phi[*k] - x.phi_J_first;
+    x.P_2_none_left = P[*k];
+    const auto& D = r.divisions;
+    const std::size_t c_s = D.column("step");
+    // its count takes a division logged at the jamming step itself
+    double n = 0;
+    for (std::size_t j = 0; j < D.size(); ++j) n += D.number(j, c_s) >= x.step_J_first && D.number(j, c_s) <= st[*k];
+    x.N_div_2_none_left = n;
+  }
+  return at;
+}
+
 // The numbers summary.json records at jamming and at budjam's φ_2, under their runs.csv names.
 constexpr std::string_view kSummaryKeys[] = {"phi_J", "u_J", "n_J",      "N_J",    "N_nr_J",    "Z_J",
                                              "dZ_J",  "P_J", "tagged_J", "step_J", "u_J_lobes", "phi_2",
@@ -165,8 +222,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   const std::size_t c_step = S.column("step"), c_phi = S.column("phi"), c_P = S.column("P"), c_N = S.column("N"),
                     c_Nf = S.column("N_f"), c_Nub = S.column("N_u_buds"), c_chi = S.column("chi_c"),
                     c_act = S.column("tagged_active"), c_div = S.column("divisions_since_jamming"), c_Z = S.column("Z"),
-                    c_dZ = S.column("dZ"), c_Nu = S.column("N_u");
-  std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, lambda_lobes, active, divisions;
+                    c_dZ = S.column("dZ");
+  std::vector<double> st, phi, P, Z, dZ, u, chi, lambda, active, divisions;
   for (std::size_t k = 0; k < S.size(); ++k) {
     const double s = S.number(k, c_step);
     if (s < x.step_J) continue;
@@ -179,7 +236,6 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
     u.push_back(S.number(k, c_Nub) / (N - Nf));
     chi.push_back(S.number(k, c_chi));
     lambda.push_back(lambda_c(u.back(), chi.back()));
-    lambda_lobes.push_back(lambda_c(S.number(k, c_Nu) / (N - Nf), chi.back()));
     active.push_back(S.number(k, c_act));
     divisions.push_back(S.number(k, c_div));
   }
@@ -198,23 +254,15 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   }
   x.depleted = std::isfinite(x.phi_2);
   if (x.depleted) x.dphi_2 = x.phi_2 - x.phi_J;
-  double step_2_none_left = kNaN;
   if (x.depleted) {
     const auto k2 = static_cast<std::size_t>(std::find(st.begin(), st.end(), step_2) - st.begin());
     if (k2 < st.size()) {
       x.u_2 = u[k2];
       x.chi_bar = growth_coordinate_average(chi, 0, k2);
       x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
-      x.lambda_bar_lobes = growth_coordinate_average(lambda_lobes, 0, k2);
     }
   }
-  if (const auto k2 = depletion_state(active, 1, kNoneLeft)) {
-    step_2_none_left = st[*k2];
-    x.phi_2_none_left = phi[*k2];
-    x.dphi_2_none_left = phi[*k2] - x.phi_J;
-    x.P_2_none_left = P[*k2];
-    x.N_div_2_none_left = divisions[*k2];
-  }
+  const FirstJammingStates first = anchor_at_first_jamming(r, x);
 
   // Survival of the tagged buds: per-run a_ε with ε = 1/N_nr,J (at most one left = φ_2's definition)
   if (r.bud_events) {
@@ -231,9 +279,11 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
           x.pred_d2 = p.dphi2_diameter_sq;
         }
       }
-      const auto ae_paper = km.quantile_point(1.0 / x.tagged, 0.0);
-      if (ae_paper && std::isfinite(x.chi_bar))
-        x.pred_paper = predict_phi2(x.n_J, x.u_J, x.chi_bar, *ae_paper, km.integral(*ae_paper)).dphi2_diameter_sq;
+      const auto ae_paper = km.quantile_point(1.0 / x.tagged_J_first, 0.0);
+      if (ae_paper && std::isfinite(x.chi_bar_first))
+        x.pred_paper = predict_phi2(x.N_nr_J_first / (x.L * x.L), x.tagged_J_first / x.N_nr_J_first, x.chi_bar_first,
+                                    *ae_paper, km.integral(*ae_paper))
+                           .dphi2_diameter_sq;
     }
   }
 
@@ -310,7 +360,8 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.G_2_energy = sm.G_energy;
       x.G_min_2 = sm.G_min;
     }
-    if (saved_step_2 == step_2_none_left) x.G_2_none_left = sm.G;
+    if (saved_step_2 == first.phi_2) x.G_2_first = sm.G;
+    if (saved_step_2 == first.none_left) x.G_2_none_left = sm.G;
   }
   {
     const fs::path jam = r.dir / io::run_files::packing(io::run_files::jammed);
@@ -579,6 +630,15 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
       throw InputError((dirs[k] / io::run_files::summary).string() + ": " + x.what());
     }
   }
+  {
+    const auto unknown =
+        std::count_if(e.rows.begin(), e.rows.end(), [](const RunRow& r) { return std::isnan(r.phi_J_first); });
+    if (unknown > 0)
+      e.unchecked.push_back(std::to_string(unknown) +
+                            " run(s) unjammed after a jamming and have logs from before the tagged buds were followed "
+                            "through an unjamming: the paper's columns anchored at the first jamming (*_first, "
+                            "none_left, lambda_bar_lobes, dphi_2_pred_paper) are empty for them; grow them again");
+  }
   // The growth parameters of the runs, for the growth-only baseline (the first run stands for all:
   // check_one_protocol holds every run to its cell parameters).
   check_one_protocol(e.rows);
@@ -682,26 +742,28 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
 }
 
 // The divisions that decide the paper's selection for a run (selection_divisions): at its smallest
-// target at or beyond its φ_2.
+// target at or beyond its φ_2 (from the first jamming). A target's divisions count from the last
+// jamming, as its code's count restarts at each.
 double run_selection_divisions(const RunRow& r) {
   std::vector<double> phi, divisions;
   for (const auto& t : r.targets) {
     phi.push_back(t.phi);
     divisions.push_back(t.N_div);
   }
-  return selection_divisions(phi, divisions, r.phi_2);
+  return selection_divisions(phi, divisions, r.phi_2_first);
 }
 
 // The statistics of the paper's analysis over the depleted runs of a group (docs/analysis.md,
-// "Definitions"): φ_2 at most one tagged bud left, as budjam's; the runs its selection admits; Eq. 14
-// with a as diameter squared; G_2 > 0 and Tukey's fences on G_2 alone, the G_2 ratios over the runs
-// those keep. Each statistic says how many runs the group has and how many the selection admitted.
+// "Definitions"): φ_2 at most one tagged bud left, as budjam's, but anchored at the run's first
+// jamming; the runs its selection admits; Eq. 14 with a as diameter squared; G_2 > 0 and Tukey's
+// fences on G_2 alone, the G_2 ratios over the runs those keep. Each statistic says how many runs the
+// group has and how many the selection admitted.
 void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const BootstrapOptions& bo) {
   std::vector<const RunRow*> admitted, kept;
   for (const auto* r : rs)
-    if (r->depleted && paper_admits(run_selection_divisions(*r))) admitted.push_back(r);
+    if (std::isfinite(r->phi_2_first) && paper_admits(run_selection_divisions(*r))) admitted.push_back(r);
   const auto keep =
-      paper_G2_kept(collect(admitted, [](auto& r) { return r.G_2; }), std::vector<bool>(admitted.size(), true));
+      paper_G2_kept(collect(admitted, [](auto& r) { return r.G_2_first; }), std::vector<bool>(admitted.size(), true));
   for (std::size_t k = 0; k < admitted.size(); ++k)
     if (keep[k]) kept.push_back(admitted[k]);
   const auto selected = [&](Json j) {
@@ -718,18 +780,18 @@ void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const Bo
     j["predicted"] = predicted.size();
     return j;
   };
-  const auto dphi_2 = [](auto& r) { return r.dphi_2; };
+  const auto dphi_2 = [](auto& r) { return r.dphi_2_first; };
   g["dphi_2_paper"] = with_predicted(mean_se_by_seed(predicted, dphi_2));
   g["dphi_2_pred_paper"] = with_predicted(mean_se_json(collect(predicted, [](auto& r) { return r.pred_paper; })));
   // Eq. 14 against the simulation run by run (the same runs on both sides: a paired difference)
   g["dphi_2_pred_minus_sim_paper"] =
-      with_predicted(mean_se_json(collect(predicted, [](auto& r) { return r.pred_paper - r.dphi_2; })));
-  const auto P_2 = [](auto& r) { return r.P_2 / kPmax; };
+      with_predicted(mean_se_json(collect(predicted, [](auto& r) { return r.pred_paper - r.dphi_2_first; })));
+  const auto P_2 = [](auto& r) { return r.P_2_first / kPmax; };
   g["P_2_over_Pmax_paper"] = with_predicted(mean_se_by_seed(predicted, P_2));
   const auto lambda_bar = [](auto& r) { return r.lambda_bar_lobes; };
   g["lambda_bar_paper"] = selected(mean_se_by_seed(admitted, lambda_bar));
-  g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2 / kPmax; }), bo));
-  const auto G_2_over_P_2 = [](auto& r) { return r.G_2 / r.P_2; };
+  g["G_2_over_Pmax_paper"] = selected(median_json(collect(kept, [](auto& r) { return r.G_2_first / kPmax; }), bo));
+  const auto G_2_over_P_2 = [](auto& r) { return r.G_2_first / r.P_2_first; };
   g["G_2_over_P_2_paper"] = selected(median_by_seed(kept, G_2_over_P_2, bo));
 }
 
@@ -766,9 +828,10 @@ struct Tables {
   std::vector<std::vector<std::string>> survival, remaining, divisions, growth_rates, trajectory;
 };
 
-// `pooled_runs`: how many runs `km` pools, where known (survival.csv's `runs`).
+// `pooled_runs`: how many runs `km` pools, where known (survival.csv's `runs`). `N_J_first_size`:
+// the mean N at the first jamming over every run of the group's box, every P0 (the paper's ⟨N_J⟩).
 Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const KaplanMeierCurve& km,
-                std::optional<std::size_t> pooled_runs, const BootstrapOptions& bo, Tables& t) {
+                std::optional<std::size_t> pooled_runs, double N_J_first_size, const BootstrapOptions& bo, Tables& t) {
   const std::string P0_label = key.P0 ? num(*key.P0) : "none", P0s = P0_csv(P0_label);
   std::vector<const RunRow*> dep;
   for (const auto* r : rs)
@@ -827,11 +890,12 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
     g["shear_unstable_phi2"] = fraction_json(k2, n2);
   }
   // Divisions by φ_2 normalised by the mean number of cells at jamming (Fig. D1B), by budjam's φ_2
-  // (summary N_div_2) and as the paper's division figure counts them (every division after φ_J up to
-  // the first state with no tagged bud left)
+  // (summary N_div_2) and as the paper's division figure counts them (every division from the first
+  // jamming up to the first state with no tagged bud left, over the box's mean N at the first jamming)
   const double NJ = mean(finite(collect(rs, [](auto& r) { return r.N_J; })));
   g["N_div_2_over_N_J"] = median_json(collect(dep, [NJ](auto& r) { return r.N_div_2 / NJ; }), bo);
-  g["N_div_2_over_N_J_paper"] = median_json(collect(rs, [NJ](auto& r) { return r.N_div_2_none_left / NJ; }), bo);
+  g["N_div_2_over_N_J_paper"] =
+      median_json(collect(rs, [N_J_first_size](auto& r) { return r.N_div_2_none_left / N_J_first_size; }), bo);
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   // the paper's figure: mean ± SE over runs, every cell of a run
@@ -1367,11 +1431,13 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   const fs::path out(o.out);
   Tables tables;
   Json jgroups = Json::array();
+  std::map<double, std::vector<double>> N_J_first_by_L;
+  for (const auto& r : e.rows) N_J_first_by_L[r.L].push_back(r.N_J_first);
   for (const auto& [key, rs] : groups) {
     const auto pooled = e.survival_runs.find(key);
     jgroups.push_back(group_json(key, rs, e.survival.at(key),
                                  pooled != e.survival_runs.end() ? std::optional(pooled->second) : std::nullopt,
-                                 o.bootstrap, tables));
+                                 mean(finite(N_J_first_by_L.at(key.L))), o.bootstrap, tables));
   }
 
   Json J;

@@ -56,8 +56,19 @@ struct RunRow {
   double phi_2 = kNaN, dphi_2 = kNaN, P_2 = kNaN, Z_2 = kNaN, dZ_2 = kNaN, u_2 = kNaN, N_div_2 = kNaN;
   // χ̄ and λ̄_c: plain means over the accepted states of [φ_J, φ_2] (Eq. 13 averages over a)
   double chi_bar = kNaN, lambda_bar = kNaN;
-  double lambda_bar_lobes = kNaN;  // λ̄_c with u the contact-free lobes, as the paper's analysis reads u
-  // the first state with no tagged bud left: its φ, P and the divisions after φ_J up to it
+  // λ̄_c with u the contact-free lobes, as the paper's analysis reads u, over the states of
+  // [first φ_J, φ_2_first] that have non-rattlers
+  double lambda_bar_lobes = kNaN;
+  // The paper's analysis anchors at the run's first jamming (a run that unjammed has a later one,
+  // budjam's φ_J): φ_J, N_J, N_nr and the buds tagged there, and its φ_2 scan runs through every
+  // later state, the unjammed ones included, which follow those tags until a new jamming tags
+  // others (docs/analysis.md, "Definitions"). Equal to budjam's where the run never unjammed; NaN
+  // where its logs are from before the tags were followed through an unjamming.
+  double step_J_first = kNaN, phi_J_first = kNaN, N_J_first = kNaN, N_nr_J_first = kNaN, tagged_J_first = kNaN;
+  double phi_2_first = kNaN, dphi_2_first = kNaN, P_2_first = kNaN, chi_bar_first = kNaN;
+  double G_2_first = kNaN;  // where the run saved that state (packings/phi2.pack)
+  // From the first jamming as well: the first state with no tagged bud left, its φ, P and the
+  // divisions after the first φ_J up to it (the paper's division figure)
   double phi_2_none_left = kNaN, dphi_2_none_left = kNaN, P_2_none_left = kNaN, N_div_2_none_left = kNaN;
   double N_div_end = kNaN;  // divisions after φ_J at the end of the run
   // The definition of the φ_2 the run saved (packings/phi2.pack, summary.json phi_2): at most this
@@ -66,10 +77,12 @@ struct RunRow {
   double phi2_tagged_left = kBudjamTaggedLeft;
   double a_eps = kNaN, int_S = kNaN, pred_area = kNaN, pred_d2 = kNaN;  // per-run KM, ε = 1/N_nr,J
   // Eq. 14 as the paper's analysis computes it: a as diameter², a_ε the first completion with Ŝ ≤
-  // 1/tagged in floating point, no slack (so an exact level such as 1/5 can step one completion on)
+  // 1/tagged in floating point, no slack (so an exact level such as 1/5 can step one completion on);
+  // φ_J, n_J, u_J, the level's tagged count and χ̄ from the first jamming, Ŝ of the last episode's
+  // tags (its code keeps one cohort file, rewritten at each jamming)
   double pred_paper = kNaN;
   double G_2 = kNaN, G_2_energy = kNaN, B_2 = kNaN, G_min_2 = kNaN;  // at budjam's φ_2, if saved there
-  double G_2_none_left = kNaN;  // at the first state with none left, where the run saved that packing
+  double G_2_none_left = kNaN;  // at the first state with none left (from the first jamming), where the run saved it
   double h_gamma = kNaN;
   // As the paper's analysis takes Π(g): every cell, rattlers included, at Δφ = 3·10⁻³; the fraction
   // growing at g = 1 exactly (no bud pressure) is the weight of its spike.
@@ -195,6 +208,16 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"P_J", &RunRow::P_J},
                                             {"step_J", &RunRow::step_J},
                                             {"tagged_J", &RunRow::tagged},
+                                            {"step_J_first", &RunRow::step_J_first},
+                                            {"phi_J_first", &RunRow::phi_J_first},
+                                            {"N_J_first", &RunRow::N_J_first},
+                                            {"N_nr_J_first", &RunRow::N_nr_J_first},
+                                            {"tagged_J_first", &RunRow::tagged_J_first},
+                                            {"phi_2_first", &RunRow::phi_2_first},
+                                            {"dphi_2_first", &RunRow::dphi_2_first},
+                                            {"P_2_first", &RunRow::P_2_first},
+                                            {"chi_bar_first", &RunRow::chi_bar_first},
+                                            {"G_2_first", &RunRow::G_2_first},
                                             {"bud_records", &RunRow::bud_records}};
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.

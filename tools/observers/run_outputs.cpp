@@ -88,7 +88,8 @@ io::OwnedEntries run_owned_entries() {
 
 void RunLog::on_step_accepted(const StepAccepted& e) {
   const StateView& s = e.state;
-  const bool above = s.phase == Phase::jammed && s.network;
+  // From the first jamming on (unjammed states after it included) the network, χ_c and the tags.
+  const bool above = s.after_jamming && s.network;
   const ContactNetwork* n = s.network;
   auto opt = [&](auto v) { return above ? CsvField(v) : CsvField::missing(); };
   log(kSteps).row({s.step,
@@ -112,7 +113,7 @@ void RunLog::on_step_accepted(const StepAccepted& e) {
                    opt(s.buds->active()),
                    opt(s.buds->completed()),
                    opt(s.buds->divided()),
-                   opt(s.divisions_since_jamming)});
+                   s.phase == Phase::jammed ? CsvField(s.divisions_since_jamming) : CsvField::missing()});
 }
 
 void RunLog::on_divided(const Divided& e) {
