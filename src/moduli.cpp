@@ -10,6 +10,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -476,11 +477,17 @@ Eigen::MatrixXd solve_pinned(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf, 
     case ModuliSolver::cg: {
       if (!(options.cg_tolerance > 0 && options.cg_tolerance < 1))
         throw std::invalid_argument("elastic_response: cg_tolerance must lie in (0, 1)");
+      // CG converges on an indefinite H, and on one singular to the Hessian's resolution (a mechanism
+      // held by prestress below δ) to a response those modes decide. The direct solvers' test of the
+      // factor decides here too, and such a system takes their regularised path (the saddle test,
+      // then refinement that converges only without load on the soft modes): every solver tells a
+      // saddle or an unresolved mechanism alike.
+      CholmodSolver f(Factorisation::ldlt);
+      if (!(f.factor(Hf) && f.negative_pivots() == 0 && f.rcond() > kSingularRcond)) {
+        k.cholesky_failed_column = f.failed_column();
+        return regularised_refinement(Hf, Xf, options, k);
+      }
       k.solver_tolerance = options.cg_tolerance;
-      // CG can converge on an indefinite H, which the direct solvers' factors refuse: the saddle
-      // test they fall back to runs here first, so every solver tells a saddle alike.
-      if (const Stability st = hessian_stability(Hf, options.regularisation); !st.minimum())
-        return no_response(st, Hf, Xf, k);
       if (options.cg_preconditioner == CgPreconditioner::incomplete_cholesky) {
         k.method = SolveMethod::cg_ichol;
         return cg_solve<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(Hf, Xf, options, k);
@@ -655,11 +662,24 @@ void require_relaxed_moduli(const ElasticResponse& e, const std::string& what) {
   if (!e.linear_response()) return;
   const bool finite = std::isfinite(e.B()) && std::isfinite(e.G()) && std::isfinite(e.B_energy()) &&
                       std::isfinite(e.G_energy()) && e.R.allFinite() && e.E.allFinite();
-  if (!finite || !e.kernel.well_posed)
-    throw NoResultError(
-        what + ": the linear response did not converge (solver " + to_string(e.kernel.method) + ", relative residual " +
-        std::to_string(e.kernel.residual) + (finite ? "" : ", moduli not finite") +
-        "); try another of the solvers ldlt, cholesky, dense and cg, or relax the packing to force balance first");
+  if (!finite || !e.kernel.well_posed) {
+    char residual[32];
+    std::snprintf(residual, sizeof residual, "%.3g", e.kernel.residual);
+    const std::string diagnosis = "(solver " + std::string(to_string(e.kernel.method)) + ", relative residual " +
+                                  residual + (finite ? "" : ", moduli not finite") + ")";
+    // Every solver takes the regularised path when the factor is singular to the Hessian's resolution.
+    if (e.kernel.method == SolveMethod::regularised_refinement)
+      throw NoResultError(what +
+                          ": no resolved linear response: the non-rattler Hessian is singular to its resolution and "
+                          "the strain loads its soft modes (a mechanism held only by prestress below the "
+                          "regularisation, as at or below the jamming point) " +
+                          diagnosis +
+                          "; every solver gives this; relax the packing to force balance first, or take one "
+                          "at a larger pressure");
+    throw NoResultError(what + ": the linear response did not converge " + diagnosis +
+                        "; try another of the solvers ldlt, cholesky, dense and cg, or relax the packing to force "
+                        "balance first");
+  }
 }
 
 ElasticResponse elastic_response(const Packing& p, const std::vector<Contact>& contacts, const ContactNetwork& net,

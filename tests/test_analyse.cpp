@@ -368,6 +368,37 @@ TEST_CASE(
   CHECK(unjammed >= 1);  // one of the three runs unjams after its first jamming
 }
 
+TEST_CASE(
+    "the paper's means over [first φ_J, φ_2] count a jamming after an unjamming twice, as its code writes "
+    "that state's row for the followed tags and again for the new ones",
+    "[analyse]") {
+  // L = 7, P0 = 1e-4, seed 4: jams at step 1591, unjams, jams again at 1593, and reaches φ_2 after it.
+  const fs::path scene = work_dir() / "rejam.toml", dir = work_dir() / "rejam_run", out = work_dir() / "rejam_out";
+  std::ofstream(scene) << "[run]\nname = \"rejam\"\nseed = 4\n[box]\nL = 7.0\n[growth]\nP0 = 1e-4\n"
+                       << "[jamming]\ntargets = [1e-3, 1e-2]\ncontinue_to_phi2 = true\n";
+  REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir)).code == 0);
+  REQUIRE(run_budjam("analyse " + q(dir) + " --out " + q(out) + " --main-L 7").code == 0);
+  const auto r = read_csv(out / "runs.csv").at(0);
+  const double phi_2_first = number(r.at("phi_2_first"));
+  double chi_sum = 0, n = 0, rejammed_at = NAN;
+  std::string phase_before;
+  for (const auto& row : read_csv(dir / "steps.csv")) {
+    const std::string phase = row.at("phase");
+    if (phase == "jammed" && phase_before == "unjammed" && std::isfinite(n) && n > 0) {
+      rejammed_at = number(row.at("phi"));
+      chi_sum += number(row.at("chi_c")), ++n;  // the followed tags' row of this state
+    }
+    if (phase == "jammed" || n > 0) {
+      if (number(row.at("phi")) > phi_2_first) break;
+      chi_sum += number(row.at("chi_c")), ++n;
+    }
+    phase_before = phase;
+  }
+  REQUIRE(std::isfinite(rejammed_at));
+  REQUIRE(rejammed_at < phi_2_first);  // the doubled state lies inside the mean
+  CHECK(number(r.at("chi_bar_first")) == Approx(chi_sum / n).epsilon(1e-12));
+}
+
 TEST_CASE("analyse reads the φ_2 definition a run saved: budjam's φ_2 from the log, G of the none-left packing",
           "[analyse]") {
   // Seed 4 of the runs above, grown on to the first state with no tagged bud left, which it saves.
@@ -712,15 +743,17 @@ fs::path hand_tables(const std::string& name, const std::function<void(std::ostr
 constexpr const char* kRunsHeader =
     "run,L,P0,seed,status,jamming_state,phi_J,u_J,n_J,N_J,N_nr_J,phi_2,dphi_2,P_2,lambda_bar,lambda_bar_lobes,"
     "dphi_2_pred_area,dphi_2_pred_diameter_sq,dphi_2_pred_paper,G_2,phi_J_first,phi_2_first,dphi_2_first,P_2_first,"
-    "G_2_first\n";
+    "G_2_first,selection_divisions_first\n";
 
 TEST_CASE(
-    "the paper's rules on hand-built tables: selection at the smallest target past φ_2, Eq. 14 as diameter², "
+    "the paper's rules on hand-built tables: selection by the divisions of the target runs past φ_2, Eq. 14 as "
+    "diameter², "
     "its φ_2 summary over the runs with a prediction, fences on G_2 alone, φ_J and φ_2 from the first jamming",
     "[analyse]") {
   // Six runs of one group. Targets at Δφ = 10⁻³ (before every φ_2) and 3·10⁻² (beyond it), with the
-  // divisions after φ_J counted there. Run 6 has 2 divisions at the first target but 12 at the one
-  // that decides (the smallest at or beyond φ_2): not admitted. Run 5's G_2 is an outlier of the
+  // divisions after φ_J counted there; runs.csv's selection_divisions_first holds those of the target
+  // runs past φ_2 (here the 3·10⁻² one). Run 6 has 2 divisions at the first target but 12 at the one
+  // past φ_2: not admitted. Run 5's G_2 is an outlier of the
   // admitted G_2 (fences [0.8, 1.6] from 1.0, 1.1, 1.2, 1.3, 50): out of the G_2 statistics only. Run 5
   // has no prediction under the paper's rule (its Ŝ never fell to 1/tagged): out of the φ_2 summary.
   // Run 3 unjammed after a first jamming 0.004 below budjam's φ_J (its last): the paper's columns
@@ -743,7 +776,8 @@ TEST_CASE(
         << dphi_2_budjam[k] << "," << P_2[k] << "," << 0.5 + 0.01 * k << "," << 0.6 + 0.01 * k << ","
         << 0.75 * dphi_2_budjam[k] << "," << dphi_2[k] + 0.002 * k << ","
         << (k == 4 ? std::string() : std::to_string(dphi_2[k] + 0.001 * k)) << "," << (k == 2 ? 2.0 : G_2[k]) << ","
-        << phi_J_first << "," << phi_2 << "," << dphi_2[k] << "," << P_2[k] << "," << G_2[k] << "\n";
+        << phi_J_first << "," << phi_2 << "," << dphi_2[k] << "," << P_2[k] << "," << G_2[k] << "," << div_far[k]
+        << "\n";
       t << run << ",15,0.001," << k + 1 << ",0.001," << phi_J + 0.001 << ",2,true\n";
       t << run << ",15,0.001," << k + 1 << ",0.03," << phi_J + 0.03 << "," << div_far[k] << ",false\n";
     }
@@ -856,7 +890,7 @@ TEST_CASE(
         const std::string run = "few/P0_" + std::string(P0s[p]) + "/seed" + std::to_string(s);
         const double P_2 = 0.01 / (p + 1) + 0.001 * s;
         r << run << ",15," << P0s[p] << "," << k + 1 << ",finished," << k << ",0.84,0.2,0.76,172,170,0.85,0.01," << P_2
-          << ",0.5,0.5,0.01,0.011,0.011,1.0,0.84,0.85,0.01," << P_2 << ",1.0\n";
+          << ",0.5,0.5,0.01,0.011,0.011,1.0,0.84,0.85,0.01," << P_2 << ",1.0,2\n";
         for (int d = 0; d < 2; ++d)
           t << run << ",15," << P0s[p] << "," << k + 1 << "," << (d ? 0.03 : 0.001) << "," << (d ? 0.87 : 0.841)
             << ",2," << (d ? "false" : "true") << ",0.01," << 0.01 * (k + d) << "," << 0.001 * d << ",0.5,"

@@ -101,7 +101,7 @@ TEST_CASE("χ̄ is the plain mean over the accepted states, not a trapezoid in �
   CHECK(std::isnan(growth_coordinate_average(chi, 5, 6)));
 }
 
-TEST_CASE("the paper's selection decides on the divisions at the smallest target at or beyond φ_2") {
+TEST_CASE("the paper's selection admits a seed when a target run that reached φ_2 has at most 10 divisions") {
   // targets in any order: φ 0.85, 0.80, 0.83, 0.81 with 14, 0, 9, 2 divisions after φ_J
   const std::vector<double> phi{0.85, 0.80, 0.83, 0.81}, div{14, 0, 9, 2};
   CHECK(selection_divisions(phi, div, 0.82) == 9);  // the 0.83 run: admitted
@@ -114,6 +114,11 @@ TEST_CASE("the paper's selection decides on the divisions at the smallest target
   CHECK(paper_admits(10));
   CHECK(!paper_admits(10.5));
   CHECK_THROWS(selection_divisions(phi, std::vector<double>{1}, 0.8));
+  // After an unjamming the count restarts at the new jamming: a later target run can have fewer
+  // divisions than an earlier one, and it is one of the runs that reached φ_2.
+  const std::vector<double> reset_phi{0.81, 0.84, NAN}, reset_div{12, 3, NAN};
+  CHECK(selection_divisions(reset_phi, reset_div, 0.805) == 3);
+  CHECK(paper_admits(selection_divisions(reset_phi, reset_div, 0.805)));
 }
 
 TEST_CASE("the paper's fences apply to G_2 alone: G_2 > 0 first, four values at least, never an empty set") {

@@ -644,12 +644,29 @@ TEST_CASE(
   }
 }
 
+namespace {
+
+// `budjam moduli` on a packing of tests/data (its name without .pack) with `options` and each solver:
+// `check(code, stdout, stderr)` under INFO of the packing and solver. Every solver must tell the
+// cases where a packing has no linear response alike.
+template <class Check>
+void moduli_with_every_solver(const std::string& packing, const std::string& options, Check check) {
+  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  for (const char* solver : {"ldlt", "cholesky", "dense", "cg"}) {
+    INFO(packing << ", --solver " << solver);
+    const auto [code, out, err] = run_budjam("moduli '" + std::string(src) + "/tests/data/" + packing + ".pack' " +
+                                             options + " --solver " + solver);
+    check(code, out, err);
+  }
+}
+
+}  // namespace
+
 TEST_CASE(
     "budjam moduli on a packing with an unstable mode prints its JSON with null relaxed moduli, a one-line notice "
     "naming what it is (a saddle, or a minimum held by a pair at zero force), and exits 1, whatever the solver",
     "[fast]") {
-  const char* src = std::getenv("BUDJAM_SOURCE_DIR");
-  REQUIRE(src != nullptr);
   struct Case {
     const char* packing;
     bool minimum;
@@ -659,10 +676,7 @@ TEST_CASE(
   for (const Case& c : {Case{"saddle_jamming_L15_seed3", false, "saddle", "is a saddle"},
                         Case{"contact_bounded_jamming_L20_seed3", true, "contact-bounded minimum",
                              "is a minimum of U held by a pair at zero force"}}) {
-    for (const char* solver : {"ldlt", "cholesky", "dense", "cg"}) {  // every solver tells them alike
-      INFO(c.packing << ", --solver " << solver);
-      const auto [code, out, err] =
-          run_budjam("moduli '" + std::string(src) + "/tests/data/" + c.packing + ".pack' --json --solver " + solver);
+    moduli_with_every_solver(c.packing, "--json", [&](int code, const std::string& out, const std::string& err) {
       CHECK(code == 1);
       // a finding, reported as such in one line, not as an error
       CHECK(err.rfind("budjam: moduli: ", 0) == 0);
@@ -677,8 +691,24 @@ TEST_CASE(
       CHECK(j["kernel"]["method"] == "unstable");
       CHECK(j["kernel"]["unstable_modes"] == 1);
       CHECK(j["moduli_affine"]["B"].get<double>() > 0);
-    }
+    });
   }
+}
+
+TEST_CASE(
+    "budjam moduli refuses alike with every solver a packing whose Hessian is singular to its resolution where the "
+    "strain loads it (a mechanism held by prestress below the regularisation): exit 1, one line, no moduli",
+    "[fast]") {
+  // The demo's jamming point (L = 8, seed 1) decompressed by 1.15e-8 and relaxed: hypostatic (ΔZ < 0)
+  // at P ~ 6e-11, a minimum, its extra floppy modes held only by a prestress below δ. CG once gave a
+  // negative B here with exit 0.
+  moduli_with_every_solver("mechanism_below_resolution_L8", "--relax",
+                           [](int code, const std::string& out, const std::string& err) {
+                             CHECK(code == 1);
+                             CHECK(out.empty());
+                             CHECK(err.find("no resolved linear response") != std::string::npos);
+                             CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+                           });
 }
 
 // ---- linear solver of the pinned system (accuracy against cost) -----------------------------

@@ -6,9 +6,7 @@
 
 namespace budjam::tools {
 
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-}  // namespace
+namespace {}  // namespace
 
 std::optional<std::size_t> depletion_state(std::span<const double> tagged_active, std::size_t from, double left) {
   for (std::size_t k = from; k < tagged_active.size(); ++k)
@@ -26,13 +24,10 @@ double growth_coordinate_average(std::span<const double> y, std::size_t first, s
 double selection_divisions(std::span<const double> target_phi, std::span<const double> target_divisions, double phi_2) {
   if (target_phi.size() != target_divisions.size())
     throw std::invalid_argument("selection_divisions: target φ and divisions differ in length");
-  double smallest_phi = kInf, divisions = std::numeric_limits<double>::quiet_NaN();
+  double fewest = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t k = 0; k < target_phi.size(); ++k)
-    if (target_phi[k] >= phi_2 && target_phi[k] < smallest_phi) {
-      smallest_phi = target_phi[k];
-      divisions = target_divisions[k];
-    }
-  return divisions;
+    if (target_phi[k] >= phi_2 && !(target_divisions[k] >= fewest)) fewest = target_divisions[k];
+  return fewest;
 }
 
 std::vector<bool> paper_G2_kept(std::span<const double> G_2, const std::vector<bool>& admitted, double k) {

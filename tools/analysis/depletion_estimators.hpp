@@ -24,11 +24,12 @@ std::optional<std::size_t> depletion_state(std::span<const double> tagged_active
 double growth_coordinate_average(std::span<const double> y, std::size_t first, std::size_t last);
 
 // The paper's run selection (its figure pipeline, where every target Δφ is a run of its own): a
-// (P0, seed) enters the φ_2, P_2, λ̄_c, Eq. 14 and G_2 statistics through the run of the smallest
-// target whose end lies at or beyond φ_2, and only when that run had at most 10 divisions after φ_J
-// at its end. One budjam run visits every target, so that run is this run up to the smallest target
-// at or beyond φ_2: the divisions counted there decide. `target_phi` and `target_divisions` are the
-// run's targets (φ, divisions after φ_J); NaN when no target reaches φ_2 (the paper has no such run).
+// (P0, seed) enters the φ_2, P_2, λ̄_c, Eq. 14 and G_2 statistics when one of its target runs whose
+// end lies at or beyond φ_2 had at most 10 divisions at its end (counted from its last jamming; its
+// smallest such run represents it). One budjam run visits every target, so a target run is this run
+// up to where it first lands on that target. `target_phi` and `target_divisions` are those ends (φ,
+// divisions there; NaN φ for a target never landed); the fewest divisions of the runs that reach
+// φ_2 decide, NaN when none does (the paper has no such run).
 double selection_divisions(std::span<const double> target_phi, std::span<const double> target_divisions, double phi_2);
 
 // A run whose selection divisions are at most 10 (a NaN is never admitted).

@@ -30,6 +30,7 @@
 #include "io/run_data.hpp"
 #include "io/run_directory.hpp"
 
+#include "budjam/bud_events.hpp"  // BudEventKind of bud_events.csv rows
 #include "budjam/depletion.hpp"
 #include "budjam/growth.hpp"
 #include "budjam/saddle.hpp"  // StationaryPoint of a moduli sidecar
@@ -146,31 +147,72 @@ struct FirstJammingStates {
 
 // The paper's anchor (RunRow::phi_J_first …): its first post-jamming row is the run's first jammed
 // state, and every accepted state after it is a row of its φ_2 scan, with the tags its code follows.
-FirstJammingStates anchor_at_first_jamming(const tools::RunData& r, RunRow& x) {
+// At a jamming after an unjamming its code writes two rows of the one state: the followed tags'
+// (those still unconstrained there end censored_unjam, which bud_events.csv counts) and the new
+// tags'; its scan and its means over [φ_J, φ_2] take both.
+FirstJammingStates anchor_at_first_jamming(const tools::RunData& r, const Scene& scene, RunRow& x) {
   const auto& S = r.steps;
   const std::size_t c_step = S.column("step"), c_phase = S.column("phase"), c_phi = S.column("phi"),
                     c_P = S.column("P"), c_N = S.column("N"), c_Nf = S.column("N_f"), c_Nu = S.column("N_u"),
-                    c_chi = S.column("chi_c"), c_act = S.column("tagged_active");
+                    c_chi = S.column("chi_c"), c_act = S.column("tagged_active"),
+                    c_div = S.column("divisions_since_jamming");
+  std::map<double, double> followed_left;  // step of a jamming → earlier tags still active there
+  if (r.bud_events) {
+    const auto& E = *r.bud_events;
+    const std::size_t c_ev = E.column("event"), c_es = E.column("step");
+    for (std::size_t j = 0; j < E.size(); ++j)
+      if (E.text(j, c_ev) == to_string(BudEventKind::censored_unjam)) followed_left[E.number(j, c_es)] += 1;
+  }
   std::size_t first = 0;
   while (first < S.size() && S.text(first, c_phase) != "jammed") ++first;
   std::vector<double> st, phi, P, active, chi, lambda_lobes;
+  // Each Δφ target is a run of its own there, which ends where the trajectory first lands on it (in
+  // whichever episode) with the divisions counted from that episode's jamming.
+  std::vector<double> target_end(scene.targets.size(), kNaN), target_divisions(scene.targets.size(), kNaN);
+  double phi_J_episode = kNaN;
+  bool old_logs = false;
   for (std::size_t k = first; k < S.size(); ++k) {
-    st.push_back(S.number(k, c_step));
-    phi.push_back(S.number(k, c_phi));
-    P.push_back(S.number(k, c_P));
-    active.push_back(S.number(k, c_act));
-    chi.push_back(S.number(k, c_chi));
-    const double N = S.number(k, c_N), Nf = S.number(k, c_Nf);
+    const bool jammed = S.text(k, c_phase) == "jammed";
+    const bool jamming = jammed && (k == first || S.text(k - 1, c_phase) != "jammed");
+    const double N = S.number(k, c_N), Nf = S.number(k, c_Nf), c = S.number(k, c_chi);
     // a state with no non-rattler has no λ_c (its paper's code, with one-pass rattlers, divides by N_nr)
-    lambda_lobes.push_back(N > Nf ? lambda_c(S.number(k, c_Nu) / (N - Nf), chi.back()) : kNaN);
+    const double lambda = N > Nf ? lambda_c(S.number(k, c_Nu) / (N - Nf), c) : kNaN;
+    const auto row = [&](double tags) {
+      st.push_back(S.number(k, c_step));
+      phi.push_back(S.number(k, c_phi));
+      P.push_back(S.number(k, c_P));
+      active.push_back(tags);
+      chi.push_back(c);
+      lambda_lobes.push_back(lambda);
+    };
+    if (jamming && k > first) {
+      const auto left = followed_left.find(S.number(k, c_step));
+      row(!r.bud_events ? kNaN : left != followed_left.end() ? left->second : 0.0);
+    }
+    const double tags = S.number(k, c_act);
+    old_logs = old_logs || std::isnan(tags);
+    row(tags);
+    if (jamming) phi_J_episode = phi.back();
+    if (!jammed) continue;
+    for (std::size_t t = 0; t < scene.targets.size(); ++t)
+      if (std::isnan(target_end[t]) &&
+          std::abs(phi.back() - (phi_J_episode + scene.targets[t])) <= scene.target_tolerance) {
+        target_end[t] = phi.back();
+        target_divisions[t] = S.number(k, c_div);
+      }
   }
   // Logs from before the tags were followed through an unjamming leave those rows empty.
-  if (st.empty() || std::any_of(active.begin(), active.end(), [](double a) { return std::isnan(a); })) return {};
+  if (st.empty() || old_logs) return {};
   x.step_J_first = st[0];
   x.phi_J_first = phi[0];
   x.N_J_first = S.number(first, c_N);
   x.N_nr_J_first = x.N_J_first - S.number(first, c_Nf);
   x.tagged_J_first = active[0];
+  // Its means take every row with φ ≤ φ_2 (both rows of a state).
+  const auto through = [&](std::size_t k) {
+    while (k + 1 < st.size() && st[k + 1] == st[k]) ++k;
+    return k;
+  };
   // Its scan includes the jamming state itself (with at most one bud tagged there, φ_2 = φ_J).
   FirstJammingStates at;
   if (const auto k = depletion_state(active, 0, kBudjamTaggedLeft)) {
@@ -178,8 +220,9 @@ FirstJammingStates anchor_at_first_jamming(const tools::RunData& r, RunRow& x) {
     x.phi_2_first = phi[*k];
     x.dphi_2_first = phi[*k] - x.phi_J_first;
     x.P_2_first = P[*k];
-    x.chi_bar_first = growth_coordinate_average(chi, 0, *k);
-    x.lambda_bar_lobes = growth_coordinate_average(lambda_lobes, 0, *k);
+    x.chi_bar_first = growth_coordinate_average(chi, 0, through(*k));
+    x.lambda_bar_lobes = growth_coordinate_average(lambda_lobes, 0, through(*k));
+    x.selection_divisions_first = selection_divisions(target_end, target_divisions, x.phi_2_first);
   }
   if (const auto k = depletion_state(active, 0, kNoneLeft)) {
     at.none_left = st[*k];
@@ -262,7 +305,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
       x.lambda_bar = growth_coordinate_average(lambda, 0, k2);
     }
   }
-  const FirstJammingStates first = anchor_at_first_jamming(r, x);
+  const FirstJammingStates first = anchor_at_first_jamming(r, io::load_scene(r.dir / io::run_files::scene), x);
 
   // Survival of the tagged buds: per-run a_ε with ε = 1/N_nr,J (at most one left = φ_2's definition)
   if (r.bud_events) {
@@ -741,18 +784,6 @@ Json states_json(const std::vector<const RunRow*>& rs, F f, const BootstrapOptio
   return j;
 }
 
-// The divisions that decide the paper's selection for a run (selection_divisions): at its smallest
-// target at or beyond its φ_2 (from the first jamming). A target's divisions count from the last
-// jamming, as its code's count restarts at each.
-double run_selection_divisions(const RunRow& r) {
-  std::vector<double> phi, divisions;
-  for (const auto& t : r.targets) {
-    phi.push_back(t.phi);
-    divisions.push_back(t.N_div);
-  }
-  return selection_divisions(phi, divisions, r.phi_2_first);
-}
-
 // The statistics of the paper's analysis over the depleted runs of a group (docs/analysis.md,
 // "Definitions"): φ_2 at most one tagged bud left, as budjam's, but anchored at the run's first
 // jamming; the runs its selection admits; Eq. 14 with a as diameter squared; G_2 > 0 and Tukey's
@@ -761,7 +792,7 @@ double run_selection_divisions(const RunRow& r) {
 void paper_analysis_json(Json& g, const std::vector<const RunRow*>& rs, const BootstrapOptions& bo) {
   std::vector<const RunRow*> admitted, kept;
   for (const auto* r : rs)
-    if (std::isfinite(r->phi_2_first) && paper_admits(run_selection_divisions(*r))) admitted.push_back(r);
+    if (std::isfinite(r->phi_2_first) && paper_admits(r->selection_divisions_first)) admitted.push_back(r);
   const auto keep =
       paper_G2_kept(collect(admitted, [](auto& r) { return r.G_2_first; }), std::vector<bool>(admitted.size(), true));
   for (std::size_t k = 0; k < admitted.size(); ++k)

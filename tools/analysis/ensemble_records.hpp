@@ -67,6 +67,10 @@ struct RunRow {
   double step_J_first = kNaN, phi_J_first = kNaN, N_J_first = kNaN, N_nr_J_first = kNaN, tagged_J_first = kNaN;
   double phi_2_first = kNaN, dphi_2_first = kNaN, P_2_first = kNaN, chi_bar_first = kNaN;
   double G_2_first = kNaN;  // where the run saved that state (packings/phi2.pack)
+  // The paper's selection: the fewest divisions (from the episode's jamming) at the end of a target
+  // run that reached phi_2_first, each target a run of its own ending where the trajectory first lands
+  // on it; NaN where none did. Admitted with at most kPaperMaxDivisions.
+  double selection_divisions_first = kNaN;
   // From the first jamming as well: the first state with no tagged bud left, its φ, P and the
   // divisions after the first φ_J up to it (the paper's division figure)
   double phi_2_none_left = kNaN, dphi_2_none_left = kNaN, P_2_none_left = kNaN, N_div_2_none_left = kNaN;
@@ -218,6 +222,7 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
                                             {"P_2_first", &RunRow::P_2_first},
                                             {"chi_bar_first", &RunRow::chi_bar_first},
                                             {"G_2_first", &RunRow::G_2_first},
+                                            {"selection_divisions_first", &RunRow::selection_divisions_first},
                                             {"bud_records", &RunRow::bud_records}};
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
