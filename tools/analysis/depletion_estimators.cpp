@@ -6,8 +6,6 @@
 
 namespace budjam::tools {
 
-namespace {}  // namespace
-
 std::optional<std::size_t> depletion_state(std::span<const double> tagged_active, std::size_t from, double left) {
   for (std::size_t k = from; k < tagged_active.size(); ++k)
     if (tagged_active[k] <= left) return k;
