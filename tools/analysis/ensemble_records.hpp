@@ -8,6 +8,7 @@
 #include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -163,67 +164,78 @@ struct Ensemble {
 struct RunColumn {
   const char* name;
   double RunRow::*field;
+  // What it is computed from, for the account of a column that tables of an earlier format lack.
+  const char* source;
   const char* legacy = nullptr;
 };
+inline constexpr const char kSummary[] = "summary.json";
+inline constexpr const char kSteps[] = "steps.csv";
+inline constexpr const char kBudEvents[] = "bud_events.csv";
+inline constexpr const char kModuliAtPhi2[] = "the moduli at φ_2";
+inline constexpr const char kGrowthFactors[] = "the growth factor of each cell at Δφ = 3·10⁻³";
+inline constexpr const char kJammedPacking[] = "the jammed packing";
 struct TargetColumn {
   const char* name;
   double TargetRow::*field;
 };
 
 // runs.csv after its leading columns run, L, P0, seed, status, jamming_state, protocol, cells.
-inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J},
-                                            {"u_J", &RunRow::u_J},
-                                            {"u_J_lobes", &RunRow::u_J_lobes},
-                                            {"n_J", &RunRow::n_J},
-                                            {"N_J", &RunRow::N_J},
-                                            {"N_nr_J", &RunRow::N_nr_J},
-                                            {"Z_J", &RunRow::Z_J},
-                                            {"dZ_J", &RunRow::dZ_J},
-                                            {"phi_2", &RunRow::phi_2},
-                                            {"dphi_2", &RunRow::dphi_2},
-                                            {"P_2", &RunRow::P_2},
-                                            {"Z_2", &RunRow::Z_2},
-                                            {"dZ_2", &RunRow::dZ_2},
-                                            {"u_2", &RunRow::u_2},
-                                            {"N_div_2", &RunRow::N_div_2},
-                                            {"chi_bar", &RunRow::chi_bar},
-                                            {"lambda_bar", &RunRow::lambda_bar},
-                                            {"lambda_bar_lobes", &RunRow::lambda_bar_lobes},
-                                            {"phi_2_none_left", &RunRow::phi_2_none_left, "phi_2_paper"},
-                                            {"dphi_2_none_left", &RunRow::dphi_2_none_left, "dphi_2_paper"},
-                                            {"P_2_none_left", &RunRow::P_2_none_left, "P_2_paper"},
-                                            {"N_div_2_none_left", &RunRow::N_div_2_none_left, "N_div_2_paper"},
-                                            {"N_div_end", &RunRow::N_div_end},
-                                            {"phi_2_tagged_left", &RunRow::phi2_tagged_left},
-                                            {"a_eps", &RunRow::a_eps},
-                                            {"integral_S", &RunRow::int_S},
-                                            {"dphi_2_pred_area", &RunRow::pred_area},
-                                            {"dphi_2_pred_diameter_sq", &RunRow::pred_d2},
-                                            {"dphi_2_pred_paper", &RunRow::pred_paper},
-                                            {"B_2", &RunRow::B_2},
-                                            {"G_2", &RunRow::G_2},
-                                            {"G_2_energy", &RunRow::G_2_energy},
-                                            {"G_min_2", &RunRow::G_min_2},
-                                            {"G_2_none_left", &RunRow::G_2_none_left, "G_2_paper"},
-                                            {"h_gamma", &RunRow::h_gamma},
-                                            {"h_gamma_all_cells", &RunRow::h_gamma_all_cells},
-                                            {"g1_fraction_all_cells", &RunRow::g1_fraction_all_cells},
-                                            {"lc2_J", &RunRow::lc2_J},
-                                            {"P_J", &RunRow::P_J},
-                                            {"step_J", &RunRow::step_J},
-                                            {"tagged_J", &RunRow::tagged},
-                                            {"step_J_first", &RunRow::step_J_first},
-                                            {"phi_J_first", &RunRow::phi_J_first},
-                                            {"N_J_first", &RunRow::N_J_first},
-                                            {"N_nr_J_first", &RunRow::N_nr_J_first},
-                                            {"tagged_J_first", &RunRow::tagged_J_first},
-                                            {"phi_2_first", &RunRow::phi_2_first},
-                                            {"dphi_2_first", &RunRow::dphi_2_first},
-                                            {"P_2_first", &RunRow::P_2_first},
-                                            {"chi_bar_first", &RunRow::chi_bar_first},
-                                            {"G_2_first", &RunRow::G_2_first},
-                                            {"selection_divisions_first", &RunRow::selection_divisions_first},
-                                            {"bud_records", &RunRow::bud_records}};
+inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J, kSummary},
+                                            {"u_J", &RunRow::u_J, kSummary},
+                                            {"u_J_lobes", &RunRow::u_J_lobes, kSummary},
+                                            {"n_J", &RunRow::n_J, kSummary},
+                                            {"N_J", &RunRow::N_J, kSummary},
+                                            {"N_nr_J", &RunRow::N_nr_J, kSummary},
+                                            {"Z_J", &RunRow::Z_J, kSummary},
+                                            {"dZ_J", &RunRow::dZ_J, kSummary},
+                                            {"phi_2", &RunRow::phi_2, kSummary},
+                                            {"dphi_2", &RunRow::dphi_2, kSummary},
+                                            {"P_2", &RunRow::P_2, kSummary},
+                                            {"Z_2", &RunRow::Z_2, kSummary},
+                                            {"dZ_2", &RunRow::dZ_2, kSummary},
+                                            {"u_2", &RunRow::u_2, kSteps},
+                                            {"N_div_2", &RunRow::N_div_2, kSummary},
+                                            {"chi_bar", &RunRow::chi_bar, kSteps},
+                                            {"lambda_bar", &RunRow::lambda_bar, kSteps},
+                                            {"lambda_bar_lobes", &RunRow::lambda_bar_lobes, kSteps},
+                                            {"phi_2_none_left", &RunRow::phi_2_none_left, kSteps, "phi_2_paper"},
+                                            {"dphi_2_none_left", &RunRow::dphi_2_none_left, kSteps, "dphi_2_paper"},
+                                            {"P_2_none_left", &RunRow::P_2_none_left, kSteps, "P_2_paper"},
+                                            {"N_div_2_none_left", &RunRow::N_div_2_none_left, kSteps, "N_div_2_paper"},
+                                            {"N_div_end", &RunRow::N_div_end, kSteps},
+                                            {"phi_2_tagged_left", &RunRow::phi2_tagged_left, kSummary},
+                                            {"a_eps", &RunRow::a_eps, kBudEvents},
+                                            {"integral_S", &RunRow::int_S, kBudEvents},
+                                            {"dphi_2_pred_area", &RunRow::pred_area, kBudEvents},
+                                            {"dphi_2_pred_diameter_sq", &RunRow::pred_d2, kBudEvents},
+                                            {"dphi_2_pred_paper", &RunRow::pred_paper, kBudEvents},
+                                            {"B_2", &RunRow::B_2, kModuliAtPhi2},
+                                            {"G_2", &RunRow::G_2, kModuliAtPhi2},
+                                            {"G_2_energy", &RunRow::G_2_energy, kModuliAtPhi2},
+                                            {"G_min_2", &RunRow::G_min_2, kModuliAtPhi2},
+                                            {"G_2_none_left", &RunRow::G_2_none_left, kModuliAtPhi2, "G_2_paper"},
+                                            {"h_gamma", &RunRow::h_gamma, kGrowthFactors},
+                                            {"h_gamma_all_cells", &RunRow::h_gamma_all_cells, kGrowthFactors},
+                                            {"g1_fraction_all_cells", &RunRow::g1_fraction_all_cells, kGrowthFactors},
+                                            {"lc2_J", &RunRow::lc2_J, kJammedPacking},
+                                            {"P_J", &RunRow::P_J, kSummary},
+                                            {"step_J", &RunRow::step_J, kSummary},
+                                            {"tagged_J", &RunRow::tagged, kSummary},
+                                            {"step_J_first", &RunRow::step_J_first, kSteps},
+                                            {"phi_J_first", &RunRow::phi_J_first, kSteps},
+                                            {"N_J_first", &RunRow::N_J_first, kSteps},
+                                            {"N_nr_J_first", &RunRow::N_nr_J_first, kSteps},
+                                            {"tagged_J_first", &RunRow::tagged_J_first, kSteps},
+                                            {"phi_2_first", &RunRow::phi_2_first, kSteps},
+                                            {"dphi_2_first", &RunRow::dphi_2_first, kSteps},
+                                            {"P_2_first", &RunRow::P_2_first, kSteps},
+                                            {"chi_bar_first", &RunRow::chi_bar_first, kSteps},
+                                            {"G_2_first", &RunRow::G_2_first, kModuliAtPhi2},
+                                            {"selection_divisions_first", &RunRow::selection_divisions_first, kSteps},
+                                            {"bud_records", &RunRow::bud_records, kBudEvents}};
+
+static_assert(std::ranges::all_of(kRunColumns, [](const RunColumn& c) { return c.source != nullptr; }),
+              "every runs.csv column names what it is computed from");
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
 inline constexpr TargetColumn kTargetColumns[] = {{"phi", &TargetRow::phi},

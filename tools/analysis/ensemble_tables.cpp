@@ -23,44 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// What a runs.csv column is computed from, for the account of a column the tables lack.
-std::string needs(const std::string& column) {
-  static const std::map<std::string, std::string> from{
-      {"u_2", "steps.csv"},
-      {"chi_bar", "steps.csv"},
-      {"lambda_bar", "steps.csv"},
-      {"lambda_bar_lobes", "steps.csv"},
-      {"step_J_first", "steps.csv"},
-      {"phi_J_first", "steps.csv"},
-      {"N_J_first", "steps.csv"},
-      {"N_nr_J_first", "steps.csv"},
-      {"tagged_J_first", "steps.csv"},
-      {"phi_2_first", "steps.csv"},
-      {"dphi_2_first", "steps.csv"},
-      {"P_2_first", "steps.csv"},
-      {"chi_bar_first", "steps.csv"},
-      {"G_2_first", "the moduli at φ_2"},
-      {"phi_2_none_left", "steps.csv"},
-      {"dphi_2_none_left", "steps.csv"},
-      {"P_2_none_left", "steps.csv"},
-      {"N_div_2_none_left", "steps.csv"},
-      {"N_div_end", "steps.csv"},
-      {"a_eps", "bud_events.csv"},
-      {"integral_S", "bud_events.csv"},
-      {"dphi_2_pred_paper", "bud_events.csv"},
-      {"bud_records", "bud_events.csv"},
-      {"B_2", "the moduli at φ_2"},
-      {"G_2", "the moduli at φ_2"},
-      {"G_2_energy", "the moduli at φ_2"},
-      {"G_min_2", "the moduli at φ_2"},
-      {"h_gamma", "the growth factor of each cell at Δφ = 3·10⁻³"},
-      {"h_gamma_all_cells", "the growth factor of each cell at Δφ = 3·10⁻³"},
-      {"g1_fraction_all_cells", "the growth factor of each cell at Δφ = 3·10⁻³"},
-      {"lc2_J", "the jammed packing"}};
-  const auto it = from.find(column);
-  return it != from.end() ? it->second : "summary.json";
-}
-
 double number_or_nan(const CsvTable& t, const char* name, std::size_t row) {
   return t.has_column(name) ? t.number(row, t.column(name)) : kNaN;
 }
@@ -125,7 +87,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
   // Tables from before jamming.phi2_tagged_left hold budjam's φ_2 only, which is what the default says.
   for (const auto& c : kRunColumns)
     if (!run_column(R, c) && c.field != &RunRow::phi2_tagged_left)
-      e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + needs(c.name) + " of each run)";
+      e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + c.source + " of each run)";
   const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
                     c_status = R.column("status");
   std::set<std::tuple<double, std::string, std::uint64_t>> samples;  // (L, P0, seed)
