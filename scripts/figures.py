@@ -232,7 +232,7 @@ def fig2(T):
 
 
 def figS(T):
-    """Kaplan–Meier S(a) with Greenwood 95 % bands (the input of Eq. 14)."""
+    """Kaplan–Meier S(a) with 95 % bands clustered by run (the input of Eq. 14)."""
     L = T.main_L
     rows = same_L(T.csv("survival.csv"), L)
     labels = sorted({r["P0"] for r in rows}, key=p0_value, reverse=True)

@@ -128,8 +128,8 @@ def jamming_size_rows(J, source):
     head = ("| L | runs | N_J | N_J/L² | growth alone | difference/σ | n_J | " +
             " | ".join(t for _, t in JAMMING_SIZE_COLUMNS) + " |")
     rows = ["", "## Finite size at jamming", "",
-            f"Jamming-only runs without feedback ({source}), each size with seeds of its own, so that sizes are "
-            "independent samples; one jamming state per run. The cell density N_J/L² is compared with what the growth "
+            f"Jamming-only runs without feedback ({source}), one jamming state per run. " + sizes_independence_text([J]) +
+            " The cell density N_J/L² is compared with what the growth "
             "and division rules alone give at the same φ (400 growth histories per size, no mechanics): N/L² at fixed "
             "φ is not monotone in L, so it is not fitted. The other quantities are fitted by q(N) = q_∞ + c/N (weighted "
             "least squares, errors widened by √(χ²/dof) when it exceeds 1) where five sizes or more have an error bar; "
@@ -142,11 +142,30 @@ def jamming_size_rows(J, source):
                     f"{fmt(g.get('value'))}{' ± ' + fmt(g['se'], 2) if error_bar(g.get('se'), g.get('n')) else ''} | "
                     f"{fmt(r.get('cells_per_area_minus_growth_only_in_se'), 2)} | "
                     f"{cell_pm(r['n_J'])} | " + " | ".join(cells) + " |")
-    nl = J.get("n_J_limit")
-    rows.append("| N → ∞ | | | | | | " + (f"{fmt(nl['value'])} ± {fmt(nl['se'], 2)}" if nl and error_bar(
-        nl.get("se"), J["extrapolation"].get("rattler_fraction", {}).get("sizes")) else "—") + " | " +
+    nl, r = J.get("n_J_limit"), J["extrapolation"].get("rattler_fraction", {})
+    if verdicts.fit_rejected(r.get("chi2"), r.get("dof")):
+        n_J_inf = "— (the rattler fraction's fit is rejected: no 1 − r_∞)"
+    elif nl and error_bar(nl.get("se"), r.get("sizes")):
+        n_J_inf = f"{fmt(nl['value'])} ± {fmt(nl['se'], 2)}"
+    else:
+        n_J_inf = "—"
+    rows.append("| N → ∞ | | | | | | " + n_J_inf + " | " +
                 " | ".join(limit_text(J["extrapolation"][k]) for k, _ in JAMMING_SIZE_COLUMNS) + " |")
     return rows
+
+
+def sizes_independence_text(entries):
+    """Whether the sizes of the finite-size entries are independent samples, as analysis.json counts the seeds
+    grown at more than one size (a run's random stream does not depend on L)."""
+    shared = [e.get("seeds_shared") for e in entries]
+    if not shared:
+        return ""  # one size
+    if any(not isinstance(x, int) for x in shared):
+        return "Whether the sizes share seeds this analysis.json does not say (an earlier version)."
+    if max(shared) == 0:
+        return "Each size grows seeds of its own, so the sizes are independent samples."
+    return (f"{max(shared)} seeds are grown at more than one size, and a run's random stream does not depend on L, so "
+            "the sizes are not independent samples.")
 
 
 def depletion_size_rows(entries):
@@ -155,9 +174,9 @@ def depletion_size_rows(entries):
         return []
     head = "| L | runs | N_J | " + " | ".join(t for _, t in DEPLETION_SIZE_COLUMNS) + " |"
     rows = ["", "## Finite size at the depletion point", "",
-            "Per box size and feedback strength. The paper's grid grows seeds 1–20 at every size, and a run's random "
-            "stream does not depend on L, so the sizes are not independent samples; q_∞ + c/N is fitted only with five "
-            "sizes or more (three leave one degree of freedom and cannot test the form).", ""]
+            "Per box size and feedback strength. " + sizes_independence_text(entries) + " q_∞ + c/N is fitted only "
+            "with five sizes or more, no seed grown at two of them (three sizes leave one degree of freedom and cannot "
+            "test the form).", ""]
     for e in entries:
         rows += [f"P0 = {e['P0_label']}:", "", head, "|" + " --- |" * (len(DEPLETION_SIZE_COLUMNS) + 3)]
         for r in e["sizes"]:
@@ -196,11 +215,12 @@ def paper_cells_text(cells, measured, predicted):
 def effective_n(p, se, n, seeds):
     """The packings a fraction p of n packings is worth when they come in seeds: Kish's effective sample size
     p(1 − p)/se² from the SE by seed (at most n). Where p is 0 or 1 the SE by seed is 0 whatever the
-    sample, so it says nothing: then the seeds are the independent samples. None without an SE by seed."""
+    sample, so it says nothing: then the seeds are the independent samples. Otherwise an SE of 0 (every seed
+    the same fraction) bounds nothing: n. None without an SE by seed."""
     if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in (p, se, n, seeds)):
         return None
     if se <= 0:
-        return min(n, seeds) if p in (0, 1) else None
+        return min(n, seeds) if p in (0, 1) else n
     return min(n, p * (1 - p) / (se * se))
 
 
@@ -675,8 +695,9 @@ def main():
 
     # The size table: identities across L from the preset's own runs.
     size_rows = ["", "## System size", "",
-                 "Identities over the targets of each size of this preset (its seeds repeat across sizes, so the sizes "
-                 "are not independent); errors are by seed, the targets of a seed being one sample.", "",
+                 "Identities over the targets of each size of this preset. " +
+                 sizes_independence_text(A.get("finite_size") or []) +
+                 " Errors are by seed, the targets of a seed being one sample.", "",
                  "| L | runs | ΔZ identity residual (feedback runs, all P0) | " +
                  growth_bulk(M["B_grow_over_lambda_B_log10"])[0] + " |", "| --- | --- | --- | --- |"]
     for sz in A.get("sizes", []):
@@ -724,6 +745,8 @@ def main():
            f"({'; '.join(' = '.join(d) for d in inp['duplicates'])}); " if inp.get("duplicates") else "")
         + f"{len(inp['not_finished'])} stopped before their last target"
         + (" (" + not_finished_text(inp["not_finished"]) + ": their recorded states are used)" if inp["not_finished"] else "")
+        + (f"; {len(inp['never_jammed'])} never jammed and contribute nothing ("
+           + not_finished_text(inp["never_jammed"]) + ")" if inp.get("never_jammed") else "")
         + ". "
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
         f"resamples, seed {A['bootstrap']['seed']}. Jamming rows: {jam_src}"
@@ -749,7 +772,7 @@ def main():
         "except where the paper's analysis draws a figure without a test (the ΔZ identity, B_grow = λ_c B_ext, "
         "N_zero = N_u): there it is budjam's test, and the paper's figure is summarised beside it. "
         "φ_2 is the first state after jamming with at most one tagged bud left under both; the paper's selection "
-        "admits a run when its smallest Δφ target at or beyond φ_2 had at most 10 divisions after φ_J, its Eq. 14 "
+        "admits a run when one of its Δφ targets reached at or beyond φ_2 had at most 10 divisions after φ_J, its Eq. 14 "
         "takes the bud size a as diameter², its G_2 statistics keep G_2 > 0 within Tukey's 1.5·IQR fences (G_2 only), "
         "and its division figure counts divisions up to the first state with no tagged bud left. Errors: ± standard "
         "error of the mean unless the cell says median (then bootstrap SE of the median) or gives a 95 % bootstrap "

@@ -132,7 +132,11 @@ StrainSweep strain_sweep(const Packing& reference, StrainKind kind, const std::v
     sweep.modulus_energy = polyfit(x, ye, 1)[1];
   }
   const double A = reference.box.L * reference.box.L;
-  if (x.size() >= 3) {
+  // A curvature at s = 0 from samples on one side only extrapolates the parabola to the reference,
+  // where the rounding of U (∝ 1/s²) is not cancelled: it needs a kept sample on either side.
+  const bool bracketed = std::any_of(x.begin(), x.end(), [](double s) { return s < 0; }) &&
+                         std::any_of(x.begin(), x.end(), [](double s) { return s > 0; });
+  if (x.size() >= 3 && bracketed) {
     const Eigen::VectorXd c = polyfit(x, u, 2);
     sweep.energy_slope = c[1] / A;
     sweep.curvature = 2.0 * c[2] / A;

@@ -4,15 +4,52 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 namespace budjam {
 
-std::optional<SurvivalBand> greenwood_band(const KaplanMeierStep& step) {
-  if (step.at_risk < kMinSamplesForError) return std::nullopt;
-  const double se = std::sqrt(step.greenwood_var);
+std::optional<SurvivalBand> survival_band(const KaplanMeierStep& step, double variance) {
+  if (step.at_risk < kMinSamplesForError || !std::isfinite(variance)) return std::nullopt;
+  const double se = std::sqrt(variance);
   return SurvivalBand{se, std::max(0.0, step.S - 1.96 * se), std::min(1.0, step.S + 1.96 * se)};
 }
+
+namespace {
+
+// Σ_c U_c(a_k)² at every step k of a curve already made from `r` (sorted as kaplan_meier sorts). With
+// weights w_i on the records, n_k = Σ w_i Y_ik and d_k = Σ w_i δ_ik (Y: at risk at a_k, δ: an event
+// there), and ∂ log Ŝ(a_k) / ∂w_i = Σ_{k' ≤ k} (Y_ik' d_k' − n_k' δ_ik') / (n_k' (n_k' − d_k')); a
+// cluster's influence sums its records', so only its count at risk and its events at each step enter.
+void clustered_variances(const std::vector<SurvivalRecord>& r, std::vector<KaplanMeierStep>& steps,
+                         std::size_t& clusters) {
+  std::map<std::size_t, std::size_t> index;
+  for (const auto& x : r) index.try_emplace(x.cluster, index.size());
+  clusters = index.size();
+  std::vector<double> at_risk(clusters, 0.0), log_influence(clusters, 0.0), events(clusters, 0.0);
+  for (const auto& x : r) ++at_risk[index[x.cluster]];
+  std::size_t i = 0;
+  bool exhausted = false;
+  for (auto& st : steps) {
+    const std::size_t first = i;
+    for (; i < r.size() && r[i].a == st.a; ++i)
+      if (r[i].event) ++events[index[r[i].cluster]];
+    if (st.events > 0 && st.events < st.at_risk) {
+      const double n = static_cast<double>(st.at_risk), d = static_cast<double>(st.events);
+      for (std::size_t c = 0; c < clusters; ++c) log_influence[c] += (at_risk[c] * d - n * events[c]) / (n * (n - d));
+    }
+    exhausted = exhausted || (st.events > 0 && st.events == st.at_risk);
+    double sum = 0;
+    for (const double u : log_influence) sum += u * u;
+    st.clustered_var = exhausted ? 0.0 : st.S * st.S * sum;
+    for (std::size_t j = first; j < i; ++j) {
+      --at_risk[index[r[j].cluster]];
+      if (r[j].event) --events[index[r[j].cluster]];
+    }
+  }
+}
+
+}  // namespace
 
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records) {
   std::vector<SurvivalRecord> r = records;
@@ -48,7 +85,9 @@ KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records) {
     steps.push_back(st);
     k = j;
   }
-  return KaplanMeierCurve(std::move(steps), r.size(), events_total);
+  std::size_t clusters = 0;
+  clustered_variances(r, steps, clusters);
+  return KaplanMeierCurve(std::move(steps), r.size(), events_total, clusters);
 }
 
 double KaplanMeierCurve::S(double a) const {

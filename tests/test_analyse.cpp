@@ -713,7 +713,10 @@ TEST_CASE(
     for (std::size_t k = 0; k < column; ++k) at = t.find(',', at) + 1;
     return std::pair{at, t.find_first_of(",\n", at) - at};
   };
-  const std::size_t risk = 7;  // L,P0,a,S,se,lo,hi,at_risk
+  const std::size_t risk = [&] {  // the column of at_risk, by its name in the header
+    const std::string header = good.substr(0, good.find('\n'));
+    return static_cast<std::size_t>(std::count(header.begin(), header.begin() + header.find("at_risk"), ','));
+  }();
   for (const std::size_t line : {2, 4}) {
     INFO("line " << line);
     std::string t = good;

@@ -5,6 +5,7 @@
 #include "budjam/jamming.hpp"
 #include "budjam/scene_keys.hpp"
 #include "io/checkpoint.hpp"
+#include "io/run_directory.hpp"
 #include "scratch.hpp"
 
 #include <catch2/catch.hpp>
@@ -162,6 +163,24 @@ TEST_CASE("docs/growth.md's table of observers is the registry's, and each is sw
       CHECK(budjam::find_scene_key(keys) != nullptr);
   }
   CHECK(rows >= 7);
+}
+
+TEST_CASE("every CSV log an observer writes at the top of a run directory is one the run's readers read", "[docs]") {
+  const auto printed = run_budjam("validate --observers-markdown");
+  REQUIRE(printed.code == 0);
+  namespace run_files = budjam::io::run_files;
+  const std::regex log(R"(`([a-z_]+\.csv)`)");
+  std::size_t logs = 0;
+  for (std::sregex_iterator it(printed.out.begin(), printed.out.end(), log), end; it != end; ++it) {
+    const std::string name = (*it)[1].str();
+    INFO(name << ": add it to io::run_files::observer_logs (docs/howto.md)");
+    ++logs;
+    const bool read = name == run_files::steps || name == run_files::divisions || name == run_files::bud_events ||
+                      std::find(run_files::observer_logs.begin(), run_files::observer_logs.end(), name) !=
+                          run_files::observer_logs.end();
+    CHECK(read);
+  }
+  CHECK(logs >= 5);
 }
 
 TEST_CASE("every checkpoint format the documentation names is the one the writer writes", "[docs]") {

@@ -213,11 +213,49 @@ TEST_CASE("no output makes a directory at the top level of a run, however deep a
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     CHECK(top() == before);
   }
-  // Below packings/ (and spectra/), the run's own directories, an output may make one.
+  // Below packings/, beside the packings, an output may make one.
   const auto below = run_budjam("rigidity " + pack + " --out plink/mine/j");
   INFO(below.err);
   CHECK(below.code == 0);
   CHECK(fs::is_regular_file(work_dir() / "deep-run" / "packings" / "mine" / "j.json"));
+}
+
+TEST_CASE("spectra/ of a run holds the dos observer's files alone: no command writes or makes anything there",
+          "[taxonomy]") {
+  const std::string demo = budjam::testing::shell_quoted(budjam::testing::source_file("data/scenes/demo.toml"));
+  REQUIRE(run_budjam("grow " + demo + " --quiet --out spec-run --set observe.dos.every=20").code == 0);
+  const fs::path spectra = work_dir() / "spec-run" / "spectra";
+  REQUIRE(fs::is_directory(spectra));
+  const auto listing = [&] {
+    std::vector<std::pair<std::string, std::string>> files;
+    for (const auto& e : fs::recursive_directory_iterator(work_dir() / "spec-run"))
+      files.emplace_back(e.path().string(), e.is_regular_file() ? budjam::testing::slurp(e.path()) : "");
+    std::sort(files.begin(), files.end());
+    return files;
+  };
+  std::string spectrum;  // a spectrum the observer wrote, by its base name
+  for (const auto& e : fs::directory_iterator(spectra))
+    if (e.path().extension() == ".json") spectrum = e.path().stem().string();
+  REQUIRE(!spectrum.empty());
+  const auto before = listing();
+  const std::string pack = "spec-run/packings/jammed.pack";
+  for (const std::string& args :
+       {"dos " + pack + " --out spec-run/spectra/" + spectrum, "rigidity " + pack + " --out spec-run/spectra/r",
+        "render " + pack + " -o spec-run/spectra/new/r.svg", std::string("analyse spec-run --out spec-run/spectra"),
+        std::string("analyse spec-run --out spec-run/spectra/a")}) {
+    INFO(args);
+    const auto r = run_budjam(args);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("the spectra directory of a budjam run") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(listing() == before);
+  }
+  // a run whose observer made none: spectra/ is not made either
+  REQUIRE(run_budjam("grow " + demo + " --quiet --out nospec-run").code == 0);
+  const auto made = run_budjam("moduli nospec-run/packings/jammed.pack --out nospec-run/spectra/m");
+  CHECK(made.code == 2);
+  CHECK_FALSE(fs::exists(work_dir() / "nospec-run" / "spectra"));
 }
 
 TEST_CASE(

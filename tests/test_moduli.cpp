@@ -134,6 +134,20 @@ TEST_CASE("Second strain derivative of the relaxed energy equals the non-affine 
   CHECK(e.E(kXY, kXY) < e.E_affine(kXY, kXY));
 }
 
+TEST_CASE("A curvature of the relaxed energy needs strained states on both sides of the reference", "[fast]") {
+  const Relaxed r = jammed(80, 1e-2, 0.3, 1.0, 2);
+  // The same strains of one sign only: the stress slope stays, the parabola through s = 0 is not fitted.
+  std::vector<double> one_sided;
+  for (const double s : symmetric_strains(1e-5, 2))
+    if (s > 0) one_sided.push_back(s);
+  const StrainSweep shear = strain_sweep(r.p, StrainKind::simple_shear, one_sided, tight_fire());
+  REQUIRE(shear.used == 3);
+  CHECK(std::isfinite(shear.modulus));
+  CHECK(std::isnan(shear.curvature));
+  CHECK(std::isnan(shear.energy_modulus()));
+  CHECK(shear.central_curvatures.empty());
+}
+
 // ---- the two conventions: lobe-centre stress (the paper's) and energy curvature ----------------
 
 TEST_CASE("The lobe-centre stress plus the load of the rigid mother-bud links is the energy stress", "[fast]") {

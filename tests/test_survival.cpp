@@ -7,6 +7,7 @@
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <random>
 
 using namespace budjam;
 
@@ -84,11 +85,11 @@ TEST_CASE("a_eps reaches an exact level despite rounding of the product-limit") 
   CHECK(*a_epsilon(km, 5.0 / N_nr, 1.0 / N_nr) == 0.4);
 }
 
-TEST_CASE("the Greenwood band is given where at least five records are at risk, clipped to [0, 1]") {
+TEST_CASE("the band is given where at least five records are at risk, clipped to [0, 1]") {
   const auto km = kaplan_meier(example());
   for (const auto& st : km.steps()) {
     INFO("a = " << st.a << ", at risk " << st.at_risk);
-    const auto band = greenwood_band(st);
+    const auto band = survival_band(st, st.greenwood_var);
     REQUIRE(band.has_value() == (st.at_risk >= kMinSamplesForError));
     if (!band) continue;
     CHECK(band->se == Approx(std::sqrt(st.greenwood_var)));
@@ -96,7 +97,7 @@ TEST_CASE("the Greenwood band is given where at least five records are at risk, 
     CHECK(band->hi == Approx(std::min(1.0, st.S + 1.96 * band->se)));
   }
   // the first event of the example: Ŝ = 7/8 with eight at risk, Ŝ + 1.96 se > 1 is clipped
-  const auto first = greenwood_band(km.steps().front());
+  const auto first = survival_band(km.steps().front(), km.steps().front().greenwood_var);
   REQUIRE(first);
   CHECK(first->hi == 1.0);
   CHECK(first->lo == Approx(7.0 / 8 - 1.96 * std::sqrt(7.0 / 8 * 7.0 / 8 / 56)));
@@ -109,6 +110,91 @@ TEST_CASE("without censoring Kaplan-Meier is the empirical survival function") {
   for (int k = 1; k <= 10; ++k) CHECK(km.S(0.1 * k + 1e-12) == Approx(1.0 - 0.1 * k).margin(1e-12));
   // Greenwood without censoring is the binomial variance S(1 − S)/n
   CHECK(km.variance(0.35) == Approx(0.7 * 0.3 / 10));
+}
+
+TEST_CASE("the variance clustered by record is Greenwood's at the first event and the binomial one without censoring") {
+  std::vector<SurvivalRecord> r;
+  for (std::size_t k = 1; k <= 10; ++k) r.push_back({0.1 * static_cast<double>(k), true, k});
+  const auto km = kaplan_meier(r);
+  CHECK(km.clusters() == 10);
+  for (const auto& st : km.steps()) {
+    INFO("a = " << st.a);
+    if (st.S > 0) CHECK(st.clustered_var == Approx(st.S * (1 - st.S) / 10));
+  }
+  // with censoring, one record per cluster: Greenwood's sum at the first event (hand-worked example)
+  auto ex = example();
+  for (std::size_t k = 0; k < ex.size(); ++k) ex[k].cluster = k;
+  const auto c = kaplan_meier(ex);
+  CHECK(c.steps().front().clustered_var == Approx(c.steps().front().greenwood_var));
+}
+
+TEST_CASE("copies of every record within its cluster leave the clustered variance as it is, not Greenwood's") {
+  // Twelve clusters of three records each, censored at a third of the sizes.
+  std::vector<SurvivalRecord> base;
+  for (std::size_t c = 0; c < 12; ++c)
+    for (std::size_t j = 0; j < 3; ++j) {
+      const double a = 0.3 + 0.17 * static_cast<double>((5 * c + 7 * j) % 13) + 0.05 * static_cast<double>(c % 4);
+      base.push_back({a, (c + j) % 3 != 0, c});
+    }
+  std::vector<SurvivalRecord> copied;
+  for (const auto& x : base) copied.insert(copied.end(), 4, x);
+  const auto one = kaplan_meier(base), four = kaplan_meier(copied);
+  REQUIRE(one.steps().size() == four.steps().size());
+  for (std::size_t k = 0; k < one.steps().size(); ++k) {
+    const auto &x = one.steps()[k], &y = four.steps()[k];
+    INFO("a = " << x.a);
+    CHECK(y.S == Approx(x.S));
+    CHECK(y.clustered_var == Approx(x.clustered_var).margin(1e-15));
+    if (x.greenwood_var > 0) CHECK(y.greenwood_var < 0.3 * x.greenwood_var);  // the buds counted as samples
+  }
+  // a single cluster: the influences of its records sum to zero
+  std::vector<SurvivalRecord> single = base;
+  for (auto& x : single) x.cluster = 7;
+  for (const auto& st : kaplan_meier(single).steps()) CHECK(st.clustered_var == Approx(0.0).margin(1e-15));
+}
+
+TEST_CASE("the clustered variance of S agrees with a bootstrap over clusters") {
+  // 40 clusters (runs) of 4–9 records sharing a cluster factor on their sizes, a quarter censored.
+  std::mt19937_64 rng(20261207);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<std::vector<SurvivalRecord>> clusters(40);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const double scale = 0.5 + U(rng);
+    const auto n = static_cast<std::size_t>(4 + 6 * U(rng));
+    for (std::size_t j = 0; j < n; ++j) clusters[c].push_back({scale * -std::log(1 - U(rng)), U(rng) > 0.25, c});
+  }
+  std::vector<SurvivalRecord> all;
+  for (const auto& c : clusters) all.insert(all.end(), c.begin(), c.end());
+  const auto km = kaplan_meier(all);
+  const std::array<double, 3> at{0.3, 0.7, 1.2};
+  std::array<double, 3> sum{}, sum2{};
+  const int B = 2000;
+  std::uniform_int_distribution<std::size_t> pick(0, clusters.size() - 1);
+  for (int b = 0; b < B; ++b) {
+    std::vector<SurvivalRecord> r;
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+      const auto& from = clusters[pick(rng)];
+      for (auto x : from) r.push_back({x.a, x.event, c});
+    }
+    const auto boot = kaplan_meier(r);
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      sum[i] += boot.S(at[i]);
+      sum2[i] += boot.S(at[i]) * boot.S(at[i]);
+    }
+  }
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const double var_boot = sum2[i] / B - (sum[i] / B) * (sum[i] / B);
+    const double clustered = [&] {
+      double v = 0;
+      for (const auto& st : km.steps())
+        if (st.a <= at[i]) v = st.clustered_var;
+      return v;
+    }();
+    INFO("a = " << at[i] << ": S = " << km.S(at[i]) << ", bootstrap var " << var_boot << ", clustered " << clustered);
+    // 2000 resamples: the bootstrap's variance is itself uncertain by ≈ 3 %; the jackknife is first order
+    CHECK(clustered == Approx(var_boot).epsilon(0.15));
+    CHECK(clustered > 1.2 * km.variance(at[i]));  // the shared factor widens the band beyond Greenwood's
+  }
 }
 
 TEST_CASE("Kaplan-Meier refuses negative or non-finite sizes") {
@@ -184,8 +270,8 @@ TEST_CASE("budjam survival pools the censored bud events of a run into the hand-
   CHECK(csv.find("\n3,") != std::string::npos);
   CHECK(csv.find(",0.5833333333333334,") != std::string::npos);  // Ŝ(3) = 7/12
   // one run: no band anywhere, though six buds are at risk at a = 3 (a run, not a bud, is the sample)
-  CHECK(csv.find(",0.5833333333333334,,,,6,") != std::string::npos);
-  CHECK(csv.find("\n5,3.9269908169872414,0.38888888888888895,,,,3,1,0\n") != std::string::npos);
+  CHECK(csv.find(",0.5833333333333334,,,,,6,") != std::string::npos);
+  CHECK(csv.find("\n5,3.9269908169872414,0.38888888888888895,,,,,3,1,0\n") != std::string::npos);
 }
 
 TEST_CASE("the survival band needs five runs, and five buds at risk") {
@@ -203,9 +289,13 @@ TEST_CASE("the survival band needs five runs, and five buds at risk") {
     const std::string csv = slurp(dir / ("km" + std::to_string(seed) + ".csv"));
     INFO(seed << " runs\n" << csv);
     // Ŝ(3) = 7/12 in every pool of copies; 6 buds of each run at risk there, 3 at a = 5
-    const std::string at_3 = ",0.5833333333333334,", banded = at_3 + "0.";
-    CHECK((csv.find(banded) != std::string::npos) == (seed >= 5));
-    CHECK((csv.find(at_3 + ",,," + std::to_string(6 * seed) + ",") != std::string::npos) == (seed < 5));
+    const std::string at_3 = ",0.5833333333333334,";
+    const auto row = csv.find(at_3);
+    REQUIRE(row != std::string::npos);
+    CHECK((csv.compare(row + at_3.size(), 1, ",") != 0) == (seed >= 5));
+    CHECK((csv.find(at_3 + ",,,," + std::to_string(6 * seed) + ",") != std::string::npos) == (seed < 5));
+    // runs alike in every bud: no spread between runs, whatever Greenwood's count of buds says
+    if (seed >= 5) CHECK(std::stod(csv.substr(row + at_3.size())) < 1e-12);
   }
 }
 

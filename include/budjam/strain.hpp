@@ -49,6 +49,7 @@ struct StrainSweep {
   //   simple shear: energy_slope = τ_xy, curvature = G_energy (= E_xyxy);
   //   isotropic (A = A0 e^ε): energy_slope = −P_energy, curvature − energy_slope = B_energy
   //                           (= energy_modulus()).
+  // NaN unless three samples kept the contact set with at least one on either side of s = 0.
   double energy_slope = std::numeric_limits<double>::quiet_NaN(), curvature = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::pair<double, double>> central_curvatures;
   // The modulus from the energy alone: G_energy = curvature (shear), B_energy = A d²U/dA² =

@@ -12,6 +12,9 @@ namespace budjam {
 struct SurvivalRecord {
   double a = 0;        // ≥ 0: added size at the event or at censoring
   bool event = false;  // true: completed; false: censored
+  // The independent sample the record belongs to (its run): the buds of one run share its growth,
+  // so the clustered variance resamples clusters, not records.
+  std::size_t cluster = 0;
 };
 
 // One distinct a at which something happened. `at_risk` counts records with a_i ≥ a (censored
@@ -21,17 +24,23 @@ struct KaplanMeierStep {
   std::size_t at_risk = 0, events = 0, censored = 0;
   double S = 1;              // Ŝ(a) = Π_{a_k ≤ a} (1 − d_k / n_k)
   double greenwood_var = 0;  // Ŝ(a)² Σ_{a_k ≤ a} d_k / (n_k (n_k − d_k)); 0 once Ŝ = 0
+  // Σ_c U_c(a)², U_c = Σ_{i ∈ c} ∂Ŝ(a)/∂w_i the infinitesimal-jackknife influence of cluster c
+  // (Williams 1995, Biometrics 51, 907; R's survfit with a cluster term): records independent across
+  // clusters only. 0 once Ŝ = 0; 0 for a single cluster (the influences sum to zero).
+  double clustered_var = 0;
 };
 
 class KaplanMeierCurve {
  public:
   KaplanMeierCurve() = default;
-  explicit KaplanMeierCurve(std::vector<KaplanMeierStep> steps, std::size_t n, std::size_t events)
-      : steps_(std::move(steps)), n_(n), events_(events) {}
+  explicit KaplanMeierCurve(std::vector<KaplanMeierStep> steps, std::size_t n, std::size_t events, std::size_t clusters)
+      : steps_(std::move(steps)), n_(n), events_(events), clusters_(clusters) {}
 
   const std::vector<KaplanMeierStep>& steps() const { return steps_; }
   std::size_t records() const { return n_; }
   std::size_t events() const { return events_; }
+  // Distinct clusters among the records (0 for no record).
+  std::size_t clusters() const { return clusters_; }
 
   // Right-continuous step function: Ŝ(a) = 1 before the first event.
   double S(double a) const;
@@ -50,17 +59,17 @@ class KaplanMeierCurve {
 
  private:
   std::vector<KaplanMeierStep> steps_;  // ascending a
-  std::size_t n_ = 0, events_ = 0;
+  std::size_t n_ = 0, events_ = 0, clusters_ = 0;
 };
 
-// The pointwise 95 % band of Ŝ at a step: se = √(Greenwood variance), Ŝ ± 1.96 se clipped to [0, 1].
-// None where fewer than kMinSamplesForError records are at risk: the tail of the curve, where
-// Greenwood's variance rests on a handful of buds and is itself unreliable (no error bar from fewer
-// samples, statistics.hpp).
+// The pointwise 95 % band of Ŝ at a step from a variance of Ŝ there: se = √variance, Ŝ ± 1.96 se
+// clipped to [0, 1]. None where fewer than kMinSamplesForError records are at risk: the tail of the
+// curve, where the variance rests on a handful of buds and is itself unreliable (no error bar from
+// fewer samples, statistics.hpp).
 struct SurvivalBand {
   double se = 0, lo = 0, hi = 0;
 };
-std::optional<SurvivalBand> greenwood_band(const KaplanMeierStep& step);
+std::optional<SurvivalBand> survival_band(const KaplanMeierStep& step, double variance);
 
 // Throws std::invalid_argument for a negative or non-finite a.
 KaplanMeierCurve kaplan_meier(const std::vector<SurvivalRecord>& records);

@@ -24,30 +24,142 @@ the same names: the result of moduli(), rigidity(), spectrum() and survival() is
 `budjam moduli`, `rigidity`, `dos` and `survival`, key for key, with the columns of the command's
 CSV table (if it writes one) under "table".
 """
+import collections.abc
 import functools
 import numbers
 import os
 import pathlib
+import re
 
 from . import _budjam
-from ._budjam import (Growth, InputError, NoResultError, OutputError, Packing, __version__, blas, read_packing,
-                      survival)
+from ._budjam import Growth, InputError, NoResultError, OutputError, Packing, __version__, blas
 
 __all__ = ["Growth", "grow", "InputError", "NoResultError", "OutputError", "Packing", "Run", "__version__", "blas",
            "contacts", "export", "gsd_frame", "load_run", "moduli", "particle_frame", "read_packing", "rigidity",
            "spectrum", "survival"]
 
 
+# pybind11 refuses an argument of the wrong type with a TypeError of several lines listing the C++
+# signature; budjam's messages are one line naming the argument, as the command line's are. The
+# signature in pybind11's message says what each parameter takes.
+_READABLE = {"float": "a number", "int": "an integer", "str": "text (str)", "bool": "True or False",
+             "dict": "a dict", "os.PathLike": "a path (str or os.PathLike)", "object": "anything",
+             "budjam._budjam.Packing": "a budjam.Packing"}
+
+
+def _readable(annotation):
+    if annotation.startswith("Optional["):
+        return _readable(annotation[len("Optional["):-1]) + " or None"
+    if annotation.startswith("List["):
+        return "a list of " + _readable(annotation[len("List["):-1]).removeprefix("a ").removeprefix("an ")
+    if annotation.startswith("numpy.ndarray"):
+        return "an array of numbers"
+    return _READABLE.get(annotation, annotation)
+
+
+def _fits(value, annotation):
+    """Whether pybind11 would take `value` for a parameter of this annotation (None: cannot tell)."""
+    if annotation.startswith("Optional["):
+        return value is None or _fits(value, annotation[len("Optional["):-1])
+    if annotation.startswith("List["):
+        inner = annotation[len("List["):-1]
+        return (isinstance(value, collections.abc.Sequence) and not isinstance(value, (str, bytes))
+                and all(_fits(v, inner) is not False for v in value))
+    if annotation.startswith("numpy.ndarray"):
+        import numpy
+        try:
+            numpy.asarray(value, dtype=numpy.float64)
+        except (TypeError, ValueError):
+            return False
+        return not isinstance(value, (str, bytes))
+    checks = {"float": lambda v: isinstance(v, numbers.Real), "int": lambda v: isinstance(v, numbers.Integral),
+              "str": lambda v: isinstance(v, str), "bool": lambda v: isinstance(v, bool),
+              "dict": lambda v: isinstance(v, collections.abc.Mapping),
+              "os.PathLike": lambda v: isinstance(v, (str, os.PathLike)), "object": lambda v: True,
+              "budjam._budjam.Packing": lambda v: isinstance(v, Packing)}
+    return checks[annotation](value) if annotation in checks else None
+
+
+def _parameters(signature):
+    """[(name, annotation)] of a pybind11 signature's parameter list "a: T, b: U = d"."""
+    parts, depth, current = [], 0, ""
+    for ch in signature:
+        if ch in "[(":
+            depth += 1
+        elif ch in "])":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append(current)
+            current = ""
+        else:
+            current += ch
+    parts.append(current)
+    return [(name.strip(), annotation.split(" = ")[0].strip())
+            for name, _, annotation in (p.partition(":") for p in parts if p.strip())]
+
+
+def _one_line_type_error(name, error, args, kwargs):
+    """pybind11's TypeError for wrong argument types as one line naming the first argument that does not
+    fit; any other TypeError as it is."""
+    text = str(error)
+    if "incompatible function arguments" not in text and "incompatible constructor arguments" not in text:
+        return error
+    match = re.search(r"^\s*1\. [\w.]*\((.*)\)(?: -> .*)?$", text, re.M)
+    if match is None:
+        return TypeError(f"{name}: an argument of the wrong type")
+    parameters = [p for p in _parameters(match.group(1)) if p[0] != "self"]
+    given = list(zip(parameters, args)) + [(p, kwargs[p[0]]) for p in parameters if p[0] in kwargs]
+    for (parameter, annotation), value in given:
+        if _fits(value, annotation) is False:
+            return TypeError(f"{name}: {parameter}: must be {_readable(annotation)}, got {type(value).__name__}")
+    return TypeError(f"{name}: arguments of the wrong type for ({match.group(1)})")
+
+
+def _one_line_type_errors(name, function, method=False):
+    """`function` raising a one-line TypeError (naming the argument) where pybind11 raises its own;
+    `method`: its first argument is self, which the signature in the message leaves out."""
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as error:
+            one_line = _one_line_type_error(name, error, args[1:] if method else args, kwargs)
+            if one_line is error:
+                raise
+            raise one_line from None
+
+    return wrapper
+
+
+read_packing = _one_line_type_errors("read_packing", _budjam.read_packing)
+Packing.__init__ = _one_line_type_errors("Packing", Packing.__init__, method=True)
+Packing.write = _one_line_type_errors("Packing.write", Packing.write, method=True)
+
+
 def _accepts_paths(function):
     """`function` (first argument a Packing) also taking the path of a packing file (str or os.PathLike)."""
+    checked = _one_line_type_errors(function.__name__, function)
 
     @functools.wraps(function)
     def wrapper(packing, *args, **kwargs):
         if isinstance(packing, (str, os.PathLike)):
             packing = read_packing(packing)
-        return function(packing, *args, **kwargs)
+        elif not isinstance(packing, Packing):
+            raise TypeError(f"{function.__name__}: packing: must be a budjam.Packing or the path of a packing file "
+                            f"(str or os.PathLike), got {type(packing).__name__}")
+        return checked(packing, *args, **kwargs)
 
     return wrapper
+
+
+_survival = _one_line_type_errors("survival", _budjam.survival)
+
+
+@functools.wraps(_budjam.survival)
+def survival(runs, epsilon=None):
+    # One run directory given by its path is a list of one, as `budjam survival RUNDIR` takes it.
+    return _survival([runs] if isinstance(runs, (str, os.PathLike)) else runs, epsilon)
 
 
 contacts = _accepts_paths(_budjam.contacts)
@@ -57,12 +169,15 @@ spectrum = _accepts_paths(_budjam.spectrum)
 particle_frame = _accepts_paths(_budjam.particle_frame)
 
 
+_export = _accepts_paths(_budjam.export)
+
+
 @functools.wraps(_budjam.export)
 def export(packing, path, format, network="load-bearing"):
     # A packing given by its path is never overwritten by its own export (as on the command line).
     if isinstance(packing, (str, os.PathLike)):
-        return _budjam.export(read_packing(packing), path, format, network, source=packing)
-    return _budjam.export(packing, path, format, network)
+        return _export(read_packing(packing), path, format, network, source=packing)
+    return _export(packing, path, format, network)
 
 
 gsd_frame = _accepts_paths(_budjam.gsd_frame)

@@ -189,7 +189,7 @@ py::object moduli_dict(const Packing& p, const std::string& solver) {
   ModuliOptions options;
   options.solver = parse_moduli_solver(solver);
   const ElasticResponse e = elastic_response(p, a.pc.contacts, a.pc.network, options);
-  require_relaxed_moduli(e, "moduli");  // unstable modes: returned, flagged by stationary_point
+  require_relaxed_moduli(e, "packing");  // unstable modes: returned, flagged by stationary_point
   return python_of(tools::elastic_response_json(e));
 }
 
@@ -317,17 +317,25 @@ Scene seeded(Scene scene, std::optional<std::uint64_t> seed) {
   return scene;
 }
 
-// `for event in budjam.grow(...)`: advances the driver until it has something to report.
+// `for event in budjam.grow(...)`: advances the driver until it has something to report. Many growth
+// steps, and relaxations of up to millions of force evaluations, pass between two events, so Python's
+// signal handlers run between steps and inside relaxations (the hook of the command line's
+// checkpoints): Ctrl-C raises KeyboardInterrupt at once, and the growth, left inside an attempt,
+// cannot go on.
 class Growth {
  public:
   Growth(const std::filesystem::path& scene, std::optional<std::uint64_t> seed, const std::vector<std::string>& set)
       : scene_(seeded(io::load_scene(scene, set), seed)), driver_(scene_) {
     driver_.add_observer(queue_);
+    driver_.set_relaxation_checkpoints(
+        0, [this] { return signal_raised(); }, [this](const GrowthState&) { end_interrupted(); });
   }
   py::dict next() {
+    if (interrupted_) throw std::runtime_error("grow: interrupted inside a growth step: start a new budjam.grow");
     while (queue_.events.empty()) {
       if (driver_.result().status != RunStatus::running) throw py::stop_iteration();
       driver_.advance();
+      if (signal_raised()) end_interrupted();
     }
     py::dict e = std::move(queue_.events.front());
     queue_.events.pop_front();
@@ -336,9 +344,24 @@ class Growth {
   const GrowthDriver& driver() const { return driver_; }
 
  private:
+  // Runs Python's signal handlers; the exception one raised (KeyboardInterrupt) is kept for
+  // end_interrupted, which throws it where the driver can be left.
+  bool signal_raised() {
+    if (!pending_ && PyErr_CheckSignals() != 0) pending_.emplace();
+    return pending_.has_value();
+  }
+  [[noreturn]] void end_interrupted() {
+    interrupted_ = true;
+    py::error_already_set e = std::move(*pending_);
+    pending_.reset();
+    throw e;
+  }
+
   Scene scene_;
   EventQueue queue_;
   GrowthDriver driver_;
+  std::optional<py::error_already_set> pending_;
+  bool interrupted_ = false;
 };
 
 }  // namespace
@@ -435,6 +458,7 @@ Cell i has centroid (x[i], y[i]) (area-weighted, not wrapped into the box), orie
            "of cell i, 2i+1 its bud.")
       .def("write", [](const io::PackingFile& f, const std::filesystem::path& path) {
              io::check_output_file("", path);  // the command line's output-name rules
+             const io::TemporariesRemovedOnStop stop;
              io::write_packing(path, f.packing, f.meta);
            },
            "path"_a, "Write the packing file (.pack), atomically; reads back bit-identically.")
@@ -508,7 +532,8 @@ result of `budjam survival` (each run's last jamming episode; completion is the 
 the end of the run censor; a run given twice is one sample). The dict of its JSON, key for key:
 runs, records, events (completed buds), censored, u_J, N_nr_J, epsilon, a_eps, integral_S, ...,
 and under "table" the columns of its CSV: a = b^2 - b_J^2 in D0^2 (diameter squared), a_area
-(pi/4 times it), S, se (Greenwood), lo, hi (95 % band), at_risk, events, censored at each a.
+(pi/4 times it), S, se (clustered by run), lo, hi (95 % band), se_greenwood (buds as independent),
+at_risk, events, censored at each a.
 epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
   m.def(
       "particle_frame",
@@ -528,6 +553,7 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
         io::check_output_file("", path);  // the command line's output-name rules
         // Never over the file the packing was read from, given by path or as a Packing read from it.
         if (source || !f.source.empty()) io::check_not_an_input("path", path, {source.value_or(f.source)});
+        const io::TemporariesRemovedOnStop stop;
         io::write_particles(path, io::particle_frame(f, network_of(network)), format);
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing", "source"_a = py::none(),

@@ -1,5 +1,6 @@
 """What `budjam` says on stderr: the progress line of a growth run, an expected stop as a notice
 that agrees with the exit code, and parse errors that point to the help of the subcommand used."""
+import json
 import re
 
 import pytest
@@ -113,3 +114,48 @@ def test_a_path_with_control_bytes_is_printed_escaped_on_every_line(run_budjam, 
         for line in r.stderr.splitlines():
             assert line.startswith(("grow: ", "budjam: ", "analyse: ", "accuracy: ")), (what, line)
         assert "\\x0a" in r.stderr, (what, r.stderr)
+
+
+def doc_key_tree(text):
+    """The keys of a JSON document as docs/spectrum.md lists them: `a, b{c, d}, e{...} | null`; a brace of
+    `name: value` is a map of any keys (None)."""
+    text = re.sub(r"\s*\|\s*null", "", text)
+    pos = 0
+
+    def keys():
+        nonlocal pos
+        out = {}
+        while pos < len(text) and text[pos] != "}":
+            name = re.match(r"\s*([^,{}\s]+)\s*", text[pos:])
+            assert name, text[pos:pos + 40]
+            pos += name.end()
+            sub = None
+            if pos < len(text) and text[pos] == "{":
+                pos += 1
+                start = pos
+                sub = keys()
+                if ":" in text[start:pos]:
+                    sub = None
+                pos += 1  # the closing brace
+            out[name.group(1).rstrip(":")] = sub
+            rest = re.match(r"\s*,?\s*", text[pos:])
+            pos += rest.end()
+        return out
+
+    return keys()
+
+
+def assert_keys_as_documented(document, doc, where):
+    assert set(document) == set(doc), f"{where}: missing {set(document) - set(doc)}, stale {set(doc) - set(document)}"
+    for key, sub in doc.items():
+        if sub is not None and isinstance(document[key], dict):
+            assert_keys_as_documented(document[key], sub, f"{where}.{key}")
+
+
+def test_the_dos_json_has_exactly_the_keys_docs_spectrum_lists(run_budjam):
+    page = (SOURCE_DIR / "docs" / "spectrum.md").read_text()
+    listed = re.search(r"JSON\s+keys: `([^`]*)`", page)
+    assert listed, "docs/spectrum.md: no JSON key list"
+    document = json.loads(run_budjam("dos", SOURCE_DIR / "tests" / "data" / "negative_G_target_L8.pack",
+                                     "--json").stdout)
+    assert_keys_as_documented(document, doc_key_tree(listed.group(1)), "dos")

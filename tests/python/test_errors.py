@@ -4,6 +4,7 @@ input does not have raises budjam.NoResultError; messages are one line with cont
 as the command line prints them."""
 import json
 import os
+import signal
 
 import pytest
 
@@ -85,10 +86,40 @@ def test_messages_escape_control_bytes_and_stay_on_one_line(tmp_path):
     assert not any(ord(c) < 0x20 for c in str(e.value))
 
 
-def test_moduli_of_an_unjammed_packing_raises_no_result_error():
+def test_moduli_of_an_unjammed_packing_raises_no_result_error_naming_the_packing():
     gas = budjam.Packing(L=8.0, x=[2.0, 5.0], y=[2.0, 5.0], theta=[0.0, 1.0], b=[0.5, 0.7])
-    with pytest.raises(budjam.NoResultError, match="is not jammed: all 2 cells are rattlers"):
+    with pytest.raises(budjam.NoResultError, match="^packing is not jammed: all 2 cells are rattlers"):
         budjam.moduli(gas)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda p: budjam.moduli(None), "moduli: packing: must be a budjam.Packing or the path of a packing file"),
+    (lambda p: budjam.rigidity(42), "rigidity: packing: must be a budjam.Packing or the path"),
+    (lambda p: budjam.read_packing(42), "read_packing: path: must be a path (str or os.PathLike), got int"),
+    (lambda p: budjam.moduli(p, solver=1), "moduli: solver: must be text (str), got int"),
+    (lambda p: budjam.spectrum(p, "auto", "a"), "spectrum: modes: must be an integer, got str"),
+    (lambda p: budjam.survival(["x"], epsilon="x"), "survival: epsilon: must be a number or None, got str"),
+    (lambda p: budjam.survival(3), "survival: runs: must be a list of path"),
+    (lambda p: budjam.export(p, 3, "xyz"), "export: path: must be a path (str or os.PathLike), got int"),
+    (lambda p: p.write(3), "Packing.write: path: must be a path (str or os.PathLike), got int"),
+    (lambda p: budjam.Packing("a", [1], [1], [1], [1]), "Packing: L: must be a number, got str"),
+    (lambda p: budjam.Packing(8.0, [1.0, "x"], [1.0, 2.0], [0.0, 0.0], [0.5, 0.5]),
+     "Packing: x: must be an array of numbers, got list"),
+])
+def test_an_argument_of_the_wrong_type_raises_a_one_line_type_error_naming_it(call, message):
+    with pytest.raises(TypeError) as e:
+        call(budjam.read_packing(PACKING))
+    assert str(e.value).startswith(message), str(e.value)
+    assert "\n" not in str(e.value)
+
+
+def test_survival_takes_one_run_directory_by_its_path_as_the_command_line_does(tmp_path):
+    run = make_run(tmp_path / "run")
+    (run / "bud_events.csv").write_text(BUD_EVENTS)
+    (run / "scene.toml").write_text("[run]\nseed = 1\n")
+    one, listed = budjam.survival(run), budjam.survival([run])
+    assert one["runs"] == 1 and one["a_eps"] == listed["a_eps"]
+    assert list(one["table"]["S"]) == list(listed["table"]["S"])
 
 
 def test_a_packing_with_coincident_cells_is_refused_by_input_error():
@@ -268,3 +299,34 @@ def test_a_write_past_the_file_size_limit_raises_output_error_and_leaves_no_temp
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith("OutputError") and "File too large" in r.stdout
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["TERM", "HUP"])
+def test_a_python_export_stopped_midway_leaves_no_temporary(tmp_path, sig):
+    """SIGTERM or SIGHUP, which end a Python process that does not handle them, remove the temporaries
+    of a budjam.export still writing (its GSD writer stands in, slowed), as the command line does."""
+    import shlex
+    import subprocess
+    import sys
+    import time
+
+    started, writer = tmp_path / "started", tmp_path / "slow-python"
+    writer.write_text(f"#!/bin/sh\necho $$ > {shlex.quote(str(started))}.new\n"
+                      f"mv {shlex.quote(str(started))}.new {shlex.quote(str(started))}\nexec sleep 60\n")
+    writer.chmod(0o755)
+    out = tmp_path / "out"
+    out.mkdir()
+    script = f"import budjam; budjam.export({str(PACKING)!r}, {str(out / 'p.gsd')!r}, 'gsd')"
+    proc = subprocess.Popen([sys.executable, "-c", script], env={**os.environ, "BUDJAM_PYTHON": str(writer)})
+    deadline = time.monotonic() + 60
+    while not started.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert started.exists(), "the GSD writer never started"
+    assert any(out.iterdir()), "no temporary while the writer runs"
+    proc.send_signal(sig)
+    assert proc.wait(timeout=30) == -sig
+    try:
+        os.kill(int(started.read_text()), signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    assert list(out.iterdir()) == []

@@ -93,6 +93,34 @@ def test_grow_dict_values_are_written_as_the_scene_would_hold_them():
         budjam.grow(DEMO, set={"growth.nope": 1})
 
 
+def test_ctrl_c_inside_growth_raises_keyboard_interrupt_before_another_event_and_ends_the_growth():
+    # A SIGINT while the driver relaxes (between two events) is Python's at once: no event is delivered
+    # after it, and the growth, left inside a step, refuses to go on.
+    import signal
+    fired = []
+
+    def interrupt(signum, frame):
+        fired.append(True)
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    growth = budjam.grow(SOURCE_DIR / "data" / "scenes" / "paper-L15.toml",
+                         set={"jamming.targets": [1e-3, 1e-2, 3e-2, 6e-2, 0.12]})
+    after = []
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.3)
+        with pytest.raises(KeyboardInterrupt):
+            for event in growth:
+                if fired:
+                    after.append(event["kind"])
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert fired and after == []
+    with pytest.raises(RuntimeError, match="interrupted"):
+        next(growth)
+
+
 def test_buds_tagged_at_a_jamming_come_after_its_jammed_event():
     events = list(budjam.grow(DEMO))
     kinds = [e["kind"] for e in events]

@@ -240,6 +240,18 @@ def test_a_fraction_of_zero_or_one_is_judged_by_a_finite_error(tmp_path):
         assert "Wilson" in row
 
 
+def test_a_fraction_alike_in_every_seed_is_judged_on_its_packings(tmp_path):
+    # 0 < p < 1 and an SE by seed of 0: every seed has the same fraction, which bounds nothing below the packings
+    A, J = quick()
+    paper = A["main"]["dos"]["paper"]
+    paper.update(packings=56, fraction_Z_minus_6_negative=0.5, fraction_Z_minus_6_negative_se=0.0)
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    row = row_of(out, "ω* collapses")
+    assert "effective n = 56" in row and "before version" not in row, row
+    assert re.match(r"confirmed \(z = 0", row.split(" | ")[4]), row
+
+
 def test_the_quick_preset_says_its_grid_and_takes_the_papers_twenty_seeds(tmp_path):
     A, J = quick()
     r, out = report(tmp_path, A, J)
@@ -302,6 +314,46 @@ def test_a_finite_size_fit_its_chi2_rejects_prints_no_limit(tmp_path):
     assert jam_cells[6].startswith(f"{J['finite_size_jamming']['n_J_limit']['value']:.3g} ± ")  # n_J,∞ as before
     assert dep_cells[3].startswith("model rejected (χ²/dof = 40/3") and "+3.1" in dep_cells[3], dep_cells[3]
     assert dep_cells[4].startswith("0.0123 ± 4.0e-04 (χ²/dof = 2/3"), dep_cells[4]
+
+
+def test_no_n_J_limit_from_a_rattler_fraction_its_chi2_rejects(tmp_path):
+    A, J = quick()
+    r_fit = J["finite_size_jamming"]["extrapolation"]["rattler_fraction"]
+    r_fit.update(chi2=9.59, dof=3)  # above 7.81, the 95 % quantile at 3 dof
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    row = next(line for line in out.splitlines() if line.startswith("| N → ∞"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[-1].startswith("model rejected"), cells[-1]
+    assert cells[6].startswith("— (the rattler fraction's fit is rejected"), cells[6]
+
+
+@pytest.mark.parametrize("shared", [0, 8])
+def test_the_report_says_whether_its_sizes_share_seeds_as_the_analysis_counted(tmp_path, shared):
+    _, J = quick()
+    A = load(os.path.join(REF, "paper", "reanalysed", "analysis.json"))
+    assert A.get("finite_size"), "the paper reference has a finite-size table"
+    for e in A["finite_size"]:
+        e["seeds_shared"] = shared
+    J["finite_size_jamming"]["seeds_shared"] = shared
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    for section in ("## Finite size at the depletion point", "## System size", "## Finite size at jamming"):
+        text = out.split(section, 1)[1].split("\n## ", 1)[0]
+        independent = "the sizes are independent samples" in text
+        dependent = "the sizes are not independent samples" in text
+        assert (independent, dependent) == (shared == 0, shared > 0), (section, text[:400])
+
+
+def test_runs_that_never_jammed_are_not_said_to_be_used(tmp_path):
+    A, J = quick()
+    A["inputs"]["not_finished"] = ["runs/x/L10/P0_1e-5/seed1 (step_limit)"]
+    A["inputs"]["never_jammed"] = [f"runs/x/L10/P0_1e-4/seed{k} (step_limit)" for k in range(1, 7)]
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    line = next(line for line in out.splitlines() if line.startswith("Runs:"))
+    assert "1 stopped before their last target (runs/x/L10/P0_1e-5/seed1 (step_limit): their recorded states" in line
+    assert "6 never jammed and contribute nothing (runs/x/L10/P0_1e-4/seed1 (step_limit)" in line, line
 
 
 def test_a_value_from_another_box_than_the_papers_number_is_not_judged(tmp_path):

@@ -8,7 +8,7 @@
 //                     and the paper's (key suffix _paper), errors over independent samples
 //   runs.csv          one row per run (φ_J, u_J, n_J, φ_2 both ways, predictions, P_2, G_2, divisions, h_γ ...)
 //   targets.csv       one row per (run, Δφ target): P, Z, ΔZ, u, χ_c, λ_c, B_grow, ΔZ_0(P) + 2(u_J − u), B, G
-//   survival.csv      pooled Kaplan–Meier S(a) per group with Greenwood band (Fig. 2B)
+//   survival.csv      pooled Kaplan–Meier S(a) per group with its band clustered by run (Fig. 2B)
 //   remaining.csv     fraction of the buds free at jamming still free against φ − φ_J (Fig. 2B)
 //   division_curve.csv  cumulative post-jamming divisions / ⟨N_J⟩ against Δφ: median and quartiles (Fig. D1)
 //   growth_rates.csv  Π(g) at Δφ = 3·10⁻³ per group on the paper's bins (Fig. E1)
@@ -665,8 +665,11 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
     // point, targets and φ_2 are used; it is listed so that the report can say so. One that never
     // jammed has nothing to contribute.
     try {
+      if (!r.jammed()) {
+        e.never_jammed.push_back(dirs[k].string() + " (" + r.status() + ")");
+        continue;
+      }
       if (r.status() != "finished") e.failed.push_back(dirs[k].string() + " (" + r.status() + ")");
-      if (!r.jammed()) continue;
       e.rows.push_back(extract(r, o.require_moduli, e.moduli));
     } catch (const nlohmann::json::exception& x) {
       // A value of the wrong type or a missing key in the run's summary: name the file.
@@ -707,10 +710,14 @@ Ensemble read_ensemble(const EnsembleOptions& o) {
   }
   if (e.rows.empty()) throw InputError("analyse: no run among the inputs reached jamming");
   std::map<GroupKey, std::vector<SurvivalRecord>> pools;
-  for (const auto& r : e.rows) {
+  for (std::size_t k = 0; k < e.rows.size(); ++k) {
+    const RunRow& r = e.rows[k];
     const GroupKey key{r.L, r.P0};
     auto& pool = pools[key];
-    pool.insert(pool.end(), r.survival.begin(), r.survival.end());
+    for (SurvivalRecord rec : r.survival) {
+      rec.cluster = k;  // the run is the sample
+      pool.push_back(rec);
+    }
     e.survival_runs[key] += std::isfinite(r.bud_records);  // a run without bud events adds no run to the pool
   }
   for (const auto& [key, pool] : pools) e.survival.emplace(key, kaplan_meier(pool));
@@ -959,8 +966,9 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["pooled_survival"] = pooled;
   const std::string runs_cell = pooled_runs ? std::to_string(*pooled_runs) : std::string();
   const auto survival_row = [&](const KaplanMeierStep& st) {
-    const auto [se, lo, hi] = band_cells(st, pooled_runs);
-    t.survival.push_back({num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, std::to_string(st.at_risk), runs_cell});
+    const auto [se, lo, hi, se_greenwood] = band_cells(st, pooled_runs);
+    t.survival.push_back(
+        {num(key.L), P0s, num(st.a), num(st.S), se, lo, hi, se_greenwood, std::to_string(st.at_risk), runs_cell});
   };
   survival_row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
   for (const auto& st : km.steps()) survival_row(st);
@@ -1404,7 +1412,7 @@ std::vector<std::pair<std::string, std::string>> table_files(const Ensemble& e, 
   };
   write("runs.csv", run_header, run_rows);
   write("targets.csv", tgt_header, tgt_rows);
-  write("survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "at_risk", "runs"}, t.survival);
+  write("survival.csv", {"L", "P0", "a", "S", "se", "lo", "hi", "se_greenwood", "at_risk", "runs"}, t.survival);
   write("remaining.csv", {"L", "P0", "dphi", "mean", "se", "runs"}, t.remaining);
   write("division_curve.csv", {"L", "P0", "dphi", "median", "q25", "q75", "runs"}, t.divisions);
   write("growth_rates.csv", {"L", "P0", "g_lo", "g_hi", "density", "delta_at_1"}, t.growth_rates);
@@ -1479,6 +1487,7 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   J["inputs"] = Json{{"runs", e.runs},
                      {"used", e.rows.size()},
                      {"not_finished", e.failed},
+                     {"never_jammed", e.never_jammed},
                      {"duplicates", e.duplicates},
                      {"moduli_files", e.moduli.found},
                      {"moduli_saddles", e.moduli.saddles},
@@ -1551,6 +1560,7 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
 
   std::ostringstream msg;
   msg << e.rows.size() << " runs used (" << e.failed.size() << " not finished";
+  if (!e.never_jammed.empty()) msg << "; " << e.never_jammed.size() << " never jammed, left out";
   if (!e.duplicates.empty()) {
     msg << "; duplicate copies left out:";
     for (const auto& d : e.duplicates)

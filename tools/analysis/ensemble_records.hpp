@@ -139,7 +139,8 @@ struct ModuliFiles {
 struct Ensemble {
   std::vector<RunRow> rows;
   std::vector<DosRow> dos_rows;
-  std::vector<std::string> failed;                   // runs that stopped early, with their status
+  std::vector<std::string> failed;                   // jammed runs that stopped early, with their status
+  std::vector<std::string> never_jammed;             // runs that never jammed, with their status
   std::vector<std::vector<std::string>> duplicates;  // copies of one run: the used one first
   ModuliFiles moduli;
   std::size_t dos_found = 0;

@@ -214,8 +214,8 @@ void read_spectra(const CsvTable& D, Ensemble& e, const std::map<std::string, st
 // The pooled Kaplan–Meier curve of each group from survival.csv: per group a first row at a = 0 with
 // the number of records at risk, then one row per step (a, Ŝ, at risk). The events at a step follow
 // from Ŝ_k = Ŝ_{k−1} (1 − d_k / n_k), the censored from the drop of the risk set; the curve is made
-// again from those records, so Ŝ and the Greenwood variance (whose band the table leaves out where
-// few are at risk) come back as the runs gave them.
+// again from those records, so Ŝ and the Greenwood variance come back as the runs gave them; the
+// variance clustered by run, which needs each record's run, is read from the table's se.
 //
 // Each group's `runs` (the runs it pools) and records are held to runs.csv: the runs of the group
 // there that recorded bud events (bud_records, the rule of the run-directory reader) and the sum of
@@ -258,6 +258,13 @@ void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
     e.unchecked.push_back(S.source + "'s pooled curves cannot be checked against runs.csv: it has no bud_records " +
                           "column (tables from before it)");
   const bool check = c_runs && runs_have_bud_records;
+  // se is clustered by run in tables that also give Greenwood's (se_greenwood); before, it was
+  // Greenwood's alone, which would pass for a band it is not.
+  const bool clustered = S.has_column("se_greenwood");
+  if (!clustered)
+    e.unavailable["survival.csv:se"] = S.source + " has no se_greenwood column (tables from before it): its se is " +
+                                       "Greenwood's, which takes the buds of the pooled runs as independent; no band";
+  const std::size_t c_se = S.column("se");
   std::size_t k = 0;
   while (k < S.size()) {
     const std::size_t first_row = k;
@@ -281,6 +288,7 @@ void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
                          io::format_double(g->second.records) + ": the curve is not of these runs");
     }
     std::vector<SurvivalRecord> kept;
+    std::vector<double> se;  // per step, as the runs' analysis wrote it
     double S_prev = 1, a_prev = 0;
     std::size_t at_risk_prev = records, events_prev = 0;
     const auto censored_before = [&](std::size_t at_risk) { return at_risk_prev - events_prev - at_risk; };
@@ -299,6 +307,7 @@ void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
       if (k > first_row + 1) kept.insert(kept.end(), censored_before(at_risk), SurvivalRecord{a_prev, false});
       events_prev = static_cast<std::size_t>(std::lround(static_cast<double>(at_risk) * (1.0 - S_k / S_prev)));
       kept.insert(kept.end(), events_prev, SurvivalRecord{a, true});
+      se.push_back(clustered && !S.text(k, c_se).empty() ? S.number(k, c_se) : kNaN);
       S_prev = S_k;
       a_prev = a;
       at_risk_prev = at_risk;
@@ -308,7 +317,16 @@ void read_survival(const CsvTable& S, Ensemble& e, bool runs_have_bud_records) {
       throw InputError(S.source + ":" + std::to_string(first_row + 2) + ": group L = " + S.text(first_row, c_L) +
                        ", P0 = " + S.text(first_row, c_P0) + ": its steps account for " + std::to_string(kept.size()) +
                        " records, its first row for " + std::to_string(records));
-    e.survival[g->second.key] = kaplan_meier(kept);
+    // The records' runs are not in the table: the variance clustered by run is the one it holds.
+    const KaplanMeierCurve rebuilt = kaplan_meier(kept);
+    std::vector<KaplanMeierStep> steps = rebuilt.steps();
+    if (steps.size() != se.size())
+      throw InputError(S.source + ":" + std::to_string(first_row + 2) + ": group " + group + ": " +
+                       std::to_string(se.size()) + " rows after the first, but they make " +
+                       std::to_string(steps.size()) + " steps (rows of equal a)");
+    for (std::size_t j = 0; j < steps.size(); ++j) steps[j].clustered_var = se[j] * se[j];
+    e.survival[g->second.key] = KaplanMeierCurve(std::move(steps), rebuilt.records(), rebuilt.events(),
+                                                 c_runs ? e.survival_runs[g->second.key] : 0);
   }
   if (check)
     for (const auto& [label, g] : groups)

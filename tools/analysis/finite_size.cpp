@@ -93,6 +93,15 @@ Json extrapolation_json(const std::vector<double>& N, const std::vector<double>&
   return x;
 }
 
+// How many seeds were grown at more than one of the per-size rows' sizes (the report's account of
+// whether its sizes are independent samples).
+std::size_t seeds_shared_by_sizes(const Json& rows, const SeedsBySize& seeds) {
+  std::vector<const std::set<std::uint64_t>*> of;
+  for (const auto& row : rows)
+    if (const auto it = seeds.find(number(row, "L")); it != seeds.end()) of.push_back(&it->second);
+  return seeds_shared(of);
+}
+
 // The extrapolation of one quantity over the per-size rows: the sizes whose value has an error bar.
 // `seeds`: the seeds of the runs of each row's L.
 Json extrapolate(const Json& rows, const char* name, const SeedsBySize& seeds) {
@@ -138,6 +147,7 @@ Json finite_size_json(const Json& groups, const std::map<std::string, SeedsBySiz
     }
     Json extrapolation;
     for (const auto& q : kDepletionQuantities) extrapolation[q.name] = extrapolate(sizes, q.name, seeds.at(label));
+    entry["seeds_shared"] = seeds_shared_by_sizes(sizes, seeds.at(label));
     entry["sizes"] = sizes;
     entry["model"] = kModel;
     entry["extrapolation"] = extrapolation;
@@ -177,6 +187,7 @@ Json jamming_finite_size_json(const Json& sizes_in, const SeedsBySize& seeds, co
   for (const auto& q : kJammingQuantities) extrapolation[q.name] = extrapolate(rows, q.name, seeds);
   Json J;
   J["sizes"] = rows;
+  J["seeds_shared"] = seeds_shared_by_sizes(rows, seeds);
   J["model"] = kModel;
   J["extrapolation"] = extrapolation;
   // n_J,∞ = ρ_∞ (1 − r_∞): the growth-only density of a large box times the extrapolated non-rattler

@@ -229,6 +229,11 @@ Json finite_strain_check_json(const FiniteStrainCheck& check, const ElasticRespo
   // A contact pressed less than any strain step can keep is at the relaxation's resolution: it opens or
   // closes under every strain, where the linear response counts its stiffness both ways. There the
   // finite strain has no slope to compare, and the check says so rather than disagree.
+  if (std::min(check.shear.used, check.isotropic.used) >= 3 &&
+      !(std::isfinite(check.shear_energy.curvature) && std::isfinite(check.isotropic_energy.curvature)))
+    c["not_applicable"] =
+        "the contact network changed under every strain of one sign (shear or isotropic): a "
+        "curvature of U at the reference needs states kept on both sides of it";
   if (std::min(check.shear.used, check.isotropic.used) < 3)
     c["not_applicable"] = "fewer than 3 strained states kept the contact network (shear " +
                           std::to_string(check.shear.used) + ", isotropic " + std::to_string(check.isotropic.used) +

@@ -40,8 +40,10 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
     }
     if (!r.jammed()) throw InputError(d + ": the run never jammed (phi_J is null)");
     if (!r.bud_events) throw InputError(d + ": no bud_events.csv (the scene turned observe.bud_events off)");
-    const auto rec = survival_records(*r.bud_events);
-    records.insert(records.end(), rec.begin(), rec.end());
+    for (auto rec : survival_records(*r.bud_events)) {
+      rec.cluster = k;  // the run is the sample
+      records.push_back(rec);
+    }
     uJ.push_back(r.get("u_J"));
     nrJ.push_back(r.get("N_nr_J"));
   }
@@ -82,11 +84,12 @@ Json survival_json(const SurvivalReport& r) {
   return j;
 }
 
-std::array<std::string, 3> band_cells(const KaplanMeierStep& step, std::optional<std::size_t> runs) {
+std::array<std::string, 4> band_cells(const KaplanMeierStep& step, std::optional<std::size_t> runs) {
   if (!runs || *runs < kMinSamplesForError) return {};
-  const auto band = greenwood_band(step);
-  if (!band) return {};
-  return {io::format_double(band->se), io::format_double(band->lo), io::format_double(band->hi)};
+  const auto band = survival_band(step, step.clustered_var);
+  const auto independent = survival_band(step, step.greenwood_var);
+  return {band ? io::format_double(band->se) : "", band ? io::format_double(band->lo) : "",
+          band ? io::format_double(band->hi) : "", independent ? io::format_double(independent->se) : ""};
 }
 
 namespace {
@@ -106,12 +109,12 @@ std::string summary_line(const SurvivalReport& r) {
 io::CommandResult survival_result(const SurvivalReport& r) {
   io::CommandResult result{survival_json(r), {}, summary_line(r)};
   result.csv = [&km = r.km, runs = r.runs](std::ostream& os) {
-    os << "a,a_area,S,se,lo,hi,at_risk,events,censored\n";
+    os << "a,a_area,S,se,lo,hi,se_greenwood,at_risk,events,censored\n";
     auto row = [&](const KaplanMeierStep& st) {
-      const auto [se, lo, hi] = band_cells(st, runs);
+      const auto [se, lo, hi, se_greenwood] = band_cells(st, runs);
       os << io::format_double(st.a) << ',' << io::format_double(kDiameterSquaredToArea * st.a) << ','
-         << io::format_double(st.S) << ',' << se << ',' << lo << ',' << hi << ',' << st.at_risk << ',' << st.events
-         << ',' << st.censored << '\n';
+         << io::format_double(st.S) << ',' << se << ',' << lo << ',' << hi << ',' << se_greenwood << ',' << st.at_risk
+         << ',' << st.events << ',' << st.censored << '\n';
     };
     row(KaplanMeierStep{.a = 0, .at_risk = km.records()});
     for (const auto& st : km.steps()) row(st);

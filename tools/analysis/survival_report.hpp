@@ -36,14 +36,16 @@ SurvivalReport survival_report(std::span<const std::filesystem::path> runs, std:
 
 io::Json survival_json(const SurvivalReport& report);
 
-// The se, lo and hi cells of a step of a curve pooled from `runs` runs (greenwood_band), empty where it
-// gives none, and everywhere on a curve of fewer than kMinSamplesForError runs (or an unknown number):
-// the buds of one run share its growth, so a run, not a bud, is the sample an error bar needs.
-std::array<std::string, 3> band_cells(const KaplanMeierStep& step, std::optional<std::size_t> runs);
+// The se, lo, hi and se_greenwood cells of a step of a curve pooled from `runs` runs: the 95 % band
+// from the variance clustered by run (KaplanMeierStep::clustered_var) and Greenwood's standard error,
+// which takes every bud as independent. Empty where a band has fewer than kMinSamplesForError buds at
+// risk, and everywhere on a curve of fewer than kMinSamplesForError runs (or an unknown number): the
+// buds of one run share its growth, so a run, not a bud, is the sample an error bar needs.
+std::array<std::string, 4> band_cells(const KaplanMeierStep& step, std::optional<std::size_t> runs);
 
 // The JSON, the curve's table and the summary line. The table starts at a = 0 with S = 1 and every
-// record at risk: a, a_area, S, se (Greenwood), lo and hi (95 % band clipped to [0, 1]), at_risk,
-// events, censored. The CSV writer refers to `report`, which must outlive it.
+// record at risk: a, a_area, S, se (clustered by run), lo and hi (95 % band clipped to [0, 1]),
+// se_greenwood, at_risk, events, censored. The CSV writer refers to `report`, which must outlive it.
 io::CommandResult survival_result(const SurvivalReport& report);
 
 }  // namespace budjam::tools

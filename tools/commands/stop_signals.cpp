@@ -1,7 +1,6 @@
 #include "commands/stop_signals.hpp"
 
 #include "io/atomic_file.hpp"
-#include "io/run_program.hpp"
 
 namespace budjam::cli {
 
@@ -9,16 +8,9 @@ namespace {
 
 volatile std::sig_atomic_t g_received = 0;
 
-extern "C" void on_fatal_signal(int sig) {
-  io::stop_running_program();  // first: a converter still running would write its file anew
-  io::remove_open_temporaries();
-  std::signal(sig, SIG_DFL);
-  std::raise(sig);
-}
-
 extern "C" void on_stop_signal(int sig) {
   if (g_received == sig) {  // asked twice: stop now
-    on_fatal_signal(sig);
+    io::end_process_without_temporaries(sig);
     return;
   }
   g_received = sig;
@@ -50,7 +42,7 @@ int StopSignals::received() { return g_received; }
 void remove_temporaries_on_fatal_signals() {
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction sa {};
-    sa.sa_handler = on_fatal_signal;
+    sa.sa_handler = io::end_process_without_temporaries;
     sigemptyset(&sa.sa_mask);
     sigaction(sig, &sa, nullptr);
   }

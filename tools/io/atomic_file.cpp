@@ -2,6 +2,7 @@
 
 #include "budjam/errors.hpp"
 #include "io/run_directory.hpp"
+#include "io/run_program.hpp"
 #include "io/text.hpp"
 
 #include <dirent.h>
@@ -15,6 +16,7 @@
 #include <atomic>
 #include <cerrno>
 #include <climits>
+#include <csignal>
 #include <cstring>
 #include <random>
 #include <sstream>
@@ -418,6 +420,31 @@ void remove_open_temporaries() noexcept {
   }
 }
 
+extern "C" void end_process_without_temporaries(int sig) {
+  stop_running_program();  // first: a converter still running would write its file anew
+  remove_open_temporaries();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+TemporariesRemovedOnStop::TemporariesRemovedOnStop() {
+  replaced_[0].sig = SIGTERM;
+  replaced_[1].sig = SIGHUP;
+  for (Replaced& r : replaced_) {
+    if (::sigaction(r.sig, nullptr, &r.old) != 0 || (r.old.sa_flags & SA_SIGINFO) || r.old.sa_handler != SIG_DFL)
+      continue;
+    struct sigaction sa {};
+    sa.sa_handler = end_process_without_temporaries;
+    sigemptyset(&sa.sa_mask);
+    r.installed = ::sigaction(r.sig, &sa, nullptr) == 0;
+  }
+}
+
+TemporariesRemovedOnStop::~TemporariesRemovedOnStop() {
+  for (const Replaced& r : replaced_)
+    if (r.installed) ::sigaction(r.sig, &r.old, nullptr);
+}
+
 TempFile::TempFile(Directory dir, std::string_view final_name) : dir_(std::move(dir)), final_(final_name) {
   static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
   static thread_local std::mt19937_64 rng{std::random_device{}()};
@@ -503,14 +530,22 @@ void check_output_spelling(std::string_view option, const fs::path& path) {
                      " bytes; at most " + std::to_string(kMaxOutputName) + ")");
 }
 
-// A run directory's top level holds its run's files, which budjam grow writes: another command's
-// output there could replace one of them (summary.json, a log) and break the run for every reader.
+// A run directory's top level holds its run's files, which budjam grow writes, and so does its
+// spectra/ (the dos observer's): another command's output there could replace one of them
+// (summary.json, a log, a spectrum) and break the run for every reader.
+bool holds_only_run_files(const fs::path& dir) {
+  std::error_code ec;
+  return is_run_directory(dir) || (fs::weakly_canonical(dir, ec).filename() == run_files::spectra && !ec &&
+                                   is_run_directory(fs::weakly_canonical(dir, ec).parent_path()));
+}
+
 void refuse_run_directory(std::string_view option, const fs::path& shown, const fs::path& dir) {
   const fs::path d = dir.empty() ? fs::path(".") : dir;
-  if (is_run_directory(d))
+  if (holds_only_run_files(d))
     throw InputError(output_at(option, shown) + escape_control(d.string()) +
-                     " is a budjam run directory, whose top level holds only the run's own files (write "
-                     "elsewhere, or beside its packings in packings/)");
+                     (is_run_directory(d) ? " is a budjam run directory, whose top level"
+                                          : " is the spectra directory of a budjam run, which") +
+                     " holds only the run's own files (write elsewhere, or beside its packings in packings/)");
 }
 
 // A run's packings are its data, written only by grow: no other output replaces one.
@@ -524,8 +559,8 @@ void refuse_run_packing(std::string_view option, const fs::path& path) {
                    escape_control(canonical.parent_path().string()) + ", which only budjam grow writes");
 }
 
-// A directory a run owns at its top level: the only ones an output may make there.
-bool run_subdirectory(const fs::path& name) { return name == run_files::packings || name == run_files::spectra; }
+// The directory a run owns at its top level that other commands' outputs may go in (beside the packings).
+bool run_subdirectory(const fs::path& name) { return name == run_files::packings; }
 
 // A path for messages: the user's spelling of `real` where it names that directory, else `real`.
 fs::path shown_as(const fs::path& spelled, const fs::path& real) {
@@ -562,11 +597,12 @@ void refuse_new_directory(std::string_view option, const fs::path& shown, const 
   fs::path real = fs::canonical(at, ec), spelled = at;
   if (ec) return;  // what cannot be resolved cannot be created either: the writer reports it
   const auto refuse = [&](const fs::path& run, const fs::path& made) {
-    throw InputError(output_at(option, shown) + "is inside the budjam run directory " +
-                     escape_control(shown_as(spelled, run).string()) +
-                     ", whose top level holds only the run's own files (write elsewhere" +
-                     (made.empty() ? std::string() : "; it would make the directory " + escape_control(made.string())) +
-                     ")");
+    throw InputError(
+        output_at(option, shown) + "is inside " +
+        (is_run_directory(run) ? "the budjam run directory " : "the spectra directory of a budjam run, ") +
+        escape_control(shown_as(spelled, run).string()) + (is_run_directory(run) ? ", whose top level" : ", which") +
+        " holds only the run's own files (write elsewhere" +
+        (made.empty() ? std::string() : "; it would make the directory " + escape_control(made.string())) + ")");
   };
   for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
     if (it->empty() || *it == ".") continue;
@@ -575,11 +611,12 @@ void refuse_new_directory(std::string_view option, const fs::path& shown, const 
       spelled /= "..";
       continue;
     }
-    if (!run_subdirectory(*it) && is_run_directory(real)) refuse(real, *it);
+    if (holds_only_run_files(real) && !(run_subdirectory(*it) && is_run_directory(real))) refuse(real, *it);
     real /= *it;
     spelled /= *it;
   }
-  if (itself && !run_subdirectory(real.filename()) && is_run_directory(real.parent_path())) {
+  if (itself && holds_only_run_files(real.parent_path()) &&
+      !(run_subdirectory(real.filename()) && is_run_directory(real.parent_path()))) {
     spelled /= "..";
     refuse(real.parent_path(), {});
   }

@@ -11,6 +11,7 @@
 // is, as the user gave it. Every output file gets the mode open(2) gives with 0666 and the umask.
 #include <sys/stat.h>
 
+#include <array>
 #include <csignal>
 #include <cstdint>
 #include <filesystem>
@@ -146,6 +147,31 @@ class TempFile {
 // lists of temporaries that named only those: for a handler of a signal that ends the process (no
 // destructor runs then). Async-signal-safe (unlinkat and ftruncate only).
 void remove_open_temporaries() noexcept;
+
+// A handler of a signal that ends the process: stops a helper program still running (whose file
+// would otherwise be written anew), removes the open temporaries, then ends the process as the
+// signal would have without a handler. Async-signal-safe.
+extern "C" void end_process_without_temporaries(int sig);
+
+// While it lives, SIGTERM and SIGHUP whose disposition is the default (to end the process) go through
+// end_process_without_temporaries: for writers in a process that does not handle those signals
+// itself (the Python module's), so that a stop leaves no temporary behind. Signals the process
+// handles or ignores are left as they are.
+class TemporariesRemovedOnStop {
+ public:
+  TemporariesRemovedOnStop();
+  ~TemporariesRemovedOnStop();
+  TemporariesRemovedOnStop(const TemporariesRemovedOnStop&) = delete;
+  TemporariesRemovedOnStop& operator=(const TemporariesRemovedOnStop&) = delete;
+
+ private:
+  struct Replaced {
+    int sig = 0;
+    struct sigaction old {};
+    bool installed = false;
+  };
+  std::array<Replaced, 2> replaced_{};
+};
 
 // Holds back SIGINT, SIGTERM and SIGHUP while it lives (they are delivered when it ends), making
 // one step of what a stop must not split: a temporary's creation and its listing for

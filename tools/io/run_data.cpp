@@ -577,9 +577,9 @@ std::vector<fs::path> run_input_files(const fs::path& dir) {
   namespace run_files = io::run_files;
   std::vector<fs::path> files;
   for (const std::string_view name :
-       {run_files::summary, run_files::scene, run_files::steps, run_files::divisions, run_files::bud_events,
-        run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
+       {run_files::summary, run_files::scene, run_files::steps, run_files::divisions, run_files::bud_events})
     files.push_back(dir / name);
+  for (const std::string_view name : run_files::observer_logs) files.push_back(dir / name);
   // the packings and the sidecars beside them (moduli, spectra), which analyse reads too
   for (const std::string_view sub : {run_files::packings, run_files::spectra}) {
     std::error_code ec;
@@ -593,7 +593,7 @@ std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run) {
   namespace run_files = io::run_files;
   std::vector<std::pair<std::string, CsvTable>> tables{{"steps", run.steps}, {"divisions", run.divisions}};
   if (run.bud_events) tables.emplace_back("bud_events", *run.bud_events);
-  for (const std::string_view name : {run_files::moduli, run_files::dos, run_files::rigidity, run_files::trials})
+  for (const std::string_view name : run_files::observer_logs)
     if (const fs::path path = run.dir / name; input_exists(path))
       tables.emplace_back(path.stem().string(), read_csv(path));
   return tables;

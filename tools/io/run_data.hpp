@@ -115,7 +115,7 @@ void check_summary(const io::Json& summary, const std::filesystem::path& file);
 void check_run_tables(const RunData& run);
 
 // The tables budjam wrote in a run directory, named by their file without .csv: steps, divisions,
-// and bud_events, moduli, dos, rigidity_events, trials where the scene asked for them (docs/files.md).
+// and bud_events and the observers' logs (run_files::observer_logs) where the scene asked for them.
 // Other files in the directory are not read. InputError naming a malformed table.
 std::vector<std::pair<std::string, CsvTable>> run_tables(const RunData& run);
 

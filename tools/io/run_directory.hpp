@@ -21,6 +21,7 @@
 //    again (remove_recorded_temporaries), and no file is ever removed for its name's pattern.
 #include "io/atomic_file.hpp"
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -47,6 +48,10 @@ inline constexpr std::string_view dos = "dos.csv";
 inline constexpr std::string_view rigidity = "rigidity_events.csv";
 inline constexpr std::string_view trials = "trials.csv";
 inline constexpr std::string_view trajectory = "trajectory.xyz";
+// The observers' CSV logs beside steps, divisions and bud_events: the readers of a run
+// (load_run's run_tables, `budjam.load_run`) read each one present, and no command's output may
+// replace one (run_input_files). A new observer's log belongs here.
+inline constexpr std::array<std::string_view, 4> observer_logs{moduli, dos, rigidity, trials};
 // `budjam export` of trajectory.xyz to GSD
 inline constexpr std::string_view trajectory_gsd = "trajectory.gsd";
 inline constexpr std::string_view packings = "packings";  // <name>.pack and their sidecars
