@@ -187,6 +187,20 @@ TEST_CASE("a new output directory at the top level of a run is refused, for grow
   CHECK(beside.code == 0);
 }
 
+// `budjam ARGS` refused with exit 2 and one line holding `phrase`, `snapshot()` of what it must not
+// touch still `before`.
+template <class Snapshot, class Value>
+void check_refused_as_is(const std::string& args, const std::string& phrase, const Snapshot& snapshot,
+                         const Value& before) {
+  INFO(args);
+  const auto r = run_budjam(args);
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(r.err.find(phrase) != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(snapshot() == before);
+}
+
 TEST_CASE("no output makes a directory at the top level of a run, however deep and through a link", "[taxonomy]") {
   const std::string demo = budjam::testing::shell_quoted(budjam::testing::source_file("data/scenes/demo.toml"));
   REQUIRE(run_budjam("grow " + demo + " --quiet --out deep-run").code == 0);
@@ -205,13 +219,7 @@ TEST_CASE("no output makes a directory at the top level of a run, however deep a
         "export " + pack + " --format xyz --out deep-run/sub3/e", "grow " + demo + " --quiet --out deep-run/sub9/run",
         std::string("analyse deep-run --out deep-run/sub5/deeper"), std::string("analyse deep-run --out plink/../newA"),
         "dos " + pack + " --out plink/../newB/d"}) {
-    INFO(args);
-    const auto r = run_budjam(args);
-    INFO(r.err);
-    CHECK(r.code == 2);
-    CHECK(r.err.find("is inside the budjam run directory") != std::string::npos);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    CHECK(top() == before);
+    check_refused_as_is(args, "is inside the budjam run directory", top, before);
   }
   // Below packings/, beside the packings, an output may make one.
   const auto below = run_budjam("rigidity " + pack + " --out plink/mine/j");
@@ -243,13 +251,7 @@ TEST_CASE("spectra/ of a run holds the dos observer's files alone: no command wr
        {"dos " + pack + " --out spec-run/spectra/" + spectrum, "rigidity " + pack + " --out spec-run/spectra/r",
         "render " + pack + " -o spec-run/spectra/new/r.svg", std::string("analyse spec-run --out spec-run/spectra"),
         std::string("analyse spec-run --out spec-run/spectra/a")}) {
-    INFO(args);
-    const auto r = run_budjam(args);
-    INFO(r.err);
-    CHECK(r.code == 2);
-    CHECK(r.err.find("the spectra directory of a budjam run") != std::string::npos);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    CHECK(listing() == before);
+    check_refused_as_is(args, "the spectra directory of a budjam run", listing, before);
   }
   // a run whose observer made none: spectra/ is not made either
   REQUIRE(run_budjam("grow " + demo + " --quiet --out nospec-run").code == 0);
