@@ -300,6 +300,36 @@ TEST_CASE(
   CHECK(median_completion_size(back) == median_completion_size(km));
   CHECK(back.integral(30) == km.integral(30));
   CHECK(e.unavailable.count("remaining.csv") == 1);
+  // A table without se_greenwood holds Greenwood's se, not the run-clustered one: no band from it.
+  CHECK(e.unavailable.count("survival.csv:se") == 1);
+  for (const auto& st : back.steps()) CHECK(std::isnan(st.clustered_var));
+}
+
+TEST_CASE("survival.csv read back keeps the run-clustered se it holds, step by step", "[ensemble]") {
+  std::vector<SurvivalRecord> records;
+  for (std::size_t run = 0; run < 6; ++run)
+    for (std::size_t k = 0; k < 4; ++k)
+      records.push_back({0.5 + 0.3 * static_cast<double>((run * 5 + k * 3) % 7) + 0.01 * static_cast<double>(run),
+                         (run + k) % 4 != 0, run});
+  const auto km = kaplan_meier(records);
+  const auto dir = budjam::testing::work_dir() / "km_tables_clustered";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "runs.csv") << "run,L,P0,seed,status\nr1,8,0.001,1,finished\n";
+  std::ofstream(dir / "targets.csv") << "run,L,P0,seed,dphi,below_phi2\n";
+  {
+    std::ofstream f(dir / "survival.csv");
+    f << "L,P0,a,S,se,lo,hi,se_greenwood,at_risk\n8,0.001,0,1,,,,," << km.records() << "\n";
+    for (const auto& st : km.steps())
+      f << "8,0.001," << io::format_double(st.a) << "," << io::format_double(st.S) << ","
+        << io::format_double(std::sqrt(st.clustered_var)) << ",0,1," << io::format_double(std::sqrt(st.greenwood_var))
+        << "," << st.at_risk << "\n";
+  }
+  const Ensemble e = read_ensemble_tables(dir);
+  CHECK(e.unavailable.count("survival.csv:se") == 0);
+  const auto& back = e.survival.at(GroupKey{8, 1e-3});
+  REQUIRE(back.steps().size() == km.steps().size());
+  for (std::size_t k = 0; k < km.steps().size(); ++k)
+    CHECK(back.steps()[k].clustered_var == Approx(km.steps()[k].clustered_var).epsilon(1e-12).margin(1e-300));
 }
 
 namespace {
