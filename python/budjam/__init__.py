@@ -94,7 +94,7 @@ def _parameters(signature):
         else:
             current += ch
     parts.append(current)
-    return [(name.strip(), annotation.split(" = ")[0].strip())
+    return [(name.strip(), annotation.split(" = ")[0].strip(), " = " in annotation)
             for name, _, annotation in (p.partition(":") for p in parts if p.strip())]
 
 
@@ -108,8 +108,15 @@ def _one_line_type_error(name, error, args, kwargs):
     if match is None:
         return TypeError(f"{name}: an argument of the wrong type")
     parameters = [p for p in _parameters(match.group(1)) if p[0] != "self"]
+    names = [p[0] for p in parameters]
+    if unknown := [k for k in kwargs if k not in names]:
+        return TypeError(f"{name}: no argument named {unknown[0]} (it takes {', '.join(names)})")
+    if len(args) > len(parameters):
+        return TypeError(f"{name}: at most {len(parameters)} arguments ({', '.join(names)}), got {len(args)}")
     given = list(zip(parameters, args)) + [(p, kwargs[p[0]]) for p in parameters if p[0] in kwargs]
-    for (parameter, annotation), value in given:
+    if missing := [p[0] for p in parameters[len(args):] if not p[2] and p[0] not in kwargs]:
+        return TypeError(f"{name}: missing argument {missing[0]}")
+    for (parameter, annotation, _), value in given:
         if _fits(value, annotation) is False:
             return TypeError(f"{name}: {parameter}: must be {_readable(annotation)}, got {type(value).__name__}")
     return TypeError(f"{name}: arguments of the wrong type for ({match.group(1)})")
@@ -258,6 +265,8 @@ class Run:
 
 def load_run(directory):
     """Read a finished run directory: a Run with .summary (dict) and one DataFrame per budjam table."""
+    if not isinstance(directory, (str, os.PathLike)):
+        raise TypeError(f"load_run: directory: must be a path (str or os.PathLike), got {type(directory).__name__}")
     return Run(directory)
 
 
@@ -277,9 +286,15 @@ def _overrides(set):
     """`set` as the list of "section.key=value" strings that `budjam grow --set` takes."""
     if isinstance(set, str):
         return [set]
-    if hasattr(set, "items"):
+    if isinstance(set, collections.abc.Mapping):
         return [f"{key}={_override_value(value)}" for key, value in set.items()]
-    return list(set)
+    items = list(set) if isinstance(set, collections.abc.Iterable) else None
+    if items is not None and all(isinstance(item, str) for item in items):
+        return items
+    got = type(set).__name__ if items is None else \
+        f"a {type(set).__name__} holding {next(type(i).__name__ for i in items if not isinstance(i, str))}"
+    raise TypeError(f"grow: set: must be a dict of scene keys, a \"section.key=value\" string or a list of them, "
+                    f"got {got}")
 
 
 def _seed(seed):
@@ -304,6 +319,8 @@ def grow(scene, seed=None, set=(), callback=None):
     stop such as 'step_limit')."""
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError(f"scene: must be the path of a scene file (str or os.PathLike), got {type(scene).__name__}")
+    if callback is not None and not callable(callback):
+        raise TypeError(f"grow: callback: must be callable (or None), got {type(callback).__name__}")
     growth = Growth(os.fspath(scene), _seed(seed), _overrides(set))
     if callback is None:
         return growth

@@ -554,7 +554,13 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
         // Never over the file the packing was read from, given by path or as a Packing read from it.
         if (source || !f.source.empty()) io::check_not_an_input("path", path, {source.value_or(f.source)});
         const io::TemporariesRemovedOnStop stop;
-        io::write_particles(path, io::particle_frame(f, network_of(network)), format);
+        try {
+          io::write_particles(path, io::particle_frame(f, network_of(network)), format);
+        } catch (const std::exception&) {
+          // Ctrl-C reaches the whole process group: the gsd writer it killed is this interrupt, not a failure.
+          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+          throw;
+        }
       },
       "packing"_a, "path"_a, "format"_a, "network"_a = "load-bearing", "source"_a = py::none(),
       "Write the packing as `budjam export` does to `path` (the name is used as given): extended XYZ, "

@@ -98,3 +98,15 @@ def test_growth_events_are_named_as_the_runs_summary(run_dir):
     if summary["phi_2"] is not None:
         last = [e for e in events if e["kind"] == "phi2"][-1]
         assert (last["phi_2"], last["Z_2"], last["dZ_2"]) == (summary["phi_2"], summary["Z_2"], summary["dZ_2"])
+
+
+def test_docs_python_lists_the_table_columns_each_analysis_returns(relaxed, run_dir):
+    """The "table" column of the analyses table of docs/python.md names exactly the columns the result has."""
+    import re
+    page = (SOURCE_DIR / "docs" / "python.md").read_text()
+    results = {"moduli": budjam.moduli(relaxed), "rigidity": budjam.rigidity(relaxed),
+               "spectrum": budjam.spectrum(relaxed), "survival": budjam.survival([run_dir])}
+    for name, result in results.items():
+        row = next(line for line in page.splitlines() if line.startswith(f"| `{name}("))
+        listed = re.findall(r"`([A-Za-z_]+)`", row.split(" | ")[2])
+        assert listed == list(result.get("table", {})), name

@@ -105,6 +105,13 @@ def test_moduli_of_an_unjammed_packing_raises_no_result_error_naming_the_packing
     (lambda p: budjam.Packing("a", [1], [1], [1], [1]), "Packing: L: must be a number, got str"),
     (lambda p: budjam.Packing(8.0, [1.0, "x"], [1.0, 2.0], [0.0, 0.0], [0.5, 0.5]),
      "Packing: x: must be an array of numbers, got list"),
+    (lambda p: budjam.Packing(), "Packing: missing argument L"),
+    (lambda p: budjam.Packing(8.0, [1.0], [1.0], [0.0], [0.5], colour=1), "Packing: no argument named colour"),
+    (lambda p: budjam.load_run(3), "load_run: directory: must be a path (str or os.PathLike), got int"),
+    (lambda p: budjam.grow(PACKING, set=3), "grow: set: must be a dict of scene keys"),
+    (lambda p: budjam.grow(PACKING, set=[3]), "grow: set: must be a dict of scene keys, a \"section.key=value\" "
+     "string or a list of them, got a list holding int"),
+    (lambda p: budjam.grow(PACKING, callback=3), "grow: callback: must be callable (or None), got int"),
 ])
 def test_an_argument_of_the_wrong_type_raises_a_one_line_type_error_naming_it(call, message):
     with pytest.raises(TypeError) as e:
@@ -329,4 +336,34 @@ def test_a_python_export_stopped_midway_leaves_no_temporary(tmp_path, sig):
         os.kill(int(started.read_text()), signal.SIGKILL)
     except ProcessLookupError:
         pass
+    assert list(out.iterdir()) == []
+
+
+def test_ctrl_c_to_the_process_group_during_a_gsd_export_raises_keyboard_interrupt(tmp_path):
+    """Ctrl-C reaches the GSD writer as well as Python: the writer it killed is the interrupt, not an OutputError."""
+    import shlex
+    import subprocess
+    import sys
+    import time
+
+    started, writer = tmp_path / "started", tmp_path / "slow-python"
+    writer.write_text(f"#!/bin/sh\necho $$ > {shlex.quote(str(started))}.new\n"
+                      f"mv {shlex.quote(str(started))}.new {shlex.quote(str(started))}\nexec sleep 60\n")
+    writer.chmod(0o755)
+    out = tmp_path / "out"
+    out.mkdir()
+    script = ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+              "import budjam\n"
+              f"try: budjam.export({str(PACKING)!r}, {str(out / 'p.gsd')!r}, 'gsd')\n"
+              "except KeyboardInterrupt: print('KeyboardInterrupt')\n"
+              "except Exception as e: print(type(e).__name__, e)\n")
+    proc = subprocess.Popen([sys.executable, "-c", script], env={**os.environ, "BUDJAM_PYTHON": str(writer)},
+                            stdout=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while not started.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert started.exists(), "the GSD writer never started"
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: Python and its writer
+    out_text, _ = proc.communicate(timeout=30)
+    assert out_text.strip() == "KeyboardInterrupt", out_text
     assert list(out.iterdir()) == []
