@@ -8,7 +8,6 @@
 #include "budjam/statistics.hpp"
 #include "budjam/survival.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -163,11 +162,14 @@ struct Ensemble {
 // A number of a record under its column name in runs.csv / targets.csv; `legacy` is the name tables
 // of earlier versions gave the same number.
 struct RunColumn {
+  // `source` is required: what the column is computed from, for the account of a column that tables
+  // of an earlier format lack.
+  constexpr RunColumn(const char* name, double RunRow::*field, const char* source, const char* legacy = nullptr)
+      : name(name), field(field), source(source), legacy(legacy) {}
   const char* name;
   double RunRow::*field;
-  // What it is computed from, for the account of a column that tables of an earlier format lack.
   const char* source;
-  const char* legacy = nullptr;
+  const char* legacy;
 };
 inline constexpr const char kSummary[] = "summary.json";
 inline constexpr const char kSteps[] = "steps.csv";
@@ -234,9 +236,6 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J, kSummary},
                                             {"G_2_first", &RunRow::G_2_first, kModuliAtPhi2},
                                             {"selection_divisions_first", &RunRow::selection_divisions_first, kSteps},
                                             {"bud_records", &RunRow::bud_records, kBudEvents}};
-
-static_assert(std::ranges::all_of(kRunColumns, [](const RunColumn& c) { return c.source != nullptr; }),
-              "every runs.csv column names what it is computed from");
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
 inline constexpr TargetColumn kTargetColumns[] = {{"phi", &TargetRow::phi},
