@@ -308,10 +308,10 @@ def test_a_write_past_the_file_size_limit_raises_output_error_and_leaves_no_temp
     assert os.listdir(tmp_path) == []
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["TERM", "HUP"])
-def test_a_python_export_stopped_midway_leaves_no_temporary(tmp_path, sig):
-    """SIGTERM or SIGHUP, which end a Python process that does not handle them, remove the temporaries
-    of a budjam.export still writing (its GSD writer stands in, slowed), as the command line does."""
+def export_with_a_slow_gsd_writer(tmp_path, script_around, **popen):
+    """Runs `script_around(export_call)` in a Python process whose GSD writer (BUDJAM_PYTHON) is a stand-in
+    that records its pid and sleeps; returns (process, output directory, writer's pid file) once the writer
+    has started, the export's temporary then in the output directory."""
     import shlex
     import subprocess
     import sys
@@ -323,47 +323,47 @@ def test_a_python_export_stopped_midway_leaves_no_temporary(tmp_path, sig):
     writer.chmod(0o755)
     out = tmp_path / "out"
     out.mkdir()
-    script = f"import budjam; budjam.export({str(PACKING)!r}, {str(out / 'p.gsd')!r}, 'gsd')"
-    proc = subprocess.Popen([sys.executable, "-c", script], env={**os.environ, "BUDJAM_PYTHON": str(writer)})
+    call = f"budjam.export({str(PACKING)!r}, {str(out / 'p.gsd')!r}, 'gsd')"
+    proc = subprocess.Popen([sys.executable, "-c", script_around(call)],
+                            env={**os.environ, "BUDJAM_PYTHON": str(writer)}, **popen)
     deadline = time.monotonic() + 60
     while not started.exists() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)
     assert started.exists(), "the GSD writer never started"
     assert any(out.iterdir()), "no temporary while the writer runs"
-    proc.send_signal(sig)
-    assert proc.wait(timeout=30) == -sig
+    return proc, out, started
+
+
+def kill_the_writer(started):
     try:
         os.kill(int(started.read_text()), signal.SIGKILL)
     except ProcessLookupError:
         pass
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["TERM", "HUP"])
+def test_a_python_export_stopped_midway_leaves_no_temporary(tmp_path, sig):
+    """SIGTERM or SIGHUP, which end a Python process that does not handle them, remove the temporaries
+    of a budjam.export still writing (its GSD writer stands in, slowed), as the command line does."""
+    proc, out, started = export_with_a_slow_gsd_writer(tmp_path, lambda call: f"import budjam; {call}")
+    proc.send_signal(sig)
+    assert proc.wait(timeout=30) == -sig
+    kill_the_writer(started)
     assert list(out.iterdir()) == []
 
 
 def test_ctrl_c_to_the_process_group_during_a_gsd_export_raises_keyboard_interrupt(tmp_path):
     """Ctrl-C reaches the GSD writer as well as Python: the writer it killed is the interrupt, not an OutputError."""
-    import shlex
     import subprocess
-    import sys
-    import time
 
-    started, writer = tmp_path / "started", tmp_path / "slow-python"
-    writer.write_text(f"#!/bin/sh\necho $$ > {shlex.quote(str(started))}.new\n"
-                      f"mv {shlex.quote(str(started))}.new {shlex.quote(str(started))}\nexec sleep 60\n")
-    writer.chmod(0o755)
-    out = tmp_path / "out"
-    out.mkdir()
-    script = ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-              "import budjam\n"
-              f"try: budjam.export({str(PACKING)!r}, {str(out / 'p.gsd')!r}, 'gsd')\n"
-              "except KeyboardInterrupt: print('KeyboardInterrupt')\n"
-              "except Exception as e: print(type(e).__name__, e)\n")
-    proc = subprocess.Popen([sys.executable, "-c", script], env={**os.environ, "BUDJAM_PYTHON": str(writer)},
-                            stdout=subprocess.PIPE, text=True, start_new_session=True)
-    deadline = time.monotonic() + 60
-    while not started.exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.01)
-    assert started.exists(), "the GSD writer never started"
+    proc, out, started = export_with_a_slow_gsd_writer(
+        tmp_path, lambda call: ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+                                f"import budjam\ntry: {call}\n"
+                                "except KeyboardInterrupt: print('KeyboardInterrupt')\n"
+                                "except Exception as e: print(type(e).__name__, e)\n"),
+        stdout=subprocess.PIPE, text=True, start_new_session=True)
     os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: Python and its writer
     out_text, _ = proc.communicate(timeout=30)
+    kill_the_writer(started)
     assert out_text.strip() == "KeyboardInterrupt", out_text
     assert list(out.iterdir()) == []
