@@ -7,7 +7,10 @@ Run with Debian's python3 and python3-matplotlib:
     /usr/bin/python3 scripts/figures.py --tables analysis/quick/tables --out analysis/quick/figures fig2 fig3 ...
 
 Each figure is written as <name>.png and <name>.pdf. A figure whose inputs are missing (no moduli,
-no spectra) stops with an error naming the missing stage instead of drawing an empty plot.
+no spectra, too few runs for a branch, a target the grid lacks) stops with an error naming what is
+missing instead of drawing an empty plot. With --record-not-drawn (the pipeline's mode: a user's grid
+need not hold every figure's inputs) it writes <name>.not-drawn with that reason instead, removes an
+earlier <name>.png/.pdf, and goes on; the report names the reason.
 """
 import argparse
 import csv
@@ -180,7 +183,8 @@ def dz_identity(ax, targets, colour_of, label_of):
         if math.isfinite(x) and math.isfinite(y):
             points.append((r, x, y))
     identity_scatter(ax, points, colour_of, label_of,
-                     "ΔZ identity: no target has a ΔZ_0(P) prediction (no no-feedback runs?)")
+                     "ΔZ identity: no target has a ΔZ_0(P) prediction (the branch ΔZ_0(P) is the mean of a "
+                     f"target's no-feedback runs, {MIN_SAMPLES} or more of them)")
     ax.set_xlabel(r"$\Delta Z_0(P)+2(u_J-u)$")
     ax.set_ylabel(r"$\Delta Z$")
     ax.legend(fontsize=7, frameon=False)
@@ -709,6 +713,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tables", required=True, help="directory with analysis.json and the CSV tables")
     ap.add_argument("--out", required=True, help="directory for the figures")
+    ap.add_argument("--record-not-drawn", action="store_true",
+                    help="a figure whose inputs the tables lack is recorded in <name>.not-drawn, not an error")
     ap.add_argument("figures", nargs="+", choices=sorted(FIGURES))
     a = ap.parse_args()
     if a.figures == ["accuracy"]:
@@ -719,11 +725,24 @@ def main():
         T.out = a.out
     plt.rcParams.update({"font.size": 9, "axes.labelsize": 10})
     for name in a.figures:
+        reason = os.path.join(a.out, f"{name}.not-drawn")
         try:
             FIGURES[name](T)
         except Missing as e:
-            print(f"figures.py: {name}: {e}", file=sys.stderr)
-            sys.exit(2)
+            print(f"figures.py: {name}: {'not drawn: ' if a.record_not_drawn else ''}{e}", file=sys.stderr)
+            if not a.record_not_drawn:
+                sys.exit(2)
+            plt.close("all")
+            for ext in ("png", "pdf"):
+                if os.path.exists(os.path.join(a.out, f"{name}.{ext}")):
+                    os.remove(os.path.join(a.out, f"{name}.{ext}"))
+            os.makedirs(a.out, exist_ok=True)
+            with open(reason + ".tmp", "w") as f:
+                f.write(f"{e}\n")
+            os.replace(reason + ".tmp", reason)
+            continue
+        if os.path.exists(reason):
+            os.remove(reason)
 
 
 if __name__ == "__main__":

@@ -229,6 +229,11 @@ PAPER_SEEDS = 20  # the paper's seeds per point (docs/model.md, "Reference param
 PAPER_L_JAMMING = 15    # the box of the paper's u_J and n_J
 PAPER_L_DIVISIONS = 20  # the box of the paper's N_div medians
 PAPER_L_MAIN = 15       # the box of the paper's other numbers (h_γ, the Π(g) weights)
+PAPER_SIZES = (8, 15, 20)
+# The paper's Δφ targets per feedback strength (Makefile.analysis, PRESET=paper)
+_PAPER_WIDE = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 6e-2, 0.1, 0.12)
+PAPER_TARGETS = {"none": _PAPER_WIDE, "0.1": _PAPER_WIDE, "0.01": _PAPER_WIDE, "0.001": _PAPER_WIDE[:7],
+                 "0.0001": _PAPER_WIDE[:7], "1e-05": _PAPER_WIDE[:6]}
 
 
 def size_mismatch(have, paper_L):
@@ -256,6 +261,28 @@ def paper_n(n, seeds):
     the paper ran the same protocol on PAPER_SEEDS seeds, so n · PAPER_SEEDS / seeds (n when seeds = 20)."""
     ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0 for x in (n, seeds))
     return n * PAPER_SEEDS / seeds if ok else None
+
+
+def paper_grid_departures(groups_at, label, targets_csv):
+    """How a grid departs from the paper's (sizes, feedback strengths, 20 seeds per point, the Δφ targets reached
+    per P0); empty when it is the paper's."""
+    out = []
+    if sorted(groups_at) != sorted(PAPER_SIZES):
+        out.append("L = " + ", ".join(f"{x:g}" for x in sorted(groups_at)))
+    if any(set(g) != set(PAPER_TARGETS) for g in groups_at.values()):
+        out.append("P0 = " + ", ".join(sorted({l for g in groups_at.values() for l in g})))
+    if any(g_.get("runs") != PAPER_SEEDS for g in groups_at.values() for g_ in g.values()):
+        out.append(f"not {PAPER_SEEDS} runs at every point")
+    reached = {}
+    if os.path.exists(targets_csv):
+        with open(targets_csv, newline="", encoding="utf-8") as f:
+            for r in csv.DictReader(f):
+                if r["dphi"]:
+                    p0 = label(float(r["P0"]) if r["P0"] else None)
+                    reached.setdefault(p0, set()).add(float(r["dphi"]))
+    if any(sorted(reached.get(l, ())) != sorted(t) for l, t in PAPER_TARGETS.items()):
+        out.append("other Δφ targets")
+    return out
 
 
 def judged(stat, claim, key="mean", n_paper=None, seeds=None):
@@ -387,7 +414,13 @@ def main():
 
     def fig(name):
         path = os.path.join(a.figures, name + ".png")
-        return f"[{name}]({figdir}/{name}.png)" if os.path.exists(path) else f"{name} (not drawn)"
+        if os.path.exists(path):
+            return f"[{name}]({figdir}/{name}.png)"
+        try:  # figures.py --record-not-drawn says why
+            with open(os.path.join(a.figures, name + ".not-drawn"), encoding="utf-8") as f:
+                return f"{name} (not drawn: {f.read().strip()})"
+        except OSError:
+            return f"{name} (not drawn)"
 
     rows = []
     verdict_list = []
@@ -416,10 +449,14 @@ def main():
         return (fmt(stat[key]) + (f" ± {fmt(se, 2)}" if error_bar(se, n) else "") +
                 f" (n={n_text(n)}; {stat.get('admitted', '?')} of {stat.get('runs', '?')} runs admitted{predicted})")
 
-    order = [l for l in ("none", *PAPER_P0_LABELS.values()) if l in groups]
-    # Groups of feedback strengths the paper did not run have no number of the paper to test: they are
-    # named, not silently dropped.
-    unpaired = sorted(l for l in groups if l not in order)
+    # Every group, from the weakest feedback (none, then the largest P0) to the strongest: the trends are
+    # claims about feedback strength and take every group. A P0 the paper did not run has no number of
+    # the paper to test, so its rows show budjam's values with no verdict of their own.
+    order = sorted(groups, key=lambda l: math.inf if l == "none" else float(l), reverse=True)
+    unpaired = [l for l in order if l != "none" and l not in PAPER_P0_LABELS.values()]
+
+    def outside_grid(lab):
+        return "— (P0 outside the paper's grid: no number of the paper to test)" if lab in unpaired else None
     fed = [l for l in order if l != "none"]
 
     # Seeds per point of this preset's grid: the paper's sample of a grid statistic is paper_n(n, seeds).
@@ -474,17 +511,23 @@ def main():
     ident = M["dZ_identity"]
     unrep = ident.get("per_P0_unrepopulated_by_run", [])
     vs = [judged(x, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY) for x in unrep]
+    none_runs = seeds_in(groups.get("none"))
+    no_test = ("no no-feedback runs at this L, whose means per target are the branch ΔZ₀(P)" if not none_runs else
+               f"{none_runs} no-feedback runs, fewer than the {verdicts.MIN_SAMPLES} the branch ΔZ₀(P) is the mean of"
+               if none_runs < verdicts.MIN_SAMPLES else "no feedback runs with ≤ 10 divisions after φ_J at a target"
+               if fed else "no feedback runs")
     claim("ΔZ = ΔZ₀(P) + 2(u_J − u) over (P0, Δφ) (Eq. 6)", "holds within finite-size scatter",
           "residual over every target, no-feedback runs included: " + pm(ident["all_targets"]) +
           f", RMS {fmt(ident['all_targets'].get('rms'))}; the verdict's test: mean residual per run over the targets with ≤ 10 divisions after φ_J (the identity assumes no "
           "repopulation), feedback runs, per P0 (± is the SE over runs and that of the no-feedback branch ΔZ₀(P), which "
           "every run shares, in quadrature): " +
-          "; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)),
+          ("; ".join(f"P0={label(x['P0'])} {pm(x)} → {v.word}" for x, v in zip(unrep, vs)) or
+           f"not measured ({no_test})"),
           paper_cells_text(ident.get("paper_cells"), "ΔZ", "ΔZ₀(P) + 2(u_J − u)") +
           " (its ingredients: ΔZ₀(P) through the no-feedback targets' means, u_J the buds tagged at jamming over the "
           "target's N_nr, u the contact-free lobes; its single-pass rattler rule and contacts with rattlers in N_c "
           "are not in the tables)",
-          all_of(vs, "P0 groups") if vs else verdicts.Verdict("inconclusive", "not measured"), fig("fig2"))
+          all_of(vs, "P0 groups") if vs else verdicts.Verdict("inconclusive", f"not measured: {no_test}"), fig("fig2"))
     # ---- depletion ----
     for lab in order:
         x = groups[lab]
@@ -495,11 +538,13 @@ def main():
               avail(f"{sel(x['dphi_2_paper'])} vs {pm(x['dphi_2_pred_paper'])} (a as diameter², the paper's measure; "
                     f"φ_J and φ_2 from the first jamming); prediction − simulation "
                     f"{sel(x['dphi_2_pred_minus_sim_paper'])}", "dphi_2_pred_paper", "dphi_2_first"),
+              outside_grid(lab) or
               judged(x["dphi_2_pred_minus_sim_paper"], verdicts.at_least(0.0), seeds=seeds_in(x)), fig("fig2"))
     claim("Stronger feedback moves φ_2 closer to φ_J", "monotone",
           ", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2']['mean'])}" for l in order),
           avail(", ".join(f"{p0_name(l)} {fmt(groups[l]['dphi_2_paper']['mean'])}" for l in order) +
-                f" (the trend is tested on these {len(order)} groups, in this order: no feedback is the weakest)",
+                f" (the trend is tested over {len(order)} group{'s' if len(order) != 1 else ''}, from the weakest "
+                "feedback to the strongest)",
                 "dphi_2_pred_paper"),
           trend_of([groups[l]["dphi_2_paper"] for l in order], increasing=False), fig("fig2"))
     claim("Kaplan–Meier a_ε and ∫₀^{a_ε} S da per P0 (each P0's runs pooled, diameter²)", "—",
@@ -549,10 +594,13 @@ def main():
               pm(x["G_2_over_Pmax"], "median") + ", every run" if have_moduli else "not measured (moduli stage off)",
               avail(sel(s_, "median") + " (G_2 > 0 at φ_2 from the first jamming, Tukey fences on G_2)", "G_2_first")
               if have_moduli else "not measured",
-              judged(s_, verdicts.interval(0.2, 1.0), key="median", seeds=seeds_in(x)) if have_moduli else
+              outside_grid(lab) or judged(s_, verdicts.interval(0.2, 1.0), key="median", seeds=seeds_in(x))
+              if have_moduli else
               verdicts.Verdict("inconclusive", "not measured"), fig("fig3"))
     claim("Rigidity plateau G_2(0⁺) = n_J k ℓ_c² M₄ u_J (inputs at the strongest P0)", "finite plateau",
-          f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={M.get('plateau_P0')}, ℓ_c² = {fmt(M.get('lc2_J'))})",
+          (f"G_2(0⁺)/P_max = {fmt(M.get('G2_plateau_over_Pmax'))} (P0={label(M['plateau_P0'])}, "
+           f"ℓ_c² = {fmt(M.get('lc2_J'))})" if M.get("plateau_P0") is not None else
+           "not measured: no feedback group in this grid"),
           "same", "—", fig("fig4"))
     for lab in order:
         x = groups[lab]
@@ -570,20 +618,29 @@ def main():
         pv = paper_div.get(lab)
         bound = pv is None
         cl = verdicts.at_most(3e-3) if bound else verdicts.quoted(*pv)
-        paper = "≲ 3e-3 (L = 20)" if bound else f"{fmt(pv[0])} (L = 20)"
+        paper = "—" if lab in unpaired else "≲ 3e-3 (L = 20)" if bound else f"{fmt(pv[0])} (L = 20)"
         if g20 and lab in g20:
             x = g20[lab]
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}, L = 20", paper,
                   ci(x["N_div_2_over_N_J"]) + "; up to φ_2 (≤ 1 tagged bud left)",
                   avail(ci(x["N_div_2_over_N_J_paper"]) + "; every division from the first jamming up to no tagged bud left",
-                        "N_div_2_none_left", "N_J_first"), judged(x["N_div_2_over_N_J_paper"], cl, key="median", seeds=seeds_in(x)),
+                        "N_div_2_none_left", "N_J_first"),
+                  outside_grid(lab) or judged(x["N_div_2_over_N_J_paper"], cl, key="median", seeds=seeds_in(x)),
                   fig("figD1"))
         else:
             claim(f"Median N_div(φ_2)/N_J, {p0_name(lab)}", paper, "no L = 20 runs in this preset", "—",
-                  size_mismatch(list(groups_at), PAPER_L_DIVISIONS) or
+                  outside_grid(lab) or size_mismatch(list(groups_at), PAPER_L_DIVISIONS) or
                   verdicts.Verdict("inconclusive", f"no L = 20 runs at {p0_name(lab)}"), fig("figD1"))
     # ---- growth rates ----
     paper_h = {"0.1": (1.4e-4, 0.01e-4)}
+    # h_γ and Π(g) are measured at the Δφ = 3·10⁻³ target, which a grid need not have.
+    growth_missing = None
+    targets_csv = os.path.join(a.tables, "targets.csv")
+    if os.path.exists(targets_csv):
+        with open(targets_csv, newline="", encoding="utf-8") as f:
+            dphis = {float(r["dphi"]) for r in csv.DictReader(f) if r["dphi"] and float(r["L"]) == L}
+        if not any(abs(d / 3e-3 - 1) < 1e-9 for d in dphis):
+            growth_missing = "not measured: no target at Δφ = 3·10⁻³ at this L"
     for lab in order:
         x = groups[lab]
         ours = pm(x["h_gamma"], "median")
@@ -603,8 +660,12 @@ def main():
             verdict, paper = "see trend row", "rises for P0 ≲ 1e-2"
         theirs = (avail(f"{pm(x.get('h_gamma_paper'))} (mean ± SE over runs, every cell, rattlers included)",
                         "h_gamma_all_cells") if lab != "none" else "same")
-        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)}", paper, ours + " (median ± bootstrap SE)", theirs, verdict,
-              fig("figE1"))
+        if growth_missing:
+            ours, theirs = growth_missing, growth_missing
+            verdict = verdicts.Verdict("inconclusive", growth_missing) if lab in paper_h else "—"
+        else:
+            ours += " (median ± bootstrap SE)"
+        claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)}", paper, ours, theirs, verdict, fig("figE1"))
     strong = [l for l in fed if float(l) <= 1e-2]
     claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "the trend of the means ± SE over runs",
           trend_of([groups[l].get("h_gamma_paper") for l in strong], increasing=True), fig("figE1"))
@@ -619,9 +680,14 @@ def main():
         if peak is not None and None not in quart:
             peak_text = (f"; the paper's peak ≈ {peak} lies {'inside' if quart[0] <= peak <= quart[2] else 'outside'} "
                          "the quartiles (a nearly flat density has no measurable peak: not judged)")
-        claim(f"Π(g) at Δφ = 3e-3, {p0_name(lab)}: weight at g = 1; compressed sector",
-              f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
-              f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}",
+        paper = (f"{'≈ ' + fmt(paper_w[lab]) if lab in paper_w else '—'}; "
+                 f"{'peak ≈ ' + fmt(peak) if peak is not None else ('lowest bin' if lab == '0.0001' else '—')}")
+        name = f"Π(g) at Δφ = 3e-3, {p0_name(lab)}: weight at g = 1; compressed sector"
+        if growth_missing:
+            claim(name, paper, growth_missing, growth_missing,
+                  verdicts.Verdict("inconclusive", growth_missing) if lab in paper_w else "—", fig("figE1"))
+            continue
+        claim(name, paper,
               avail(f"{fmt(x.get('g_peak_weight_at_1'))} (cells with g = 1 exactly)", "g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"),
               avail(f"{pm(w)} (per run, the fraction of all cells, rattlers included, whose bud grows at g = 1 "
                     "exactly; mean ± SE over runs)", "g1_fraction_all_cells") + "; g < 1: " +
@@ -631,7 +697,8 @@ def main():
               if lab in paper_w else "—", fig("figE1"))
     if "P_star_range_paper" not in M:
         claim("Crossover scale P* ~ n_J(6+2u_J) a_c/(8 ln 10) (Eq. E12)", "1.3e-3 – 4.3e-3",
-              "not measured: no completion sizes a_c (no bud events, or no survival.csv in the tables)", "same",
+              "not measured: " + ("no completion sizes a_c (no bud events, or no survival.csv in the tables)" if fed
+                                  else "no feedback group in this grid (P* is a scale of the feedback runs)"), "same",
               verdicts.Verdict("inconclusive", "not measured"), fig("figE1"))
     else:
         lo, hi = M["P_star_range_paper"]
@@ -651,11 +718,14 @@ def main():
         # slope_se is a bootstrap over seeds, null from fewer than 5 (analysis.json version 5; before it, over packings)
         nz_se = (f" ± {fmt(nz['slope_se'], 2)}" if error_bar(nz.get("slope_se"), nz.get("seeds")) else
                  " (no error bar by seed: an analysis.json before version 5)" if nz.get("seeds") is None else
-                 " (no error bar: n seeds < 5)")
+                 f" (no error bar: n seeds < {verdicts.MIN_SAMPLES})" if not enough_samples(nz.get("seeds")) else
+                 " (no error bar: every resample of the seeds gives this slope)" if nz.get("slope_se") == 0 else
+                 " (no error bar: the bootstrap over seeds gave none)")
         slope = (f"; slope of N_zero on N_u through 0: {fmt(nz['slope_through_origin'])}{nz_se}"
                  if nz.get("slope_through_origin") is not None else "")
         claim("N_zero ≃ N_u (Eq. F4)", "tracks",
-              f"N_zero = N_u in {fmt(D.get('N_zero_equals_N_u'))} of {D.get('packings')} distinct packings; "
+              (f"N_zero = N_u in {n_text(round(D['N_zero_equals_N_u'] * D['packings']))} of {D['packings']} "
+               "distinct packings; " if D.get("N_zero_equals_N_u") is not None and D.get("packings") else "") +
               f"N_zero − N_u = {pm(diff)} (the verdict's test)",
               f"N_zero = N_u exactly in {n_text(nz.get('N_zero_equals_N_u'))} of {n_text(nz.get('packings'))} "
               f"Δφ-target packings{slope} (the paper's panel, no test)" if nz else "not measured",
@@ -709,11 +779,13 @@ def main():
     sizes_run = ", ".join(f"{l:g}" for l in sorted(groups_at))
     seeds_text = ("?" if not grid_seeds else f"{grid_seeds[0]:g}" if len(grid_seeds) == 1 else
                   f"{grid_seeds[0]:g}–{grid_seeds[-1]:g}")
-    if a.preset == "paper":
+    departures = paper_grid_departures(groups_at, label, os.path.join(a.tables, "targets.csv"))
+    if a.preset == "paper" and not departures:
         scope = (f"Preset paper: the paper's grid, L = {sizes_run} with {seeds_text} seeds per point, for the targets "
                  "listed in docs/analysis.md.")
     else:
-        scope = (f"Preset {a.preset} ran L = {sizes_run} with {seeds_text} seeds per point and its own Δφ targets, "
+        scope = ((f"Preset paper with its grid overridden ({'; '.join(departures)}): " if a.preset == "paper" else "") +
+                 f"Preset {a.preset} ran L = {sizes_run} with {seeds_text} seeds per point and its own Δφ targets, "
                  f"not the paper's grid (L = 8, 15, 20 with {PAPER_SEEDS} seeds per point, Δφ up to 0.12): its "
                  f"verdicts compare these values (main L = {L:g}) with the paper's {PAPER_SEEDS}-seed numbers (L = 15; "
                  f"L = 20 for the divisions), with s_p from the paper's {PAPER_SEEDS} seeds, so they check trends and "
@@ -740,7 +812,7 @@ def main():
         "",
         f"Preset **{a.preset}** (main system size L = {L:g}); {source}.",
         "",
-        f"Runs: {inp['used']} of {inp['runs']} reached jamming and are used; "
+        f"Runs: {inp['used']} of {inp['runs']} used; "
         + (f"{sum(len(d) - 1 for d in inp.get('duplicates', []))} duplicate copies of a run left out "
            f"({'; '.join(' = '.join(d) for d in inp['duplicates'])}); " if inp.get("duplicates") else "")
         + f"{len(inp['not_finished'])} stopped before their last target"
@@ -751,8 +823,9 @@ def main():
         f"Moduli files: {inp['moduli_files']}; spectra: {inp['dos_files']}. Bootstrap: {A['bootstrap']['resamples']} "
         f"resamples, seed {A['bootstrap']['seed']}. Jamming rows: {jam_src}"
         + (f" ({jam.get('runs')} runs)" if AJ else "") + "."
-        + (f" Groups at L = {L:g} with a P0 outside the paper's grid, in no row (the paper has no number for "
-           f"them): P0 = {', '.join(unpaired)}." if unpaired else ""),
+        + (f" Groups at L = {L:g} with a P0 outside the paper's grid (P0 = {', '.join(unpaired)}): their rows show "
+           "budjam's values without a verdict of their own (the paper has no number for them), and they enter the "
+           "trend rows, which order every group by feedback strength." if unpaired else ""),
         "",
         f"**Verdicts: {tally}** (docs/analysis.md, \"Verdicts\"). One rule for every row: a claim is the set of values "
         "it allows (a number quoted to its last digit, a range, a bound); z is the distance of budjam's estimate from "

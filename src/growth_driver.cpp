@@ -4,6 +4,7 @@
 #include "budjam/energy.hpp"
 #include "budjam/fire.hpp"
 #include "budjam/jamming.hpp"
+#include "budjam/packing_rules.hpp"
 #include "budjam/saddle.hpp"
 #include "budjam/stability.hpp"
 
@@ -43,6 +44,7 @@ const char* to_string(RunStatus status) {
     case RunStatus::step_limit: return "step_limit";
     case RunStatus::dt_underflow: return "dt_underflow";
     case RunStatus::minimiser_failed: return "minimiser_failed";
+    case RunStatus::overlap_bound: return "overlap_bound";
   }
   return "?";
 }
@@ -154,11 +156,19 @@ TrialRelaxed trial_relaxed(const Trial& t, long attempt, double log_scale, Trial
                       {}};
 }
 
-// Whether `p` is a minimum of U (no unstable mode of its Hessian). Requires `field` to be current
-// for `p` (freshly evaluated on it).
+// Whether `p` holds its energy in a rigid backbone: some cell is not a rattler. With every cell a
+// rattler, E is what a relaxation of floppy cells stopped short of removing (a loose force_tol, or a
+// window below what FIRE resolves), not the energy of a jammed minimum. Requires `field` to be current.
+bool has_backbone(const Packing& p, const ForceField& field) {
+  return analyse_network(p.size(), find_contacts(p, field.lobes(), field.neighbours())).N_nr > 0;
+}
+
+// Whether `p` is a minimum of U with a rigid backbone (no unstable mode of its non-rattler Hessian).
+// Requires `field` to be current for `p` (freshly evaluated on it).
 bool is_minimum(const Packing& p, const ForceField& field) {
   const std::vector<Contact> c = find_contacts(p, field.lobes(), field.neighbours());
-  return stability(p, c, analyse_network(p.size(), c)).minimum();
+  const ContactNetwork net = analyse_network(p.size(), c);
+  return net.N_nr > 0 && stability(p, c, net).minimum();
 }
 
 // The lowest unstable mode of `p` (nullopt: none below the saddle test's −δ). Requires `field` to be
@@ -601,6 +611,13 @@ struct GrowthDriver::Impl {
                                                 " steps along its unstable mode and relaxations (" + where + ")");
           return false;
         }
+        if (!has_backbone(t.packing, field)) {
+          fail(RunStatus::minimiser_failed,
+               "a jamming candidate (E/N = " + num(t.E) + ") has no rigid backbone, every cell a rattler, after " +
+                   "relaxing to FIRE's force resolution: jamming.epsilon_U = " + num(scene.epsilon_U) +
+                   " is below what the minimiser resolves (" + where + ")");
+          return false;
+        }
         const std::optional<UnstableMode> mode = unstable_mode_of(t.packing, field);
         if (!mode) return true;
         const SaddleStep step = step_off_saddle(t.packing, field, *mode);
@@ -788,6 +805,16 @@ struct GrowthDriver::Impl {
   // An accepted trial: the new accepted state, its records and events; then the end of the run or
   // a checkpoint.
   void take(Trial&& trial) {
+    // The packing rules refuse lobes of different cells at r ≤ σ/2 (docs/model.md, "Degenerate
+    // packings"): a run grown that deep ends at its last readable state instead of writing a packing
+    // no reader takes.
+    if (const auto problem = overlap_problem(trial.packing)) {
+      fail(RunStatus::overlap_bound, "growth step " + std::to_string(attempts) +
+                                         ": the relaxed state at phi = " + num(trial.packing.packing_fraction()) +
+                                         " passes the packing rules' overlap bound (" + *problem +
+                                         "); lower jamming.max_dphi or the targets");
+      return;
+    }
     const std::vector<Division> divisions = trial.divisions;
     const Change change = accept(std::move(trial));
 

@@ -99,6 +99,17 @@ void validate(const Scene& s) {
   // Below the floor a packing counts as certainly unjammed, so the floor must lie below ε_U.
   if (!(f.energy_floor < s.epsilon_U))
     fail("minimiser.energy_floor", "must be below jamming.epsilon_U = " + value_text(s.epsilon_U), f.energy_floor);
+  // A relaxation stopped at |F| < force_tol leaves an energy of order force_tol²/2k in each contact it
+  // did not balance (k = 1): the window tells a jammed minimum from an unfinished relaxation only when
+  // that residual lies well below its bottom, force_tol² ≤ ε_U / 100.
+  const double force_tol_max = std::sqrt(kResidualEnergyOverWindow * s.epsilon_U);
+  if (!(f.force_tol <= force_tol_max))
+    fail("minimiser.force_tol",
+         "must be at most √(" + value_text(kResidualEnergyOverWindow) +
+             " jamming.epsilon_U) = " + value_text(force_tol_max) +
+             ": a relaxation stopped at a larger force leaves an energy the jamming window cannot tell from a jammed "
+             "packing's",
+         f.force_tol);
 }
 
 }  // namespace budjam

@@ -67,9 +67,9 @@ Range above(double lo, std::string why = "") {
   r.lo = lo, r.lo_open = true, r.why = std::move(why);
   return r;
 }
-Range at_least(double lo) {
+Range at_least(double lo, std::string why = "") {
   Range r;
-  r.lo = lo;
+  r.lo = lo, r.why = std::move(why);
   return r;
 }
 Range at_most(double hi, std::string why) {
@@ -171,7 +171,7 @@ std::vector<SceneKey> make_keys() {
 
   SceneKey P0 = row("growth", "P0", KeyType::real_or_none,
                     "feedback pressure scale of γ = γ0 exp(−p/P0), or \"none\" for no feedback",
-                    above(0, ", or \"none\" for no feedback"));
+                    at_least(kMinP0, " so that p/P0 stays finite, or \"none\" for no feedback"));
   P0.get = [](const Scene& s) -> SceneValue {
     if (s.P0) return *s.P0;
     return std::string("none");

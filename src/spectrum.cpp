@@ -167,11 +167,15 @@ std::vector<LocalMode> local_null_vectors(const Sparse& K, double tol) {
   return out;
 }
 
-Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt) {
+// `arpack_most`: where ARPACK could take this problem with fewer modes, the most it takes (for the
+// message when the dense method does not fit either).
+Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const SpectrumOptions& opt,
+                     const std::string& arpack_most = "") {
   const Eigen::Index n3 = mass.size(), nd = n3 - 2;
   // K, its complement block, the eigenvectors and the modes.
   require_dense_fits(static_cast<std::size_t>(n3), 4, "spectrum: the dense method",
-                     "the arpack method (--method arpack)");
+                     arpack_most.empty() ? "the arpack method (--method arpack)"
+                                         : "the arpack method with at most " + arpack_most + " modes (--modes)");
   Spectrum s;
   s.method = SpectrumMethod::dense;
   s.n_cells = static_cast<std::size_t>(n3 / 3);
@@ -207,6 +211,32 @@ Spectrum solve_dense(const Sparse& H, const Eigen::VectorXd& mass, const Spectru
 struct ArpackTooSmall {
   long nev = 0, dim = 0, n_local = 0;
 };
+
+// The Lanczos basis (ncv vectors of n3 rows), the eigenvectors asked for and ARPACK's work space are
+// dense: bounded like the dense methods (kMaxDenseBytes), before anything is allocated. InputError
+// naming the most modes whose default basis (2K + 1 vectors) fits.
+double lanczos_bytes(Eigen::Index n3, double nev, double ncv, bool vectors) {
+  return 8.0 * (static_cast<double>(n3) * (ncv + (vectors ? nev : 0.0)) + ncv * (ncv + 8.0));
+}
+
+long lanczos_most_modes(Eigen::Index n3, bool vectors) {
+  // From the leading term, then down to where the whole estimate fits.
+  long k = static_cast<long>((kMaxDenseBytes / (8.0 * static_cast<double>(n3)) - 1.0) / (vectors ? 3.0 : 2.0));
+  while (k > 1 && lanczos_bytes(n3, k, 2.0 * k + 1, vectors) > kMaxDenseBytes) --k;
+  return std::max(1L, k);
+}
+
+void require_lanczos_fits(Eigen::Index n3, int nev, int ncv, bool vectors) {
+  const double bytes = lanczos_bytes(n3, nev, ncv, vectors);
+  if (bytes <= kMaxDenseBytes) return;
+  const long most = lanczos_most_modes(n3, vectors);
+  throw InputError("spectrum: the arpack method: " + std::to_string(nev) + " modes need a Lanczos basis of " +
+                   std::to_string(ncv) + " vectors of " + std::to_string(n3) + " rows" +
+                   (vectors ? " and their eigenvectors" : "") + ", about " +
+                   std::to_string(static_cast<long long>(std::ceil(bytes / 1e9))) + " GB, more than the limit of " +
+                   std::to_string(static_cast<int>(kMaxDenseBytes / 1e9)) + " GB; ask for at most " +
+                   std::to_string(most) + " modes (--modes)");
+}
 
 // ARPACK's failures on a valid problem (too few iterations, no shifts, a Lanczos breakdown) are
 // outcomes of the input, not errors of budjam.
@@ -262,6 +292,11 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   }
   const Eigen::Index dim = nd - n_local;  // dimension of the space Lanczos works in
   if (nev >= dim) throw ArpackTooSmall{nev, static_cast<long>(dim), static_cast<long>(n_local)};
+  const int idim = static_cast<int>(dim);
+  // An explicit ncv is raised to nev + 1 if the inertia count raised nev past it.
+  const int ncv =
+      opt.ncv > 0 ? std::min(idim, std::max(opt.ncv, nev + 1)) : std::min(idim, std::max(2 * nev + 1, nev + 20));
+  require_lanczos_fits(n3, nev, ncv, opt.vectors);
 
   double sigma = opt.sigma;
   CholmodSolver chol(Factorisation::llt);
@@ -291,9 +326,7 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
   Eigen::VectorXd buf(n3);
   LanczosOptions lo;
   lo.nev = nev;
-  const int idim = static_cast<int>(dim);
-  // An explicit ncv is raised to nev + 1 if the inertia count raised nev past it.
-  lo.ncv = opt.ncv > 0 ? std::min(idim, std::max(opt.ncv, nev + 1)) : std::min(idim, std::max(2 * nev + 1, nev + 20));
+  lo.ncv = ncv;
   lo.tol = opt.tol;
   lo.vectors = opt.vectors;
   lo.start.resize(n3);
@@ -360,6 +393,7 @@ Spectrum solve_arpack(const Sparse& H, const Eigen::VectorXd& mass, const Spectr
     ++s.retries;
     lo.tol = 0.0;
     lo.ncv = std::min(idim, 2 * lo.ncv);
+    require_lanczos_fits(n3, nev, lo.ncv, opt.vectors);
   }
   return s;
 }
@@ -381,15 +415,16 @@ Spectrum solve_spectrum(const Eigen::SparseMatrix<double>& H, const Eigen::Vecto
     try {
       s = solve_arpack(H, mass, options);
     } catch (const ArpackTooSmall& t) {
+      const long most = std::min(t.dim - 1, lanczos_most_modes(mass.size(), options.vectors));
       // Too few modes left after deflating the cell-local zero modes for a partial solve: the automatic
       // choice takes the dense method; an explicit request for ARPACK is refused.
       if (options.method != SpectrumMethod::automatic)
-        throw InputError("spectrum: the arpack method cannot solve so small a problem: it has " +
+        throw InputError("spectrum: the arpack method computes fewer modes than the problem has: it has " +
                          std::to_string(t.dim) + " modes besides its " + std::to_string(t.n_local) +
                          " cell-local zero modes and would need " + std::to_string(t.nev) +
-                         " of them, but ARPACK computes fewer modes than the problem has; use the dense method "
-                         "(--method dense or auto)");
-      s = solve_dense(H, mass, options);
+                         " of them; ask for at most " + std::to_string(most) +
+                         " modes (--modes) or use the dense method (--method dense or auto)");
+      s = solve_dense(H, mass, options, std::to_string(most));
     }
   }
   // A Hessian that is not finite (no packing the readers accept gives one) must not pass as a spectrum.

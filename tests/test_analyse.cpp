@@ -697,6 +697,52 @@ TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: ex
   CHECK(msg.find((a / "targets.csv").string() + ":2: run elsewhere/seed9 is not in runs.csv") != std::string::npos);
 }
 
+TEST_CASE("analyse --tables refuses a finished run whose target rows are missing: exit 2, one line naming the runs",
+          "[analyse]") {
+  const fs::path a = analysed("missing_targets_runs");
+  const auto rows = read_csv(a / "targets.csv");
+  REQUIRE(!rows.empty());
+  // every row of the first run, whose group's other finished runs keep theirs
+  const std::string run = rows.front().at("run");
+  std::istringstream in(slurp(a / "targets.csv"));
+  std::string kept, line;
+  for (bool header = true; std::getline(in, line); header = false)
+    if (header || line.rfind(run + ",", 0) != 0) kept += line + "\n";
+  std::ofstream(a / "targets.csv") << kept;
+  const std::string msg = refused_tables(a, "missing_targets_out");
+  CHECK(msg.find((a / "targets.csv").string() + ": the finished runs ") != std::string::npos);
+  CHECK(msg.find(run) != std::string::npos);
+  CHECK(msg.find("rows are missing or added") != std::string::npos);
+}
+
+TEST_CASE("analyse --tables counts the runs its analysis left out, as analysis.json names them", "[analyse]") {
+  const fs::path a = analysed("left_out_runs");
+  auto j = budjam::io::read_json(a / "analysis.json");
+  const std::size_t used = j["inputs"]["used"].get<std::size_t>();
+  j["inputs"]["never_jammed"] = budjam::io::Json::array({"runs/x/seed9 (step_limit)"});
+  j["inputs"]["duplicates"] = budjam::io::Json::array({budjam::io::Json::array({"runs/x/seed1", "copy/seed1"})});
+  std::ofstream(a / "analysis.json") << j.dump();
+  const fs::path b = work_dir() / "left_out_out";
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(b) + " --main-L 6").code == 0);
+  const auto jb = budjam::io::read_json(b / "analysis.json");
+  CHECK(jb["inputs"]["never_jammed"] == j["inputs"]["never_jammed"]);
+  CHECK(jb["inputs"]["duplicates"] == j["inputs"]["duplicates"]);
+  CHECK(jb["inputs"]["used"] == used);
+  CHECK(jb["inputs"]["runs"] == used + 2);  // the run that never jammed and the second copy
+  CHECK_FALSE(jb["unavailable"].contains("never_jammed"));
+  // a list of the wrong kind is refused, naming the file and the key
+  j["inputs"]["never_jammed"] = "runs/x/seed9";
+  std::ofstream(a / "analysis.json") << j.dump();
+  CHECK(
+      refused_tables(a, "left_out_bad").find((a / "analysis.json").string() + ": inputs.never_jammed is not a list") !=
+      std::string::npos);
+  // tables without analysis.json say that they cannot tell
+  fs::remove(a / "analysis.json");
+  const fs::path c = work_dir() / "left_out_none";
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(c) + " --main-L 6").code == 0);
+  CHECK(budjam::io::read_json(c / "analysis.json")["unavailable"].contains("never_jammed"));
+}
+
 TEST_CASE(
     "analyse --tables refuses a survival curve whose steps do not add up to its buds: exit 2, one line naming "
     "file and line",

@@ -61,7 +61,7 @@ TEST_CASE("budjam validate on a bad scene exits 2 with one stderr line naming th
     std::string toml, key;
   };
   for (const Case& c :
-       std::vector<Case>{{"[growth]\nP0 = -1e-3\n", "growth.P0: must be positive"},
+       std::vector<Case>{{"[growth]\nP0 = -1e-3\n", "growth.P0: must be at least 1e-300"},
                          {"[growth]\nP00 = 1\n", "growth.P00: unknown key"},
                          {"[box]\nL = 1\n", "box.L: must exceed"},
                          {"[jamming]\ntargets = [0.01, 0.001]\n", "jamming.targets: must be strictly increasing"},

@@ -1,5 +1,6 @@
 // The quasistatic growth loop (docs/model.md, "Growth", "Growth protocol", "Bud events and survival").
 #include "budjam/growth_driver.hpp"
+#include "budjam/packing_rules.hpp"
 
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
@@ -538,6 +539,52 @@ TEST_CASE("a bisection whose step falls below growth.dt_min fails with status dt
   CHECK(d.result().message.find("dt_min") != std::string::npos);
   CHECK(rec.failed == 1);
   CHECK_FALSE(d.result().jamming);  // never reports a jammed state it did not find
+}
+
+// The demo scene's box (L = 8, seed 1), as the packings a user grows from data/scenes/demo.toml.
+Scene demo_like_scene() {
+  Scene s;
+  s.name = "test";
+  s.L = 8.0;
+  s.seed = 1;
+  s.P0 = 1e-3;
+  return s;
+}
+
+TEST_CASE("a window below what FIRE resolves never yields a jamming point without a rigid backbone",
+          "[driver][.hard]") {
+  // ε_U = 1e-26: the first candidate in the window is all rattlers, its energy the residual of a
+  // relaxation of floppy cells; relaxed on to FIRE's force resolution it keeps E/N in the window.
+  Scene s = demo_like_scene();
+  s.epsilon_U = 1e-26;
+  s.fire.energy_floor = 1e-34;
+  Recorder rec;
+  GrowthDriver d(s);
+  d.add_observer(rec);
+  CHECK(d.run() == RunStatus::minimiser_failed);
+  CHECK(d.result().message.find("no rigid backbone") != std::string::npos);
+  CHECK_FALSE(d.result().jamming);
+  CHECK_FALSE(rec.first_jammed);
+}
+
+TEST_CASE("a run grown to the packing rules' overlap bound ends with status overlap_bound at its last readable state",
+          "[driver][.hard]") {
+  // L = 6 without feedback, bisection, Δφ = 0.4: the relaxed state at φ ≈ 1.19 has two buds at r < σ/2.
+  Scene s = small_scene();
+  s.seed = 1;
+  s.P0.reset();
+  s.search = JammingSearch::bisection;
+  s.max_dphi = 0.4;
+  s.targets = {0.4};
+  Recorder rec;
+  GrowthDriver d(s);
+  d.add_observer(rec);
+  CHECK(d.run() == RunStatus::overlap_bound);
+  CHECK(d.result().message.find("overlap bound") != std::string::npos);
+  CHECK(rec.final_status == RunStatus::overlap_bound);
+  REQUIRE_FALSE(rec.steps.empty());
+  for (const auto& step : rec.steps) CHECK_FALSE(overlap_problem(step.packing));
+  CHECK(d.result().targets.empty());  // the target lies beyond the bound
 }
 
 // growth.adaptive_dt (docs/growth.md, "Adaptive growth step"). L = 6, seed 3, P0 = 1e-4: the

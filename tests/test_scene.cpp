@@ -254,8 +254,10 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[grwoth]\nP0 = 1\n", "test.toml:1:2: grwoth: unknown section"},
       {"L = 8\n", "test.toml:1:1: L: unknown key"},
       {"[observe.moduli]\nevery_step = 1\n", "observe.moduli.every_step: unknown key"},
-      {"[growth]\nP0 = 0\n", "test.toml: growth.P0: must be positive, or \"none\" for no feedback (got 0)"},
-      {"[growth]\nP0 = -1e-3\n", "growth.P0: must be positive, or \"none\" for no feedback (got -0.001)"},
+      {"[growth]\nP0 = 0\n",
+       "test.toml: growth.P0: must be at least 1e-300 so that p/P0 stays finite, or \"none\" for no feedback (got 0)"},
+      {"[growth]\nP0 = -1e-3\n", "growth.P0: must be at least 1e-300 so that p/P0 stays finite, or \"none\""},
+      {"[growth]\nP0 = 1e-320\n", "growth.P0: must be at least 1e-300 so that p/P0 stays finite"},
       {"[growth]\nP0 = nan\n", "growth.P0: must be a finite number (got nan)"},
       {"[growth]\nP0 = inf\n", "growth.P0: must be a finite number (got inf)"},
       {"[box]\nL = nan\n", "box.L: must be a finite number (got nan)"},
@@ -306,6 +308,10 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[minimiser]\ndt_min = 0.5\n", "minimiser.dt_min: must not exceed minimiser.dt_start = 0.1"},
       {"[minimiser]\nn_delay = -1\n", "minimiser.n_delay: must be zero or positive"},
       {"[minimiser]\nforce_tol = 0\n", "minimiser.force_tol: must be positive"},
+      // the residual energy of a relaxation stopped at force_tol, ~force_tol², must lie below ε_U / 100
+      {"[minimiser]\nforce_tol = 1e-8\n", "minimiser.force_tol: must be at most √(0.01 jamming.epsilon_U) = 1e-09"},
+      {"[jamming]\nepsilon_U = 1e-30\n[minimiser]\nenergy_floor = 0\n",
+       "minimiser.force_tol: must be at most √(0.01 jamming.epsilon_U) = 1e-16"},
       {"[minimiser]\nenergy_floor = 1e-16\n", "minimiser.energy_floor: must be below jamming.epsilon_U = 1e-16"},
       {"[minimiser]\nmax_iterations = 0\n", "minimiser.max_iterations: must be positive"},
       {"[minimiser]\nactive_set_after = 5000\n",
@@ -348,7 +354,9 @@ TEST_CASE("validate names the key for scenes built in code, without a file", "[s
   CHECK_NOTHROW(validate(Scene{}));
   Scene s;
   s.P0 = 0.0;
-  CHECK_THROWS_WITH(validate(s), "growth.P0: must be positive, or \"none\" for no feedback (got 0)");
+  CHECK_THROWS_WITH(validate(s),
+                    "growth.P0: must be at least 1e-300 so that p/P0 stays finite, or \"none\" for no "
+                    "feedback (got 0)");
   s = Scene{};
   s.targets = {std::numeric_limits<double>::quiet_NaN()};
   CHECK_THROWS_WITH(validate(s), StartsWith("jamming.targets: must be finite numbers"));
@@ -396,7 +404,7 @@ TEST_CASE("--set overrides go through the same keys and types as the file", "[sc
   CHECK_THROWS_WITH(apply_override(s, "growth.dt=fast"),
                     "--set growth.dt=fast: growth.dt: expected a number (got \"fast\")");
   // Overrides are validated with the scene.
-  CHECK_THAT(error_of("[run]\n", {"growth.P0=-1"}), Contains("growth.P0: must be positive"));
+  CHECK_THAT(error_of("[run]\n", {"growth.P0=-1"}), Contains("growth.P0: must be at least 1e-300"));
   CHECK_THAT(error_of("[run]\n", {"box.L=1"}), Contains("box.L: must exceed"));
 }
 

@@ -794,6 +794,39 @@ TEST_CASE("budjam dos refuses bad options with one line naming the option", "[sp
   CHECK(r.err.find("--modes") == std::string::npos);
 }
 
+TEST_CASE("ARPACK's dense Lanczos basis is bounded like the dense methods, naming the most modes that fit",
+          "[spectrum][arpack]") {
+  // 12 000 cells: 20 000 modes would need tens of GB; the refusal comes before any allocation.
+  const Eigen::Index n3 = 36000;
+  Eigen::SparseMatrix<double> H(n3, n3);
+  H.setIdentity();
+  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(n3);
+  for (const bool vectors : {false, true}) {
+    SpectrumOptions opt;
+    opt.method = SpectrumMethod::arpack;
+    opt.modes = 20000;
+    opt.vectors = vectors;
+    std::string message;
+    try {
+      solve_spectrum(H, mass, opt);
+    } catch (const InputError& e) {
+      message = e.what();
+    }
+    INFO(message);
+    const auto at = message.find("ask for at most ");
+    REQUIRE(at != std::string::npos);
+    CHECK(message.find("--modes") != std::string::npos);
+    const double most = std::stod(message.substr(at + 16));
+    // The named count's default basis (2K + 1 vectors of n3 rows, K eigenvectors if asked) fits in
+    // kMaxDenseBytes; one mode more does not.
+    const auto bytes = [&](double k) {
+      return 8.0 * (static_cast<double>(n3) * (2 * k + 1 + (vectors ? k : 0)) + (2 * k + 1) * (2 * k + 9));
+    };
+    CHECK(bytes(most) <= kMaxDenseBytes);
+    CHECK(bytes(most + 1) > kMaxDenseBytes);
+  }
+}
+
 TEST_CASE("budjam dos on a 3-cell packing: auto solves densely; --method arpack is refused naming the dense method",
           "[spectrum][cli]") {
   const fs::path dir = work_dir() / "small";
@@ -806,6 +839,7 @@ TEST_CASE("budjam dos on a 3-cell packing: auto solves densely; --method arpack 
   CHECK(r.code == 2);
   CHECK(r.err.find("internal") == std::string::npos);
   CHECK(r.err.find("--method dense") != std::string::npos);
+  CHECK(r.err.find("ask for at most") != std::string::npos);  // or fewer modes, named
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   const fs::path a = work_dir() / "small-auto", d = work_dir() / "small-dense";
   r = run_budjam("dos '" + pack.string() + "' --dense-max-dof 0 --quiet --out '" + a.string() + "'");

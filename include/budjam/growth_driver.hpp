@@ -44,7 +44,8 @@ enum class RunStatus {
   finished,          // every target landed (and φ_2 found or φ_J + max_dphi reached if asked)
   step_limit,        // more than scene.max_steps growth steps (accepted + rejected)
   dt_underflow,      // a trial Δt below scene.dt_min (halved or solved for)
-  minimiser_failed,  // FIRE hit its iteration limit, or could not leave a saddle
+  minimiser_failed,  // FIRE hit its iteration limit, could not leave a saddle, or left a candidate without backbone
+  overlap_bound,     // a relaxed state grown so deep that a pair of lobes reached the packing rules' r ≤ σ/2
 };
 const char* to_string(RunStatus status);
 

@@ -93,8 +93,18 @@ inline constexpr double kMaxBoxSide = 1e4;
 
 // The deepest compression a run may grow to. The smallest r/σ over the contacts of grown packings
 // (the demo scene without feedback) is 0.73 at Δφ = 0.2, 0.59 at 0.4 and 0.53 at 0.5: beyond 0.4 a
-// run would approach the packing rules' bound r > σ/2 and could write packings no reader accepts.
+// run would approach the packing rules' bound r > σ/2. Within it a run can still reach the bound
+// (small boxes, bisection): it then ends with status overlap_bound instead of writing the packing.
 inline constexpr double kMaxDphi = 0.4;
+
+// The largest minimiser.force_tol² over jamming.epsilon_U: a relaxation stopped at |F| < force_tol
+// leaves about force_tol²/2k in each contact it did not balance, which must lie well below ε_U.
+inline constexpr double kResidualEnergyOverWindow = 0.01;
+
+// The smallest feedback scale growth.P0: p/P0 must stay a finite double for the growth factors
+// exp(−p/P0) to keep their order in log scale (an overflow to ∞ made χ_c and the adaptive step NaN);
+// with P0 ≥ 10⁻³⁰⁰ it does for every bud pressure below 10⁸, far above any grown packing's.
+inline constexpr double kMinP0 = 1e-300;
 
 // The most cells random seed placement may start from: the initial state holds about 0.5 kB per
 // cell (peak resident memory of `budjam grow` to its first step: 56 MB at 10⁵ cells, 484 MB at

@@ -52,6 +52,20 @@ expected=$("$prefix/bin/budjam" rigidity "$packing" --json | "$python" -c \
 [[ "$n $contacts $excess" == "$expected" ]] ||
   fail "consumer says N, contacts, excess contacts = $n $contacts $excess, budjam rigidity $expected"
 
+# The shared library of that project, holding the static libraries, loads and agrees with `budjam moduli`.
+shear=$source/tests/data/shear_conventions_differ_L8.pack
+plugin=$(find "$work/consumer" -name 'libbudjam_plugin.so' | head -1)
+[[ -n $plugin ]] || fail "no shared library built against the installed static libraries"
+"$python" - "$plugin" "$shear" "$prefix/bin/budjam" <<'PY' || fail "the shared library's G differs from budjam moduli's"
+import ctypes, json, subprocess, sys
+lib = ctypes.CDLL(sys.argv[1])
+lib.budjam_plugin_shear_modulus.restype = ctypes.c_double
+g = lib.budjam_plugin_shear_modulus(sys.argv[2].encode())
+cli = json.loads(subprocess.run([sys.argv[3], "moduli", sys.argv[2], "--json"], check=True, capture_output=True,
+                                text=True).stdout)
+sys.exit(0 if g == cli["G"] else 1)
+PY
+
 # The Python module imports from the prefix, outside the source and build trees.
 if [[ -d $prefix/$pydir/budjam ]]; then
   where=$(cd "$work" && PYTHONPATH=$prefix/$pydir "$python" -c \

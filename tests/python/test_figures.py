@@ -111,3 +111,27 @@ def test_a_missing_error_is_no_bar_not_a_zero_bar(figures):
     assert e[0] == 0.1 and e[1] != e[1] and e[2] != e[2]
     lo, hi = figures.err([None, 0.2], [None, 0.3])
     assert lo[0] != lo[0] and hi[1] == 0.3
+
+
+def test_a_figure_the_tables_cannot_give_is_an_error_or_with_record_not_drawn_a_reason(tmp_path):
+    """figF1 from tables without spectra: exit 2 naming the stage; with --record-not-drawn (the
+    pipeline's mode) exit 0, figF1.not-drawn holds the reason and an earlier figF1.png is gone."""
+    import shutil
+    import subprocess
+    import sys
+    tables = tmp_path / "tables"
+    shutil.copytree(SOURCE_DIR / "data" / "reference" / "quick" / "tables", tables)
+    A = json.loads((tables / "analysis.json").read_text())
+    A["inputs"]["dos_files"] = 0
+    (tables / "analysis.json").write_text(json.dumps(A))
+    out = tmp_path / "figures"
+    out.mkdir()
+    (out / "figF1.png").write_bytes(b"an earlier grid's figure")
+    command = [sys.executable, str(SOURCE_DIR / "scripts" / "figures.py"), "--tables", str(tables), "--out", str(out)]
+    r = subprocess.run(command + ["figF1"], capture_output=True, text=True)
+    assert r.returncode == 2 and "vibrational spectra" in r.stderr, r.stderr
+    r = subprocess.run(command + ["--record-not-drawn", "figF1"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "not drawn" in r.stderr
+    assert "vibrational spectra" in (out / "figF1.not-drawn").read_text()
+    assert not (out / "figF1.png").exists()

@@ -87,7 +87,7 @@ def test_grow_dict_values_are_written_as_the_scene_would_hold_them():
     status = budjam.grow(DEMO, set={"growth.P0": None, "growth.max_steps": 30, "observe.bud_events": False},
                          callback=lambda e: None)
     assert status == "step_limit"
-    with pytest.raises(budjam.InputError, match=r"growth\.P0: must be positive.*\(got -0\.001\)"):
+    with pytest.raises(budjam.InputError, match=r"growth\.P0: must be at least 1e-300.*\(got -0\.001\)"):
         budjam.grow(DEMO, set={"growth.P0": -1e-3})
     with pytest.raises(budjam.InputError, match=r"--set growth\.nope=1: growth\.nope: unknown key"):
         budjam.grow(DEMO, set={"growth.nope": 1})

@@ -19,13 +19,16 @@ def load(path):
         return json.load(f)
 
 
-def report(tmp_path, A, J=None):
-    """Writes A (and J as the jamming tables) and runs report.py; returns (process, report text)."""
+def report(tmp_path, A, J=None, preset="quick", targets=None):
+    """Writes A (and J as the jamming tables, `targets` as targets.csv) and runs report.py; returns
+    (process, report text)."""
     tables = tmp_path / "tables"
     tables.mkdir()
     (tables / "analysis.json").write_text(json.dumps(A))
+    if targets is not None:
+        (tables / "targets.csv").write_text(targets)
     args = [sys.executable, os.path.join(SRC, "scripts", "report.py"), "--tables", str(tables),
-            "--figures", str(tmp_path / "figures"), "--preset", "quick", "--out", str(tmp_path / "R.md")]
+            "--figures", str(tmp_path / "figures"), "--preset", preset, "--out", str(tmp_path / "R.md")]
     if J is not None:
         jam = tmp_path / "jamming"
         jam.mkdir()
@@ -443,13 +446,88 @@ def test_pooled_rows_take_the_papers_twenty_seeds_when_groups_are_unequal(tmp_pa
     assert "σ = 0.1, z_c = 2.36)" in row, row  # t with 7 degrees of freedom
 
 
-def test_groups_outside_the_papers_grid_are_named(tmp_path):
+def test_groups_outside_the_papers_grid_get_rows_without_a_verdict_and_enter_the_trends(tmp_path):
     A, J = quick()
     extra = dict(next(g for g in A["groups"] if g["P0_label"] == "0.001"), P0=3e-3, P0_label="0.003")
     A["groups"].append(extra)
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
-    assert "P0 = 0.003" in out
+    assert "P0 = 0.003" in out.split("\n| Claim")[0]  # named in the header
+    for start in ("φ_2 − φ_J, P0=0.003", "G_2/P_max, P0=0.003", "Median N_div(φ_2)/N_J, P0=0.003"):
+        row = row_of(out, start)
+        assert "P0 outside the paper's grid" in row, row
+    # every group in the trend, ordered by feedback strength: 0.01 (weaker) before 0.003 before 0.001
+    trend = row_of(out, "Stronger feedback moves φ_2 closer to φ_J")
+    n = len(main_L_groups(A))
+    assert f"tested over {n} groups" in trend, trend
+    assert trend.index("P0=0.01 ") < trend.index("P0=0.003 ") < trend.index("P0=0.001 "), trend
+
+
+def test_the_rows_say_why_a_grid_without_feedback_or_without_no_feedback_runs_measures_nothing(tmp_path):
+    A, J = quick()
+    main_L = A["main_L"]
+    fed_only = dict(A, groups=[g for g in A["groups"] if g["P0"] is not None or g["L"] != main_L])
+    fed_only["main"] = dict(A["main"], dZ_identity=dict(A["main"]["dZ_identity"], per_P0_unrepopulated_by_run=[]))
+    r, out = report(fresh(tmp_path, "fed"), fed_only, J)
+    assert r.returncode == 0, r.stderr
+    assert "not measured (no no-feedback runs at this L" in row_of(out, "ΔZ = ΔZ₀(P) + 2(u_J − u)")
+    assert "no feedback is the weakest" not in out
+    A["main"].pop("P_star_range_paper", None)
+    A["main"].pop("plateau_P0", None)
+    none_only = dict(A, groups=[g for g in A["groups"] if g["P0"] is None or g["L"] != main_L])
+    r, out = report(fresh(tmp_path, "none"), none_only, J)
+    assert r.returncode == 0, r.stderr
+    assert "P0=None" not in out
+    assert "no feedback group in this grid" in row_of(out, "Rigidity plateau")
+    assert "no feedback group in this grid" in row_of(out, "Crossover scale P*")
+    assert "tested over 1 group," in row_of(out, "Stronger feedback moves φ_2 closer to φ_J")
+
+
+def test_growth_rate_rows_name_the_missing_target(tmp_path):
+    A, J = quick()
+    with open(os.path.join(REF, "quick", "reanalysed", "targets.csv")) as f:
+        lines = f.read().splitlines()
+    col = lines[0].split(",").index("dphi")
+    without = "\n".join([lines[0]] + [x for x in lines[1:] if float(x.split(",")[col]) != 3e-3]) + "\n"
+    r, out = report(tmp_path, A, J, targets=without)
+    assert r.returncode == 0, r.stderr
+    for start in ("h_γ at Δφ = 3e-3, P0=0.1", "Π(g) at Δφ = 3e-3, P0=0.01"):
+        assert "no target at Δφ = 3·10⁻³ at this L" in row_of(out, start), start
+
+
+def test_the_n_zero_row_counts_packings_and_says_why_its_slope_has_no_error_bar(tmp_path):
+    A, J = quick()
+    A["main"]["dos"]["N_zero_equals_N_u"] = 1.0
+    A["main"]["dos"]["packings"] = 45
+    A["main"]["dos"]["paper"]["N_zero_vs_N_u"].update(seeds=5, slope_se=0, slope_through_origin=1.0)
+    r, out = report(tmp_path, A, J)
+    row = row_of(out, "N_zero ≃ N_u")
+    assert "N_zero = N_u in 45 of 45 distinct packings" in row, row
+    assert "every resample of the seeds gives this slope" in row and "n seeds < 5" not in row, row
+
+
+def test_a_paper_preset_with_its_grid_overridden_does_not_claim_the_papers_grid(tmp_path):
+    A, J = quick()
+    r, out = report(tmp_path, A, J, preset="paper")
+    assert r.returncode == 0, r.stderr
+    assert "Preset paper with its grid overridden (L = 8; not 20 runs at every point" in out
+    assert "Preset paper: the paper's grid" not in out
+    # the committed paper tables are the paper's grid
+    args = [sys.executable, os.path.join(SRC, "scripts", "report.py"), "--tables",
+            os.path.join(REF, "paper", "reanalysed"), "--jamming", os.path.join(REF, "jamming", "reanalysed"),
+            "--figures", str(tmp_path / "figures"), "--preset", "paper", "--out", str(tmp_path / "P.md")]
+    r = subprocess.run(args, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "Preset paper: the paper's grid" in (tmp_path / "P.md").read_text()
+
+
+def test_a_figure_the_tables_cannot_give_is_named_with_its_reason(tmp_path):
+    A, J = quick()
+    figures = tmp_path / "figures"
+    figures.mkdir()
+    (figures / "figE1.not-drawn").write_text("Fig. E1: no run has a target at Δφ = 3·10⁻³ (add it to TARGETS)\n")
+    r, out = report(tmp_path, A, J)
+    assert "figE1 (not drawn: Fig. E1: no run has a target at Δφ = 3·10⁻³" in row_of(out, "h_γ at Δφ = 3e-3, P0=0.1")
 
 
 @pytest.mark.parametrize("preset", ["paper", "quick"])
@@ -500,8 +578,8 @@ def test_jamming_states_that_share_seeds_take_their_error_by_seed(budjam_exe, tm
 
 
 def test_every_point_of_the_no_feedback_branch_carries_its_own_error(budjam_exe, tmp_path):
-    # the no-feedback targets at Δφ = 1e-2 kept for only 3 runs: that point leaves the branch, rather
-    # than taking the SE of its neighbours
+    # the no-feedback targets at Δφ = 1e-2 kept for only 3 runs (the others stopped before their last
+    # target): that point leaves the branch, rather than taking the SE of its neighbours
     import csv
     tables = tmp_path / "tables"
     src = os.path.join(REF, "quick", "tables")
@@ -517,6 +595,15 @@ def test_every_point_of_the_no_feedback_branch_carries_its_own_error(budjam_exe,
     body = [r for r in body if not (r[P0] in ("", "none") and float(r[dphi]) == 1e-2 and r[run] not in kept)]
     with open(tables / "targets.csv", "w", newline="") as f:
         csv.writer(f, lineterminator="\n").writerows([header] + body)
+    with open(tables / "runs.csv") as f:
+        runs = list(csv.reader(f))
+    R, S = runs[0].index("run"), runs[0].index("status")
+    stopped = {r[run] for r in rows[1:] if r[P0] in ("", "none") and float(r[dphi]) == 1e-2} - set(kept)
+    for r in runs[1:]:
+        if r[R] in stopped:
+            r[S] = "step_limit"
+    with open(tables / "runs.csv", "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows(runs)
     out = {}
     for name, t in (("all", src), ("thinned", tables)):
         r = subprocess.run([budjam_exe, "analyse", "--tables", str(t), "--out", str(tmp_path / name)],

@@ -159,6 +159,26 @@ void read_targets(const CsvTable& T, Ensemble& e, const std::map<std::string, st
       e.unavailable[std::string("targets.csv:") + c.name] = T.source + " has no column " + c.name;
 }
 
+// The finished runs of one group ran one protocol to its end, so each reached the same targets: a
+// finished run with other targets than its group's first has rows missing from (or added to) targets.csv.
+void check_finished_targets(const Ensemble& e, const std::string& source) {
+  std::map<GroupKey, std::pair<const RunRow*, std::vector<double>>> first;
+  for (const RunRow& r : e.rows) {
+    if (r.status != "finished") continue;
+    std::vector<double> reached;
+    for (const auto& t : r.targets) reached.push_back(t.dphi);
+    std::sort(reached.begin(), reached.end());
+    const auto [it, inserted] = first.try_emplace(GroupKey{r.L, r.P0}, &r, reached);
+    if (inserted || it->second.second == reached) continue;
+    const auto& [other, theirs] = it->second;
+    throw InputError(source + ": the finished runs " + other->dir.string() + " and " + r.dir.string() + " of " +
+                     group_text(r.L, r.P0_label) + " have " + std::to_string(theirs.size()) + " and " +
+                     std::to_string(reached.size()) +
+                     " target rows with different Δφ (one protocol run to its end reaches the same targets): "
+                     "rows are missing or added");
+  }
+}
+
 // Integer contact counts of a spectrum row of a table that does not store them: N_nr from the
 // target's Z_iso or the run's N_nr,J, N_c = Z N_nr. 0 where neither is known (the φ_2 packing).
 void contact_counts(DosRow& q, const RunRow& run) {
@@ -347,6 +367,47 @@ void drop_format1_averages(Ensemble& e) {
         "for the plain mean over the accepted states)";
 }
 
+// runs.csv lists the runs that jammed: the runs left out (never jammed, later copies of one run) are
+// named by the analysis.json the tables came with, and carried over so that a report from the tables
+// counts the runs the analysis was given.
+void read_left_out_runs(const fs::path& file, Ensemble& e) {
+  const auto text = [](const io::Json& x) { return x.is_string(); };
+  const auto copy_group = [&](const io::Json& x) {
+    return x.is_array() && x.size() >= 2 && std::all_of(x.begin(), x.end(), text);
+  };
+  const auto list_of = [&](const io::Json& inputs, const char* key, auto is_item,
+                           const char* items) -> std::optional<io::Json> {
+    const auto it = inputs.find(key);
+    if (it == inputs.end()) return std::nullopt;
+    if (!it->is_array() || !std::all_of(it->begin(), it->end(), is_item))
+      throw InputError(file.string() + ": inputs." + key + " is not a list of " + items);
+    return *it;
+  };
+  std::optional<io::Json> never, copies;
+  if (fs::exists(file)) {
+    const io::Json j = io::read_json(file);
+    const auto inputs = j.find("inputs");
+    if (inputs != j.end() && inputs->is_object()) {
+      never = list_of(*inputs, "never_jammed", text, "run directories");
+      copies = list_of(*inputs, "duplicates", copy_group, "groups of two or more run directories");
+    }
+  }
+  if (never) {
+    for (const io::Json& x : *never) e.never_jammed.push_back(x.get<std::string>());
+    e.runs += e.never_jammed.size();
+  } else {
+    e.unavailable["never_jammed"] =
+        file.string() + " does not name the runs that never jammed (runs.csv lists only those that did)";
+  }
+  if (copies) {
+    for (const io::Json& group : *copies) {
+      e.duplicates.push_back(group.get<std::vector<std::string>>());
+      e.runs += e.duplicates.back().size() - 1;
+    }
+  } else {
+  }
+}
+
 }  // namespace
 
 Ensemble read_ensemble_tables(const fs::path& dir) {
@@ -356,7 +417,9 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
   if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1)
     drop_format1_averages(e);
   e.runs = e.rows.size();
+  read_left_out_runs(dir / "analysis.json", e);
   read_targets(read_csv(dir / "targets.csv"), e, index);
+  check_finished_targets(e, (dir / "targets.csv").string());
   if (fs::exists(dir / "dos.csv"))
     read_spectra(read_csv(dir / "dos.csv"), e, index);
   else
@@ -375,7 +438,6 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
   e.unavailable["g_peak_weight_at_1, g_compressed_*, h_gamma_pooled"] = cells;
   e.unavailable["moduli_saddles"] = "the tables do not say which packings were saddles";
   e.unavailable["moduli_contact_bounded"] = "the tables do not say which packings were contact-bounded minima";
-  e.unavailable["duplicates"] = "the tables do not hold summary.json to compare copies by";
   for (const auto& r : e.rows) {
     e.moduli.found += std::isfinite(r.G_2);
     for (const auto& t : r.targets) e.moduli.found += std::isfinite(t.G);

@@ -432,10 +432,10 @@ void check_summary(const io::Json& summary, const fs::path& path) {
   check_keys(summary, kSummaryRules, file, "");
   if (const auto status = summary.find("status"); status != summary.end()) {
     const std::string s = status->get<std::string>();
-    if (s != "finished" && s != "step_limit" && s != "dt_underflow" && s != "minimiser_failed")
-      throw InputError(
-          file + ": status: \"" + s +
-          "\" is not the status of a finished run (finished, step_limit, dt_underflow or minimiser_failed)");
+    if (s != "finished" && s != "step_limit" && s != "dt_underflow" && s != "minimiser_failed" && s != "overlap_bound")
+      throw InputError(file + ": status: \"" + s +
+                       "\" is not the status of a finished run (finished, step_limit, dt_underflow, minimiser_failed "
+                       "or overlap_bound)");
   }
   if (const auto seed = summary.find("seed"); seed == summary.end() || !seed->is_number_unsigned())
     throw InputError(file + ": seed: not a non-negative integer");
