@@ -541,21 +541,13 @@ TEST_CASE("a bisection whose step falls below growth.dt_min fails with status dt
   CHECK_FALSE(d.result().jamming);  // never reports a jammed state it did not find
 }
 
-// The demo scene's box (L = 8, seed 1), as the packings a user grows from data/scenes/demo.toml.
-Scene demo_like_scene() {
-  Scene s;
-  s.name = "test";
-  s.L = 8.0;
-  s.seed = 1;
-  s.P0 = 1e-3;
-  return s;
-}
-
 TEST_CASE("a window below what FIRE resolves never yields a jamming point without a rigid backbone",
           "[driver][.hard]") {
   // ε_U = 1e-26: the first candidate in the window is all rattlers, its energy the residual of a
   // relaxation of floppy cells; relaxed on to FIRE's force resolution it keeps E/N in the window.
-  Scene s = demo_like_scene();
+  Scene s = small_scene(8.0);  // the demo scene's box and seed, to jamming
+  s.seed = 1;
+  s.targets.clear();
   s.epsilon_U = 1e-26;
   s.fire.energy_floor = 1e-34;
   Recorder rec;
