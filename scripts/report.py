@@ -668,6 +668,7 @@ def main():
         claim(f"h_γ at Δφ = 3e-3, {p0_name(lab)}", paper, ours, theirs, verdict, fig("figE1"))
     strong = [l for l in fed if float(l) <= 1e-2]
     claim("h_γ rises as feedback strengthens (P0 ≲ 1e-2)", "rises", "—", "the trend of the means ± SE over runs",
+          verdicts.Verdict("inconclusive", growth_missing) if growth_missing else
           trend_of([groups[l].get("h_gamma_paper") for l in strong], increasing=True), fig("figE1"))
     paper_w = {"0.1": 0.21, "0.01": 0.21, "0.0001": 0.16}
     paper_peak = {"0.1": 0.97, "0.01": 0.90, "0.001": 0.17}

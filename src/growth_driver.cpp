@@ -809,8 +809,8 @@ struct GrowthDriver::Impl {
     // packings"): a run grown that deep ends at its last readable state instead of writing a packing
     // no reader takes.
     if (const auto problem = overlap_problem(trial.packing)) {
-      fail(RunStatus::overlap_bound, "growth step " + std::to_string(attempts) +
-                                         ": the relaxed state at phi = " + num(trial.packing.packing_fraction()) +
+      fail(RunStatus::overlap_bound, "growth attempt " + std::to_string(attempts) + " (step " + std::to_string(step) +
+                                         "): the relaxed state at phi = " + num(trial.packing.packing_fraction()) +
                                          " passes the packing rules' overlap bound (" + *problem +
                                          "); lower jamming.max_dphi or the targets");
       return;

@@ -185,7 +185,8 @@ std::vector<SceneKey> make_keys() {
   e.push_back(P0);
   e.push_back(real("growth", "dt", "nominal growth step Δt", kPositive, BUDJAM_FIELD(dt)));
   e.push_back(real("growth", "dt_min", "a bisected step below this is a failure", kPositive, BUDJAM_FIELD(dt_min)));
-  e.push_back(integer("growth", "max_steps", "growth steps (accepted + rejected) before the run fails", kPositive,
+  e.push_back(integer("growth", "max_steps",
+                      "growth steps (accepted + rejected) before the run stops (status step_limit)", kPositive,
                       BUDJAM_FIELD(max_steps)));
   e.push_back(flag("growth", "adaptive_dt",
                    "above jamming with feedback, start each step from dt / max(max_i exp(-p_i/P0), adaptive_floor)",

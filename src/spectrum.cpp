@@ -226,16 +226,27 @@ long lanczos_most_modes(Eigen::Index n3, bool vectors) {
   return std::max(1L, k);
 }
 
+// Where the basis is the default one (2K + 1 vectors) the fix is fewer modes; where it is larger than
+// that (an explicit ncv, or the retry that doubles the basis), a smaller --ncv or the default.
 void require_lanczos_fits(Eigen::Index n3, int nev, int ncv, bool vectors) {
   const double bytes = lanczos_bytes(n3, nev, ncv, vectors);
   if (bytes <= kMaxDenseBytes) return;
   const long most = lanczos_most_modes(n3, vectors);
+  std::string fix = "ask for at most " + std::to_string(most) + " modes (--modes)";
+  if (nev <= most) {
+    long largest = ncv;  // the largest basis that fits with these modes
+    while (largest > nev + 1 && lanczos_bytes(n3, nev, static_cast<double>(largest), vectors) > kMaxDenseBytes)
+      largest = std::max<long>(nev + 1, largest * 9 / 10);
+    fix =
+        "the basis is larger than the default for these modes (an explicit --ncv, or the retry that doubles it): "
+        "use at most --ncv " +
+        std::to_string(largest) + ", or fewer modes";
+  }
   throw InputError("spectrum: the arpack method: " + std::to_string(nev) + " modes need a Lanczos basis of " +
                    std::to_string(ncv) + " vectors of " + std::to_string(n3) + " rows" +
                    (vectors ? " and their eigenvectors" : "") + ", about " +
                    std::to_string(static_cast<long long>(std::ceil(bytes / 1e9))) + " GB, more than the limit of " +
-                   std::to_string(static_cast<int>(kMaxDenseBytes / 1e9)) + " GB; ask for at most " +
-                   std::to_string(most) + " modes (--modes)");
+                   std::to_string(static_cast<int>(kMaxDenseBytes / 1e9)) + " GB; " + fix);
 }
 
 // ARPACK's failures on a valid problem (too few iterations, no shifts, a Lanczos breakdown) are

@@ -825,6 +825,12 @@ TEST_CASE("ARPACK's dense Lanczos basis is bounded like the dense methods, namin
     CHECK(bytes(most) <= kMaxDenseBytes);
     CHECK(bytes(most + 1) > kMaxDenseBytes);
   }
+  // a basis made too large by an explicit ncv names --ncv, not the modes already few enough
+  SpectrumOptions opt;
+  opt.method = SpectrumMethod::arpack;
+  opt.modes = 100;
+  opt.ncv = 30000;
+  CHECK_THROWS_WITH(solve_spectrum(H, mass, opt), Catch::Matchers::Contains("use at most --ncv "));
 }
 
 TEST_CASE("budjam dos on a 3-cell packing: auto solves densely; --method arpack is refused naming the dense method",

@@ -36,8 +36,8 @@ inline constexpr double kMaxBoxesAway = 16;
 // Where a contact's overlap reaches half its contact distance, r ≤ σ/2, its prestress stiffness
 // f/r = k (σ/r − 1) exceeds the contact stiffness k, and at r = 0 (stacked lobes) the contact has no
 // direction: forces, Hessian and spectrum of the harmonic model are undefined or dominated by the
-// singular f/r. Grown packings stay clear of it: r/σ ≥ 0.73 at Δφ = 0.2, and jamming.max_dphi ≤ 0.4
-// (kMaxDphi, scene_keys.hpp) keeps runs where it is ≥ 0.59.
+// singular f/r. Grown packings stay clear of it (the demo scene: r/σ ≥ 0.63 at Δφ = 0.4, the largest
+// jamming.max_dphi, kMaxDphi); a run that would pass it ends with status overlap_bound.
 inline constexpr double kMinContactRatio = 0.5;
 // With r > σ/2 for every pair of different cells, and r = σ between a cell's own two lobes, the disks
 // of half the lobe radii are disjoint: Σ π (R/2)² < L², i.e. φ = Σ π R² / L² < 4. Checked first,

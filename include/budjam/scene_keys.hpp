@@ -92,7 +92,7 @@ std::string value_text(const SceneValue& value);
 inline constexpr double kMaxBoxSide = 1e4;
 
 // The deepest compression a run may grow to. The smallest r/σ over the contacts of grown packings
-// (the demo scene without feedback) is 0.73 at Δφ = 0.2, 0.59 at 0.4 and 0.53 at 0.5: beyond 0.4 a
+// (the demo scene without feedback, docs/model.md) is 0.77 at Δφ = 0.2 and 0.63 at 0.4: beyond 0.4 a
 // run would approach the packing rules' bound r > σ/2. Within it a run can still reach the bound
 // (small boxes, bisection): it then ends with status overlap_bound instead of writing the packing.
 inline constexpr double kMaxDphi = 0.4;

@@ -334,6 +334,7 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
   const fs::path summary = r.dir / io::run_files::summary;
   const auto targets = r.summary.find("targets");
   if (targets == r.summary.end() || !targets->is_array()) throw InputError(summary.string() + ": targets: not a list");
+  x.target_rows = static_cast<double>(targets->size());
   for (std::size_t k = 0; k < targets->size(); ++k) {
     const io::Json& t = (*targets)[k];
     if (!t.is_object()) throw InputError(summary.string() + ": targets[" + std::to_string(k) + "]: not an object");

@@ -94,7 +94,8 @@ struct RunRow {
   // The records the run gave the pooled survival of its group: NaN where it recorded no bud events
   // (observe.bud_events off), and so contributed no run to that pool.
   double bud_records = kNaN;
-  std::vector<double> g;  // growth factors of the non-rattler cells at Δφ = 3·10⁻³
+  double target_rows = kNaN;  // the targets the run landed: its rows of targets.csv
+  std::vector<double> g;      // growth factors of the non-rattler cells at Δφ = 3·10⁻³
   std::vector<SurvivalRecord> survival;
   std::vector<TargetRow> targets;
   // curves on the Δφ grid
@@ -235,7 +236,8 @@ inline constexpr RunColumn kRunColumns[] = {{"phi_J", &RunRow::phi_J, kSummary},
                                             {"chi_bar_first", &RunRow::chi_bar_first, kSteps},
                                             {"G_2_first", &RunRow::G_2_first, kModuliAtPhi2},
                                             {"selection_divisions_first", &RunRow::selection_divisions_first, kSteps},
-                                            {"bud_records", &RunRow::bud_records, kBudEvents}};
+                                            {"bud_records", &RunRow::bud_records, kBudEvents},
+                                            {"target_rows", &RunRow::target_rows, kSummary}};
 
 // targets.csv after its leading columns run, L, P0, seed, dphi; below_phi2 follows.
 inline constexpr TargetColumn kTargetColumns[] = {{"phi", &TargetRow::phi},
