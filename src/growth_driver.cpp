@@ -492,6 +492,11 @@ struct GrowthDriver::Impl {
   }
 
   // ---- one growth attempt -------------------------------------------------------------------
+
+  // Where a message is from, as the stop notices name it: the attempts made and the accepted step.
+  std::string attempt_text() const {
+    return "growth attempt " + std::to_string(attempts) + " (step " + std::to_string(step) + ")";
+  }
   // The attempt the search asks for, relaxed; a jamming candidate that is a saddle is relaxed on.
   // nullopt if the run failed (minimiser or Δt below dt_min).
   std::optional<Trial> make_trial() {
@@ -524,8 +529,7 @@ struct GrowthDriver::Impl {
     search->place(t);
     note_start(t.packing, search->branch_start(t));
     follow_branch_from(search->branch_start(t), t.packing);
-    const std::string where =
-        "growth step " + std::to_string(attempts) + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
+    const std::string where = attempt_text() + ", dt = " + num(unscaled_dt(t.dt, next.log_scale));
     if (!relax(t.packing, trial_minimiser(), where, search->trial_budget(), &t.deferred)) return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);
     if (t.deferred && window.near(t.E)) {
@@ -569,8 +573,7 @@ struct GrowthDriver::Impl {
     --result.rejected;
     t.deferred = false;
     note_start(t.packing);
-    if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, growth step " + std::to_string(attempts)))
-      return std::nullopt;
+    if (!relax(t.packing, trial_minimiser(), "resuming a deferred trial, " + attempt_text())) return std::nullopt;
     t.E = fresh_energy_per_cell(t.packing);
     if (!relax_if_saddle(t)) return std::nullopt;
     return t;
@@ -582,8 +585,7 @@ struct GrowthDriver::Impl {
   // (accepted + rejected = attempts, which a checkpoint is checked against).
   std::optional<Trial> settle(Trial t) {
     note_start(t.packing);
-    if (!relax(t.packing, trial_minimiser(), "settling the bracket, growth step " + std::to_string(attempts)))
-      return std::nullopt;
+    if (!relax(t.packing, trial_minimiser(), "settling the bracket, " + attempt_text())) return std::nullopt;
     --result.rejected;
     t.E = fresh_energy_per_cell(t.packing);
     t.start = TrialStart::settled;
@@ -600,7 +602,7 @@ struct GrowthDriver::Impl {
     if (!scene.check_minimum || phase != Phase::unjammed) return true;
     FireParams deep = scene.fire;
     deep.force_tol = 0;
-    const std::string where = "growth step " + std::to_string(attempts);
+    const std::string where = attempt_text();
     for (int escapes = 0; window.candidate(t.E) && !is_minimum(t.packing, field); ++escapes) {
       if (escapes == 0) {
         ++result.saddles_relaxed;
@@ -809,10 +811,9 @@ struct GrowthDriver::Impl {
     // packings"): a run grown that deep ends at its last readable state instead of writing a packing
     // no reader takes.
     if (const auto problem = overlap_problem(trial.packing)) {
-      fail(RunStatus::overlap_bound, "growth attempt " + std::to_string(attempts) + " (step " + std::to_string(step) +
-                                         "): the relaxed state at phi = " + num(trial.packing.packing_fraction()) +
-                                         " passes the packing rules' overlap bound (" + *problem +
-                                         "); lower jamming.max_dphi or the targets");
+      fail(RunStatus::overlap_bound,
+           attempt_text() + ": the relaxed state at phi = " + num(trial.packing.packing_fraction()) +
+               " passes the packing rules' overlap bound (" + *problem + "); lower jamming.max_dphi or the targets");
       return;
     }
     const std::vector<Division> divisions = trial.divisions;

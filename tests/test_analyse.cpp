@@ -714,6 +714,23 @@ TEST_CASE("analyse --tables refuses a run whose target rows are missing: exit 2,
   CHECK(msg.find((a / "targets.csv").string() + ": run " + run + " has 0 target rows where runs.csv says it landed " +
                  std::to_string(landed)) != std::string::npos);
   CHECK(msg.find("rows are missing or added") != std::string::npos);
+  // an empty count does not switch the check off
+  std::string runs_csv = slurp(a / "runs.csv");
+  const auto header_end = runs_csv.find('\n');
+  const std::string header = runs_csv.substr(0, header_end);
+  const auto column = std::count(header.begin(), header.begin() + header.find("target_rows"), ',');
+  std::istringstream in_runs(runs_csv);
+  std::string edited;
+  for (bool first = true; std::getline(in_runs, line); first = false) {
+    if (!first) {  // empty the field of every run
+      std::size_t at = 0;
+      for (long k = 0; k < column; ++k) at = line.find(',', at) + 1;
+      line.erase(at, line.find(',', at) == std::string::npos ? std::string::npos : line.find(',', at) - at);
+    }
+    edited += line + "\n";
+  }
+  std::ofstream(a / "runs.csv") << edited;
+  CHECK(refused_tables(a, "missing_targets_empty").find("target_rows") != std::string::npos);
 }
 
 TEST_CASE("analyse --tables counts the runs its analysis left out, as analysis.json names them", "[analyse]") {
@@ -737,6 +754,15 @@ TEST_CASE("analyse --tables counts the runs its analysis left out, as analysis.j
   CHECK(
       refused_tables(a, "left_out_bad").find((a / "analysis.json").string() + ": inputs.never_jammed is not a list") !=
       std::string::npos);
+  // inputs of the wrong kind are refused; a list left out is named
+  j["inputs"] = budjam::io::Json::array();
+  std::ofstream(a / "analysis.json") << j.dump();
+  CHECK(refused_tables(a, "left_out_array").find("inputs is not an object") != std::string::npos);
+  j["inputs"] = budjam::io::Json::object({{"never_jammed", budjam::io::Json::array()}});
+  std::ofstream(a / "analysis.json") << j.dump();
+  const fs::path d = work_dir() / "left_out_no_copies";
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(d) + " --main-L 6").code == 0);
+  CHECK(budjam::io::read_json(d / "analysis.json")["unavailable"].contains("duplicates"));
   // tables without analysis.json say that they cannot tell
   fs::remove(a / "analysis.json");
   const fs::path c = work_dir() / "left_out_none";
@@ -1006,13 +1032,13 @@ std::size_t unchecked_notices(const std::string& err) {
 fs::path protocol_tables(const std::string& name, std::string (*protocol)(int), std::string (*cells)(int)) {
   return hand_tables(name, [&](std::ostream& r, std::ostream& t) {
     r << "run,L,P0,seed,status,jamming_state" << (protocol ? ",protocol" : "") << (cells ? ",cells" : "")
-      << ",phi_J,u_J,n_J,N_J,N_nr_J\n";
+      << ",phi_J,u_J,n_J,N_J,N_nr_J,target_rows\n";
     t << "run,L,P0,seed,dphi,below_phi2\n";
     for (int k = 0; k < 6; ++k) {
       r << name << "/seed" << k + 1 << ",15," << (k < 3 ? "0.01" : "0.001") << "," << k + 1 << ",finished," << k;
       if (protocol) r << "," << protocol(k);
       if (cells) r << "," << cells(k);
-      r << ",0.84,0.2,0.76,172,170\n";
+      r << ",0.84,0.2,0.76,172,170,0\n";
     }
   });
 }

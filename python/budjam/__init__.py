@@ -315,8 +315,8 @@ def grow(scene, seed=None, set=(), callback=None):
     {"growth.P0": 1e-3, "growth.max_steps": 500} (None is "none", lists are arrays), one
     "section.key=value" string, or a list of them.
     Without callback, returns the Growth iterator of events (see Growth); with one, calls
-    callback(event) for every event and returns the final status ('finished', or an expected early
-    stop such as 'step_limit')."""
+    callback(event) for every event and returns the final status ('finished', 'step_limit', or a
+    failure such as 'minimiser_failed' or 'overlap_bound': no exception, so check it)."""
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError(f"scene: must be the path of a scene file (str or os.PathLike), got {type(scene).__name__}")
     if callback is not None and not callable(callback):

@@ -590,8 +590,8 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
   py::class_<Growth>(m, "Growth", R"(A growth run as an iterator of events (`budjam.grow`).
 
 Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
-'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the status of an
-expected early stop such as 'step_limit'), the state it happened in (step = accepted steps, phi,
+'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the run's status:
+'step_limit', or a failure such as 'minimiser_failed' or 'overlap_bound', which raises nothing), the state it happened in (step = accepted steps, phi,
 P in k, N, phase) with a copy of the packing, and the fields of that event under the names
 summary.json gives them: jammed: episode, phi_J, Z_J, Z_iso_J, dZ_J, N_nr_J, u_J, tagged_J;
 unjammed: episode, phi_J (the one lost), targets_lost; target: index, dphi, Z, dZ, N_nr, chi_c

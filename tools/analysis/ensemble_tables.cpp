@@ -86,7 +86,7 @@ void check_protocol_columns(const CsvTable& R, Ensemble& e) {
 void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t>& index) {
   // Tables from before jamming.phi2_tagged_left hold budjam's φ_2 only, which is what the default says.
   for (const auto& c : kRunColumns)
-    if (!run_column(R, c) && c.field != &RunRow::phi2_tagged_left)
+    if (!run_column(R, c) && c.field != &RunRow::phi2_tagged_left && c.field != &RunRow::target_rows)
       e.unavailable[c.name] = R.source + " has no column " + c.name + " (it needs " + c.source + " of each run)";
   const std::size_t c_run = R.column("run"), c_L = R.column("L"), c_P0 = R.column("P0"), c_seed = R.column("seed"),
                     c_status = R.column("status");
@@ -103,6 +103,10 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     if (R.has_column("cells")) x.cells = R.text(k, R.column("cells"));
     for (const auto& c : kRunColumns)
       if (const char* name = run_column(R, c)) x.*c.field = R.number(k, R.column(name));
+    // Every run has a count, 0 included: an empty field would switch the check of its rows off.
+    if (R.has_column("target_rows"))
+      x.target_rows =
+          static_cast<double>(R.integer(k, R.column("target_rows"), 0, std::numeric_limits<long long>::max()));
     x.depleted = std::isfinite(x.phi_2);
     if (!index.emplace(x.dir.string(), e.rows.size()).second)
       throw InputError(R.source + ":" + std::to_string(k + 2) + ": run " + x.dir.string() + " listed twice");
@@ -114,6 +118,10 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     e.rows.push_back(std::move(x));
   }
   if (e.rows.empty()) throw InputError(R.source + ": no runs");
+  if (!R.has_column("target_rows"))
+    e.unchecked.push_back(R.source +
+                          " has no target_rows column (tables from before it): each run's rows of "
+                          "targets.csv cannot be checked against the targets it landed");
   check_protocol_columns(R, e);
   if (e.unavailable.count("P_J"))
     e.unavailable["P_J"] +=
@@ -378,7 +386,8 @@ void read_left_out_runs(const fs::path& file, Ensemble& e) {
   if (fs::exists(file)) {
     const io::Json j = io::read_json(file);
     const auto inputs = j.find("inputs");
-    if (inputs != j.end() && inputs->is_object()) {
+    if (inputs != j.end() && !inputs->is_object()) throw InputError(file.string() + ": inputs is not an object");
+    if (inputs != j.end()) {
       never = list_of(*inputs, "never_jammed", text, "run directories");
       copies = list_of(*inputs, "duplicates", copy_group, "groups of two or more run directories");
     }
@@ -396,6 +405,8 @@ void read_left_out_runs(const fs::path& file, Ensemble& e) {
       e.runs += e.duplicates.back().size() - 1;
     }
   } else {
+    e.unavailable["duplicates"] =
+        file.string() + " does not name the copies of a run it left out (runs.csv lists the copy it used)";
   }
 }
 
