@@ -101,8 +101,7 @@ Eigen::MatrixXd refined_solve(const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
   return Uf;
 }
 
-// A saddle's response: none (NaN), method unstable. Pinning kernel dofs leaves the count of
-// eigenvalues below −δ unchanged, so they are the unstable modes of H.
+// A saddle's response: none (NaN), method unstable, with the count of eigenvalues below −δ.
 Eigen::MatrixXd no_response(const Stability& st, const SparseMatrix& Hf, const Eigen::MatrixXd& Xf,
                             KernelTreatment& k) {
   k.method = SolveMethod::unstable;
@@ -416,6 +415,29 @@ std::pair<std::vector<bool>, std::vector<KernelVector>> pin_kernel(const Packing
   return {std::move(pinned), std::move(kernel)};
 }
 
+// max over the kernel vectors v of ‖H v‖ / ‖v‖: 0 to rounding at force balance, where each is an exact
+// null direction of H; off balance (a packing written with rounded positions) the residual forces
+// curve them.
+double kernel_curvature(const std::vector<KernelVector>& kernel, const SparseMatrix& H) {
+  double worst = 0;
+  Eigen::VectorXd Hv = Eigen::VectorXd::Zero(H.rows());
+  for (const auto& v : kernel) {
+    double vv = 0;
+    for (const auto& [d, a] : v) {
+      for (SparseMatrix::InnerIterator it(H, d); it; ++it) Hv[it.row()] += a * it.value();  // H symmetric
+      vv += a * a;
+    }
+    double hh = 0;
+    for (const auto& [d, a] : v)
+      for (SparseMatrix::InnerIterator it(H, d); it; ++it) {
+        hh += Hv[it.row()] * Hv[it.row()];
+        Hv[it.row()] = 0;  // each row once; the vector is zero again for the next v
+      }
+    worst = std::max(worst, std::sqrt(hh / vv));
+  }
+  return worst;
+}
+
 // max over strain columns and kernel vectors v of |vᵀΞ| / (‖v‖ ‖Ξ‖): Ξ must have no kernel component.
 double kernel_component(const std::vector<KernelVector>& kernel, const Eigen::MatrixXd& Xi) {
   double worst = 0;
@@ -589,6 +611,7 @@ ResponseProblem response_problem(const Packing& p, const std::vector<Contact>& c
   std::vector<KernelVector> kernel;
   std::tie(pr.pinned, kernel) = pin_kernel(p, map, pr.H, lobe_count, pr.kernel);
   pr.kernel.kernel_component = kernel_component(kernel, pr.Xi);
+  pr.kernel_curvature = kernel_curvature(kernel, pr.H);
   return pr;
 }
 
@@ -606,11 +629,22 @@ Relaxation relax(const ResponseProblem& pr, const ModuliOptions& options) {
   for (Eigen::Index d = 0; d < nr; ++d)
     if (free_index[d] >= 0) Xf.row(free_index[d]) = pr.Xi.row(d);
 
+  // Pinning exact null directions of H keeps its inertia, so the solve's own test of H_ff decides as
+  // the test of H itself (`budjam dos`'s) would. Off force balance (a packing written with rounded
+  // positions) those directions curve by more than δ, and then H itself is tested first: one
+  // verdict and one count of unstable modes for both commands.
+  Stability full;
+  if (const double delta = options.regularisation * pr.H.diagonal().cwiseAbs().maxCoeff(); pr.kernel_curvature > delta)
+    full = hessian_stability(pr.H, options.regularisation);
   Eigen::MatrixXd Uf = Eigen::MatrixXd::Zero(nf, 4);
-  if (nf > 0 && Xf.norm() > 0)
+  if (full.factored && !full.minimum()) {
+    r.kernel.regularisation = full.delta;
+    Uf = no_response(full, Hf, Xf, r.kernel);
+  } else if (nf > 0 && Xf.norm() > 0) {
     Uf = solve_pinned(Hf, Xf, options, r.kernel);
-  else
+  } else {
     r.kernel.method = SolveMethod::no_force_response;
+  }
   r.U = Eigen::MatrixXd::Zero(nr, 4);
   for (Eigen::Index d = 0; d < nr; ++d)
     if (free_index[d] >= 0) r.U.row(d) = Uf.row(free_index[d]);

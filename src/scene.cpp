@@ -53,7 +53,8 @@ void validate(const Scene& s) {
     if (cover > 0.4) {
       const auto n_max = static_cast<std::size_t>(0.4 * s.L * s.L / disk);
       fail("init.cells",
-           "too many seeds for the box: at most " + std::to_string(n_max) + " fit at random in L = " + value_text(s.L),
+           "too many seeds for the box: at most " + std::to_string(n_max) +
+               " fit at random in box.L = " + value_text(s.L),
            std::int64_t(s.n_seeds));
     }
   } else if (s.n_seeds != 0) {
@@ -78,8 +79,8 @@ void validate(const Scene& s) {
          s.targets);
   if (!s.targets.empty()) {
     if (!(s.target_tolerance < s.targets.front()))
-      fail("jamming.target_tolerance", "must be smaller than the first target " + value_text(s.targets.front()),
-           s.target_tolerance);
+      fail("jamming.target_tolerance",
+           "must be smaller than the first of jamming.targets, " + value_text(s.targets.front()), s.target_tolerance);
     if (s.targets.back() > s.max_dphi)
       fail("jamming.targets", "must not exceed jamming.max_dphi = " + value_text(s.max_dphi), s.targets);
   }

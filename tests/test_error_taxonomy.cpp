@@ -2,6 +2,7 @@
 // reach the terminal raw; file names that look like options stay file names.
 #include <catch2/catch.hpp>
 #include "input_error.hpp"
+#include "io/json.hpp"
 #include "run_budjam.hpp"
 #include "scratch.hpp"
 
@@ -114,7 +115,7 @@ TEST_CASE("a result that cannot be written to standard output is exit 3 with one
   // out when it could not: the failure is the one line.
   for (const std::string& args :
        {"validate " + shell_quoted(budjam::testing::source_file("data/scenes/demo.toml")),
-        "rigidity " + shell_quoted(work_dir() / "full.pack") + " --json", std::string("--help"),
+        "rigidity " + shell_quoted(work_dir() / "full.pack") + " --network raw --json", std::string("--help"),
         std::string("--version"), std::string("grow --help"),
         "moduli " + shell_quoted(budjam::testing::source_file("tests/data/saddle_jamming_L15_seed3.pack")) +
             " --json"}) {
@@ -273,15 +274,25 @@ TEST_CASE(
   CHECK_FALSE(fs::exists(work_dir() / "bare-out"));
 }
 
-TEST_CASE("moduli of an unjammed packing (N_nr = 0) is a notice and exit 1, and writes nothing", "[taxonomy]") {
+TEST_CASE(
+    "moduli and the load-bearing rigidity of an unjammed packing (N_nr = 0) are a notice and exit 1, and write "
+    "nothing (not zero moduli or zero floppy modes)",
+    "[taxonomy]") {
   write(work_dir() / "gas.pack", kPacking);  // two cells far apart: every cell is a rattler
-  const auto r = run_budjam("moduli gas.pack --out gas");
-  INFO(r.err);
-  CHECK(r.code == 1);
-  CHECK(r.err.rfind("budjam: moduli: gas.pack is not jammed: all 2 cells are rattlers (N_nr = 0)", 0) == 0);
-  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-  CHECK(r.out.empty());
-  CHECK_FALSE(fs::exists(work_dir() / "gas.json"));
+  for (const std::string command : {"moduli", "rigidity"}) {
+    const auto r = run_budjam(command + " gas.pack --out gas-" + command);
+    INFO(r.err);
+    CHECK(r.code == 1);
+    CHECK(r.err.rfind("budjam: " + command + ": gas.pack is not jammed: all 2 cells are rattlers (N_nr = 0)", 0) == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.out.empty());
+    CHECK_FALSE(fs::exists(work_dir() / ("gas-" + command + ".json")));
+  }
+  // The raw network takes every cell: two free dumbbells, 2 × 3 − 3 floppy modes in the plane.
+  const auto raw = run_budjam("rigidity gas.pack --network raw --json");
+  INFO(raw.err);
+  CHECK(raw.code == 0);
+  CHECK(budjam::io::Json::parse(raw.out)["floppy_modes"]["plane"] == 3);
 }
 
 TEST_CASE("an error line is cut to a bounded length, keeping its start and its end", "[taxonomy]") {

@@ -241,6 +241,17 @@ TEST_CASE("grow refuses bad input with exit 2 and one line naming the problem", 
     CHECK(r.code == 2);
     CHECK(r.err.rfind("budjam: error: --set " + set + ": growth.dt_min: must be smaller than growth.dt", 0) == 0);
   }
+  // ... for each key of every rule between keys: the message names the other key in full
+  for (const std::string set :
+       {"'jamming.targets=[1e-300]'", "jamming.target_tolerance=0.5", "jamming.max_dphi=1e-300",
+        "minimiser.dt_start=100", "minimiser.dt_max=1e-300", "jamming.epsilon_U=1e-30", "minimiser.skin=3"}) {
+    r = grow(q(small_scene("bad", "")) + " --quiet --set " + set + " --out " + q(dir));
+    INFO(r.err);
+    CHECK(r.code == 2);
+    std::string unquoted = set;
+    std::erase(unquoted, '\'');
+    CHECK(r.err.rfind("budjam: error: --set " + unquoted + ": ", 0) == 0);
+  }
   std::ofstream(work_dir() / "bad_dt.toml") << "[growth]\ndt_min = 10\n";  // the file's own broken rule
   r = grow(q(work_dir() / "bad_dt.toml") + " --quiet --set growth.P0=1e-3 --out " + q(dir));
   INFO(r.err);

@@ -5,6 +5,8 @@
 #include "budjam/energy.hpp"
 #include "budjam/hessian.hpp"
 #include "budjam/moduli.hpp"
+#include "budjam/spectrum.hpp"
+#include "budjam/stability.hpp"
 #include "budjam/strain.hpp"
 #include "compressed_packing.hpp"
 #include "random_packing.hpp"
@@ -655,6 +657,51 @@ TEST_CASE(
     ModuliOptions o;
     o.solver = solver;
     CHECK(elastic_response(r.p, r.contacts, r.net, o).kernel.unstable_modes == below);
+  }
+}
+
+// A jammed packing put in a larger box without relaxing: contacts across the boundary are gone and
+// the rest keep a prestress of order 1e-9, so several unstable modes lie within a few δ of zero,
+// where the pinned Hessian H_ff and H itself can count differently. moduli reports H's count.
+TEST_CASE("A saddle's unstable modes are counted alike by moduli (every solver), dos and the dense eigenvalues of H",
+          "[moduli]") {
+  Relaxed jam = data_packing("saddle_jamming_L15_seed3.pack");
+  jam.p.box.L = 20.0;
+  const Relaxed r = at_state(std::move(jam.p));
+  const DofMap map = non_rattler_dofs(r.net);
+  const SparseMatrix H = restrict_matrix(hessian(r.p, load_bearing(r.contacts, r.net)), map);
+  const Stability st = hessian_stability(H);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(H)};
+  const auto below = static_cast<std::size_t>((eig.eigenvalues().array() < -st.delta).count());
+  INFO("λ_min = " << eig.eigenvalues()[0] << ", δ = " << st.delta);
+  REQUIRE(below > 1);
+  CHECK(st.unstable_modes == below);
+  CHECK(packing_spectrum(r.p, r.contacts, r.net).stability.unstable_modes == below);
+  for (const ModuliSolver solver :
+       {ModuliSolver::ldlt, ModuliSolver::cholesky, ModuliSolver::dense, ModuliSolver::cg}) {
+    ModuliOptions o;
+    o.solver = solver;
+    const ElasticResponse e = elastic_response(r.p, r.contacts, r.net, o);
+    CHECK_FALSE(e.energy_minimum());
+    CHECK(e.kernel.unstable_modes == below);
+  }
+}
+
+// Positions rounded to 10⁻⁸ (an extended XYZ file's precision) leave forces of that order: the
+// kernel directions moduli pins curve, and moduli must still say what dos says.
+TEST_CASE("moduli and dos give one verdict and one unstable-mode count on packings off force balance", "[moduli]") {
+  for (const char* name : {"negative_G_target_L8.pack", "shear_conventions_differ_L8.pack",
+                           "saddle_after_relaxing_L20_P0_1e-5_seed6.pack", "contact_bounded_jamming_L20_seed3.pack"}) {
+    INFO(name);
+    Relaxed r = data_packing(name);
+    r.p.q = (r.p.q.array() * 1e8).round() / 1e8;
+    const Relaxed rounded = at_state(std::move(r.p));
+    if (rounded.net.N_nr == 0) continue;
+    const PackingSpectrum dos = packing_spectrum(rounded.p, rounded.contacts, rounded.net);
+    const ElasticResponse e = elastic_response(rounded.p, rounded.contacts, rounded.net);
+    INFO("dos " << dos.stability.unstable_modes << ", moduli " << e.kernel.unstable_modes);
+    CHECK(e.kernel.unstable_modes == dos.stability.unstable_modes);
+    CHECK(e.stationary == dos.stationary);
   }
 }
 

@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -293,7 +294,7 @@ TEST_CASE("survival keeps -o as --out: -o BASE.csv writes BASE.csv and BASE.json
   CHECK(budjam::io::read_json(base.string() + ".json").contains("a_eps"));
 }
 
-TEST_CASE("scripts/progress.sh counts the stamps that exist and extrapolates the pace since the first made", "[cli]") {
+TEST_CASE("scripts/progress.py counts the stamps that exist and extrapolates the pace since the first made", "[cli]") {
   const fs::path dir = work_dir() / "stamps";
   fs::create_directories(dir);
   std::string stamps;
@@ -305,7 +306,7 @@ TEST_CASE("scripts/progress.sh counts the stamps that exist and extrapolates the
   shell("cd " + shell_quoted(dir) + " && touch -d @$((" + now + " - 120)) s0 && touch -d @$((" + now +
         " - 60)) s1 && touch s2");
   const auto progress = [&](int at_start) {
-    shell("bash " + shell_quoted(source_file("scripts/progress.sh")) + " moduli $((" + now + " - 130)) " +
+    shell("python3 " + shell_quoted(source_file("scripts/progress.py")) + " moduli $((" + now + " - 130)) " +
           std::to_string(at_start) + stamps + " 2> " + shell_quoted(err));
     return slurp(err);
   };
@@ -314,4 +315,33 @@ TEST_CASE("scripts/progress.sh counts the stamps that exist and extrapolates the
   CHECK(progress(2) == "[moduli 3/4 runs]\n");  // one made by this make: no pace yet
   std::ofstream(dir / "s3");
   CHECK(progress(0) == "[moduli 4/4 runs]\n");  // done
+}
+
+TEST_CASE("scripts/progress.py weights the runs left by the cost of the done runs of their group", "[cli]") {
+  // Two groups of runs: the cheap one done (1 s each, the last two made in 60 s), the costly one
+  // (one run of it done, 30 s) with two runs left: ETA = 60 s × (30 + 30) / (1 + 30) ≈ 116 s, where
+  // weighing every run alike would say 60 s × 2 / 2 = 60 s.
+  const fs::path grid = work_dir() / "grid";
+  const auto shell = [](const std::string& cmd) { REQUIRE(std::system(cmd.c_str()) == 0); };
+  std::string stamps;
+  const std::string now = "$(date +%s)";
+  int k = 0;
+  for (const auto& [group, seed, wall, ago] :
+       std::vector<std::tuple<std::string, int, double, int>>{{"P0_none", 1, 1.0, 60},
+                                                              {"P0_none", 2, 1.0, 30},
+                                                              {"P0_1e-5", 1, 30.0, 0},
+                                                              {"P0_1e-5", 2, 0, -1},
+                                                              {"P0_1e-5", 3, 0, -1}}) {
+    const fs::path run = grid / "L8" / group / ("seed" + std::to_string(seed));
+    fs::create_directories(run);
+    stamps.append(" ").append(shell_quoted(run / "summary.json"));
+    ++k;
+    if (ago < 0) continue;
+    std::ofstream(run / "timing.json") << "{\"wall_seconds\": " << wall << ", \"final_N\": 48}";
+    shell("touch -d @$((" + now + " - " + std::to_string(ago) + ")) " + shell_quoted(run / "summary.json"));
+  }
+  const fs::path err = work_dir() / "progress-weighted.txt";
+  shell("python3 " + shell_quoted(source_file("scripts/progress.py")) + " grow $((" + now + " - 70)) 0" + stamps +
+        " 2> " + shell_quoted(err));
+  CHECK_THAT(slurp(err), Catch::Matchers::Matches(R"(\[grow 3/5 runs, ETA 1m5[5-9]s\]\n)"));
 }

@@ -270,7 +270,7 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[jamming]\ntargets = [1e-3, nan]\n", "jamming.targets: must be finite numbers (got [0.001, nan])"},
       {"[jamming]\ntargets = [1e-3, \"x\"]\n", "jamming.targets: expected an array of numbers"},
       {"[jamming]\ntargets = [0.3]\n", "jamming.targets: must not exceed jamming.max_dphi = 0.2"},
-      {"[jamming]\ntargets = [1e-9]\n", "jamming.target_tolerance: must be smaller than the first target"},
+      {"[jamming]\ntargets = [1e-9]\n", "jamming.target_tolerance: must be smaller than the first of jamming.targets"},
       {"[jamming]\nepsilon_U = 0\n", "jamming.epsilon_U: must be positive (got 0)"},
       {"[jamming]\ncrossing_step = 0.01\n",
        "jamming.crossing_step: is only used with jamming.continuation = true (got 0.01)"},
@@ -324,6 +324,10 @@ TEST_CASE("invalid scenes are refused with one line naming the key and the value
       {"[observe.dos]\nevery = -1\n", "observe.dos.every: must be zero or positive (got -1)"},
       {"[[run]]\nname = \"x\"\n", "run: expected a table [run]"},
       {"[growth]\nP0 = 1e-3 1e-4\n", "test.toml:2:"},
+      // a bare word, which TOML reads as a broken number or boolean: the key and its quoted form
+      {"[growth]\nP0 = none\n", "test.toml:2:7: growth.P0 = none: a text value is quoted in TOML (P0 = \"none\")"},
+      {"[run]\nseed = 2\n[jamming]\nsearch = secant # x\n",
+       "test.toml:4:10: jamming.search = secant: a text value is quoted in TOML (search = \"secant\")"},
       {"[growth]\nP0 = 1\nP0 = 2\n", "test.toml:3:"},
   };
   for (const Case& c : cases) {

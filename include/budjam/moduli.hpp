@@ -200,6 +200,7 @@ struct ResponseProblem {
   std::vector<ContactResponseTerms> terms;  // one per load-bearing contact
   std::vector<bool> pinned;                 // per non-rattler dof: fixed at 0 (an exact kernel direction)
   KernelTreatment kernel;                   // the pinning (counts, reference cell, kernel_component)
+  double kernel_curvature = 0;              // max ‖H v‖/‖v‖ over the pinned kernel directions v
 };
 
 // The non-affine relaxation du/de = H⁺Ξ of a problem (pinned rows 0; NaN for a saddle) and how it

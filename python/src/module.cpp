@@ -158,7 +158,8 @@ py::dict result_dict(const io::CommandResult& result) {
 
 py::dict rigidity_dict(const Packing& p, const std::string& network) {
   const Analysed a(p);
-  const tools::RigidityReport r = tools::rigidity_report(p, a.lobes, a.pc.contacts, a.pc.network, network_of(network));
+  const tools::RigidityReport r =
+      tools::rigidity_report(p, a.lobes, a.pc.contacts, a.pc.network, network_of(network), "packing");
   const RigidityState& s = r.state;
   const Framework fw = build_framework(p, a.lobes, a.pc.contacts, a.pc.network, r.network);
   py::array_t<std::uint32_t> bars({static_cast<py::ssize_t>(fw.bars.size()), py::ssize_t{2}});
@@ -296,6 +297,10 @@ class EventQueue : public Observer {
   void push(const std::string& kind, const StateView& s, py::dict fields) {
     io::PackingFile f;
     f.packing = *s.packing;
+    // The metadata a run's packing file carries, so that the bridges (to_ase, to_gsd_frame, write)
+    // see the state's step, φ and seed; a target's Δφ with it.
+    const auto dphi = fields.contains("dphi") ? std::optional<double>(fields["dphi"].cast<double>()) : std::nullopt;
+    f.meta = io::state_meta(s, kind, s.scene->seed, dphi);
     fields["kind"] = kind;
     fields["step"] = s.step;
     fields["phi"] = s.phi;
@@ -592,7 +597,7 @@ epsilon: the cutoff of u_J S(a_eps) = epsilon (default 1/<N_nr,J>).)");
 Each event is a dict with kind ('jammed', 'unjammed', 'target', 'phi2', 'division', 'bud_tagged',
 'bud_first_contact', 'bud_completed', ..., and last 'finished' or 'stopped' with the run's status:
 'step_limit', or a failure such as 'minimiser_failed' or 'overlap_bound', which raises nothing), the state it happened in (step = accepted steps, phi,
-P in k, N, phase) with a copy of the packing, and the fields of that event under the names
+P in k, N, phase) with a copy of the packing (its meta as a run's packing file has it), and the fields of that event under the names
 summary.json gives them: jammed: episode, phi_J, Z_J, Z_iso_J, dZ_J, N_nr_J, u_J, tagged_J;
 unjammed: episode, phi_J (the one lost), targets_lost; target: index, dphi, Z, dZ, N_nr, chi_c
 (as an entry of its targets); phi2: phi_2, Z_2, dZ_2; division: mother_id, daughter_id, b (as

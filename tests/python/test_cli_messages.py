@@ -45,6 +45,11 @@ def test_a_parse_error_names_the_help_of_the_subcommand_used(run_budjam):
     assert r.returncode == 2 and r.stderr.rstrip().endswith("(see budjam moduli --help)")
     r = run_budjam("--no-such-option", check=False)
     assert r.returncode == 2 and r.stderr.rstrip().endswith("(see budjam --help)")
+    # a mistyped option of budjam's own is named, before a command or without one
+    for args in (["--versio"], ["--foo", "grow", DEMO]):
+        r = run_budjam(*args, check=False)
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+        assert f"unknown option '{args[0]}'" in r.stderr and r.stderr.rstrip().endswith("(see budjam --help)")
 
 
 def test_a_mistyped_command_is_named_with_the_commands_there_are(run_budjam):

@@ -90,6 +90,9 @@ def test_moduli_of_an_unjammed_packing_raises_no_result_error_naming_the_packing
     gas = budjam.Packing(L=8.0, x=[2.0, 5.0], y=[2.0, 5.0], theta=[0.0, 1.0], b=[0.5, 0.7])
     with pytest.raises(budjam.NoResultError, match="^packing is not jammed: all 2 cells are rattlers"):
         budjam.moduli(gas)
+    with pytest.raises(budjam.NoResultError, match="^packing is not jammed: all 2 cells are rattlers"):
+        budjam.rigidity(gas)
+    assert budjam.rigidity(gas, "raw")["floppy_modes"]["plane"] == 3
 
 
 @pytest.mark.parametrize("call, message", [

@@ -3,6 +3,7 @@ directory where a file is expected, names too long for a temporary beside them, 
 regular files. Each is one line `budjam: error: ...` naming the path, exit 2, nothing written and
 every file that was there byte-identical (docs/files.md, "Crash safety")."""
 import os
+import shlex
 import shutil
 import stat
 import subprocess
@@ -268,3 +269,22 @@ def test_a_run_whose_progress_reader_went_away_goes_on(budjam_exe, tmp_path):
         os.close(err)
     assert r.returncode == 0
     assert (tmp_path / "run" / "summary.json").is_file()
+
+
+def test_a_full_disk_names_the_file_whose_write_failed(budjam_exe, tmp_path):
+    """On a filesystem too small for a run (a tmpfs in a mount namespace of its own), the one error line
+    names the file budjam could not write, whichever it is, never just the run directory."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    for size in ("8k", "28k", "170k"):
+        script = (f"mount -t tmpfs -o size={size} tmpfs {shlex.quote(str(disk))} && "
+                  f"exec {shlex.quote(str(budjam_exe))} grow {shlex.quote(str(SOURCE_DIR / 'data' / 'scenes' / 'demo.toml'))} "
+                  f"--quiet --out {shlex.quote(str(disk / 'run'))}")
+        r = subprocess.run(["unshare", "--mount", "sh", "-c", script], capture_output=True, text=True)
+        if "No space left on device" not in r.stderr:
+            pytest.skip(f"no tmpfs in a mount namespace here: {r.stderr.strip()}")
+        assert r.returncode == 3, r.stderr
+        line = r.stderr.strip()
+        assert len(r.stderr.splitlines()) == 1
+        failed = line.removeprefix("budjam: error: ").split(": cannot")[0]
+        assert failed.startswith(str(disk / "run") + "/"), line

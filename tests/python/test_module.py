@@ -179,6 +179,11 @@ def test_grow_generator_follows_the_same_run_as_budjam_grow(run_dir):
         saved = budjam.read_packing(run_dir / "packings" / f"target_{t['index']}.pack")
         for name in ("x", "y", "theta", "b", "gamma0", "id", "parent"):
             np.testing.assert_array_equal(getattr(t["packing"], name), getattr(saved, name))
+        # The event's packing carries the saved file's metadata, so the bridges see its step.
+        assert t["packing"].meta == saved.meta
+        assert t["packing"].to_ase().info["step"] == t["step"] == saved.meta["step"]
+    jammed = budjam.read_packing(run_dir / "packings" / "jammed.pack")
+    assert jammings[-1]["packing"].meta == jammed.meta
 
 
 def test_grow_refuses_a_seed_a_scene_file_cannot_hold_as_budjam_grow_does():

@@ -660,3 +660,41 @@ def test_admitted_runs_without_an_eq14_prediction_are_named_as_such(tmp_path):
     assert len(lines) == 2  # the Eq. 14 row and the P_2/P_max row of that group
     for line in lines:
         assert "none with an Eq. 14 prediction" in line and "G_2 > 0" not in line, line
+
+
+@pytest.mark.parametrize("missing", ["0.001", "none"])
+def test_a_paper_p0_without_runs_gets_an_inconclusive_row_and_the_header_names_it(tmp_path, missing):
+    A = paper_tables()
+    A["groups"] = [g for g in A["groups"] if g["P0_label"] != missing]
+    r, out = report(tmp_path, A, preset="paper")
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    name = "no feedback" if missing == "none" else f"P0={missing}"
+    row = row_of(out, f"Every per-P0 claim at {name} ")
+    assert row.split(" | ")[4].startswith("inconclusive (not measured: no runs at " + name), row
+    for L in (8, 15, 20):
+        assert f"no runs at L = {L} for P0 = {missing}" in out
+    # its per-P0 rows are gone, the others stay
+    assert not any(line.startswith(f"| φ_2 − φ_J, {name}:") for line in out.splitlines())
+    assert sum(line.startswith("| φ_2 − φ_J, ") for line in out.splitlines()) == 5
+
+
+def test_eq14_tests_the_sign_of_the_overestimate_and_prints_its_size(tmp_path):
+    r, out = report(tmp_path, paper_tables(), preset="paper")
+    assert r.returncode == 0, r.stderr
+    rows = [line for line in out.splitlines() if line.startswith("| φ_2 − φ_J, ")]
+    assert len(rows) == 6
+    for row in rows:
+        cells = row.split(" | ")
+        assert cells[1] == "a small systematic overestimate by the theory"
+        assert 'the sign is tested, the paper gives "small" no size' in cells[4], row
+        assert len(re.findall(r"prediction/simulation \d", row)) == 2, row  # both definitions
+
+
+def test_kaplan_meier_without_survival_records_says_not_measured(tmp_path):
+    A = paper_tables()
+    for g in A["groups"]:
+        g["pooled_survival"] = {"events": 0, "records": 0, "epsilon": 0.005, "a_eps": None, "integral_S": None}
+    r, out = report(tmp_path, A, preset="paper")
+    assert r.returncode == 0, r.stderr
+    row = row_of(out, "Kaplan–Meier a_ε")
+    assert "not measured (no survival records)" in row and "completions" not in row.split(" | ")[2], row

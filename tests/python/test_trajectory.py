@@ -90,10 +90,15 @@ def test_a_runs_trajectory_exports_by_default_to_the_runs_own_trajectory_gsd(ref
     (run / "trajectory.gsd").unlink()
     run_budjam("export", "trajectory.xyz", "--format", "gsd", cwd=run)
     assert (run / "trajectory.gsd").is_file()
-    for args in (["--format", "gsd", "--out", run / "other"], ["--format", "xyz", "--out", run / "trajectory"]):
+    r = run_budjam("export", run / "trajectory.xyz", "--format", "gsd", "--out", run / "other", check=False)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert "budjam run directory" in r.stderr
+    # Another format is refused for what it is, with or without an --out (whose default,
+    # RUN/trajectory.vtk, would also be refused as an entry of the run).
+    for args in (["--format", "xyz", "--out", run / "trajectory"], ["--format", "vtk"], ["--format", "xyz"]):
         r = run_budjam("export", run / "trajectory.xyz", *args, check=False)
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
-        assert "budjam run directory" in r.stderr
+        assert "exports to gsd only" in r.stderr
     (run / "trajectory.gsd").unlink()
     os.symlink(tmp_path / "elsewhere.gsd", run / "trajectory.gsd")
     r = run_budjam("export", run / "trajectory.xyz", "--format", "gsd", check=False)

@@ -128,7 +128,7 @@ std::string dos_line(const DosReport& r) {
   const auto& m = r.result.summary;
   char buf[512];
   std::snprintf(buf, sizeof buf,
-                "dos: %s, %zu non-rattlers, %zu of %zu modes in %.2f s; N_zero %zu (lambda < %g), floppy %s, "
+                "dos: %s, %zu non-rattlers, %zu of %zu modes in %.2f s; N_zero %zu (|lambda| < %g), floppy %s, "
                 "N_u %zu; omega* %s%s",
                 to_string(m.method), r.network.N_nr, m.computed, m.n_dof, r.seconds, m.N_zero, m.lambda_tol,
                 r.has_rigidity ? std::to_string(r.rigidity.floppy_plane).c_str() : "-", r.network.N_u,

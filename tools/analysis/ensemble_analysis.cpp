@@ -1553,6 +1553,9 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
   // Every file is complete before any replaces its predecessor (a full disk leaves the earlier
   // output whole), and a table this ensemble cannot give does not survive from an earlier one.
   auto files = table_files(e, tables);
+  // Each table's digest, by which a later `analyse --tables` tells a table edited since.
+  J["tables_written"] = Json::object();
+  for (const auto& [name, text] : files) J["tables_written"][name] = io::hex64(io::fnv1a64(text));
   files.emplace_back("analysis.json", io::json_text(J));
   const io::Directory dir = io::Directory::open(out, true);
   io::write_atomically(dir, files);

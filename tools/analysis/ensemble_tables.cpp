@@ -3,6 +3,7 @@
 #include "analysis/jamming_states.hpp"
 #include "budjam/scene.hpp"
 #include "budjam/survival.hpp"
+#include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/run_data.hpp"
 #include "io/text.hpp"
@@ -175,6 +176,71 @@ void check_target_rows(const Ensemble& e, const std::string& source) {
     throw InputError(source + ": run " + r.dir.string() + " has " + std::to_string(r.targets.size()) +
                      " target rows where runs.csv says it landed " + io::format_double(r.target_rows) +
                      " (target_rows): rows are missing or added");
+  }
+}
+
+// The target sets of finished runs of one group: a finished run lands every target of its protocol,
+// so two that differ are not samples of one protocol (rows of targets.csv lost or added in transit;
+// a run stopped early lands a subset, which is no evidence either way).
+void check_target_sets(const Ensemble& e, const std::string& source) {
+  std::map<std::tuple<double, std::string, std::string>, const RunRow*> first;  // (L, P0, protocol) → run
+  for (const RunRow& r : e.rows) {
+    if (r.status != "finished") continue;
+    const auto [at, fresh] = first.try_emplace({r.L, r.P0_label, r.protocol}, &r);
+    if (fresh) continue;
+    const auto dphis = [](const RunRow& x) {
+      std::vector<double> d;
+      for (const auto& t : x.targets) d.push_back(t.dphi);
+      std::sort(d.begin(), d.end());
+      return d;
+    };
+    const RunRow& f = *at->second;
+    if (dphis(r) == dphis(f)) continue;
+    throw InputError(source + ": finished runs " + f.dir.string() + " and " + r.dir.string() + " of " +
+                     group_text(r.L, r.P0_label) + " have different target rows (" + std::to_string(f.targets.size()) +
+                     " and " + std::to_string(r.targets.size()) +
+                     "): a finished run lands every target of its protocol, so rows are missing or added");
+  }
+}
+
+// Two seeds of one box with one jamming state to the last bit (φ_J, N_J, its step) are one sample
+// listed twice, under two labels: a seed's random stream makes its own history.
+void check_distinct_samples(const Ensemble& e, const std::string& source) {
+  std::map<std::tuple<double, double, double, double>, const RunRow*> state;  // (L, φ_J, N_J, step_J) → run
+  for (const RunRow& r : e.rows) {
+    // (tables from before step_J, and hand-made ones, have no state to compare)
+    if (!std::isfinite(r.phi_J) || !std::isfinite(r.N_J) || !std::isfinite(r.step_J)) continue;
+    const auto [at, fresh] = state.try_emplace({r.L, r.phi_J, r.N_J, r.step_J}, &r);
+    if (fresh || at->second->seed == r.seed) continue;
+    throw InputError(source + ": run " + r.dir.string() + " (seed " + std::to_string(r.seed) +
+                     ") has the jamming state of run " + at->second->dir.string() + " (seed " +
+                     std::to_string(at->second->seed) + ") to the last bit (phi_J " + io::format_double(r.phi_J) +
+                     ", N_J " + io::format_double(r.N_J) + "): one sample under two seeds");
+  }
+}
+
+// The tables against the digests their analysis recorded (analysis.json tables_written): a table
+// edited since is analysed as given, and the report says so.
+void check_table_digests(const fs::path& dir, Ensemble& e) {
+  const fs::path aj = dir / "analysis.json";
+  const io::Json j = fs::exists(aj) ? io::read_json(aj) : io::Json::object();
+  const auto* written =
+      j.contains("tables_written") && j["tables_written"].is_object() ? &j["tables_written"] : nullptr;
+  if (!written) {
+    e.unchecked.push_back((fs::exists(aj) ? aj.string() + " records no digests of its tables (tables_written; an "
+                                                          "analysis from before them)"
+                                          : dir.string() + " has no analysis.json") +
+                          ": whether a table was edited after its analysis cannot be checked");
+    return;
+  }
+  for (const auto& [name, digest] : written->items()) {
+    const fs::path table = dir / name;
+    if (!fs::exists(table)) continue;  // a table left out is named elsewhere
+    if (digest.is_string() && digest.get<std::string>() == io::hex64(io::fnv1a64(io::read_text_file(table)))) continue;
+    e.unchecked.push_back(table.string() + " is not the table its analysis wrote (its digest differs from " +
+                          aj.string() +
+                          "): edited since, its values are taken as given and an empty cell as "
+                          "no value");
   }
 }
 
@@ -416,12 +482,15 @@ Ensemble read_ensemble_tables(const fs::path& dir) {
   Ensemble e;
   std::map<std::string, std::size_t> index;  // run → row
   read_runs(read_csv(dir / "runs.csv"), e, index);
+  check_distinct_samples(e, (dir / "runs.csv").string());
   if (fs::exists(dir / "analysis.json") && io::read_json(dir / "analysis.json").value("version", 0) == 1)
     drop_format1_averages(e);
   e.runs = e.rows.size();
   read_left_out_runs(dir / "analysis.json", e);
   read_targets(read_csv(dir / "targets.csv"), e, index);
   check_target_rows(e, (dir / "targets.csv").string());
+  check_target_sets(e, (dir / "targets.csv").string());
+  check_table_digests(dir, e);
   if (fs::exists(dir / "dos.csv"))
     read_spectra(read_csv(dir / "dos.csv"), e, index);
   else

@@ -1,5 +1,7 @@
 #include "analysis/rigidity_report.hpp"
 
+#include "budjam/errors.hpp"
+
 #include <cstdio>
 #include <ostream>
 
@@ -8,7 +10,12 @@ namespace budjam::tools {
 using io::Json;
 
 RigidityReport rigidity_report(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
-                               const ContactNetwork& net, RigidityNetwork network) {
+                               const ContactNetwork& net, RigidityNetwork network, const std::string& what) {
+  // An empty load-bearing network has no floppy-mode count to report: 0 would read as rigid.
+  if (network == RigidityNetwork::load_bearing && net.N_nr == 0)
+    throw NoResultError(what + " is not jammed: all " + std::to_string(net.N) +
+                        " cells are rattlers (N_nr = 0), so its load-bearing network is empty and has no rigidity to "
+                        "analyse; the raw network (--network raw) takes every cell's contacts");
   return {network, contacts.size(), net, analyse_rigidity(p, lobes, contacts, net, network)};
 }
 

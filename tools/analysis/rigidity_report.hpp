@@ -22,9 +22,10 @@ struct RigidityReport {
   RigidityState state;
 };
 
-// The pebble game on the packing as it is (nothing relaxed).
+// The pebble game on the packing as it is (nothing relaxed). A load-bearing network of an unjammed
+// packing (N_nr = 0) is NoResultError, its message starting with `what`.
 RigidityReport rigidity_report(const Packing& p, const Lobes& lobes, const std::vector<Contact>& contacts,
-                               const ContactNetwork& net, RigidityNetwork network);
+                               const ContactNetwork& net, RigidityNetwork network, const std::string& what);
 
 // The JSON of `budjam rigidity --json`, without the packing's file name and the timing.
 io::Json rigidity_json(const RigidityReport& report);

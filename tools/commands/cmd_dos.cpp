@@ -78,10 +78,11 @@ void run(const Options& o) {
                        "negative eigenvalue, along whose mode a pair without overlap closes, so no harmonic spectrum "
                        "describes it (docs/spectrum.md, \"Saddles\")");
   if (!report.result.energy_minimum())
-    throw cli::Finding("dos: " + o.packing + " is a saddle, not an energy minimum (" +
-                       std::to_string(report.result.stability.unstable_modes) +
-                       " unstable modes): its spectrum has negative eigenvalues (N_negative in the JSON), which are "
-                       "not counted as zero modes (docs/spectrum.md, \"Saddles\")");
+    throw cli::Finding(
+        "dos: " + o.packing + " is a saddle, not an energy minimum (" +
+        std::to_string(report.result.stability.unstable_modes) +
+        " unstable modes): its eigenvalues at or below -lambda_tol (N_negative in the JSON) are not counted "
+        "as zero modes, shallower ones are (docs/spectrum.md, \"Saddles\")");
 }
 
 const bool registered = budjam::cli::register_command(

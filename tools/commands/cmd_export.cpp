@@ -39,12 +39,16 @@ std::vector<std::string> format_names() {
   return names;
 }
 
-// A run's trajectory.xyz (any extended XYZ budjam wrote) becomes one multi-frame GSD file; its
-// frames keep the rigid clusters the run labelled them with.
-void export_trajectory(const Options& o, const std::filesystem::path& out) {
+// A trajectory's options: GSD only, and the clusters its frames carry.
+void check_trajectory_options(const Options& o) {
   if (o.format != "gsd")
     throw InputError("--format: a trajectory (" + o.packing + ") exports to gsd only (got " + o.format + ")");
   if (o.network_given) throw InputError("--network: a trajectory's frames keep the rigid clusters the run gave them");
+}
+
+// A run's trajectory.xyz (any extended XYZ budjam wrote) becomes one multi-frame GSD file; its
+// frames keep the rigid clusters the run labelled them with.
+void export_trajectory(const Options& o, const std::filesystem::path& out) {
   io::write_gsd(out, io::read_extxyz(o.packing));
 }
 
@@ -63,8 +67,7 @@ bool is_trajectory(const std::string& path) {
 // writer claims it (its lock, its entries checked: a link or another kind at trajectory.gsd is
 // refused), and the file is written relative to the run directory's descriptor, atomically, its
 // temporaries recorded in the run's list.
-void export_run_trajectory(const Options& o, const std::filesystem::path& out) {
-  if (o.format != "gsd" || o.network_given) return export_trajectory(o, out);  // refused there
+void export_run_trajectory(const Options& o) {
   std::filesystem::path dir = std::filesystem::path(o.packing).parent_path();
   if (dir.empty()) dir = ".";
   io::RunDirectory run = io::RunDirectory::resume(dir, tools::run_owned_entries());
@@ -83,12 +86,16 @@ void run(const Options& o) {
   std::filesystem::path out =
       o.out.empty() ? std::filesystem::path(o.packing).replace_extension() : std::filesystem::path(o.out);
   out += "." + o.format;
+  // A trajectory's own rules before those of its output, which (RUN/trajectory.vtk, an entry of the
+  // run) would name the wrong problem.
+  const bool trajectory = is_trajectory(o.packing);
+  if (trajectory) check_trajectory_options(o);
   // The documented default: a run's trajectory.xyz converts to the run's own trajectory.gsd.
-  if (io::is_run_trajectory_conversion(o.packing, out)) return export_run_trajectory(o, out);
+  if (io::is_run_trajectory_conversion(o.packing, out)) return export_run_trajectory(o);
   if (!o.out.empty()) io::check_output_name("--out", o.out);
   io::check_output_name("--out", out);
   io::check_not_an_input("--out", out, {o.packing});  // `export p.xyz --format xyz` with no --out
-  if (is_trajectory(o.packing)) return export_trajectory(o, out);
+  if (trajectory) return export_trajectory(o, out);
   const io::PackingFile file = io::read_packing(o.packing);
   io::write_particles(out, io::particle_frame(file, which), o.format);
 }

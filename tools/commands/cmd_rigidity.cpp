@@ -42,7 +42,8 @@ void run(const Options& o) {
   const ContactNetwork net = analyse_network(p.size(), contacts);
 
   const auto t0 = std::chrono::steady_clock::now();
-  const tools::RigidityReport report = tools::rigidity_report(p, field.lobes(), contacts, net, which);
+  const tools::RigidityReport report =
+      tools::rigidity_report(p, field.lobes(), contacts, net, which, "rigidity: " + o.packing);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   io::CommandResult result = tools::rigidity_result(report);

@@ -93,6 +93,13 @@ int main(int argc, char** argv) {
     return error("unknown command '" + std::string(argv[1]) + "' (commands: " + names + "; see budjam --help)",
                  kExitBadInput);
   }
+  // ... and a mistyped option before the subcommand (`budjam --versio`) the same way.
+  if (const std::string first = argc > 1 ? argv[1] : "";
+      first.starts_with("-") && first != "-h" && first != "--help" && first != "--version")
+    return error("unknown option '" + first +
+                     "': budjam's own options are --help and --version, a command's follow the command "
+                     "(see budjam --help)",
+                 kExitBadInput);
 
   remove_temporaries_on_fatal_signals();  // `grow` replaces them with its own while it runs
   try {

@@ -332,19 +332,19 @@ TemporaryManifest::~TemporaryManifest() {
 void TemporaryManifest::add(const std::string& relative) {
   open(true);
   ++outstanding_;
-  write_all(fd_, relative + "\n", root_.path());
+  write_all(fd_, relative + "\n", root_.path() / name_);
 }
 
 void TemporaryManifest::done() {
   if (--outstanding_ == 0 && fd_ >= 0 && ::ftruncate(fd_, 0) != 0)
-    io_fail(root_.path(), "cannot empty the temporaries list", errno);
+    io_fail(root_.path() / name_, "cannot empty the temporaries list", errno);
 }
 
 void TemporaryManifest::remove_listed() {
   if (fd_ < 0 && !root_.entry(name_)) return;  // no list: nothing was left
   open(false);
   ::lseek(fd_, 0, SEEK_SET);
-  const std::string text = read_all(fd_, root_.path());
+  const std::string text = read_all(fd_, root_.path() / name_);
   std::size_t start = 0;
   while (start < text.size()) {
     const std::size_t end = std::min(text.find('\n', start), text.size());
@@ -368,7 +368,7 @@ void TemporaryManifest::remove_listed() {
     if (!ok) continue;
     if (const auto st = d.entry(parts.back()); st && S_ISREG(st->st_mode)) d.remove(parts.back());
   }
-  if (::ftruncate(fd_, 0) != 0) io_fail(root_.path(), "cannot empty the temporaries list", errno);
+  if (::ftruncate(fd_, 0) != 0) io_fail(root_.path() / name_, "cannot empty the temporaries list", errno);
   outstanding_ = 0;
   register_own_manifest(fd_);
 }

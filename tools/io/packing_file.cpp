@@ -1,6 +1,7 @@
 #include "io/packing_file.hpp"
 
 #include "budjam/errors.hpp"
+#include "budjam/growth_driver.hpp"
 #include "budjam/packing_rules.hpp"
 #include "budjam/scene.hpp"  // the default skin
 #include "io/atomic_file.hpp"
@@ -379,6 +380,28 @@ PackingFile read_packing(const std::filesystem::path& path) {
 bool looks_like_packing(std::string_view text) {
   if (text.starts_with(kUtf8ByteOrderMark)) text.remove_prefix(kUtf8ByteOrderMark.size());  // refused by the reader
   return text.starts_with(kPackingMagic);
+}
+
+PackingMeta state_meta(const StateView& s, const std::string& kind, std::uint64_t seed, std::optional<double> dphi) {
+  PackingMeta meta;
+  meta.set("kind", kind);
+  meta.set("phase", to_string(s.phase));
+  meta.set_integer("step", s.step);
+  meta.set_integer("seed", static_cast<std::int64_t>(seed));
+  meta.set_number("phi", s.phi);
+  meta.set_number("P", s.P);
+  meta.set_number("E_per_cell", s.E_per_cell);
+  if (s.scene->P0)
+    meta.set_number("P0", *s.scene->P0);
+  else
+    meta.set("P0", "none");
+  if (s.jamming) meta.set_number("phi_J", s.jamming->phi);
+  if (dphi) meta.set_number("dphi", *dphi);
+  if (s.network) {
+    meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
+    meta.set_number("Z", s.network->Z);
+  }
+  return meta;
 }
 
 }  // namespace budjam::io

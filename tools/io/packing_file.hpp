@@ -27,6 +27,10 @@
 #include <string>
 #include <string_view>
 
+namespace budjam {
+struct StateView;
+}
+
 namespace budjam::io {
 
 inline constexpr int kPackingFormatVersion = 1;
@@ -46,6 +50,11 @@ struct PackingMeta {
   double number(const std::string& key) const;
   std::int64_t integer(const std::string& key) const;
 };
+
+// The metadata of a growth run's packing (kind, phase, step, seed, φ, P, E/N, P0, φ_J, Δφ, N_nr, Z):
+// what a run's saved packings and the packings of the Python module's growth events carry alike.
+PackingMeta state_meta(const StateView& s, const std::string& kind, std::uint64_t seed,
+                       std::optional<double> dphi = std::nullopt);
 
 struct PackingFile {
   Packing packing;

@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <regex>
 #include <stdexcept>
 
 namespace budjam::io {
@@ -198,6 +199,30 @@ void read_table(const toml::table& table, const std::string& prefix, Scene& scen
   }
 }
 
+// `key = word` on line `line` (1-based) with a bare word for its value, as in `P0 = none`: TOML
+// takes it for a malformed number or boolean; the hint names the key and the quoted form.
+std::string bare_word_hint(std::string_view text, std::size_t line) {
+  std::string section, row;
+  std::size_t at = 0;
+  for (std::size_t n = 1; at <= text.size() && n <= line; ++n) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    row = std::string(text.substr(at, end - at));
+    if (const auto l = row.find_first_not_of(" \t"); n < line && l != std::string::npos && row[l] == '[') {
+      const auto r = row.find(']', l);
+      if (r != std::string::npos) section = row.substr(l + 1, r - l - 1);
+    }
+    at = end + 1;
+  }
+  static const std::regex assignment(R"(^\s*([A-Za-z0-9_-]+)\s*=\s*([A-Za-z_][A-Za-z0-9_-]*)\s*(#.*)?\r?$)");
+  std::smatch m;
+  if (!std::regex_match(row, m, assignment)) return "";
+  const std::string word = m[2];
+  if (word == "true" || word == "false" || word == "inf" || word == "nan") return "";
+  const std::string key = m[1];
+  return (section.empty() ? "" : section + ".") + key + " = " + word + ": a text value is quoted in TOML (" + key +
+         " = \"" + word + "\"); ";
+}
+
 toml::table parse_toml(std::string_view text, const std::string& source) {
   if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
     throw InputError(source +
@@ -211,7 +236,8 @@ toml::table parse_toml(std::string_view text, const std::string& source) {
     const auto& b = err.source().begin;
     std::string what(err.description());
     std::replace(what.begin(), what.end(), '\n', ' ');
-    throw InputError(source + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " + what);
+    throw InputError(source + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " +
+                     bare_word_hint(text, b.line) + what);
   }
 }
 

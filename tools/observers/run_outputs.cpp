@@ -125,25 +125,7 @@ void RunLog::on_divided(const Divided& e) {
 
 void RunLog::write_pack(const std::string& stem, const StateView& s, const std::string& kind,
                         std::optional<double> dphi) {
-  io::PackingMeta meta;
-  meta.set("kind", kind);
-  meta.set("phase", to_string(s.phase));
-  meta.set_integer("step", s.step);
-  meta.set_integer("seed", static_cast<std::int64_t>(seed_));
-  meta.set_number("phi", s.phi);
-  meta.set_number("P", s.P);
-  meta.set_number("E_per_cell", s.E_per_cell);
-  if (s.scene->P0)
-    meta.set_number("P0", *s.scene->P0);
-  else
-    meta.set("P0", "none");
-  if (s.jamming) meta.set_number("phi_J", s.jamming->phi);
-  if (dphi) meta.set_number("dphi", *dphi);
-  if (s.network) {
-    meta.set_integer("N_nr", static_cast<std::int64_t>(s.network->N_nr));
-    meta.set_number("Z", s.network->Z);
-  }
-  io::write_packing(packings(), stem + ".pack", *s.packing, meta);
+  io::write_packing(packings(), stem + ".pack", *s.packing, io::state_meta(s, kind, seed_, dphi));
 }
 
 void RunLog::on_unjammed(const Unjammed&) {
