@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -76,7 +77,7 @@ TEST_CASE("the resume harness reaches the checks against the run's files", "[fuz
     budjam::io::CheckpointLines lines;
     const budjam::GrowthState s =
         budjam::io::parse_checkpoint(budjam::fuzz::with_checksum(t), "fuzz.txt", scene, scene.seed, observers, &lines);
-    budjam::io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.divisions,
+    budjam::io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.changes, run_log.divisions,
                                   dir.subdirectory("packings", false));
   };
   CHECK_NOTHROW(check(good));
@@ -87,6 +88,23 @@ TEST_CASE("the resume harness reaches the checks against the run's files", "[fuz
   const std::size_t phi = bad.find(' ', bad.find(' ', bad.find(' ', bad.find(' ', at + 1) + 1) + 1) + 1) + 1;
   bad[phi + 3] = bad[phi + 3] == '1' ? '2' : '1';
   CHECK_THROWS_WITH(check(bad), Catch::Matchers::Contains("disagrees with packings/jammed.pack"));
+  // The unjamming record's step, φ or φ_J moved: only the phase column of steps.csv can tell.
+  const std::size_t record = good.find('\n', good.find("\nunjammings 1\n") + 1) + 1;
+  const std::string line = good.substr(record, good.find('\n', record) - record);  // "0 <step> <phi> <phi_J> <lost>"
+  std::istringstream words(line);
+  std::string episode, step, phi_u, phi_J, lost;
+  REQUIRE(words >> episode >> step >> phi_u >> phi_J >> lost);
+  auto with_record = [&](const std::string& s, const std::string& x, const std::string& x_J) {
+    return good.substr(0, record) + episode + ' ' + s + ' ' + x + ' ' + x_J + ' ' + lost +
+           good.substr(record + line.size());
+  };
+  CHECK_NOTHROW(check(with_record(step, phi_u, phi_J)));
+  const std::string earlier = std::to_string(std::stol(step) - 1);
+  const std::string at_line = "fuzz.txt:" + std::to_string(std::count(good.begin(), good.begin() + record, '\n') + 1);
+  for (const std::string& t : {with_record(earlier, phi_u, phi_J), with_record(step, "0.8" + phi_u.substr(4), phi_J),
+                               with_record(step, phi_u, "0.8" + phi_J.substr(4))})
+    CHECK_THROWS_WITH(check(t), Catch::Matchers::Contains(at_line + ": unjamming 0 at step") &&
+                                    Catch::Matchers::Contains("steps.csv.partial jams at step"));
 }
 
 TEST_CASE("the degenerate-packing harness passes on its corpus and reproducers", "[fuzz][.hard]") {

@@ -553,6 +553,7 @@ void read_unjammings(Parse& p, const Words& w) {
             " jamming episodes have ended");
   for (std::size_t k = 0; k < n; ++k) {
     const auto u_w = in.next("", 5);
+    p.where.unjammings.push_back(in.line());
     UnjamRecord u;
     u.episode =
         static_cast<int>(in.integer(u_w[0], "episode", static_cast<std::int64_t>(k), static_cast<std::int64_t>(k)));
@@ -897,6 +898,40 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
 
 // ---- the checkpoint against the run's logs and packings ----------------------------------------
 
+std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::string& file) {
+  auto fields = [](std::string_view line) {
+    std::vector<std::string_view> f;
+    for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1)
+      f.push_back(line.substr(at, (end = line.find(',', at)) - at));
+    return f;
+  };
+  std::size_t at = std::min(steps_text.find('\n'), steps_text.size());
+  const std::vector<std::string_view> columns = fields(steps_text.substr(0, at));
+  auto column = [&](std::string_view name) {
+    const auto c = std::find(columns.begin(), columns.end(), name);
+    if (c == columns.end()) throw InputError(escape_control(file + ":1: no column " + std::string(name)));
+    return static_cast<std::size_t>(c - columns.begin());
+  };
+  const std::size_t step = column("step"), phi = column("phi"), phase = column("phase");
+  std::vector<PhaseChange> changes;
+  Phase previous = Phase::unjammed;  // a run never starts jammed
+  for (std::size_t line = 2; at + 1 < steps_text.size(); ++line) {
+    const std::size_t end = std::min(steps_text.find('\n', at + 1), steps_text.size());
+    const std::vector<std::string_view> f = fields(steps_text.substr(at + 1, end - at - 1));
+    at = end;
+    const bool whole = f.size() == columns.size();
+    const auto n = whole ? parse_int64(f[step]) : std::nullopt;
+    const auto x = whole ? parse_double(f[phi]) : std::nullopt;
+    const std::string_view p = whole ? f[phase] : std::string_view();
+    if (!n || !x || (p != to_string(Phase::jammed) && p != to_string(Phase::unjammed)))
+      throw InputError(escape_control(file + ":" + std::to_string(line) + ": not a row with a step, phi and phase"));
+    const Phase now = p == to_string(Phase::jammed) ? Phase::jammed : Phase::unjammed;
+    if (now != previous) changes.push_back({static_cast<long>(*n), *x, now});
+    previous = now;
+  }
+  return changes;
+}
+
 namespace {
 
 // One checkpoint record against the packing saved with it.
@@ -924,10 +959,45 @@ struct RecordCheck {
   }
 };
 
+// Jamming episodes alternate in steps.csv: the k-th change to jammed is episode k's jamming point,
+// the k-th change back its unjamming, and the last row is in the checkpoint's phase.
+template <class Fail>
+void check_phase_changes(const GrowthState& s, const CheckpointLines& at, const std::vector<PhaseChange>& changes,
+                         Fail fail) {
+  const std::string steps_name = std::string(run_files::steps) + ".partial";
+  const RunResult& r = s.result;
+  const std::size_t jammings = (changes.size() + 1) / 2, unjammings = changes.size() / 2;
+  if (jammings != static_cast<std::size_t>(s.episodes) || unjammings != r.unjammings.size())
+    fail(at.state, std::to_string(s.episodes) + " jamming episodes with " + std::to_string(r.unjammings.size()) +
+                       " unjammings, but the phase column of " + steps_name + " changes to jammed " +
+                       std::to_string(jammings) + " and back " + std::to_string(unjammings) +
+                       " times up to the recorded length");
+  const Phase last = changes.empty() ? Phase::unjammed : changes.back().to;
+  if (last != s.phase)
+    fail(at.state,
+         "phase " + std::string(to_string(s.phase)) + ", but the last row of " + steps_name + " is " + to_string(last));
+  auto describe = [&](const PhaseChange& c) {
+    return "step " + std::to_string(c.step) + " at phi = " + format_double(c.phi);
+  };
+  for (std::size_t k = 0; k < r.unjammings.size(); ++k) {
+    const UnjamRecord& u = r.unjammings[k];
+    const PhaseChange &jam = changes[2 * k], &unjam = changes[2 * k + 1];
+    if (u.step != unjam.step || u.phi != unjam.phi || u.phi_J != jam.phi)
+      fail(at.unjammings[k], "unjamming " + std::to_string(k) + " at step " + std::to_string(u.step) + ", phi = " +
+                                 format_double(u.phi) + " from phi_J = " + format_double(u.phi_J) + ", but " +
+                                 steps_name + " jams at " + describe(jam) + " and unjams at " + describe(unjam));
+  }
+  if (r.jamming && (r.jamming->step != changes.back().step || r.jamming->phi != changes.back().phi))
+    fail(at.jamming, "jamming point at step " + std::to_string(r.jamming->step) +
+                         ", phi = " + format_double(r.jamming->phi) + ", but " + steps_name + " jams at " +
+                         describe(changes.back()));
+}
+
 }  // namespace
 
 void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
-                       const CsvLog::Cut& steps, const CsvLog::Cut& divisions, const Directory& packings) {
+                       const CsvLog::Cut& steps, const std::vector<PhaseChange>& changes, const CsvLog::Cut& divisions,
+                       const Directory& packings) {
   auto fail = [&](std::size_t line, const std::string& what) {
     throw InputError(escape_control(file + ":" + std::to_string(line) + ": " + what));
   };
@@ -995,6 +1065,7 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
     common(c, r.depletion->step, r.depletion->phi, r.depletion->P);
     c.network(r.depletion->network);
   }
+  check_phase_changes(s, at, changes, [&](std::size_t line, const std::string& what) { fail(line, what); });
 }
 
 GrowthState read_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, std::uint64_t seed,

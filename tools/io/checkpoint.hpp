@@ -52,7 +52,8 @@ class CheckpointSchedule {
 struct CheckpointLines {
   std::string blas;
   std::size_t state = 0, counters = 0, jamming = 0, depletion = 0;
-  std::vector<std::size_t> targets;  // one per target record
+  std::vector<std::size_t> targets;     // one per target record
+  std::vector<std::size_t> unjammings;  // one per unjamming record
   struct Tag {
     std::int64_t id = 0;
     double b2_J = 0;  // its bud's b² at jamming
@@ -86,14 +87,27 @@ void write_checkpoint(const Directory& dir, std::string_view name, const Scene& 
 GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
                              const std::vector<Observer*>& observers, CheckpointLines* lines = nullptr);
 
+// A change of phase between two rows of steps.csv: the first step in the new phase, with its φ.
+struct PhaseChange {
+  long step = 0;
+  double phi = 0;
+  Phase to = Phase::unjammed;
+};
+
+// The phase changes of a steps.csv text (its header, then rows; `file` names it in messages):
+// InputError "<file>:<line>: ..." for a row without a step, φ and phase.
+std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::string& file);
+
 // InputError "<file>:<line>: ..." (`file` the checkpoint, `at` where parse_checkpoint found its
 // records) unless the checkpointed state `s` agrees with what the run's other files hold: the
 // step and division counters with the rows of steps.csv and divisions.csv up to their recorded
-// lengths (`steps`, `divisions`: CsvLog::check_resumable), each record (jamming point, targets,
-// φ_2) with the packing saved with it in `packings`, the scene's P0 and the seed with each of
-// those packings, and each tagged bud's size at jamming with packings/jammed.pack.
+// lengths (`steps`, `divisions`: CsvLog::check_resumable), the jamming and unjamming records and
+// the phase with the phase changes of those rows (`changes`, in step order), each record (jamming
+// point, targets, φ_2) with the packing saved with it in `packings`, the scene's P0 and the seed
+// with each of those packings, and each tagged bud's size at jamming with packings/jammed.pack.
 void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
-                       const CsvLog::Cut& steps, const CsvLog::Cut& divisions, const Directory& packings);
+                       const CsvLog::Cut& steps, const std::vector<PhaseChange>& changes, const CsvLog::Cut& divisions,
+                       const Directory& packings);
 
 // parse_checkpoint of the file `name` in `dir` (a link is not followed).
 GrowthState read_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, std::uint64_t seed,

@@ -56,9 +56,16 @@ const io::CsvLog::Cut& CsvLogObserver::resumed_cut(std::size_t k) const {
   return cuts_[k];
 }
 
+std::string CsvLogObserver::resumed_file(std::size_t k) const {
+  return (dir_ / io::interrupted_log_file(dir_, specs_.at(k).name)).string();
+}
+
+std::string CsvLogObserver::resumed_text(std::size_t k) const {
+  return io::read_text_file(dir_, io::interrupted_log_file(dir_, specs_.at(k).name)).substr(0, resumed_cut(k).bytes);
+}
+
 std::vector<std::string> CsvLogObserver::resumed_rows(std::size_t k) const {
-  const std::string text =
-      io::read_text_file(dir_, io::interrupted_log_file(dir_, specs_.at(k).name)).substr(0, resumed_cut(k).bytes);
+  const std::string text = resumed_text(k);
   std::vector<std::string> rows;
   std::size_t at = text.find('\n') + 1;  // after the header
   for (std::size_t end; (end = text.find('\n', at)) != std::string::npos; at = end + 1)
@@ -67,8 +74,7 @@ std::vector<std::string> CsvLogObserver::resumed_rows(std::size_t k) const {
 }
 
 void CsvLogObserver::refuse_resumed(std::size_t k, const std::string& what) const {
-  throw InputError(
-      io::escape_control((dir_ / io::interrupted_log_file(dir_, specs_.at(k).name)).string() + ": " + what));
+  throw InputError(io::escape_control(resumed_file(k) + ": " + what));
 }
 
 bool due_every(const Schedule& schedule, const StateView& s) {

@@ -38,6 +38,9 @@ class CsvLogObserver : public Observer {
   io::CsvLog& log(std::size_t k = 0);
   // What load_state found in the k-th log up to its recorded length; std::logic_error before.
   const io::CsvLog::Cut& resumed_cut(std::size_t k) const;
+  // The k-th log's file and its text up to the recorded length (after load_state), header included.
+  std::string resumed_file(std::size_t k) const;
+  std::string resumed_text(std::size_t k) const;
   // The rows of the k-th log up to its recorded length (after load_state), one string each.
   std::vector<std::string> resumed_rows(std::size_t k) const;
   // InputError "<dir>/<log>.partial: <what>", for check_resumed.

@@ -40,13 +40,16 @@ class RunLog : public CsvLogObserver {
 
   // After load_state: InputError "<checkpoint>:<line>: ..." unless the checkpointed state `s`
   // agrees with what this log and the packings hold: the step and division counters with the
-  // rows of steps.csv and divisions.csv up to their recorded lengths, each record (jamming point,
-  // targets, φ_2) with its saved packing, the scene's P0 and the seed with every such packing,
+  // rows of steps.csv and divisions.csv up to their recorded lengths, the jamming and unjamming
+  // records with the phase changes of those steps, each record (jamming point, targets, φ_2) with
+  // its saved packing, the scene's P0 and the seed with every such packing,
   // and each tagged bud's size at jamming with the jammed packing.
   void check_resumed_state(const GrowthState& s, const Scene& scene, const io::CheckpointLines& at,
                            const std::string& checkpoint_file) const;
 
  private:
+  // The phase changes of steps.csv up to its recorded length (after load_state).
+  std::vector<io::PhaseChange> resumed_phase_changes() const;
   void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
   // Opened when used: a resume refused for another reason must not find packings/ created.
   io::Directory packings() const { return run_dir_.subdirectory(io::run_files::packings); }
