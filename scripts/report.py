@@ -56,10 +56,22 @@ def n_text(n):
     return f"{n:g}" if isinstance(n, (int, float)) and not isinstance(n, bool) and math.isfinite(n) else "?"
 
 
+def censored(stat):
+    """Why a statistic of a state that some runs stopped before (φ_2, no tagged bud left) has no value, or None:
+    `budjam analyse` keeps such a statistic only where every run of the group reached the state."""
+    c = (stat or {}).get("censored")
+    if not c:
+        return None
+    n = stat.get("n") or 0
+    return f"not measured: {n} of {n + c} runs reached this state, the others stopped first (right-censored)"
+
+
 def pm(stat, key="mean"):
     """'x ± se (n)' from a {mean|median, se, n} object (no ± from fewer than 5 samples). A statistic over values
     that come in seeds (the targets of runs; `budjam analyse` counts them in "values" or "targets") has n = seeds,
     the independent samples, and says how many values they hold."""
+    if censored(stat):
+        return censored(stat)
     if not stat or stat.get(key) is None:
         return "not measured"
     s = fmt(stat[key])
@@ -67,6 +79,26 @@ def pm(stat, key="mean"):
         s += " ± " + fmt(stat["se"], 2)
     held = next((f" seeds, {stat[k]} {k}" for k in ("values", "targets") if stat.get(k) is not None), "")
     return s + f" (n={n_text(stat.get('n'))}{held})"
+
+
+def isostatic_text(iso):
+    """The packings at jamming counted: ΔZ_J N_nr/2 is a whole number of contacts."""
+    if not iso or not iso.get("packings"):
+        return "isostatic packings not counted"
+    k, n, most = iso["isostatic"], iso["packings"], iso.get("most_excess_contacts", 0)
+    return (f"{k} of {n} packings isostatic (ΔZ_J N_nr/2 = 0 contacts)" +
+            (f", the others off by up to {abs(most)} {'contact' if abs(most) == 1 else 'contacts'} "
+             f"({'more' if most > 0 else 'fewer'})" if k < n else ""))
+
+
+def isostatic_verdict(iso):
+    """ΔZ_J ≈ 0 claims a jamming point isostatic: the fraction of isostatic packings judged against 1 by the
+    proportion rule. A z-score of the mean ΔZ_J is no test: with k packings off and the rest at 0 it is √k,
+    whatever their excess."""
+    if not iso or not iso.get("packings"):
+        return verdicts.Verdict("inconclusive", "isostatic packings not counted")
+    return verdicts.proportion(iso["isostatic"] / iso["packings"], iso["packings"], verdicts.interval(1.0, 1.0),
+                               n_paper=verdicts.THEORY)
 
 
 def growth_bulk(stat):
@@ -90,7 +122,7 @@ JAMMING_SIZE_COLUMNS = [("u_J", "u_J (buds)"), ("u_J_lobes", "u_J (lobes)"), ("p
 
 
 def cell_pm(c):
-    return pm({"mean": c.get("value"), "se": c.get("se"), "n": c.get("n")})
+    return pm({"mean": c.get("value"), "se": c.get("se"), "n": c.get("n"), "censored": c.get("censored")})
 
 
 def limit_text(x):
@@ -189,6 +221,8 @@ def depletion_size_rows(entries):
 
 def ci(stat):
     """'median ± bootstrap SE [95% CI lo, hi] (n)' (no SE or interval from fewer than 5 samples)."""
+    if censored(stat):
+        return censored(stat)
     if not stat or stat.get("median") is None:
         return "not measured"
     lo, hi = stat.get("ci95") or (None, None)
@@ -294,6 +328,8 @@ def judged(stat, claim, key="mean", n_paper=None, seeds=None):
     """The verdict of the one rule (scripts/verdicts.py) on a {mean|median, se, n} statistic; the paper's
     sample is n_paper, or for a statistic of the grid that budjam grew with `seeds` seeds per point,
     paper_n(n, seeds)."""
+    if censored(stat):
+        return verdicts.Verdict("inconclusive", censored(stat))
     if not stat or stat.get(key) is None:
         return verdicts.Verdict("inconclusive", "not measured")
     if n_paper is None and seeds is not None:
@@ -486,12 +522,12 @@ def main():
         if shared:
             jam = {**jam, **{k: by_seed(jam.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}
         jam_src = f"jamming ensemble, L = {jam_L}, " + ("errors by seed" if shared else "independent seeds")
-        dzj = jam_groups.get(jam_L, {}).get("dZ_J")
+        dzj, iso = (jam_groups.get(jam_L, {}).get(k) for k in ("dZ_J", "isostatic_J"))
     else:
         # a seed's runs share their growth up to the first jamming, so its jamming states are one sample
         jam, jam_L = {**M, **{k: by_seed(M.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}, L
         jam_src = f"this preset's runs at L = {L:g} (no jamming ensemble given; errors by seed)"
-        dzj = groups.get("none", {}).get("dZ_J")
+        dzj, iso = (groups.get("none", {}).get(k) for k in ("dZ_J", "isostatic_J"))
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
           f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",
           "same: the paper's u_J counts the buds free at jamming over N_nr",
@@ -514,7 +550,7 @@ def main():
           f"{fmt(C['P_max_formula_phiJ_0.84'])} (φ_J=0.84); {pm(pmax)} with the measured φ_J", "same",
           judged(pmax, verdicts.quoted(0.1, 0.1), n_paper=PAPER_SEEDS), "—")
     claim("Modified Maxwell count at jamming: ΔZ_J = Z_J − Z_iso(u_J) ≈ 0 (Eqs. 3, 5)", "marginal",
-          f"{pm(dzj)} ({jam_src})", "same", judged(dzj, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY), "—")
+          f"{pm(dzj)} ({jam_src}); {isostatic_text(iso)}", "same", isostatic_verdict(iso), "—")
     ident = M["dZ_identity"]
     unrep = ident.get("per_P0_unrepopulated_by_run", [])
     vs = [judged(x, verdicts.quoted(0.0, 0.0), n_paper=verdicts.THEORY) for x in unrep]

@@ -111,6 +111,33 @@ std::string refused_tables(const fs::path& a, const std::string& out_name) {
 
 double number(const std::string& s) { return s.empty() ? NAN : std::stod(s); }
 
+// Rewrites the CSV file `csv` row by row: `edit` gets each data row's fields (numbered from 1) and the header.
+void edit_rows(const fs::path& csv, const std::function<void(int row, std::vector<std::string>& fields,
+                                                             const std::vector<std::string>& header)>& edit) {
+  std::istringstream in(slurp(csv));
+  std::string line, t;
+  std::vector<std::string> header;
+  for (int n = 0; std::getline(in, line); ++n) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (!line.empty() && line.back() == ',') f.emplace_back();
+    if (n == 0)
+      header = f;
+    else
+      edit(n, f, header);
+    for (std::size_t k = 0; k < f.size(); ++k) t += (k ? "," : "") + f[k];
+    t += "\n";
+  }
+  std::ofstream(csv, std::ios::trunc) << t;
+}
+
+std::size_t column_of(const std::vector<std::string>& header, const std::string& name) {
+  const auto c = std::find(header.begin(), header.end(), name);
+  REQUIRE(c != header.end());
+  return static_cast<std::size_t>(c - header.begin());
+}
+
 }  // namespace
 
 TEST_CASE("analyse tables carry each run's own φ_J, u_J, φ_2 and the G of its moduli files", "[analyse]") {
@@ -752,25 +779,79 @@ TEST_CASE("analyse --tables names a table edited after its analysis in inputs.un
   };
   CHECK(unchecked(work_dir() / "digest_same").find("is not the table its analysis wrote") == std::string::npos);
   // one value changed (the first run's u_J, a digit appended): analysed as given, and named
-  std::istringstream in(slurp(a / "runs.csv"));
-  std::string line, t;
-  long column = -1;
-  for (int n = 0; std::getline(in, line); ++n) {
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-    if (!line.empty() && line.back() == ',') f.emplace_back();
-    if (n == 0) column = std::find(f.begin(), f.end(), "u_J") - f.begin();
-    if (n == 1) f[column] += "7";
-    for (std::size_t k = 0; k < f.size(); ++k) t += (k ? "," : "") + f[k];
-    t += "\n";
-  }
-  std::ofstream(a / "runs.csv") << t;
+  edit_rows(a / "runs.csv", [](int row, auto& f, const auto& header) {
+    if (row == 1) f[column_of(header, "u_J")] += "7";
+  });
   REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(work_dir() / "digest_edited") + " --main-L 6").code ==
           0);
   const std::string names = unchecked(work_dir() / "digest_edited");
   CHECK(names.find((a / "runs.csv").string() + " is not the table its analysis wrote") != std::string::npos);
   CHECK(names.find("targets.csv is not the table") == std::string::npos);
+}
+
+TEST_CASE("analyse keeps a statistic of phi_2 or of the none-left state only where every run of the group reached it",
+          "[analyse]") {
+  // A run that stopped before a state (its last target, a step limit) would have reached it late: a
+  // mean over the runs that did reach it is biased, so the group's value is withheld, the runs that
+  // stopped first counted.
+  const fs::path a = analysed("censored_runs");
+  auto group = [](const fs::path& out) {
+    const auto j = budjam::io::read_json(out / "analysis.json");
+    for (const auto& g : j.at("groups"))
+      if (!g.at("P0").is_null()) return g;
+    FAIL("no feedback group");
+    return budjam::io::Json();
+  };
+  const auto all = group(a);
+  REQUIRE(all.at("runs") == 2);
+  REQUIRE(all.at("dphi_2").at("n") == 2);  // both runs reached φ_2
+  CHECK(all.at("dphi_2").at("mean").is_number());
+  CHECK(!all.at("dphi_2").contains("censored"));
+  // the none-left state: a mean where both reached it, else none and the run that stopped first counted
+  const auto& none_left = all.at("dphi_2_none_left");
+  CHECK(none_left.at("n").get<int>() + none_left.value("censored", 0) == 2);
+  CHECK(none_left.at("mean").is_number() == (none_left.at("n") == 2));
+  // The second run stopped before either state: its φ_2 and none-left columns blank.
+  edit_rows(a / "runs.csv", [](int, auto& f, const auto& header) {
+    if (f[column_of(header, "P0")].empty() || f[column_of(header, "seed")] != "4") return;
+    // what a run that ends before φ_2 leaves empty (its jamming and target columns kept)
+    for (const char* c : {"phi_2",
+                          "dphi_2",
+                          "P_2",
+                          "Z_2",
+                          "dZ_2",
+                          "u_2",
+                          "N_div_2",
+                          "chi_bar",
+                          "lambda_bar",
+                          "phi_2_none_left",
+                          "dphi_2_none_left",
+                          "P_2_none_left",
+                          "N_div_2_none_left",
+                          "a_eps",
+                          "integral_S",
+                          "dphi_2_pred_area",
+                          "dphi_2_pred_diameter_sq",
+                          "B_2",
+                          "G_2",
+                          "G_2_energy",
+                          "G_min_2",
+                          "G_2_none_left"})
+      f[column_of(header, c)].clear();
+  });
+  const fs::path out = work_dir() / "censored_out";
+  REQUIRE(run_budjam("analyse --tables " + q(a) + " --out " + q(out) + " --main-L 6").code == 0);
+  const auto cut = group(out);
+  for (const char* key :
+       {"dphi_2", "phi_2", "P_2", "G_2", "N_div_2_over_N_J", "dphi_2_none_left", "N_div_2_over_N_J_paper"}) {
+    INFO(key);
+    CHECK(cut.at(key).at("censored").get<int>() >= 1);
+    CHECK(cut.at(key).at("n").get<int>() + cut.at(key).at("censored").get<int>() == 2);
+    CHECK(cut.at(key).value("mean", budjam::io::Json()).is_null());
+    CHECK(cut.at(key).value("median", budjam::io::Json()).is_null());
+  }
+  CHECK(cut.at("u_J").at("n") == 2);  // the jamming point: every run reached it
+  CHECK(cut.at("u_J").at("mean").is_number());
 }
 
 TEST_CASE("analyse --tables refuses a target of a run runs.csv does not list: exit 2, one line naming file and line",

@@ -1,6 +1,7 @@
 """scripts/report.py on hand-built inputs: the stored analysis.json of the quick reference with its
 sample counts, errors and values changed. No error bar, interval or verdict from fewer than 5 samples,
 no traceback, and every z with the combined error of the verdict rule."""
+import csv
 import json
 import math
 import os
@@ -12,6 +13,8 @@ import pytest
 
 SRC = os.environ.get("BUDJAM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 REF = os.path.join(SRC, "data", "reference")
+sys.path.insert(0, os.path.join(SRC, "scripts"))
+import verdicts  # noqa: E402
 
 
 def load(path):
@@ -114,8 +117,14 @@ def test_without_a_jamming_ensemble_the_jamming_rows_count_seeds_not_states(tmp_
     assert "(n=20)" in row and "0.0088" in row and "n=49" not in row, row
 
 
+def reanalysed_jamming():
+    """The jamming ensembles as this build's `analyse --tables` computes them (the stored tables predate
+    the isostatic count)."""
+    return load(os.path.join(REF, "jamming", "reanalysed", "analysis.json"))
+
+
 def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_none(tmp_path):
-    A, J = quick()
+    A, J = quick()[0], reanalysed_jamming()
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
     # n_J ≃ 0.775 is a number the paper measured on its 20 seeds: σ = s_b √(1 + n_b/20)
@@ -123,11 +132,13 @@ def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_n
     row = next(line for line in out.splitlines() if line.startswith("| Nonrattler density at jamming"))
     sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     assert math.isclose(sigma, nj["se"] * math.sqrt(1 + nj["n"] / 20), rel_tol=0.05), row
-    # ΔZ_J = 0 is what the theory predicts, no number of the paper's sample: σ = s_b
-    dz = J["groups"][[g["L"] for g in J["groups"]].index(15)]["dZ_J"]
+    # ΔZ_J = 0 (every packing isostatic) is what the theory predicts, no number of the paper's sample: σ is
+    # budjam's own, that of the isostatic fraction at its boundary 1 (Wilson's half-width over 1.96)
+    iso = J["groups"][[g["L"] for g in J["groups"]].index(15)]["isostatic_J"]
     row = next(line for line in out.splitlines() if line.startswith("| Modified Maxwell count"))
     sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
-    assert math.isclose(sigma, dz["se"], rel_tol=0.05), row
+    lo, hi = verdicts.wilson(iso["fraction"], iso["packings"])
+    assert math.isclose(sigma, (hi - lo) / (2 * 1.96), rel_tol=0.05), row
 
 
 def tally_and_cells(out):
@@ -698,3 +709,36 @@ def test_kaplan_meier_without_survival_records_says_not_measured(tmp_path):
     assert r.returncode == 0, r.stderr
     row = row_of(out, "Kaplan–Meier a_ε")
     assert "not measured (no survival records)" in row and "completions" not in row.split(" | ")[2], row
+
+
+def test_a_state_some_runs_stopped_before_is_not_measured_and_not_judged(tmp_path):
+    # analysis.json keeps no value of φ_2 or of the none-left state where runs stopped first (right-censored)
+    A = paper_tables()
+    g = next(g for g in A["groups"] if g["L"] == 20 and g["P0_label"] == "0.001")
+    for key in ("N_div_2_over_N_J", "N_div_2_over_N_J_paper"):
+        g[key] = {**g[key], "n": 12, "median": None, "se": None, "ci95": [None, None], "censored": 8}
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0, r.stderr
+    cells = row_of(out, "Median N_div(φ_2)/N_J, P0=0.001, L = 20").split(" | ")
+    for cell in cells[2:4]:
+        assert "not measured: 12 of 20 runs reached this state" in cell, cell
+    assert cells[4].startswith("inconclusive") and "right-censored" in cells[4], cells[4]
+
+
+def test_the_isostatic_count_is_what_the_jamming_tables_hold_and_its_verdict_counts_packings(tmp_path):
+    A, J = quick()[0], reanalysed_jamming()
+    with open(os.path.join(REF, "jamming", "tables", "runs.csv"), newline="") as f:
+        rows = [r for r in csv.DictReader(f) if float(r["L"]) == 15 and r["dZ_J"]]
+    excess = [round(float(r["dZ_J"]) * float(r["N_nr_J"]) / 2) for r in rows]
+    iso = next(g for g in J["groups"] if g["L"] == 15)["isostatic_J"]
+    assert (iso["packings"], iso["isostatic"]) == (len(excess), excess.count(0))
+    row = lambda out: row_of(out, "Modified Maxwell count at jamming")
+    r, out = report(tmp_path, A, J)
+    assert r.returncode == 0, r.stderr
+    assert f"{excess.count(0)} of {len(excess)} packings isostatic" in row(out)
+    # the verdict counts packings off isostatic, whatever their excess (a z of the mean would be 1 here)
+    g = next(g for g in J["groups"] if g["L"] == 15)
+    for k, most, word in ((199, 1, "confirmed"), (199, 40, "confirmed"), (150, 1, "not confirmed")):
+        g["isostatic_J"] = {"fraction": k / 200, "packings": 200, "isostatic": k, "most_excess_contacts": most}
+        r, out = report(fresh(tmp_path, f"iso{k}_{most}"), A, J)
+        assert row(out).split(" | ")[4].startswith(word + " ("), row(out)

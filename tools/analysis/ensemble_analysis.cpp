@@ -86,6 +86,27 @@ Json fraction_json(std::size_t k, std::size_t n) {
   return Json{{"fraction", n ? Json(static_cast<double>(k) / static_cast<double>(n)) : Json(nullptr)}, {"packings", n}};
 }
 
+// ΔZ_J N_nr / 2 is a whole number of contacts (Z_iso = 6 − 2u − 2/N_nr), so the claim ΔZ_J ≈ 0 is
+// that a jamming point is isostatic, and its packings are counted rather than averaged: a mean of
+// counts that are all 0 but k has SE = mean/√k, z = √k whatever the excess.
+Json isostatic_json(const std::vector<const RunRow*>& rs) {
+  std::size_t n = 0, isostatic = 0;
+  long most = 0;  // the largest excess, in contacts, of a packing that is not isostatic
+  for (const auto* r : rs) {
+    if (!std::isfinite(r->dZ_J) || !std::isfinite(r->N_nr_J)) continue;
+    const long excess = std::lround(r->dZ_J * r->N_nr_J / 2);
+    ++n;
+    if (excess == 0)
+      ++isostatic;
+    else if (std::abs(excess) > std::abs(most))
+      most = excess;
+  }
+  Json j = fraction_json(isostatic, n);
+  j["isostatic"] = isostatic;
+  j["most_excess_contacts"] = most;
+  return j;
+}
+
 std::vector<double> dphi_grid() {
   std::vector<double> g;
   for (int k = 0; k <= 40; ++k) g.push_back(1e-4 * std::pow(10.0, 3.2 * k / 40.0));  // 1e-4 … ≈0.16
@@ -443,6 +464,45 @@ RunRow extract(const tools::RunData& r, bool need_moduli, ModuliFiles& moduli_fo
 std::vector<double> finite(std::vector<double> v) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
   return v;
+}
+
+// A state a run reaches at a time of its own (φ_2, the first state with no tagged bud left) is
+// right-censored in the runs that stopped before it (at their last target or step limit): they are
+// the runs that would have reached it latest, so a statistic over the runs that did reach it is
+// biased (Δφ_2 low). Such statistics of a group are kept only where every run reached the state;
+// else their values are null and "censored" counts the runs that stopped first.
+constexpr const char* kAtPhi2[] = {"dphi_2",
+                                   "phi_2",
+                                   "dphi_2_pred_area",
+                                   "dphi_2_pred_diameter_sq",
+                                   "dphi_2_pred_minus_sim_area",
+                                   "a_eps",
+                                   "chi_bar",
+                                   "lambda_bar",
+                                   "P_2",
+                                   "P_2_over_Pmax",
+                                   "P_2_median",
+                                   "a_eps_area",
+                                   "dZ_2",
+                                   "u_2",
+                                   "G_2",
+                                   "G_2_mean",
+                                   "G_2_energy",
+                                   "G_2_over_Pmax",
+                                   "G_2_over_P_2",
+                                   "N_div_2_over_N_J"};
+constexpr const char* kAtNoneLeft[] = {"dphi_2_none_left", "G_2_over_Pmax_none_left", "N_div_2_over_N_J_paper"};
+
+template <std::size_t K>
+void censor_unreached(Json& group, const char* const (&keys)[K], std::size_t reached, std::size_t runs) {
+  if (reached == runs) return;
+  for (const char* key : keys) {
+    Json& stat = group[key];
+    for (const char* value : {"mean", "median", "se", "q25", "q75"})
+      if (stat.contains(value)) stat[value] = nullptr;
+    if (stat.contains("ci95")) stat["ci95"] = Json::array({nullptr, nullptr});
+    stat["censored"] = runs - reached;
+  }
 }
 
 Json mean_se_json(const std::vector<double>& v0) {
@@ -892,6 +952,7 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_nr_J"] = mean_se_json(collect(rs, [](auto& r) { return r.N_nr_J; }));
   g["Z_J"] = mean_se_json(collect(rs, [](auto& r) { return r.Z_J; }));
   g["dZ_J"] = mean_se_json(collect(rs, [](auto& r) { return r.dZ_J; }));
+  g["isostatic_J"] = isostatic_json(rs);
   g["lc2_J"] = mean_se_json(collect(rs, [](auto& r) { return r.lc2_J; }));
   g["dphi_2"] = mean_se_json(collect(dep, [](auto& r) { return r.dphi_2; }));
   g["phi_2"] = mean_se_json(collect(dep, [](auto& r) { return r.phi_2; }));
@@ -935,6 +996,8 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
   g["N_div_2_over_N_J"] = median_json(collect(dep, [NJ](auto& r) { return r.N_div_2 / NJ; }), bo);
   g["N_div_2_over_N_J_paper"] =
       median_json(collect(rs, [N_J_first_size](auto& r) { return r.N_div_2_none_left / N_J_first_size; }), bo);
+  censor_unreached(g, kAtPhi2, dep.size(), rs.size());
+  censor_unreached(g, kAtNoneLeft, g["depleted_none_left"].get<std::size_t>(), rs.size());
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   // the paper's figure: mean ± SE over runs, every cell of a run

@@ -49,6 +49,7 @@ Json cell(const Json& entry, const Quantity& q) {
   // n: the independent samples, the seeds where states share them (states_json)
   return Json{{"value", v.value(q.value_field, Json())},
               {"se", v.value("se", Json())},
+              {"censored", v.value("censored", 0)},
               {"n", std::min(v.value("n", 0), v.value("seeds", v.value("n", 0)))}};
 }
 
