@@ -426,6 +426,23 @@ def main():
                      "(make -f Makefile.analysis -j2 PRESET=jamming analysis writes one)")
         with open(path) as f:
             AJ = json.load(f)
+    # The jamming rows come from the ensemble only if its runs are of the jamming model of these runs (the keys that
+    # set which jamming points a run reaches: cells, initial state, Δt, ε_U, the minimum check; `budjam analyse`
+    # writes their hashes), else from these runs.
+    jam_refused = None
+    if AJ is not None:
+        own, theirs = set(A.get("jamming_models") or []), set(AJ.get("jamming_models") or [])
+        if not own or not theirs:
+            jam_refused = (f"the jamming ensemble of {a.jamming} is not used: tables without jamming_model cannot show "
+                           "that it is of these runs' model (cells, initial state, Δt, ε_U, minimum check)")
+        elif len(own) > 1:
+            jam_refused = (f"the jamming ensemble of {a.jamming} is not used: these runs are of {len(own)} jamming models "
+                           "(cells, initial state, Δt, ε_U, minimum check)")
+        elif own != theirs:
+            jam_refused = (f"the jamming ensemble of {a.jamming} is not used: its runs are of another jamming model "
+                           "(cells, initial state, Δt, ε_U or the minimum check differ)")
+        if jam_refused:
+            AJ = None
     U = A.get("unavailable", {})
 
     def lacking(*keys):
@@ -526,7 +543,7 @@ def main():
     else:
         # a seed's runs share their growth up to the first jamming, so its jamming states are one sample
         jam, jam_L = {**M, **{k: by_seed(M.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}, L
-        jam_src = f"this preset's runs at L = {L:g} (no jamming ensemble given; errors by seed)"
+        jam_src = f"this preset's runs at L = {L:g} ({jam_refused or 'no jamming ensemble given'}; errors by seed)"
         dzj, iso = (groups.get("none", {}).get(k) for k in ("dZ_J", "isostatic_J"))
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
           f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",

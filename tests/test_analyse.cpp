@@ -251,6 +251,34 @@ TEST_CASE("analyse pools runs of one L and P0 only under one protocol, and every
 }
 
 TEST_CASE(
+    "analyse names each run's jamming model: kept under another search, minimiser or P0, changed by the cells, "
+    "the growth step or the window",
+    "[analyse]") {
+  const fs::path scene = work_dir() / "model.toml";
+  std::ofstream(scene) << "[run]\nname = \"model\"\nseed = 7\n[box]\nL = 6.0\n[jamming]\ntargets = [1e-3]\n";
+  const auto model = [&](const std::string& name, const std::string& sets) {
+    const fs::path dir = work_dir() / "model" / name, out = work_dir() / "model" / (name + "_tables");
+    REQUIRE(run_budjam("grow " + q(scene) + " --quiet --out " + q(dir) + " " + sets).code == 0);
+    REQUIRE(run_budjam("analyse " + q(dir) + " --out " + q(out) + " --main-L 6").code == 0);
+    const std::string m = read_csv(out / "runs.csv").at(0).at("jamming_model");
+    CHECK(budjam::io::read_json(out / "analysis.json").at("jamming_models") == budjam::io::Json::array({m}));
+    return m;
+  };
+  const std::string base = model("base", "");
+  CHECK(base.size() == 16);
+  int k = 0;
+  for (const char* same :
+       {"--set jamming.search=bisection --set minimiser.active_set_after=0 --set growth.P0=1e-3", "--seed 9"}) {
+    INFO(same);
+    CHECK(model("same" + std::to_string(++k), same) == base);
+  }
+  for (const char* other : {"--set cells.division=aligned", "--set growth.dt=2", "--set jamming.epsilon_U=1e-14"}) {
+    INFO(other);
+    CHECK(model("other" + std::to_string(++k), other) != base);
+  }
+}
+
+TEST_CASE(
     "analyse refuses a sidecar whose N, L or φ are not its packing's (the packing replaced since): exit 2 "
     "naming it",
     "[analyse]") {

@@ -709,6 +709,7 @@ void check_one_protocol(std::vector<RunRow>& rows) {
     require_same_keys(run, *first, cells_key, "the runs of one analysis share their cells", "analyse them apart");
     r.protocol = protocol_hash(run.scene, group_protocol_key);
     r.cells = protocol_hash(run.scene, cells_key);
+    r.jamming_model = protocol_hash(run.scene, jamming_model_key);
   }
 }
 
@@ -1444,7 +1445,8 @@ const std::vector<std::string_view> kOutputFiles{"analysis.json",    "runs.csv",
 // The tables as (file name, content). A table the inputs could not give (Ensemble::unavailable names
 // it) is left out: an empty file would read as "measured, nothing there".
 std::vector<std::pair<std::string, std::string>> table_files(const Ensemble& e, const Tables& t) {
-  std::vector<std::string> run_header{"run", "L", "P0", "seed", "status", "jamming_state", "protocol", "cells"};
+  std::vector<std::string> run_header{"run",           "L",        "P0",    "seed",         "status",
+                                      "jamming_state", "protocol", "cells", "jamming_model"};
   std::vector<std::string> tgt_header{"run", "L", "P0", "seed", "dphi"};
   for (const auto& c : kRunColumns) run_header.push_back(c.name);
   for (const auto& c : kTargetColumns) tgt_header.push_back(c.name);
@@ -1453,7 +1455,7 @@ std::vector<std::pair<std::string, std::string>> table_files(const Ensemble& e, 
   for (const auto& r : e.rows) {
     std::vector<std::string> row{
         r.dir.string(), num(r.L), P0_csv(r.P0_label), std::to_string(r.seed), r.status, std::to_string(r.state),
-        r.protocol,     r.cells};
+        r.protocol,     r.cells,  r.jamming_model};
     for (const auto& c : kRunColumns) row.push_back(cell(r.*c.field));
     run_rows.push_back(row);
     for (const auto& x : r.targets) {
@@ -1572,6 +1574,13 @@ EnsembleAccount analyse_ensemble(const EnsembleOptions& o) {
                         {"u_J_lambert_w", u_J_mean_field()},
                         {"lambert_w0_of_minus_2_e_minus_2", lambert_w0(-2.0 * std::exp(-2.0))}};
   J["main"] = headline_json(main_L, e, groups, o.bootstrap);
+  {
+    // Which jamming model the runs are of (empty for tables from before the column).
+    std::set<std::string> models;
+    for (const auto& r : e.rows)
+      if (!r.jamming_model.empty()) models.insert(r.jamming_model);
+    J["jamming_models"] = models;
+  }
   J["groups"] = jgroups;
   {
     Json sizes = Json::array();

@@ -47,7 +47,7 @@ struct RunRow {
   std::size_t state = 0;  // distinct jamming state (jamming_states.hpp)
   // The run's protocol within its group and its cell parameters (run_protocol.hpp, protocol_hash);
   // empty where tables from before those columns do not say.
-  std::string protocol, cells;
+  std::string protocol, cells, jamming_model;
   bool depleted = false;
   double step_J = kNaN, phi_J = kNaN, u_J = kNaN, n_J = kNaN, N_J = kNaN, N_nr_J = kNaN, Z_J = kNaN, dZ_J = kNaN,
          P_J = kNaN;

@@ -46,14 +46,19 @@ std::string group_text(double L, const std::string& P0_label) {
 void check_protocol_columns(const CsvTable& R, Ensemble& e) {
   std::vector<std::string> lacking;
   for (const auto& [column, field, in_group] :
-       {std::tuple{"protocol", &RunRow::protocol, true}, std::tuple{"cells", &RunRow::cells, false}}) {
+       {std::tuple{"protocol", &RunRow::protocol, true}, std::tuple{"cells", &RunRow::cells, false},
+        std::tuple{"jamming_model", &RunRow::jamming_model, true}}) {
     std::optional<std::size_t> filled, empty;  // first such rows
     for (std::size_t k = 0; k < e.rows.size(); ++k) {
       auto& first = (e.rows[k].*field).empty() ? empty : filled;
       if (!first) first = k;
     }
     if (!filled) {
-      lacking.push_back(column);
+      if (std::string_view(column) == "jamming_model")
+        e.unchecked.push_back(R.source + " has no jamming_model column (tables from before it): whether a jamming " +
+                              "ensemble is of these runs' model cannot be checked");
+      else
+        lacking.push_back(column);
       continue;
     }
     if (empty) {
@@ -102,6 +107,7 @@ void read_runs(const CsvTable& R, Ensemble& e, std::map<std::string, std::size_t
     x.status = R.text(k, c_status);
     if (R.has_column("protocol")) x.protocol = R.text(k, R.column("protocol"));
     if (R.has_column("cells")) x.cells = R.text(k, R.column("cells"));
+    if (R.has_column("jamming_model")) x.jamming_model = R.text(k, R.column("jamming_model"));
     for (const auto& c : kRunColumns)
       if (const char* name = run_column(R, c)) x.*c.field = R.number(k, R.column(name));
     // Every run has a count, 0 included: an empty field would switch the check of its rows off.

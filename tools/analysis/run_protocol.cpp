@@ -23,6 +23,11 @@ bool group_protocol_key(const SceneKey& k) { return !cells_key(k) && !may_differ
 
 bool cells_key(const SceneKey& k) { return k.section == "cells"; }
 
+bool jamming_model_key(const SceneKey& k) {
+  static const std::set<std::string> keys{"growth.dt", "jamming.epsilon_U", "jamming.check_minimum"};
+  return k.section == "cells" || k.section == "init" || keys.contains(k.key());
+}
+
 std::string protocol_text(const Scene& scene, bool (*selected)(const SceneKey&)) {
   std::string text;
   for (const SceneKey& k : scene_keys()) {

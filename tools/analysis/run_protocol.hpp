@@ -23,6 +23,11 @@ bool may_differ_between_samples(const SceneKey& key);
 // cell parameters, which it holds equal across all its runs instead (cells_key).
 bool group_protocol_key(const SceneKey& key);
 bool cells_key(const SceneKey& key);
+// The keys that set which jamming points a run reaches: the cells, the initial state, the growth step
+// and the jamming window with its minimum check. Not the search or the minimiser (their ensembles are
+// held equal within their errors: docs/speed.md), nor what acts only above jamming (P0, the targets).
+// A report takes jamming-point numbers from an ensemble only where these agree with its runs'.
+bool jamming_model_key(const SceneKey& key);
 
 // The protocol of a run as a stable name, so that tables (runs.csv) can say which runs may be pooled
 // without the scenes: FNV-1a (64 bit) of the canonical text of the keys `selected` admits, one line
