@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -831,6 +832,31 @@ TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed 
         v[jamming] = joined(j);
       },
       at(jamming) + "Z = 9.5 disagrees with packings/jammed.pack");
+  // What only the cells of packings/jammed.pack can tell: N_u, and n_J from their N_nr; and the count of
+  // buds tagged there, which the checkpoint's own tags tell.
+  for (const auto& [field, value, expect] :
+       std::vector<std::tuple<std::size_t, std::string, std::string>>{{12, "20", "N_u = 20, but the cells of "},
+                                                                      {19, "0.5", "n_J = 0.5, but its N_nr"},
+                                                                      {20, "1", "1 buds tagged at jamming"}}) {
+    INFO(expect);
+    REQUIRE(words_of(lines[jamming])[static_cast<std::size_t>(field)] != value);
+    edited(
+        [&](auto& v) {
+          auto j = words_of(v[jamming]);
+          j[field] = value;
+          v[jamming] = joined(j);
+        },
+        at(jamming) + expect);
+  }
+  // The divisions since jamming, one more than the last row of steps.csv says.
+  edited(
+      [&](auto& v) {
+        auto s = words_of(v[state]);
+        s[8] = std::to_string(std::stol(s[8]) + 1);
+        v[state] = joined(s);
+      },
+      at(state) + std::to_string(std::stol(words_of(lines[state])[8]) + 1) +
+          " divisions since jamming, but the last row");
   // A tagged bud's size at jamming.
   REQUIRE(std::stoi(words_of(lines[buds])[2]) > 0);
   edited(
@@ -864,6 +890,22 @@ TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed 
         },
         log + ".csv.partial: ");
   }
+  // A cell of packings/jammed.pack moved by a tenth of a diameter, its meta lines kept: its contacts
+  // are no longer the record's.
+  fs::remove_all(copy);
+  fs::copy(run, copy, fs::copy_options::recursive);
+  std::vector<std::string> pack = lines_of(slurp(copy / "packings" / "jammed.pack"));
+  const std::size_t cell = static_cast<std::size_t>(
+      std::find_if(pack.begin(), pack.end(), [](const std::string& l) { return !l.empty() && std::isdigit(l[0]); }) -
+      pack.begin());
+  REQUIRE(cell < pack.size());
+  auto w = words_of(pack[cell]);
+  w[2] = budjam::io::format_double(std::stod(w[2]) + 0.1);  // x
+  pack[cell] = joined(w);
+  std::ofstream out(copy / "packings" / "jammed.pack", std::ios::trunc);
+  for (const auto& l : pack) out << l << "\n";
+  out.close();
+  refused_unchanged(copy, at(jamming), "but the cells of packings/jammed.pack give");
 }
 
 TEST_CASE("a relaxation in progress that the resumed attempt does not make is refused, the run directory unchanged",

@@ -5,6 +5,7 @@
 #include "budjam/packing_rules.hpp"
 #include "io/atomic_file.hpp"
 #include "io/packing_file.hpp"
+#include "io/run_data.hpp"
 #include "io/run_directory.hpp"
 #include "io/scene_file.hpp"
 #include "io/text.hpp"
@@ -957,6 +958,35 @@ struct RecordCheck {
     same("N_nr", static_cast<double>(n.N_nr));
     same("Z", n.Z);
   }
+  // The record as the packing's cells give it, not only as its meta lines say: the contact network
+  // counted afresh, φ and the contact pressure P (these two to 10⁻¹² relative: the sums may run in
+  // another order than the run's).
+  void cells(const NetworkSummary& n, double phi, double P) const {
+    const tools::PackingContacts pc = tools::analyse_contacts(pack.packing);
+    const NetworkSummary& c = pc.network;
+    const std::pair<const char*, std::pair<double, double>> counts[] = {
+        {"N_nr", {double(n.N_nr), double(c.N_nr)}},
+        {"N_f", {double(n.N_f), double(c.N_f)}},
+        {"N_f_single_pass", {double(n.N_f_single_pass), double(c.N_f_single_pass)}},
+        {"N_c", {double(n.N_c), double(c.N_c)}},
+        {"N_u", {double(n.N_u), double(c.N_u)}},
+        {"N_u_buds", {double(n.N_u_buds), double(c.N_u_buds)}},
+        {"Z", {n.Z, c.Z}},
+        {"u", {n.u, c.u}},
+        {"u_buds", {n.u_buds, c.u_buds}},
+        {"Z_iso", {n.Z_iso, c.Z_iso}},
+        {"dZ", {n.dZ, c.dZ}}};
+    for (const auto& [name, v] : counts)
+      if (!(v.first == v.second))
+        fail(std::string(name) + " = " + format_double(v.first) + ", but the cells of " + pack_name + " give " +
+             format_double(v.second));
+    auto near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b)); };
+    if (!near(phi, pack.packing.packing_fraction()))
+      fail("phi = " + format_double(phi) + ", but the cells of " + pack_name + " give " +
+           format_double(pack.packing.packing_fraction()));
+    if (!near(P, pc.P))
+      fail("P = " + format_double(P) + ", but the cells of " + pack_name + " give " + format_double(pc.P));
+  }
 };
 
 // Jamming episodes alternate in steps.csv: the k-th change to jammed is episode k's jamming point,
@@ -1009,6 +1039,11 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
   const std::string last_step = steps.last_row.substr(0, steps.last_row.find(','));
   if (last_step != std::to_string(s.step))
     fail(at.state, "step " + std::to_string(s.step) + ", but the last row of " + steps_name + " is step " + last_step);
+  // steps.csv's last column: the divisions since jamming, empty while unjammed
+  const std::string since = steps.last_row.substr(steps.last_row.rfind(',') + 1);
+  if (s.phase == Phase::jammed && since != std::to_string(s.divisions_since_jamming))
+    fail(at.state, std::to_string(s.divisions_since_jamming) + " divisions since jamming, but the last row of " +
+                       steps_name + " has " + (since.empty() ? "none" : since));
   if (divisions.rows != static_cast<std::size_t>(s.result.divisions))
     fail(at.counters, "divisions " + std::to_string(s.result.divisions) + ", but " + std::string(run_files::divisions) +
                           ".partial holds " + std::to_string(divisions.rows) + " rows up to the recorded length");
@@ -1037,6 +1072,14 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
     common(c, r.jamming->step, r.jamming->phi, r.jamming->P);
     c.same("E_per_cell", r.jamming->E_per_cell);
     c.network(r.jamming->network);
+    c.cells(r.jamming->network, r.jamming->phi, r.jamming->P);
+    const double L = pack.packing.box.L;
+    if (!(r.jamming->n_J == static_cast<double>(r.jamming->network.N_nr) / (L * L)))
+      c.fail("n_J = " + format_double(r.jamming->n_J) + ", but its N_nr / L^2 is " +
+             format_double(static_cast<double>(r.jamming->network.N_nr) / (L * L)));
+    if (s.buds.episode() == r.jamming->episode && r.jamming->tagged != at.buds.size())
+      c.fail(std::to_string(r.jamming->tagged) + " buds tagged at jamming, but the checkpoint follows " +
+             std::to_string(at.buds.size()));
     if (s.buds.episode() == r.jamming->episode)
       for (const auto& tag : at.buds) {
         const auto& ids = pack.packing.id;
@@ -1058,12 +1101,14 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
     c.same("E_per_cell", t.E_per_cell);
     c.same("dphi", t.dphi);
     c.network(t.network);
+    c.cells(t.network, t.phi, t.P);
   }
   if (r.depletion) {
     const PackingFile pack = saved(at.depletion, std::string(run_files::phi2));
     const RecordCheck c{file, at.depletion, pack, "packings/phi2.pack"};
     common(c, r.depletion->step, r.depletion->phi, r.depletion->P);
     c.network(r.depletion->network);
+    c.cells(r.depletion->network, r.depletion->phi, r.depletion->P);
   }
   check_phase_changes(s, at, changes, [&](std::size_t line, const std::string& what) { fail(line, what); });
 }
