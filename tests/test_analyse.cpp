@@ -1227,15 +1227,16 @@ std::size_t unchecked_notices(const std::string& err) {
 }
 
 // runs.csv of hand-built tables: six runs of L = 15 in two groups (P0 = 0.01 and 0.001, three seeds
-// each), each row's protocol and cells from `protocol(k)` and `cells(k)` (no columns where null).
+// each), each row's protocol and cells from `protocol(k)` and `cells(k)` (no columns where null), and
+// one jamming model where the protocol is given.
 fs::path protocol_tables(const std::string& name, std::string (*protocol)(int), std::string (*cells)(int)) {
   return hand_tables(name, [&](std::ostream& r, std::ostream& t) {
-    r << "run,L,P0,seed,status,jamming_state" << (protocol ? ",protocol" : "") << (cells ? ",cells" : "")
+    r << "run,L,P0,seed,status,jamming_state" << (protocol ? ",protocol,jamming_model" : "") << (cells ? ",cells" : "")
       << ",phi_J,u_J,n_J,N_J,N_nr_J,target_rows\n";
     t << "run,L,P0,seed,dphi,below_phi2\n";
     for (int k = 0; k < 6; ++k) {
       r << name << "/seed" << k + 1 << ",15," << (k < 3 ? "0.01" : "0.001") << "," << k + 1 << ",finished," << k;
-      if (protocol) r << "," << protocol(k);
+      if (protocol) r << "," << protocol(k) << ",45b0cfaa13de4058";
       if (cells) r << "," << cells(k);
       r << ",0.84,0.2,0.76,172,170,0\n";
     }
@@ -1279,17 +1280,19 @@ TEST_CASE(
     CHECK(std::count(res.err.begin(), res.err.end(), '\n') == 1);
     CHECK(!fs::exists(work_dir() / (name + "_out") / "analysis.json"));
   }
-  // tables from before the columns: analysed, with one line saying which file leaves the protocol unchecked
+  // tables from before the columns: analysed, with one line saying which file leaves the protocol
+  // unchecked, and one the jamming model
   const fs::path legacy = protocol_tables("protocols_legacy", nullptr, nullptr);
   const auto res = analyse(legacy);
   INFO(res.err);
   CHECK(res.code == 0);
-  CHECK(unchecked_notices(res.err) == 1);
+  CHECK(unchecked_notices(res.err) == 2);
   CHECK(res.err.find((legacy / "runs.csv").string() + " has no protocol or cells column") != std::string::npos);
+  CHECK(res.err.find((legacy / "runs.csv").string() + " has no jamming_model column") != std::string::npos);
   const auto j = budjam::io::read_json(fs::path(legacy) += "_out/analysis.json");
   CHECK(std::count_if(j["inputs"]["unchecked"].begin(), j["inputs"]["unchecked"].end(), [](const auto& x) {
           return x.template get<std::string>().find(kNoDigests) == std::string::npos;
-        }) == 1);
+        }) == 2);
 }
 
 TEST_CASE(
