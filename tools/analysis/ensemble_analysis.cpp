@@ -492,6 +492,10 @@ constexpr const char* kAtPhi2[] = {"dphi_2",
                                    "G_2_over_P_2",
                                    "N_div_2_over_N_J"};
 constexpr const char* kAtNoneLeft[] = {"dphi_2_none_left", "G_2_over_Pmax_none_left", "N_div_2_over_N_J_paper"};
+// The paper's φ_2, scanned from the first jamming (its selection admits only runs that reached it).
+constexpr const char* kAtPaperPhi2[] = {"dphi_2_paper",        "dphi_2_pred_paper", "dphi_2_pred_minus_sim_paper",
+                                        "P_2_over_Pmax_paper", "lambda_bar_paper",  "G_2_over_Pmax_paper",
+                                        "G_2_over_P_2_paper"};
 
 template <std::size_t K>
 void censor_unreached(Json& group, const char* const (&keys)[K], std::size_t reached, std::size_t runs) {
@@ -501,6 +505,7 @@ void censor_unreached(Json& group, const char* const (&keys)[K], std::size_t rea
     for (const char* value : {"mean", "median", "se", "q25", "q75"})
       if (stat.contains(value)) stat[value] = nullptr;
     if (stat.contains("ci95")) stat["ci95"] = Json::array({nullptr, nullptr});
+    stat.erase("by_seed");  // a trend must not pair the runs that reached it either
     stat["censored"] = runs - reached;
   }
 }
@@ -999,6 +1004,10 @@ Json group_json(const GroupKey& key, const std::vector<const RunRow*>& rs, const
       median_json(collect(rs, [N_J_first_size](auto& r) { return r.N_div_2_none_left / N_J_first_size; }), bo);
   censor_unreached(g, kAtPhi2, dep.size(), rs.size());
   censor_unreached(g, kAtNoneLeft, g["depleted_none_left"].get<std::size_t>(), rs.size());
+  censor_unreached(g, kAtPaperPhi2,
+                   static_cast<std::size_t>(
+                       std::count_if(rs.begin(), rs.end(), [](auto* r) { return std::isfinite(r->phi_2_first); })),
+                   rs.size());
   g["N_div_end"] = median_json(collect(rs, [](auto& r) { return r.N_div_end; }), bo);
   g["h_gamma"] = median_json(collect(rs, [](auto& r) { return r.h_gamma; }), bo);
   // the paper's figure: mean ± SE over runs, every cell of a run
