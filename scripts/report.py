@@ -97,7 +97,9 @@ def isostatic_verdict(iso):
     whatever their excess."""
     if not iso or not iso.get("packings"):
         return verdicts.Verdict("inconclusive", "isostatic packings not counted")
-    return verdicts.proportion(iso["isostatic"] / iso["packings"], iso["packings"], verdicts.interval(1.0, 1.0),
+    # the independent samples: the packings, at most one per seed (a seed's runs share their growth)
+    n = min(iso["packings"], iso.get("seeds", iso["packings"]))
+    return verdicts.proportion(iso["isostatic"] / iso["packings"], n, verdicts.interval(1.0, 1.0),
                                n_paper=verdicts.THEORY)
 
 
@@ -160,7 +162,7 @@ def jamming_size_rows(J, source):
     head = ("| L | runs | N_J | N_J/L² | growth alone | difference/σ | n_J | " +
             " | ".join(t for _, t in JAMMING_SIZE_COLUMNS) + " |")
     rows = ["", "## Finite size at jamming", "",
-            f"Jamming-only runs without feedback ({source}), one jamming state per run. " + sizes_independence_text([J]) +
+            f"The jamming states of {source}. " + sizes_independence_text([J]) +
             " The cell density N_J/L² is compared with what the growth "
             "and division rules alone give at the same φ (400 growth histories per size, no mechanics): N/L² at fixed "
             "φ is not monotone in L, so it is not fitted. The other quantities are fitted by q(N) = q_∞ + c/N (weighted "
@@ -531,7 +533,6 @@ def main():
     # ---- jamming: the jamming ensembles at the paper's L = 15 (independent seeds), else this preset ----
     jam_L = PAPER_L_JAMMING
     jam = next((s_ for s_ in (AJ or {}).get("sizes", []) if s_["L"] == jam_L), None)
-    jam_groups = {g_["L"]: g_ for g_ in (AJ or {}).get("groups", [])}
     if jam is not None:
         # a jamming-only ensemble has one state per seed; states that share seeds are judged by seed
         shared = any((jam.get(k) or {}).get("seeds") not in (None, (jam.get(k) or {}).get("n"))
@@ -539,12 +540,19 @@ def main():
         if shared:
             jam = {**jam, **{k: by_seed(jam.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}
         jam_src = f"jamming ensemble, L = {jam_L}, " + ("errors by seed" if shared else "independent seeds")
-        dzj, iso = (jam_groups.get(jam_L, {}).get(k) for k in ("dZ_J", "isostatic_J"))
+        dzj = jam.get("dZ_J")
     else:
         # a seed's runs share their growth up to the first jamming, so its jamming states are one sample
-        jam, jam_L = {**M, **{k: by_seed(M.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J")}}, L
-        jam_src = f"this preset's runs at L = {L:g} ({jam_refused or 'no jamming ensemble given'}; errors by seed)"
-        dzj, iso = (groups.get("none", {}).get(k) for k in ("dZ_J", "isostatic_J"))
+        jam, jam_L = {**M, **{k: by_seed(M.get(k)) for k in ("u_J", "u_J_lobes", "n_J", "N_J", "phi_J", "dZ_J")}}, L
+        why = jam_refused or (f"the jamming ensemble of {a.jamming} has no L = {PAPER_L_JAMMING:g}" if AJ
+                              else "no jamming ensemble given")
+        jam_src = f"this preset's runs at L = {L:g} ({why}; errors by seed)"
+        dzj = jam.get("dZ_J")
+    iso = jam.get("isostatic_J")
+    # The finite-size table at jamming: the ensemble's where it is used, else this preset's own.
+    fs_jamming = (AJ if AJ and AJ.get("finite_size_jamming") else A).get("finite_size_jamming")
+    fs_jamming_src = ("the jamming ensemble, independent seeds" if AJ and AJ.get("finite_size_jamming") else
+                      f"this preset's runs ({jam_refused or 'no jamming ensemble given'}; one state per seed)")
     claim("Unconstrained fraction at jamming u_J (L = 15 in the paper)", "≃ 0.23",
           f"{pm(jam['u_J'])}; contact-free buds / N_nr ({jam_src}); lobes, mothers included: {pm(jam['u_J_lobes'])}",
           "same: the paper's u_J counts the buds free at jamming over N_nr",
@@ -557,8 +565,9 @@ def main():
     claim("Nonrattler density at jamming n_J", "≃ 0.775", f"{pm(jam['n_J'])} ({jam_src})", "same",
           size_mismatch(jam_L, PAPER_L_JAMMING) or
           judged(jam["n_J"], verdicts.quoted(0.775, 0.001), n_paper=PAPER_SEEDS), "—")
-    claim("Cells at jamming N_J", "—", f"{pm(jam['N_J'])} ({jam_src}); N_J/L² against the growth process alone: "
-          "see \"Finite size at jamming\"", "same", "—", "—")
+    claim("Cells at jamming N_J", "—", f"{pm(jam['N_J'])} ({jam_src}); N_J/L² against the growth process alone: " +
+          ("see \"Finite size at jamming\"" if fs_jamming else "not compared (no finite-size table at jamming)"),
+          "same", "—", "—")
     claim("Jamming packing fraction φ_J", "—", f"{pm(jam['phi_J'])} ({jam_src})", "same", "—", "—")
     phi_J = jam["phi_J"]
     pmax = {"mean": None if phi_J.get("mean") is None else 2 / math.pi * (1 - phi_J["mean"]),
@@ -930,7 +939,7 @@ def main():
         "",
         "| Claim of the paper | Paper | budjam's definition | Paper's definition | Verdict | Figure |",
         "| --- | --- | --- | --- | --- | --- |",
-    ] + rows + jamming_size_rows((AJ or {}).get("finite_size_jamming"), jam_src.replace(f", L = {jam_L}", "")) \
+    ] + rows + jamming_size_rows(fs_jamming, fs_jamming_src) \
       + depletion_size_rows(A.get("finite_size")) + size_rows + shear + [
         "",
         "Per-group tables: " + ", ".join(f"`{n}`" for n in tables),

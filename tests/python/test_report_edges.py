@@ -138,7 +138,7 @@ def test_jamming_numbers_take_the_papers_twenty_seeds_and_a_predicted_relation_n
     assert math.isclose(sigma, nj["se"] * math.sqrt(1 + nj["n"] / 20), rel_tol=0.05), row
     # ΔZ_J = 0 (every packing isostatic) is what the theory predicts, no number of the paper's sample: σ is
     # budjam's own, that of the isostatic fraction at its boundary 1 (Wilson's half-width over 1.96)
-    iso = J["groups"][[g["L"] for g in J["groups"]].index(15)]["isostatic_J"]
+    iso = next(s for s in J["sizes"] if s["L"] == 15)["isostatic_J"]
     row = next(line for line in out.splitlines() if line.startswith("| Modified Maxwell count"))
     sigma = float(re.search(r"σ = ([0-9.e+-]+)[,)]", row).group(1))
     lo, hi = verdicts.wilson(iso["fraction"], iso["packings"])
@@ -734,16 +734,17 @@ def test_the_isostatic_count_is_what_the_jamming_tables_hold_and_its_verdict_cou
     with open(os.path.join(REF, "jamming", "tables", "runs.csv"), newline="") as f:
         rows = [r for r in csv.DictReader(f) if float(r["L"]) == 15 and r["dZ_J"]]
     excess = [round(float(r["dZ_J"]) * float(r["N_nr_J"]) / 2) for r in rows]
-    iso = next(g for g in J["groups"] if g["L"] == 15)["isostatic_J"]
+    iso = next(s for s in J["sizes"] if s["L"] == 15)["isostatic_J"]
     assert (iso["packings"], iso["isostatic"]) == (len(excess), excess.count(0))
     row = lambda out: row_of(out, "Modified Maxwell count at jamming")
     r, out = report(tmp_path, A, J)
     assert r.returncode == 0, r.stderr
     assert f"{excess.count(0)} of {len(excess)} packings isostatic" in row(out)
     # the verdict counts packings off isostatic, whatever their excess (a z of the mean would be 1 here)
-    g = next(g for g in J["groups"] if g["L"] == 15)
+    g = next(s for s in J["sizes"] if s["L"] == 15)
     for k, most, word in ((199, 1, "confirmed"), (199, 40, "confirmed"), (150, 1, "not confirmed")):
-        g["isostatic_J"] = {"fraction": k / 200, "packings": 200, "isostatic": k, "most_excess_contacts": most}
+        g["isostatic_J"] = {"fraction": k / 200, "packings": 200, "isostatic": k, "seeds": 200,
+                            "most_excess_contacts": most}
         r, out = report(fresh(tmp_path, f"iso{k}_{most}"), A, J)
         assert row(out).split(" | ")[4].startswith(word + " ("), row(out)
 
@@ -763,3 +764,32 @@ def test_the_jamming_rows_come_from_an_ensemble_only_of_these_runs_jamming_model
     else:
         assert "this preset's runs at L = 8 (the jamming ensemble of" in u_J and why in u_J, u_J
         assert "(n=200)" not in u_J, u_J
+
+
+def test_without_the_ensembles_l15_or_with_it_refused_the_rows_and_the_size_table_say_whose_they_are(tmp_path):
+    A, J = quick()[0], reanalysed_jamming()
+    # an ensemble without L = 15: the rows are this preset's, the finite-size table still the ensemble's
+    J15 = {**J, "sizes": [s for s in J["sizes"] if s["L"] != 15]}
+    r, out = report(tmp_path, A, J15)
+    assert r.returncode == 0, r.stderr
+    u_J = row_of(out, "Unconstrained fraction at jamming u_J")
+    assert "has no L = 15" in u_J and "no jamming ensemble given" not in u_J, u_J
+    assert "The jamming states of the jamming ensemble" in out
+    # refused: the rows and the size table are this preset's own (or absent), never the ensemble's
+    A2 = {**A, "finite_size_jamming": J["finite_size_jamming"]}  # as if this preset had several sizes
+    r, out = report(fresh(tmp_path, "refused"), A2, {**J, "jamming_models": ["0123456789abcdef"]})
+    assert r.returncode == 0, r.stderr
+    assert "The jamming states of this preset's runs (the jamming ensemble of" in out
+    r, out = report(fresh(tmp_path, "refused_one_size"), A, {**J, "jamming_models": ["0123456789abcdef"]})
+    assert "## Finite size at jamming" not in out and 'see "Finite size at jamming"' not in out
+
+
+def test_delta_z_j_without_an_ensemble_counts_this_presets_jamming_states_also_without_no_feedback_runs(tmp_path):
+    A = quick()[0]
+    A["groups"] = [g for g in A["groups"] if g["P0"] is not None]
+    r, out = report(tmp_path, A)
+    assert r.returncode == 0, r.stderr
+    iso = A["main"]["isostatic_J"]
+    row = row_of(out, "Modified Maxwell count at jamming")
+    assert f"{iso['isostatic']} of {iso['packings']} packings isostatic" in row, row
+    assert "not counted" not in row, row

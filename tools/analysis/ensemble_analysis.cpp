@@ -88,21 +88,25 @@ Json fraction_json(std::size_t k, std::size_t n) {
 
 // ΔZ_J N_nr / 2 is a whole number of contacts (Z_iso = 6 − 2u − 2/N_nr), so the claim ΔZ_J ≈ 0 is
 // that a jamming point is isostatic, and its packings are counted rather than averaged: a mean of
-// counts that are all 0 but k has SE = mean/√k, z = √k whatever the excess.
+// counts that are all 0 but k has SE = mean/√k, z = √k whatever the excess. Each distinct jamming
+// state counts once; "seeds" bounds the independent samples (a seed's runs share their growth).
 Json isostatic_json(const std::vector<const RunRow*>& rs) {
-  std::size_t n = 0, isostatic = 0;
+  std::size_t isostatic = 0;
+  std::set<std::size_t> states;
+  std::set<std::uint64_t> seeds;
   long most = 0;  // the largest excess, in contacts, of a packing that is not isostatic
   for (const auto* r : rs) {
-    if (!std::isfinite(r->dZ_J) || !std::isfinite(r->N_nr_J)) continue;
+    if (!std::isfinite(r->dZ_J) || !std::isfinite(r->N_nr_J) || !states.insert(r->state).second) continue;
+    seeds.insert(r->seed);
     const long excess = std::lround(r->dZ_J * r->N_nr_J / 2);
-    ++n;
     if (excess == 0)
       ++isostatic;
     else if (std::abs(excess) > std::abs(most))
       most = excess;
   }
-  Json j = fraction_json(isostatic, n);
+  Json j = fraction_json(isostatic, states.size());
   j["isostatic"] = isostatic;
+  j["seeds"] = seeds.size();
   j["most_excess_contacts"] = most;
   return j;
 }
@@ -1392,6 +1396,9 @@ Json size_json(const std::vector<const RunRow*>& m, const BootstrapOptions& bo) 
       m, [](auto& r) { return 1.0 - r.N_nr_J / r.N_J; }, bo);
   h["cells_per_area"] = states_json(
       m, [](auto& r) { return r.N_J / (r.L * r.L); }, bo);
+  h["dZ_J"] = states_json(
+      m, [](auto& r) { return r.dZ_J; }, bo);
+  h["isostatic_J"] = isostatic_json(m);
   h["jamming_states"] = h["u_J"]["n"];
   h["dZ_identity"] = dz_identity_json(m, bo);
   h["dZ_identity"]["paper_cells"] = paper_cells_json(
