@@ -122,7 +122,7 @@ inline void checkpoint(std::string_view input) {
 struct RunLogCuts : Observer {
   io::Directory dir;
   io::CsvLog::Cut steps, divisions;
-  std::vector<io::PhaseChange> changes;  // of steps.csv up to its cut
+  io::StepsLog steps_log;  // steps.csv up to its cut
   explicit RunLogCuts(io::Directory d) : dir(std::move(d)) {}
   std::string name() const override { return "run_log"; }
   bool stateful() const override { return true; }
@@ -137,7 +137,7 @@ struct RunLogCuts : Observer {
     std::uint64_t s = 0, d = 0;
     if (!(is >> s >> d)) throw InputError("bad run_log state");
     steps = cut("steps.csv", s);
-    changes = io::phase_changes(io::read_text_file(dir, "steps.csv.partial").substr(0, s), "steps.csv.partial");
+    steps_log = io::read_steps(io::read_text_file(dir, "steps.csv.partial").substr(0, s), "steps.csv.partial");
     divisions = cut("divisions.csv", d);
   }
 };
@@ -156,7 +156,7 @@ inline void resume(std::string_view input, const std::filesystem::path& run_dir)
   try {
     io::CheckpointLines lines;
     GrowthState s = io::parse_checkpoint(text, "fuzz.txt", scene, scene.seed, observers, &lines);
-    io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.changes, run_log.divisions,
+    io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.steps_log, run_log.divisions,
                           dir.subdirectory("packings", false));
     advance_from(std::move(s));
   } catch (const InputError&) {}

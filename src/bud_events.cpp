@@ -114,6 +114,24 @@ std::size_t BudTracker::touched() const {
   return static_cast<std::size_t>(std::count_if(tags_.begin(), tags_.end(), [](const Tag& t) { return t.touched; }));
 }
 
+std::vector<std::string> BudTracker::events_of(std::int64_t id) const {
+  const auto t =
+      std::lower_bound(tags_.begin(), tags_.end(), id, [](const Tag& x, std::int64_t i) { return x.id < i; });
+  if (t == tags_.end() || t->id != id) return {};
+  std::vector<std::string> e{to_string(BudEventKind::tagged)};
+  if (t->touched) e.emplace_back(to_string(BudEventKind::first_contact));
+  if (t->state == 1) e.emplace_back(to_string(BudEventKind::completed));
+  if (t->state == 2) e.emplace_back(to_string(BudEventKind::divided));
+  if (t->state == 3) e.emplace_back("censored");
+  return e;
+}
+
+std::vector<std::int64_t> BudTracker::tagged_ids() const {
+  std::vector<std::int64_t> ids;
+  for (const Tag& t : tags_) ids.push_back(t.id);
+  return ids;
+}
+
 void BudTracker::save(std::ostream& os) const {
   char buf[64];
   os << "buds " << episode_ << ' ' << tags_.size() << '\n';

@@ -77,7 +77,7 @@ TEST_CASE("the resume harness reaches the checks against the run's files", "[fuz
     budjam::io::CheckpointLines lines;
     const budjam::GrowthState s =
         budjam::io::parse_checkpoint(budjam::fuzz::with_checksum(t), "fuzz.txt", scene, scene.seed, observers, &lines);
-    budjam::io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.changes, run_log.divisions,
+    budjam::io::check_against_run(s, scene, lines, "fuzz.txt", run_log.steps, run_log.steps_log, run_log.divisions,
                                   dir.subdirectory("packings", false));
   };
   CHECK_NOTHROW(check(good));

@@ -857,6 +857,43 @@ TEST_CASE("resume cross-checks a checkpoint edited with its checksum recomputed 
       },
       at(state) + std::to_string(std::stol(words_of(lines[state])[8]) + 1) +
           " divisions since jamming, but the last row");
+  // A target's φ_target (φ_J + Δφ) and its χ_c (its row of steps.csv).
+  const std::size_t target = line_starting(lines, "targets ") + 1;
+  REQUIRE(std::stoi(words_of(lines[target - 1])[1]) > 0);
+  for (const auto& [field, value, expect] : std::vector<std::tuple<long, std::string, std::string>>{
+           {2, "0.835", "phi_target = 0.835, but phi_J + dphi"}, {-2, "0.9", "chi_c = 0.9 at step"}}) {
+    INFO(expect);
+    edited(
+        [&](auto& v) {
+          auto t = words_of(v[target]);
+          t[field >= 0 ? static_cast<std::size_t>(field) : t.size() - static_cast<std::size_t>(-field)] = value;
+          v[target] = joined(t);
+        },
+        at(target) + expect);
+  }
+  // A cell of the accepted state's packing grown a little: the last row of steps.csv logged another state.
+  const std::size_t packing = line_starting(lines, "packing ");
+  edited(
+      [&](auto& v) {
+        auto c = words_of(v[packing + 1]);
+        c[3] = budjam::io::format_double(std::stod(c[3]) + 0.01);  // b
+        v[packing + 1] = joined(c);
+      },
+      at(state) + "the packing has N = ");
+  // A tag that ended as completed said divided, or the other way round: as many events, but not
+  // that bud's own (bud_events.csv).
+  const std::size_t tags = static_cast<std::size_t>(std::stoi(words_of(lines[buds])[2]));
+  std::size_t ended = 0;
+  for (std::size_t k = buds + 1; k <= buds + tags && !ended; ++k)
+    if (words_of(lines[k])[3] == "1" || words_of(lines[k])[3] == "2") ended = k;
+  REQUIRE(ended);  // the run goes on past jamming: some tagged bud completed or divided
+  edited(
+      [&](auto& v) {
+        auto t = words_of(v[ended]);
+        t[3] = t[3] == "1" ? "2" : "1";
+        v[ended] = joined(t);
+      },
+      "bud_events.csv.partial: the rows of bud ");
   // A tagged bud's size at jamming.
   REQUIRE(std::stoi(words_of(lines[buds])[2]) > 0);
   edited(

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
+#include <string>
 #include <vector>
 #include "budjam/contact_network.hpp"
 #include "budjam/contacts.hpp"
@@ -61,6 +62,10 @@ class BudTracker {
   // no longer active.
   std::size_t events() const { return 2 * tagged() + touched() - active(); }
   int episode() const { return episode_; }
+  // Those events of the tag of cell `id`, in the order they were returned ("censored" for a closed tag,
+  // whichever kind closed it); empty for a cell without a tag.
+  std::vector<std::string> events_of(std::int64_t id) const;
+  std::vector<std::int64_t> tagged_ids() const;
 
   void save(std::ostream& os) const;
   void load(std::istream& is);

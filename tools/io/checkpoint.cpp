@@ -899,7 +899,7 @@ GrowthState parse_checkpoint(std::string_view text, const std::string& file, con
 
 // ---- the checkpoint against the run's logs and packings ----------------------------------------
 
-std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::string& file) {
+StepsLog read_steps(std::string_view steps_text, const std::string& file) {
   auto fields = [](std::string_view line) {
     std::vector<std::string_view> f;
     for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1)
@@ -913,8 +913,9 @@ std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::s
     if (c == columns.end()) throw InputError(escape_control(file + ":1: no column " + std::string(name)));
     return static_cast<std::size_t>(c - columns.begin());
   };
-  const std::size_t step = column("step"), phi = column("phi"), phase = column("phase");
-  std::vector<PhaseChange> changes;
+  const std::size_t step = column("step"), N = column("N"), phi = column("phi"), P = column("P"),
+                    phase = column("phase"), chi_c = column("chi_c");
+  StepsLog log;
   Phase previous = Phase::unjammed;  // a run never starts jammed
   for (std::size_t line = 2; at + 1 < steps_text.size(); ++line) {
     const std::size_t end = std::min(steps_text.find('\n', at + 1), steps_text.size());
@@ -922,18 +923,27 @@ std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::s
     at = end;
     const bool whole = f.size() == columns.size();
     const auto n = whole ? parse_int64(f[step]) : std::nullopt;
+    const auto cells = whole ? parse_int64(f[N]) : std::nullopt;
     const auto x = whole ? parse_double(f[phi]) : std::nullopt;
-    const std::string_view p = whole ? f[phase] : std::string_view();
-    if (!n || !x || (p != to_string(Phase::jammed) && p != to_string(Phase::unjammed)))
-      throw InputError(escape_control(file + ":" + std::to_string(line) + ": not a row with a step, phi and phase"));
-    const Phase now = p == to_string(Phase::jammed) ? Phase::jammed : Phase::unjammed;
-    if (now != previous) changes.push_back({static_cast<long>(*n), *x, now});
+    const auto p = whole ? parse_double(f[P]) : std::nullopt;
+    // χ_c is written exactly at any size (beyond the double range as decimal text), empty before jamming
+    const auto chi = whole ? tools::csv_number(std::string(f[chi_c])) : std::nullopt;
+    const std::string_view word = whole ? f[phase] : std::string_view();
+    if (!n || !cells || !x || !p || !chi || (word != to_string(Phase::jammed) && word != to_string(Phase::unjammed)))
+      throw InputError(
+          escape_control(file + ":" + std::to_string(line) + ": not a row with a step, N, phi, P, phase and chi_c"));
+    const Phase now = word == to_string(Phase::jammed) ? Phase::jammed : Phase::unjammed;
+    log.rows.push_back({static_cast<long>(*n), static_cast<std::size_t>(*cells), *x, *p, *chi, now});
+    if (now != previous) log.changes.push_back(log.rows.back());
     previous = now;
   }
-  return changes;
+  return log;
 }
 
 namespace {
+
+// φ and P computed again from a packing's cells: the sums may run in another order than the run's.
+bool near(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b)); }
 
 // One checkpoint record against the packing saved with it.
 struct RecordCheck {
@@ -980,7 +990,6 @@ struct RecordCheck {
       if (!(v.first == v.second))
         fail(std::string(name) + " = " + format_double(v.first) + ", but the cells of " + pack_name + " give " +
              format_double(v.second));
-    auto near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b)); };
     if (!near(phi, pack.packing.packing_fraction()))
       fail("phi = " + format_double(phi) + ", but the cells of " + pack_name + " give " +
            format_double(pack.packing.packing_fraction()));
@@ -992,7 +1001,7 @@ struct RecordCheck {
 // Jamming episodes alternate in steps.csv: the k-th change to jammed is episode k's jamming point,
 // the k-th change back its unjamming, and the last row is in the checkpoint's phase.
 template <class Fail>
-void check_phase_changes(const GrowthState& s, const CheckpointLines& at, const std::vector<PhaseChange>& changes,
+void check_phase_changes(const GrowthState& s, const CheckpointLines& at, const std::vector<StepRow>& changes,
                          Fail fail) {
   const std::string steps_name = std::string(run_files::steps) + ".partial";
   const RunResult& r = s.result;
@@ -1002,16 +1011,16 @@ void check_phase_changes(const GrowthState& s, const CheckpointLines& at, const 
                        " unjammings, but the phase column of " + steps_name + " changes to jammed " +
                        std::to_string(jammings) + " and back " + std::to_string(unjammings) +
                        " times up to the recorded length");
-  const Phase last = changes.empty() ? Phase::unjammed : changes.back().to;
+  const Phase last = changes.empty() ? Phase::unjammed : changes.back().phase;
   if (last != s.phase)
     fail(at.state,
          "phase " + std::string(to_string(s.phase)) + ", but the last row of " + steps_name + " is " + to_string(last));
-  auto describe = [&](const PhaseChange& c) {
+  auto describe = [&](const StepRow& c) {
     return "step " + std::to_string(c.step) + " at phi = " + format_double(c.phi);
   };
   for (std::size_t k = 0; k < r.unjammings.size(); ++k) {
     const UnjamRecord& u = r.unjammings[k];
-    const PhaseChange &jam = changes[2 * k], &unjam = changes[2 * k + 1];
+    const StepRow &jam = changes[2 * k], &unjam = changes[2 * k + 1];
     if (u.step != unjam.step || u.phi != unjam.phi || u.phi_J != jam.phi)
       fail(at.unjammings[k], "unjamming " + std::to_string(k) + " at step " + std::to_string(u.step) + ", phi = " +
                                  format_double(u.phi) + " from phi_J = " + format_double(u.phi_J) + ", but " +
@@ -1026,7 +1035,7 @@ void check_phase_changes(const GrowthState& s, const CheckpointLines& at, const 
 }  // namespace
 
 void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
-                       const CsvLog::Cut& steps, const std::vector<PhaseChange>& changes, const CsvLog::Cut& divisions,
+                       const CsvLog::Cut& steps, const StepsLog& log, const CsvLog::Cut& divisions,
                        const Directory& packings) {
   auto fail = [&](std::size_t line, const std::string& what) {
     throw InputError(escape_control(file + ":" + std::to_string(line) + ": " + what));
@@ -1039,6 +1048,27 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
   const std::string last_step = steps.last_row.substr(0, steps.last_row.find(','));
   if (last_step != std::to_string(s.step))
     fail(at.state, "step " + std::to_string(s.step) + ", but the last row of " + steps_name + " is step " + last_step);
+  // The accepted state as its last row logged it (φ and P to 10⁻¹², as the records' cells).
+  if (!log.rows.empty()) {
+    const StepRow& last = log.rows.back();
+    const double phi = s.packing.packing_fraction(), P = tools::analyse_contacts(s.packing).P;
+    if (last.N != s.packing.size() || !near(last.phi, phi) || !near(last.P, P))
+      fail(at.state, "the packing has N = " + std::to_string(s.packing.size()) + ", phi = " + format_double(phi) +
+                         ", P = " + format_double(P) + ", but the last row of " + steps_name + " has " +
+                         std::to_string(last.N) + ", " + format_double(last.phi) + ", " + format_double(last.P));
+  }
+  for (std::size_t k = 0; k < s.result.targets.size(); ++k) {
+    const TargetRecord& t = s.result.targets[k];
+    const auto row = t.step >= 0 && static_cast<std::size_t>(t.step) < log.rows.size()
+                         ? std::optional<StepRow>(log.rows[static_cast<std::size_t>(t.step)])
+                         : std::nullopt;
+    if (!row || row->step != t.step || !(row->chi_c == t.chi_c))
+      fail(at.targets[k], "chi_c = " + format_double(t.chi_c) + " at step " + std::to_string(t.step) + ", but " +
+                              steps_name + " has " + (row ? format_double(row->chi_c) : std::string("no such row")));
+    if (s.result.jamming && !(t.phi_target == s.result.jamming->phi + t.dphi))
+      fail(at.targets[k], "phi_target = " + format_double(t.phi_target) +
+                              ", but phi_J + dphi = " + format_double(s.result.jamming->phi + t.dphi));
+  }
   // steps.csv's last column: the divisions since jamming, empty while unjammed
   const std::string since = steps.last_row.substr(steps.last_row.rfind(',') + 1);
   if (s.phase == Phase::jammed && since != std::to_string(s.divisions_since_jamming))
@@ -1110,7 +1140,7 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
     c.network(r.depletion->network);
     c.cells(r.depletion->network, r.depletion->phi, r.depletion->P);
   }
-  check_phase_changes(s, at, changes, [&](std::size_t line, const std::string& what) { fail(line, what); });
+  check_phase_changes(s, at, log.changes, [&](std::size_t line, const std::string& what) { fail(line, what); });
 }
 
 GrowthState read_checkpoint(const Directory& dir, std::string_view name, const Scene& scene, std::uint64_t seed,

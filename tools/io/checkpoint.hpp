@@ -87,26 +87,32 @@ void write_checkpoint(const Directory& dir, std::string_view name, const Scene& 
 GrowthState parse_checkpoint(std::string_view text, const std::string& file, const Scene& scene, std::uint64_t seed,
                              const std::vector<Observer*>& observers, CheckpointLines* lines = nullptr);
 
-// A change of phase between two rows of steps.csv: the first step in the new phase, with its φ.
-struct PhaseChange {
+// A row of steps.csv as resume checks it (χ_c NaN before jamming).
+struct StepRow {
   long step = 0;
-  double phi = 0;
-  Phase to = Phase::unjammed;
+  std::size_t N = 0;
+  double phi = 0, P = 0, chi_c = 0;
+  Phase phase = Phase::unjammed;
+};
+// steps.csv up to a checkpoint's length: its rows, and those that begin a new phase.
+struct StepsLog {
+  std::vector<StepRow> rows, changes;
 };
 
-// The phase changes of a steps.csv text (its header, then rows; `file` names it in messages):
-// InputError "<file>:<line>: ..." for a row without a step, φ and phase.
-std::vector<PhaseChange> phase_changes(std::string_view steps_text, const std::string& file);
+// steps.csv's text (its header, then rows; `file` names it in messages): InputError
+// "<file>:<line>: ..." for a row without a step, N, φ, P, phase and χ_c.
+StepsLog read_steps(std::string_view steps_text, const std::string& file);
 
 // InputError "<file>:<line>: ..." (`file` the checkpoint, `at` where parse_checkpoint found its
 // records) unless the checkpointed state `s` agrees with what the run's other files hold: the
 // step and division counters with the rows of steps.csv and divisions.csv up to their recorded
-// lengths (`steps`, `divisions`: CsvLog::check_resumable), the jamming and unjamming records and
-// the phase with the phase changes of those rows (`changes`, in step order), each record (jamming
-// point, targets, φ_2) with the packing saved with it in `packings`, the scene's P0 and the seed
-// with each of those packings, and each tagged bud's size at jamming with packings/jammed.pack.
+// lengths (`steps`, `divisions`: CsvLog::check_resumable), the packing with the last of those rows
+// (N, φ, P), the jamming and unjamming records and the phase with the phase changes of `log`, each
+// target's χ_c with its row and its φ_target with φ_J + Δφ, each record (jamming point, targets, φ_2)
+// with the packing saved with it in `packings` (its meta lines and its cells), the scene's P0 and the
+// seed with each of those packings, and each tagged bud's size at jamming with packings/jammed.pack.
 void check_against_run(const GrowthState& s, const Scene& scene, const CheckpointLines& at, const std::string& file,
-                       const CsvLog::Cut& steps, const std::vector<PhaseChange>& changes, const CsvLog::Cut& divisions,
+                       const CsvLog::Cut& steps, const StepsLog& log, const CsvLog::Cut& divisions,
                        const Directory& packings);
 
 // parse_checkpoint of the file `name` in `dir` (a link is not followed).

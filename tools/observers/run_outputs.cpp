@@ -146,9 +146,7 @@ void RunLog::on_target_reached(const TargetReached& e) {
   write_pack(run_files::target_stem(e.target.index), e.state, "target", e.target.dphi);
 }
 
-std::vector<io::PhaseChange> RunLog::resumed_phase_changes() const {
-  return io::phase_changes(resumed_text(kSteps), resumed_file(kSteps));
-}
+io::StepsLog RunLog::resumed_steps() const { return io::read_steps(resumed_text(kSteps), resumed_file(kSteps)); }
 
 void RunLog::check_resumed_state(const GrowthState& s, const Scene& scene, const io::CheckpointLines& at,
                                  const std::string& checkpoint_file) const {
@@ -158,12 +156,12 @@ void RunLog::check_resumed_state(const GrowthState& s, const Scene& scene, const
       throw InputError(io::escape_control(checkpoint_file + ":" + std::to_string(at.jamming) +
                                           ": the record has no saved packing (no packings/ directory)"));
     // Without records no packing is read: the run directory stands in for packings/.
-    io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_phase_changes(),
-                          resumed_cut(kDivisions), root);
+    io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_steps(), resumed_cut(kDivisions),
+                          root);
     return;
   }
-  io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_phase_changes(),
-                        resumed_cut(kDivisions), root.subdirectory(run_files::packings, false));
+  io::check_against_run(s, scene, at, checkpoint_file, resumed_cut(kSteps), resumed_steps(), resumed_cut(kDivisions),
+                        root.subdirectory(run_files::packings, false));
 }
 
 // ---- summary.json --------------------------------------------------------------------------------

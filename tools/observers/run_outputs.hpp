@@ -48,8 +48,8 @@ class RunLog : public CsvLogObserver {
                            const std::string& checkpoint_file) const;
 
  private:
-  // The phase changes of steps.csv up to its recorded length (after load_state).
-  std::vector<io::PhaseChange> resumed_phase_changes() const;
+  // steps.csv up to its recorded length (after load_state).
+  io::StepsLog resumed_steps() const;
   void write_pack(const std::string& stem, const StateView& s, const std::string& kind, std::optional<double> dphi);
   // Opened when used: a resume refused for another reason must not find packings/ created.
   io::Directory packings() const { return run_dir_.subdirectory(io::run_files::packings); }
