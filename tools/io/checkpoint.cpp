@@ -1057,18 +1057,6 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
                          ", P = " + format_double(P) + ", but the last row of " + steps_name + " has " +
                          std::to_string(last.N) + ", " + format_double(last.phi) + ", " + format_double(last.P));
   }
-  for (std::size_t k = 0; k < s.result.targets.size(); ++k) {
-    const TargetRecord& t = s.result.targets[k];
-    const auto row = t.step >= 0 && static_cast<std::size_t>(t.step) < log.rows.size()
-                         ? std::optional<StepRow>(log.rows[static_cast<std::size_t>(t.step)])
-                         : std::nullopt;
-    if (!row || row->step != t.step || !(row->chi_c == t.chi_c))
-      fail(at.targets[k], "chi_c = " + format_double(t.chi_c) + " at step " + std::to_string(t.step) + ", but " +
-                              steps_name + " has " + (row ? format_double(row->chi_c) : std::string("no such row")));
-    if (s.result.jamming && !(t.phi_target == s.result.jamming->phi + t.dphi))
-      fail(at.targets[k], "phi_target = " + format_double(t.phi_target) +
-                              ", but phi_J + dphi = " + format_double(s.result.jamming->phi + t.dphi));
-  }
   // steps.csv's last column: the divisions since jamming, empty while unjammed
   const std::string since = steps.last_row.substr(steps.last_row.rfind(',') + 1);
   if (s.phase == Phase::jammed && since != std::to_string(s.divisions_since_jamming))
@@ -1139,6 +1127,18 @@ void check_against_run(const GrowthState& s, const Scene& scene, const Checkpoin
     common(c, r.depletion->step, r.depletion->phi, r.depletion->P);
     c.network(r.depletion->network);
     c.cells(r.depletion->network, r.depletion->phi, r.depletion->P);
+  }
+  for (std::size_t k = 0; k < s.result.targets.size(); ++k) {
+    const TargetRecord& t = s.result.targets[k];
+    const auto row = t.step >= 0 && static_cast<std::size_t>(t.step) < log.rows.size()
+                         ? std::optional<StepRow>(log.rows[static_cast<std::size_t>(t.step)])
+                         : std::nullopt;
+    if (!row || row->step != t.step || !(row->chi_c == t.chi_c))
+      fail(at.targets[k], "chi_c = " + format_double(t.chi_c) + " at step " + std::to_string(t.step) + ", but " +
+                              steps_name + " has " + (row ? format_double(row->chi_c) : std::string("no such row")));
+    if (s.result.jamming && !(t.phi_target == s.result.jamming->phi + t.dphi))
+      fail(at.targets[k], "phi_target = " + format_double(t.phi_target) +
+                              ", but phi_J + dphi = " + format_double(s.result.jamming->phi + t.dphi));
   }
   check_phase_changes(s, at, log.changes, [&](std::size_t line, const std::string& what) { fail(line, what); });
 }
